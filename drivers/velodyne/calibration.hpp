@@ -1,0 +1,50 @@
+// HDL-64E per-laser calibration: the corrections the point math needs, in SI units.
+// Loaded from Velodyne db.xml (cm, degrees) or ROS yaml (m, radians), or assembled from the
+// status cycle the sensor streams in its packet trailers (drivers/velodyne/status.hpp).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <string>
+
+#include "rt/expected.hpp"
+
+namespace stac::velodyne {
+
+inline constexpr int kMaxLasers = 64;
+
+struct LaserCalibration {
+  int laser_id = 0;                      // 0..63; 0-31 upper bank, 32-63 lower bank
+  double rot_correction_rad = 0.0;       // azimuth correction, subtracted from the rotation
+  double vert_correction_rad = 0.0;      // elevation of the beam, positive up
+  double dist_correction_m = 0.0;        // added to the raw distance
+  double dist_correction_x_m = 0.0;      // two-point correction at 2.4 m along x
+  double dist_correction_y_m = 0.0;      // two-point correction at 1.93 m along y
+  double vert_offset_m = 0.0;            // vertical offset of the beam origin
+  double horiz_offset_m = 0.0;           // horizontal offset of the beam origin
+  double focal_distance_m = 0.0;         // intensity focal distance (db.xml stores cm)
+  double focal_slope = 0.0;              // intensity focal slope (unitless)
+  int min_intensity = 0;                 // clamp range of corrected intensity
+  int max_intensity = 255;
+  bool two_pt_correction_available = false;
+  bool enabled = true;
+};
+
+struct Calibration {
+  std::array<LaserCalibration, kMaxLasers> lasers{};
+  int num_lasers = kMaxLasers;
+  double distance_resolution_m = 0.002;  // size of one raw distance unit
+  std::string source;                    // file path or "status stream", for messages
+};
+
+// Loads a db.xml or ROS yaml file, chosen by content. Errors name the file, the laser and the
+// field ("calib.yaml: laser 12: missing 'vert_correction'").
+rt::Result<Calibration> load_calibration(const std::filesystem::path& path);
+rt::Result<Calibration> load_db_xml(const std::filesystem::path& path);
+rt::Result<Calibration> load_ros_yaml(const std::filesystem::path& path);
+
+// Writes the ROS yaml form (metres, radians), as gen_calibration.py would, without its bugs.
+rt::Result<bool> save_ros_yaml(const Calibration& calibration, const std::filesystem::path& path);
+
+}  // namespace stac::velodyne
