@@ -1,0 +1,236 @@
+#include "drivers/velodyne/scan_assembler.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+namespace stac::velodyne {
+namespace {
+
+constexpr int kHalfTurn = kRotationUnits / 2;
+constexpr double kGapFactor = 1.5;  // an azimuth step this many times the usual one is a gap
+constexpr std::size_t kPointsPerPacket = kBlocksPerPacket * kLasersPerBlock;
+
+int forward(int from, int to) noexcept { return (to - from + kRotationUnits) % kRotationUnits; }
+
+std::uint64_t payload_hash(std::span<const std::uint8_t> payload) noexcept {
+  std::uint64_t h = 0xcbf29ce484222325ULL;
+  std::size_t i = 0;
+  for (; i + 8 <= payload.size(); i += 8) {
+    std::uint64_t w;
+    std::memcpy(&w, payload.data() + i, 8);
+    h = (h ^ w) * 0x9E3779B97F4A7C15ULL;
+    h ^= h >> 29;
+  }
+  for (; i < payload.size(); ++i) h = (h ^ payload[i]) * 0x100000001B3ULL;
+  return h;
+}
+
+}  // namespace
+
+std::size_t scan_capacity(const ScanAssemblerConfig& config) noexcept {
+  const ModelTraits& t = traits(config.decoder.model);
+  const double packets_per_s = t.supports_dual_return ? t.packets_per_second_dual
+                                                      : t.packets_per_second_single;
+  const double packets_per_turn = packets_per_s * 60.0 / std::max(config.min_rpm, 1.0);
+  return static_cast<std::size_t>(std::ceil(packets_per_turn * 1.1)) * kPointsPerPacket;
+}
+
+ScanAssembler::ScanAssembler(const Calibration& calibration, const ScanAssemblerConfig& config)
+    : config_(config),
+      decoder_(calibration, config.decoder),
+      max_gap_ns_(static_cast<std::int64_t>(config.max_gap_s * 1e9)),
+      max_duration_ns_(static_cast<std::int64_t>(config.max_scan_duration_s * 1e9)),
+      carry_points_(kPointsPerPacket) {
+  carry_.header = &carry_header_;
+  carry_.points = &carry_points_;
+}
+
+void ScanAssembler::begin(Scan& scan) noexcept {
+  scan_ = &scan;
+  scan.points.clear();
+  current_.header = &scan.header;
+  current_.points = &scan.points;
+  current_.open = carry_.open;
+  current_.epoch = carry_.epoch;
+  scan.header = carry_.open ? carry_header_ : ScanHeader{};
+  for (const Point& p : carry_points_) {
+    if (!scan.points.push_back(p)) ++scan.header.points_dropped;
+  }
+  carry_points_.clear();
+  carry_.open = false;
+  target_ = &current_;
+}
+
+void ScanAssembler::open(Target& t, std::int64_t stamp_ns, std::uint16_t rotation, bool at_cut,
+                         std::uint32_t device_usec, bool dual) noexcept {
+  *t.header = ScanHeader{};
+  t.points->clear();
+  t.header->stamp_ns = stamp_ns;
+  t.header->end_stamp_ns = stamp_ns;
+  t.header->first_azimuth = rotation;
+  t.header->last_azimuth = rotation;
+  t.header->starts_at_cut = at_cut;
+  t.header->device_usec_first = device_usec;
+  t.header->dual_return = dual;
+  t.open = true;
+  t.epoch = ++epochs_;
+}
+
+void ScanAssembler::close(bool at_cut) noexcept {
+  ScanHeader& h = *current_.header;
+  h.ends_at_cut = at_cut;
+  h.sequence = next_sequence_++;
+  counters_.points_dropped += h.points_dropped;
+  ++counters_.scans;
+  current_.open = false;
+  target_ = &carry_;
+}
+
+bool ScanAssembler::is_duplicate(std::span<const std::uint8_t> payload) noexcept {
+  const std::uint64_t h = payload_hash(payload);
+  if (std::find(recent_.begin(), recent_.end(), h) != recent_.end()) return true;
+  recent_[recent_next_] = h;
+  recent_next_ = (recent_next_ + 1) % recent_.size();
+  return false;
+}
+
+bool ScanAssembler::add_packet(std::span<const std::uint8_t> payload,
+                               std::int64_t stamp_ns) noexcept {
+  ++counters_.packets;
+  const RawPacket* packet = as_packet(payload);
+  if (packet == nullptr) {
+    ++counters_.wrong_size;
+    return false;
+  }
+  for (const RawBlock& b : packet->blocks) {
+    if ((b.bank != kUpperBank && b.bank != kLowerBank) || b.rotation >= kRotationUnits) {
+      ++counters_.invalid_block;
+      return false;
+    }
+  }
+  if (is_duplicate(payload)) {
+    ++counters_.duplicates;
+    return false;
+  }
+  if (scan_ == nullptr) return false;  // begin() was never called: nothing to write into
+  if (target_ == &carry_) begin(*scan_);  // the caller did not take the closed scan: reuse it
+  std::memcpy(last_trailer_.data(), packet->trailer, last_trailer_.size());
+  const ModelTraits& model = decoder_.model();
+  const std::uint32_t device_usec =
+      model.trailer == TrailerKind::kGpsStatus ? load_u32(packet->trailer) : 0;
+
+  bool completed = false;
+  bool restarted = !have_prev_;
+  // Silence, a clock jump or a scan that never ends closes the scan in progress.
+  if (have_prev_ && current_.open) {
+    const bool gap = stamp_ns - prev_stamp_ns_ > max_gap_ns_ || prev_stamp_ns_ - stamp_ns > max_gap_ns_;
+    const bool timeout = stamp_ns - current_.header->stamp_ns > max_duration_ns_;
+    if (gap || timeout) {
+      ++(gap ? counters_.time_gaps : counters_.timeouts);
+      close(false);
+      completed = true;
+      have_prev_ = false;
+      restarted = true;
+      step_ema_ = 0.0;
+    }
+  }
+  const bool dual = is_dual_return(*packet, model.supports_dual_return);
+  const int group = dual ? 4 : 2;
+
+  // Loss estimate: an azimuth step between packets much larger than the usual one.
+  const std::uint16_t r0 = packet->blocks[0].rotation;
+  if (have_prev_) {
+    const int step = forward(prev_packet_rotation_, r0);
+    if (step > 0 && step < kHalfTurn) {
+      if (step_ema_ == 0.0) {
+        step_ema_ = step;
+      } else if (step > kGapFactor * step_ema_) {
+        const auto lost = static_cast<std::uint32_t>(std::lround(step / step_ema_) - 1);
+        counters_.packets_lost += lost;
+        target_->header->packets_lost += lost;
+        gap_ = {prev_packet_rotation_, r0, lost, target_, target_->epoch};
+      } else {
+        step_ema_ = 0.95 * step_ema_ + 0.05 * step;
+      }
+      prev_packet_rotation_ = r0;
+    } else if (step >= kHalfTurn && gap_.open > 0 && forward(gap_.from, r0) > 0 &&
+               forward(gap_.from, r0) < forward(gap_.from, gap_.to)) {
+      // A packet behind the newest one, inside the last gap: it was reordered, not lost. The
+      // scan that counted the gap is corrected while it is still open.
+      --gap_.open;
+      --counters_.packets_lost;
+      if (gap_.target == target_ && gap_.epoch == target_->epoch && target_->header->packets_lost > 0) {
+        --target_->header->packets_lost;
+      }
+    }
+  } else {
+    prev_packet_rotation_ = r0;
+  }
+
+  bool wrote_current = false;
+  bool wrote_carry = false;
+  for (int first = 0; first < kBlocksPerPacket; first += group) {
+    const std::uint16_t r = packet->blocks[first].rotation;
+    const std::int64_t t = stamp_ns + decoder_.firing_offset_ns(first, 0, dual);
+    if (!have_prev_) {
+      have_prev_ = true;
+      prev_rotation_ = r;
+      if (!target_->open) open(*target_, t, r, false, device_usec, dual);
+    } else {
+      const int d = forward(prev_rotation_, r);
+      if (d != 0 && d < kHalfTurn) {
+        const int to_cut = forward(prev_rotation_, config_.cut_angle);
+        if (to_cut > 0 && to_cut <= d) {
+          if (target_ == &current_ && current_.open) {
+            close(true);
+            completed = true;
+          }
+          open(*target_, t, r, true, device_usec, dual);
+        }
+        prev_rotation_ = r;
+      } else if (d >= kHalfTurn) {
+        // Backwards: a reordered firing. If the cut lies between it and the newest firing,
+        // it belongs to a scan already closed.
+        if (forward(config_.cut_angle, prev_rotation_) < kRotationUnits - d) {
+          counters_.late_firings += 1;
+          target_->header->late_firings += 1;
+          continue;
+        }
+      }
+      if (!target_->open) open(*target_, t, r, false, device_usec, dual);
+    }
+    ScanHeader& h = *target_->header;
+    rt::FixedVector<Point>& pts = *target_->points;
+    const std::int64_t offset = stamp_ns - h.stamp_ns;
+    for (int b = first; b < first + group; ++b) {
+      const std::size_t size = pts.size();
+      if (pts.capacity() - size < static_cast<std::size_t>(kLasersPerBlock)) {
+        Point spill[kLasersPerBlock];
+        const int n = decoder_.decode_block(packet->blocks[b], b, dual, offset, spill);
+        for (int i = 0; i < n; ++i) {
+          if (!pts.push_back(spill[i])) ++h.points_dropped;
+        }
+        continue;
+      }
+      const int n = decoder_.decode_block(packet->blocks[b], b, dual, offset, pts.data() + size);
+      (void)pts.resize(size + static_cast<std::size_t>(n));
+    }
+    h.end_stamp_ns = std::max(h.end_stamp_ns, stamp_ns + decoder_.firing_offset_ns(
+                                                  first + group - 1, kLasersPerBlock - 1, dual));
+    if (forward(h.first_azimuth, r) >= forward(h.first_azimuth, h.last_azimuth)) h.last_azimuth = r;
+    (target_ == &current_ ? wrote_current : wrote_carry) = true;
+  }
+  if (wrote_current) ++current_.header->packets;
+  if (wrote_carry) ++carry_header_.packets;
+  prev_stamp_ns_ = restarted ? stamp_ns : std::max(prev_stamp_ns_, stamp_ns);
+  return completed;
+}
+
+bool ScanAssembler::flush() noexcept {
+  if (target_ != &current_ || !current_.open || current_.points->empty()) return false;
+  close(false);
+  return true;
+}
+
+}  // namespace stac::velodyne
