@@ -1,0 +1,66 @@
+// Reads UDP datagrams from a pcap or pcapng file (libpcap) with nanosecond stamps. Link types:
+// Ethernet (with 802.1Q/802.1ad tags), Linux cooked v1 and v2, raw IPv4. Frames that are not
+// IPv4 UDP, fragments, and frames shorter than their headers say are skipped and counted.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "drivers/io/datagram.hpp"
+#include "rt/expected.hpp"
+
+struct pcap;
+
+namespace stac::io {
+
+struct PcapFilter {
+  std::optional<std::uint16_t> udp_dst_port;  // keep only datagrams to this port
+  std::optional<std::uint16_t> udp_src_port;  // and/or from this port
+};
+
+struct PcapCounters {
+  std::uint64_t frames = 0;           // records read
+  std::uint64_t datagrams = 0;        // UDP datagrams returned
+  std::uint64_t non_ipv4 = 0;         // other link-layer payloads (ARP, IPv6, ...)
+  std::uint64_t non_udp = 0;          // IPv4 but not UDP (TCP, ICMP, ...)
+  std::uint64_t filtered_out = 0;     // UDP on other ports
+  std::uint64_t fragments = 0;        // IPv4 fragments (not reassembled)
+  std::uint64_t truncated_frame = 0;  // captured shorter than its headers or UDP length say
+  std::uint64_t bad_header = 0;       // impossible IPv4/UDP header fields
+};
+
+class PcapReader {
+ public:
+  // Fails with the file name and libpcap's reason (missing file, not a capture, unknown link).
+  static rt::Result<PcapReader> open(const std::filesystem::path& path, const PcapFilter& filter = {});
+
+  // The next datagram that passes the filter; false at the end of the file or on a damaged
+  // record (error() then says which). No allocation.
+  bool next(Datagram& out) noexcept;
+
+  // Empty, or why reading stopped early (a truncated or corrupt file), naming file and record.
+  const std::string& error() const noexcept { return error_; }
+  const PcapCounters& counters() const noexcept { return counters_; }
+  // Bytes of the file consumed so far (for progress bars).
+  std::uint64_t bytes_read() const noexcept { return bytes_read_; }
+
+ private:
+  struct Closer {
+    void operator()(pcap* p) const noexcept;
+  };
+  PcapReader() = default;
+  bool parse(const std::uint8_t* frame, std::uint32_t caplen, Datagram& out) noexcept;
+
+  std::unique_ptr<pcap, Closer> handle_;
+  std::string path_;
+  std::string error_;
+  PcapFilter filter_;
+  int link_type_ = 0;
+  PcapCounters counters_;
+  std::uint64_t bytes_read_ = 24;  // file header
+};
+
+}  // namespace stac::io
