@@ -54,25 +54,25 @@ PacketDecoder::PacketDecoder(const Calibration& calibration, const DecoderConfig
   for (int rank = 0; rank < kMaxLasers; ++rank) {
     const int id = order[static_cast<std::size_t>(rank)];
     const LaserCalibration& c = calibration.lasers[static_cast<std::size_t>(id)];
-    LaserTable& t = lasers_[static_cast<std::size_t>(id)];
-    t.cos_vert = static_cast<float>(std::cos(c.vert_correction_rad));
-    t.sin_vert = static_cast<float>(std::sin(c.vert_correction_rad));
-    t.cos_rot = static_cast<float>(std::cos(c.rot_correction_rad));
-    t.sin_rot = static_cast<float>(std::sin(c.rot_correction_rad));
-    t.dist = static_cast<float>(c.dist_correction_m);
-    t.dist_x = static_cast<float>(c.dist_correction_x_m);
-    t.dist_y = static_cast<float>(c.dist_correction_y_m);
-    t.vert_offset = static_cast<float>(c.vert_offset_m);
-    t.horiz_offset = static_cast<float>(c.horiz_offset_m);
+    LaserTables& t = lasers_;
+    t.cos_vert[id] = static_cast<float>(std::cos(c.vert_correction_rad));
+    t.sin_vert[id] = static_cast<float>(std::sin(c.vert_correction_rad));
+    t.cos_rot[id] = static_cast<float>(std::cos(c.rot_correction_rad));
+    t.sin_rot[id] = static_cast<float>(std::sin(c.rot_correction_rad));
+    t.dist[id] = static_cast<float>(c.dist_correction_m);
+    t.dist_x[id] = static_cast<float>(c.dist_correction_x_m);
+    t.dist_y[id] = static_cast<float>(c.dist_correction_y_m);
+    t.vert_offset[id] = static_cast<float>(c.vert_offset_m);
+    t.horiz_offset[id] = static_cast<float>(c.horiz_offset_m);
     const float fd = static_cast<float>(c.focal_distance_m * (config.ros_intensity_units ? 1.0 : 100.0));
     const float f = 1.0f - fd / kFocalScale;
-    t.focal_offset = 256.0f * f * f;
-    t.focal_slope = static_cast<float>(c.focal_slope);
-    t.min_intensity = static_cast<float>(c.min_intensity);
-    t.max_intensity = static_cast<float>(c.max_intensity);
-    t.two_pt = c.two_pt_correction_available;
-    t.enabled = c.enabled && id < n;
-    t.ring = static_cast<std::uint8_t>(rank);
+    t.focal_offset[id] = 256.0f * f * f;
+    t.focal_slope[id] = static_cast<float>(c.focal_slope);
+    t.min_intensity[id] = static_cast<float>(c.min_intensity);
+    t.max_intensity[id] = static_cast<float>(c.max_intensity);
+    t.two_pt[id] = c.two_pt_correction_available ? 1.0f : 0.0f;
+    t.enabled[id] = c.enabled && id < n;
+    t.ring[id] = static_cast<std::uint8_t>(rank);
   }
   for (int dual = 0; dual < 2; ++dual) {
     const int blocks_per_firing = dual ? 4 : 2;
@@ -94,72 +94,90 @@ int PacketDecoder::decode_block(const RawBlock& block, int block_index, bool dua
     ++counters_.invalid_rotation;
     return 0;
   }
-  const int bank_origin = block.bank == kLowerBank ? kLasersPerBlock : 0;
+  const int bank = block.bank == kLowerBank ? kLasersPerBlock : 0;
   const float cos_r = cos_table_[block.rotation];
   const float sin_r = sin_table_[block.rotation];
+  constexpr float kInvX = 1.0f / (kTwoPointFar - kTwoPointXAt);
+  constexpr float kInvY = 1.0f / (kTwoPointFar - kTwoPointYAt);
+  const LaserTables& t = lasers_;
+
+  // Pass 1, branch-free loops over all 32 returns (vectorised): the ROS math of REFERENCE §1.
+  alignas(64) float raw[kLasersPerBlock], raw_intensity[kLasersPerBlock];
+  for (int j = 0; j < kLasersPerBlock; ++j) {
+    raw[j] = static_cast<float>(block.returns[j].distance);
+    raw_intensity[j] = static_cast<float>(block.returns[j].intensity);
+  }
+  alignas(64) float distance[kLasersPerBlock], cos_a[kLasersPerBlock], sin_a[kLasersPerBlock];
+  alignas(64) float xx[kLasersPerBlock], yy[kLasersPerBlock];
+  alignas(64) float corr_x[kLasersPerBlock], corr_y[kLasersPerBlock];
+  for (int j = 0; j < kLasersPerBlock; ++j) {
+    const int l = bank + j;
+    distance[j] = raw[j] * resolution_m_ + t.dist[l];
+    // Azimuth with the laser's rotational correction: cos/sin(rotation - rot_correction).
+    cos_a[j] = cos_r * t.cos_rot[l] + sin_r * t.sin_rot[l];
+    sin_a[j] = sin_r * t.cos_rot[l] - cos_r * t.sin_rot[l];
+    const float xy = distance[j] * t.cos_vert[l] - t.vert_offset[l] * t.sin_vert[l];
+    xx[j] = std::fabs(xy * sin_a[j] - t.horiz_offset[l] * cos_a[j]);
+    yy[j] = std::fabs(xy * cos_a[j] + t.horiz_offset[l] * sin_a[j]);
+    corr_x[j] = ((t.dist[l] - t.dist_x[l]) * (xx[j] - kTwoPointXAt) * kInvX + t.dist_x[l] - t.dist[l]) *
+                t.two_pt[l];
+    corr_y[j] = ((t.dist[l] - t.dist_y[l]) * (yy[j] - kTwoPointYAt) * kInvY + t.dist_y[l] - t.dist[l]) *
+                t.two_pt[l];
+  }
+  if (config_.gate_two_point_correction) {
+    for (int j = 0; j < kLasersPerBlock; ++j) {
+      corr_x[j] = xx[j] > kTwoPointFar ? 0.0f : corr_x[j];
+      corr_y[j] = yy[j] > kTwoPointFar ? 0.0f : corr_y[j];
+    }
+  }
+  alignas(64) float px[kLasersPerBlock], py[kLasersPerBlock], pz[kLasersPerBlock];
+  alignas(64) float pi[kLasersPerBlock];
+  for (int j = 0; j < kLasersPerBlock; ++j) {
+    const int l = bank + j;
+    const float cv = t.cos_vert[l], sv = t.sin_vert[l];
+    const float vo = t.vert_offset[l], ho = t.horiz_offset[l];
+    const float xy_x = (distance[j] + corr_x[j]) * cv - vo * sv;
+    const float xy_y = (distance[j] + corr_y[j]) * cv - vo * sv;
+    const float vx = xy_x * sin_a[j] - ho * cos_a[j];  // Velodyne frame: x right
+    const float vy = xy_y * cos_a[j] + ho * sin_a[j];  // y forward
+    px[j] = vy;   // sensor frame: x forward
+    py[j] = -vx;  // y left
+    pz[j] = (distance[j] + corr_y[j]) * sv + vo * cv;
+    const float r = 1.0f - raw[j] * (1.0f / 65535.0f);
+    const float intensity =
+        raw_intensity[j] + t.focal_slope[l] * std::fabs(t.focal_offset[l] - 256.0f * r * r);
+    pi[j] = std::min(std::max(intensity, t.min_intensity[l]), t.max_intensity[l]);
+  }
+
+  // Pass 2: keep the valid returns, counting the others by cause.
   const auto& firing = firing_ns_[dual_return ? 1 : 0][static_cast<std::size_t>(block_index)];
   const std::uint8_t return_type = static_cast<std::uint8_t>(
       dual_return && (block_index % 4) >= 2 ? ReturnType::kLast : ReturnType::kStrongest);
   int written = 0;
   for (int j = 0; j < kLasersPerBlock; ++j) {
-    const RawReturn& ret = block.returns[j];
-    const int laser = bank_origin + j;
-    const LaserTable& c = lasers_[static_cast<std::size_t>(laser)];
-    const std::uint16_t raw = ret.distance;
-    if (raw == 0) {
+    const int l = bank + j;
+    if (block.returns[j].distance == 0) {
       ++counters_.no_return;
       continue;
     }
-    if (!c.enabled) {
+    if (!t.enabled[l]) {
       ++counters_.disabled;
       continue;
     }
-    const float distance = static_cast<float>(raw) * resolution_m_ + c.dist;
-    if (distance < config_.min_range_m || distance > config_.max_range_m) {
+    if (distance[j] < config_.min_range_m || distance[j] > config_.max_range_m) {
       ++counters_.out_of_range;
       continue;
     }
-    // Azimuth with the laser's rotational correction: cos/sin(rotation - rot_correction).
-    const float cos_a = cos_r * c.cos_rot + sin_r * c.sin_rot;
-    const float sin_a = sin_r * c.cos_rot - cos_r * c.sin_rot;
-    float corr_x = 0.0f;
-    float corr_y = 0.0f;
-    if (c.two_pt) {
-      const float xy = distance * c.cos_vert - c.vert_offset * c.sin_vert;
-      const float xx = std::fabs(xy * sin_a - c.horiz_offset * cos_a);
-      const float yy = std::fabs(xy * cos_a + c.horiz_offset * sin_a);
-      corr_x = (c.dist - c.dist_x) * (xx - kTwoPointXAt) / (kTwoPointFar - kTwoPointXAt) +
-               c.dist_x - c.dist;
-      corr_y = (c.dist - c.dist_y) * (yy - kTwoPointYAt) / (kTwoPointFar - kTwoPointYAt) +
-               c.dist_y - c.dist;
-      if (config_.gate_two_point_correction) {
-        if (xx > kTwoPointFar) corr_x = 0.0f;
-        if (yy > kTwoPointFar) corr_y = 0.0f;
-      }
-    }
-    const float dx = distance + corr_x;
-    const float dy = distance + corr_y;
-    const float xy_x = dx * c.cos_vert - c.vert_offset * c.sin_vert;
-    const float xy_y = dy * c.cos_vert - c.vert_offset * c.sin_vert;
-    const float vx = xy_x * sin_a - c.horiz_offset * cos_a;  // Velodyne frame: x right
-    const float vy = xy_y * cos_a + c.horiz_offset * sin_a;  // y forward
-    const float vz = dy * c.sin_vert + c.vert_offset * c.cos_vert;
-
-    const float r = 1.0f - static_cast<float>(raw) / 65535.0f;
-    float intensity = static_cast<float>(ret.intensity) +
-                      c.focal_slope * std::fabs(c.focal_offset - 256.0f * r * r);
-    intensity = std::clamp(intensity, c.min_intensity, c.max_intensity);
-
     Point& p = out[written++];
-    p.x = vy;  // forward
-    p.y = -vx; // left
-    p.z = vz;
-    p.intensity = intensity;
-    p.distance_m = distance;
+    p.x = px[j];
+    p.y = py[j];
+    p.z = pz[j];
+    p.intensity = pi[j];
+    p.distance_m = distance[j];
     p.time_offset_ns = static_cast<std::int32_t>(packet_offset_ns + firing[static_cast<std::size_t>(j)]);
     p.azimuth = block.rotation;
-    p.laser = static_cast<std::uint8_t>(laser);
-    p.ring = c.ring;
+    p.laser = static_cast<std::uint8_t>(l);
+    p.ring = t.ring[l];
     p.return_type = return_type;
   }
   return written;

@@ -52,20 +52,26 @@ class PacketDecoder {
   }
   const ModelTraits& model() const noexcept { return *traits_; }
   const DecodeCounters& counters() const noexcept { return counters_; }
-  int ring_of(int laser) const noexcept { return lasers_[static_cast<std::size_t>(laser)].ring; }
+  int ring_of(int laser) const noexcept { return lasers_.ring[laser]; }
 
  private:
-  struct LaserTable {
-    float cos_vert, sin_vert, cos_rot, sin_rot;
-    float dist, dist_x, dist_y, vert_offset, horiz_offset;
-    float focal_offset, focal_slope, min_intensity, max_intensity;
-    bool two_pt, enabled;
-    std::uint8_t ring;
+  // Per-laser constants as structure-of-arrays, so the 32 returns of a block are corrected in
+  // one branch-free loop the compiler vectorises; invalid returns are dropped afterwards.
+  struct LaserTables {
+    alignas(64) float cos_vert[kMaxLasers], sin_vert[kMaxLasers];
+    alignas(64) float cos_rot[kMaxLasers], sin_rot[kMaxLasers];
+    alignas(64) float dist[kMaxLasers], dist_x[kMaxLasers], dist_y[kMaxLasers];
+    alignas(64) float vert_offset[kMaxLasers], horiz_offset[kMaxLasers];
+    alignas(64) float two_pt[kMaxLasers];  // 1 when the two-point correction applies, else 0
+    alignas(64) float focal_offset[kMaxLasers], focal_slope[kMaxLasers];
+    alignas(64) float min_intensity[kMaxLasers], max_intensity[kMaxLasers];
+    bool enabled[kMaxLasers];
+    std::uint8_t ring[kMaxLasers];
   };
   const ModelTraits* traits_;
   DecoderConfig config_;
   float resolution_m_;
-  std::array<LaserTable, kMaxLasers> lasers_{};
+  LaserTables lasers_{};
   std::vector<float> cos_table_, sin_table_;  // by raw rotation, 36000 entries, built once
   std::array<std::array<std::array<std::int32_t, kLasersPerBlock>, kBlocksPerPacket>, 2>
       firing_ns_{};
