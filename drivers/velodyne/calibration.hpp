@@ -1,6 +1,5 @@
 // HDL-64E per-laser calibration: the corrections the point math needs, in SI units.
-// Loaded from Velodyne db.xml (cm, degrees) or ROS yaml (m, radians), or assembled from the
-// status cycle the sensor streams in its packet trailers (drivers/velodyne/status.hpp).
+// Loaded from Velodyne db.xml (cm, degrees) or ROS yaml (m, radians).
 #pragma once
 
 #include <array>

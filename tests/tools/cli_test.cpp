@@ -1,0 +1,221 @@
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+#include "drivers/io/pcap_reader.hpp"
+#include "drivers/io/pcap_writer.hpp"
+#include "drivers/io/udp_receiver.hpp"
+#include "shared_data.hpp"
+#include "velodyne/synthetic_stream.hpp"
+
+namespace stac::tools {
+namespace {
+
+constexpr const char* kYaml = "velodyne/calib/rosdrivers_64e_s2.1-sztaki.yaml";
+
+struct CliResult {
+  int code;
+  std::string output;  // stdout and stderr
+};
+
+CliResult stac(const std::string& args) {
+  const std::string cmd = std::string(STAC_CLI) + " " + args + " 2>&1";
+  FILE* p = popen(cmd.c_str(), "r");
+  if (p == nullptr) return {-1, "popen failed"};
+  std::string out;
+  char buf[4096];
+  while (std::size_t n = std::fread(buf, 1, sizeof(buf), p)) out.append(buf, n);
+  const int status = pclose(p);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+}
+
+std::filesystem::path fresh_dir(const std::string& name) {
+  const auto d = std::filesystem::temp_directory_path() / ("stac_cli_" + name);
+  std::filesystem::remove_all(d);
+  std::filesystem::create_directories(d);
+  return d;
+}
+
+// Half a second of the synthetic rotating sensor (every return at 10 m) as a pcap.
+std::filesystem::path write_capture(const std::filesystem::path& dir) {
+  const auto path = dir / "capture.pcap";
+  auto w = io::PcapWriter::open(path);
+  EXPECT_TRUE(w);
+  stac::testing::StreamSpec spec;
+  spec.seconds = 0.5;
+  for (const auto& p : stac::testing::make_stream(spec)) {
+    io::Datagram d;
+    d.payload = p.bytes;
+    d.stamp_ns = p.stamp_ns + 285'660;  // received after the packet's last firing
+    d.dst_port = 2368;
+    EXPECT_TRUE(w->write_udp(d));
+  }
+  EXPECT_TRUE(w->close());
+  return path;
+}
+
+TEST(Cli, HelpExplainsEveryCommand) {
+  const CliResult r = stac("--help");
+  EXPECT_EQ(r.code, 0);
+  for (const char* word : {"decode", "record", "demo", "Examples"}) {
+    EXPECT_NE(r.output.find(word), std::string::npos) << word << " missing from:\n" << r.output;
+  }
+  const CliResult d = stac("decode --help");
+  EXPECT_EQ(d.code, 0);
+  EXPECT_NE(d.output.find("scan,laser,azimuth"), std::string::npos) << d.output;
+  const CliResult none = stac("");
+  EXPECT_NE(none.code, 0);  // a subcommand is required
+}
+
+TEST(Cli, DecodeWritesTheDocumentedCsv) {
+  STAC_REQUIRE_SHARED_DATA(kYaml);
+  const auto dir = fresh_dir("csv");
+  const auto pcap = write_capture(dir);
+  const CliResult r = stac("decode --calib " + stac::testing::shared_data(kYaml).string() + " --in " +
+                     pcap.string() + " --out " + (dir / "points.csv").string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  std::ifstream in(dir / "points.csv");
+  std::string line;
+  std::getline(in, line);
+  EXPECT_EQ(line, "scan,laser,azimuth,distance,x,y,z,intensity,time");
+  std::size_t rows = 0;
+  long last_scan = 0;
+  while (std::getline(in, line)) {
+    std::stringstream ss(line);
+    std::string cell;
+    std::vector<double> v;
+    while (std::getline(ss, cell, ',')) v.push_back(std::stod(cell));
+    ASSERT_EQ(v.size(), 9u) << line;
+    EXPECT_GE(static_cast<long>(v[0]), last_scan);
+    last_scan = static_cast<long>(v[0]);
+    EXPECT_GE(v[1], 0);
+    EXPECT_LT(v[1], 64);
+    EXPECT_GE(v[2], 0);
+    EXPECT_LT(v[2], 36000);
+    EXPECT_NEAR(v[3], 10.0, 2.0);  // raw 10 m plus the laser's distance correction
+    EXPECT_NEAR(std::hypot(v[4], v[5], v[6]), v[3], 0.6);
+    EXPECT_NEAR(v[8], 1.7e9, 1e3);  // seconds since the epoch
+    ++rows;
+  }
+  // Every return of every packet is in range: 1736 packets x 384 returns.
+  EXPECT_EQ(rows, static_cast<std::size_t>(0.5 * 3472.17) * 384);
+  EXPECT_GE(last_scan, 4);
+  EXPECT_NE(r.output.find("scans"), std::string::npos);
+}
+
+TEST(Cli, DecodeKittiWritesOneFloatFilePerScan) {
+  STAC_REQUIRE_SHARED_DATA(kYaml);
+  const auto dir = fresh_dir("kitti");
+  const auto pcap = write_capture(dir);
+  const CliResult r = stac("decode --format kitti --calib " + stac::testing::shared_data(kYaml).string() +
+                     " --in " + pcap.string() + " --out " + (dir / "scans").string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  int files = 0;
+  for (const auto& e : std::filesystem::directory_iterator(dir / "scans")) {
+    EXPECT_EQ(e.path().extension(), ".bin");
+    EXPECT_EQ(e.file_size() % 16, 0u);
+    EXPECT_GT(e.file_size(), 0u);
+    ++files;
+  }
+  EXPECT_GE(files, 5);
+  ASSERT_TRUE(std::filesystem::exists(dir / "scans" / "000001.bin"));
+  std::ifstream f(dir / "scans" / "000001.bin", std::ios::binary);
+  float p[4];
+  f.read(reinterpret_cast<char*>(p), sizeof(p));
+  EXPECT_NEAR(std::hypot(p[0], p[1], p[2]), 10.0, 2.5);
+  EXPECT_GE(p[3], 0.0f);
+  EXPECT_LE(p[3], 1.0f);
+}
+
+TEST(Cli, DecodeNamesTheFileAndLaserOfABrokenCalibration) {
+  const auto dir = fresh_dir("badcalib");
+  const auto pcap = write_capture(dir);
+  std::ofstream(dir / "broken.yaml") << "lasers:\n- laser_id: 0\n  rot_correction: 0.1\n";
+  const CliResult r = stac("decode --calib " + (dir / "broken.yaml").string() + " --in " + pcap.string() +
+                     " --out " + (dir / "x.csv").string());
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.output.find("broken.yaml: laser 0: missing 'vert_correction'"), std::string::npos)
+      << r.output;
+}
+
+TEST(Cli, DecodeRejectsAFileThatIsNotACapture) {
+  STAC_REQUIRE_SHARED_DATA(kYaml);
+  const auto dir = fresh_dir("notpcap");
+  std::ofstream(dir / "notes.pcap") << "hello, this is not a capture at all, really not";
+  const CliResult r = stac("decode --calib " + stac::testing::shared_data(kYaml).string() + " --in " +
+                     (dir / "notes.pcap").string() + " --out " + (dir / "x.csv").string());
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.output.find("notes.pcap: cannot read as a pcap capture"), std::string::npos) << r.output;
+}
+
+TEST(Cli, DecodeSaysWhenNoPacketIsOnThePort) {
+  STAC_REQUIRE_SHARED_DATA(kYaml);
+  const auto dir = fresh_dir("port");
+  const auto pcap = write_capture(dir);
+  const CliResult r = stac("decode --port 2369 --calib " + stac::testing::shared_data(kYaml).string() +
+                     " --in " + pcap.string() + " --out " + (dir / "x.csv").string());
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.output.find("no UDP packet to port 2369"), std::string::npos) << r.output;
+}
+
+TEST(Cli, DemoRunsEndToEnd) {
+  STAC_REQUIRE_SHARED_DATA(kYaml);
+  const auto dir = fresh_dir("demo");
+  const CliResult r = stac("demo --seconds 0.5 --out " + dir.string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_GT(std::filesystem::file_size(dir / "demo.pcap"), 1'000'000u);
+  EXPECT_GT(std::filesystem::file_size(dir / "demo.csv"), 1'000'000u);
+  EXPECT_GT(std::filesystem::file_size(dir / "demo_birds_eye.png"), 10'000u);
+  EXPECT_NE(r.output.find("1736 packets received"), std::string::npos) << r.output;
+}
+
+TEST(Cli, RecordWritesWhatArrivesOnTheSocket) {
+  const auto dir = fresh_dir("record");
+  std::uint16_t port = 0;
+  {
+    io::UdpReceiverConfig any_port;
+    any_port.bind_address = "127.0.0.1";
+    any_port.port = 0;
+    auto probe = io::UdpReceiver::open(any_port);
+    ASSERT_TRUE(probe);
+    port = probe->port();
+  }
+  const auto out = dir / "live.pcap";
+  CliResult result{};
+  std::thread recorder([&] {
+    result = stac("record --bind 127.0.0.1 --port " + std::to_string(port) +
+                  " --packets 200 --duration 20 --out " + out.string());
+  });
+  auto sender = io::UdpSender::open("127.0.0.1", port);
+  ASSERT_TRUE(sender);
+  std::array<std::uint8_t, 1206> packet{};
+  // Keep sending until the recorder has what it asked for and exits.
+  for (int i = 0; i < 4000 && !std::filesystem::exists(out); ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  for (int i = 0; i < 200; ++i) {
+    packet[0] = static_cast<std::uint8_t>(i);
+    ASSERT_TRUE(sender->send(packet));
+    std::this_thread::sleep_for(std::chrono::microseconds(200));
+  }
+  recorder.join();
+  ASSERT_EQ(result.code, 0) << result.output;
+  auto r = io::PcapReader::open(out);
+  ASSERT_TRUE(r) << r.error().message;
+  io::Datagram d;
+  int n = 0;
+  while (r->next(d)) {
+    EXPECT_EQ(d.payload.size(), 1206u);
+    EXPECT_EQ(d.payload[0], static_cast<std::uint8_t>(n));
+    EXPECT_EQ(d.src_ip, 0x7F000001u);
+    ++n;
+  }
+  EXPECT_EQ(n, 200);
+}
+
+}  // namespace
+}  // namespace stac::tools

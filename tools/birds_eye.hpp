@@ -1,0 +1,39 @@
+// Bird's-eye pictures of a scan (PNG, through OpenCV): the view from above, x forward = up in the
+// picture, y left = left, with range rings every 10 m and a legend. Tools only, never per scan
+// in the real-time loop.
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+#include <opencv2/core.hpp>
+
+#include "rt/expected.hpp"
+
+namespace stac::tools {
+
+struct BirdsEyeOptions {
+  double range_m = 50.0;  // half width of the picture
+  int size_px = 900;      // square picture side
+  double z_min_m = -2.5;  // colour scale of heights (sensor frame)
+  double z_max_m = 2.5;
+};
+
+class BirdsEye {
+ public:
+  explicit BirdsEye(const BirdsEyeOptions& options);
+
+  // A point coloured by its height.
+  void add_point(float x, float y, float z) noexcept;
+  // A text line in the legend (top left).
+  void add_legend(const std::string& line);
+  rt::Result<bool> save(const std::filesystem::path& png) const;
+
+ private:
+  BirdsEyeOptions options_;
+  double px_per_m_;
+  cv::Mat image_;
+  int legend_lines_ = 0;
+};
+
+}  // namespace stac::tools

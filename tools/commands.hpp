@@ -1,0 +1,17 @@
+// The `stac` subcommands. Each registers itself on the CLI11 app; main() only composes them.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <string>
+
+namespace stac::tools {
+
+void add_decode_command(CLI::App& app);
+void add_record_command(CLI::App& app);
+void add_demo_command(CLI::App& app);
+
+// Prints "stac: <message>" on stderr and returns the exit code 1, for command callbacks.
+int fail(const std::string& message);
+
+}  // namespace stac::tools

@@ -1,0 +1,153 @@
+// stac decode: a pcap capture of HDL-64E packets -> calibrated, timed points (csv or KITTI bins).
+#include <cstdio>
+#include <filesystem>
+#include <optional>
+#include <string>
+
+#include "drivers/io/pcap_reader.hpp"
+#include "drivers/velodyne/scan_stream.hpp"
+#include "tools/birds_eye.hpp"
+#include "tools/commands.hpp"
+#include "tools/decode.hpp"
+#include "tools/progress.hpp"
+#include "tools/scan_writers.hpp"
+#include "tools/settings.hpp"
+
+namespace stac::tools {
+namespace {
+
+// Applies the command line over the configuration file's velodyne section.
+rt::Result<VelodyneSettings> settings_for(const DecodeOptions& o) {
+  const std::filesystem::path config = config_path(o.config);
+  auto s = load_velodyne_settings(config);
+  if (!s) return s;
+  if (!o.calib.empty()) s->calibration = o.calib == "stream" ? std::filesystem::path{} : std::filesystem::path(o.calib);
+  if (!o.model.empty()) {
+    const auto m = velodyne::parse_model(o.model);
+    if (!m) return rt::make_error("--model '" + o.model + "': use S2, S2.1 or S3");
+    s->assembler.decoder.model = *m;
+  }
+  if (o.port >= 0) {
+    if (o.port == 0 || o.port > 65535) return rt::make_error("--port must be 1..65535");
+    s->port = static_cast<std::uint16_t>(o.port);
+  }
+  if (o.cut_angle_deg >= 0.0) {
+    if (o.cut_angle_deg >= 360.0) return rt::make_error("--cut-angle must be in [0, 360)");
+    s->assembler.cut_angle = static_cast<std::uint16_t>(std::lround(o.cut_angle_deg * 100.0) % 36000);
+  }
+  if (s->calibration.empty()) {
+    return rt::make_error("the calibration from the sensor's status bytes ('stream') is not "
+                          "available yet; pass --calib with the unit's db.xml or ROS yaml");
+  }
+  return s;
+}
+
+}  // namespace
+
+int run_decode(const DecodeOptions& o) {
+  auto settings = settings_for(o);
+  if (!settings) return fail(settings.error().message);
+  const auto& s = *settings;
+  auto calibration = velodyne::load_calibration(s.calibration);
+  if (!calibration) return fail(calibration.error().message);
+  auto writer = make_scan_writer(o.format, o.out);
+  if (!writer) return fail(writer.error().message);
+  auto reader = io::PcapReader::open(o.in, io::PcapFilter{.udp_dst_port = s.port, .udp_src_port = {}});
+  if (!reader) return fail(reader.error().message);
+
+  velodyne::ScanStream stream(*calibration, s.assembler, 2);
+  std::optional<BirdsEye> picture;
+  if (!o.png.empty()) picture.emplace(BirdsEyeOptions{});
+  std::uint64_t scans = 0, complete = 0, points = 0;
+  Progress progress("decode", static_cast<double>(std::filesystem::file_size(o.in)));
+  auto drain = [&]() -> rt::Result<bool> {
+    while (const velodyne::Scan* scan = stream.take()) {
+      auto w = (*writer)->write(*scan);
+      if (!w) return w;
+      ++scans;
+      complete += scan->header.complete() ? 1 : 0;
+      points += scan->points.size();
+      if (picture && scan->header.complete() && complete == 1) {
+        for (const auto& p : scan->points) picture->add_point(p.x, p.y, p.z);
+        picture->add_legend("scan " + std::to_string(scan->header.sequence) + " of " + o.in);
+        picture->add_legend(std::to_string(scan->points.size()) + " points");
+      }
+      stream.release();
+    }
+    return true;
+  };
+  io::Datagram d;
+  while (reader->next(d)) {
+    if (stream.add_packet(d.payload, d.stamp_ns)) {
+      if (auto r = drain(); !r) return fail(r.error().message);
+    }
+    progress.update(static_cast<double>(reader->bytes_read()));
+  }
+  progress.finish();
+  if (!reader->error().empty()) std::fprintf(stderr, "stac decode: warning: %s\n", reader->error().c_str());
+  (void)stream.finish();
+  if (auto r = drain(); !r) return fail(r.error().message);
+  if (auto r = (*writer)->close(); !r) return fail(r.error().message);
+  if (picture) {
+    if (complete == 0) return fail("--png: the capture holds no complete scan to draw");
+    if (auto r = picture->save(o.png); !r) return fail(r.error().message);
+  }
+
+  const auto& a = stream.assembler().counters();
+  const auto& dc = stream.assembler().decode_counters();
+  const auto& pc = reader->counters();
+  std::fprintf(stderr,
+               "stac decode: %s -> %s (%s)\n"
+               "  packets   %llu read on port %u, %llu other frames skipped\n"
+               "  scans     %llu (%llu complete, framed at %.2f deg)\n"
+               "  points    %llu (no return %llu, out of range %llu)\n"
+               "  dropped   wrong size %llu, invalid block %llu, duplicate %llu, late firings %llu,"
+               " over capacity %llu\n"
+               "  estimated packets lost %llu, scans closed by silence %llu, by timeout %llu\n",
+               o.in.c_str(), o.out.c_str(), o.format.c_str(),
+               static_cast<unsigned long long>(a.packets), s.port,
+               static_cast<unsigned long long>(pc.frames - a.packets),
+               static_cast<unsigned long long>(scans), static_cast<unsigned long long>(complete),
+               s.assembler.cut_angle / 100.0, static_cast<unsigned long long>(points),
+               static_cast<unsigned long long>(dc.no_return),
+               static_cast<unsigned long long>(dc.out_of_range),
+               static_cast<unsigned long long>(a.wrong_size),
+               static_cast<unsigned long long>(a.invalid_block),
+               static_cast<unsigned long long>(a.duplicates),
+               static_cast<unsigned long long>(a.late_firings),
+               static_cast<unsigned long long>(a.points_dropped),
+               static_cast<unsigned long long>(a.packets_lost),
+               static_cast<unsigned long long>(a.time_gaps),
+               static_cast<unsigned long long>(a.timeouts));
+  if (a.packets == 0) return fail(o.in + ": no UDP packet to port " + std::to_string(s.port) +
+                                  " in the capture (wrong --port?)");
+  return 0;
+}
+
+void add_decode_command(CLI::App& app) {
+  auto o = std::make_shared<DecodeOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "decode", "Decode a pcap capture of HDL-64E packets into calibrated, timed points");
+  cmd->description(
+      "Decode a pcap capture of HDL-64E packets into calibrated, timed points.\n"
+      "Scans are framed where the azimuth crosses the cut angle. csv: one row per point with\n"
+      "columns scan,laser,azimuth (0.01 deg),distance (m),x,y,z (m; x forward, y left, z up),\n"
+      "intensity,time (s). kitti: one float32 x,y,z,reflectance(0..1) file per scan in --out/.");
+  cmd->add_option("--in", o->in, "pcap capture to read (Ethernet, Linux cooked or raw IP)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--out", o->out, "output: a .csv file, or a folder for --format kitti")->required();
+  cmd->add_option("--calib", o->calib,
+                  "calibration of the unit: Velodyne db.xml or ROS yaml. Default: the config's");
+  cmd->add_option("--format", o->format, "csv or kitti")->check(CLI::IsMember({"csv", "kitti"}));
+  cmd->add_option("--config", o->config, "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
+  cmd->add_option("--model", o->model, "S2, S2.1 or S3 (default: the config's)");
+  cmd->add_option("--port", o->port, "UDP data port in the capture (default: the config's, 2368)");
+  cmd->add_option("--cut-angle", o->cut_angle_deg, "scan cut angle in degrees (default: the config's)");
+  cmd->add_option("--png", o->png, "also draw the first complete scan from above into this PNG");
+  cmd->callback([o] {
+    if (const int code = run_decode(*o); code != 0) throw CLI::RuntimeError(code);
+  });
+}
+
+}  // namespace stac::tools

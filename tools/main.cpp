@@ -1,0 +1,37 @@
+// stac: one binary, one subcommand per job. `stac --help` lists them; `stac <sub> --help` explains
+// each one.
+#include <CLI/CLI.hpp>
+
+#include <cstdio>
+
+#include "tools/commands.hpp"
+
+namespace stac::tools {
+
+int fail(const std::string& message) {
+  std::fprintf(stderr, "stac: %s\n", message.c_str());
+  return 1;
+}
+
+}  // namespace stac::tools
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "stac - segmentation, tracking and classification of Velodyne HDL-64E scans.\n"
+      "Decodes sensor packets (live UDP or pcap) into calibrated, timed 360-degree scans.\n"
+      "Configuration: config/stac.yaml (or --config / $STAC_CONFIG).",
+      "stac"};
+  app.require_subcommand(1);
+  app.footer(
+      "Examples:\n"
+      "  stac demo                                   # a synthetic capture, decoded end to end\n"
+      "  stac decode --calib db.xml --in run.pcap --out run.csv\n"
+      "  stac decode --calib db.xml --in run.pcap --out scans/ --format kitti\n"
+      "  stac record --out live.pcap --duration 10   # capture the sensor's UDP stream\n"
+      "Run 'stac <command> --help' for the options of each command.");
+  stac::tools::add_decode_command(app);
+  stac::tools::add_record_command(app);
+  stac::tools::add_demo_command(app);
+  CLI11_PARSE(app, argc, argv);
+  return 0;
+}

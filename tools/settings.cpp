@@ -1,0 +1,107 @@
+#include "tools/settings.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <cstdlib>
+
+namespace stac::tools {
+namespace {
+
+template <class T>
+rt::Result<T> get(const YAML::Node& section, const std::string& file, const char* key,
+                  bool optional = false, T fallback = {}) {
+  const YAML::Node v = section[key];
+  if (!v) {
+    if (optional) return fallback;
+    return rt::make_error(file + ": missing required key 'velodyne." + key + "'");
+  }
+  try {
+    return v.as<T>();
+  } catch (const YAML::Exception&) {
+    return rt::make_error(file + ": 'velodyne." + key + "' has the wrong type (line " +
+                          std::to_string(v.Mark().line + 1) + ")");
+  }
+}
+
+}  // namespace
+
+std::filesystem::path default_config_path() {
+  if (const char* env = std::getenv("STAC_CONFIG"); env != nullptr && *env != '\0') return env;
+  return std::filesystem::path(STAC_SOURCE_DIR) / "config" / "stac.yaml";
+}
+
+std::filesystem::path config_path(const std::string& option) {
+  return option.empty() ? default_config_path() : std::filesystem::path(option);
+}
+
+rt::Result<VelodyneSettings> load_velodyne_settings(const std::filesystem::path& config_file) {
+  const std::string file = config_file.string();
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(file);
+  } catch (const YAML::Exception& e) {
+    return rt::make_error(file + ": cannot read the configuration: " + e.what());
+  }
+  const YAML::Node v = root["velodyne"];
+  if (!v || !v.IsMap()) return rt::make_error(file + ": missing the 'velodyne:' section");
+
+  VelodyneSettings s;
+  auto& a = s.assembler;
+#define STAC_GET(type, key, dst, ...)                                \
+  do {                                                               \
+    auto r = get<type>(v, file, key __VA_OPT__(, ) __VA_ARGS__);     \
+    if (!r) return rt::Unexpected<rt::Error>{r.error()};             \
+    dst = *r;                                                        \
+  } while (0)
+  std::string model, calibration;
+  double cut_deg = 0, min_range = 0, max_range = 0;
+  int port = 0;
+  STAC_GET(std::string, "model", model);
+  STAC_GET(std::string, "calibration", calibration);
+  STAC_GET(std::string, "bind_address", s.bind_address);
+  STAC_GET(int, "port", port);
+  STAC_GET(std::string, "sender_address", s.sender_address, true, std::string{});
+  STAC_GET(int, "receive_buffer_bytes", s.receive_buffer_bytes);
+  STAC_GET(double, "cut_angle_deg", cut_deg);
+  STAC_GET(double, "min_rpm", a.min_rpm);
+  STAC_GET(double, "min_range_m", min_range);
+  STAC_GET(double, "max_range_m", max_range);
+  STAC_GET(bool, "gate_two_point_correction", a.decoder.gate_two_point_correction);
+  STAC_GET(bool, "ros_intensity_units", a.decoder.ros_intensity_units);
+  STAC_GET(double, "max_gap_s", a.max_gap_s);
+  STAC_GET(double, "max_scan_duration_s", a.max_scan_duration_s);
+  STAC_GET(int, "scan_slots", s.scan_slots);
+#undef STAC_GET
+
+  const auto parsed = velodyne::parse_model(model);
+  if (!parsed) return rt::make_error(file + ": 'velodyne.model' is '" + model + "'; use S2, S2.1 or S3");
+  a.decoder.model = *parsed;
+  if (calibration != "stream") {
+    s.calibration = config_file.parent_path() / calibration;
+    if (std::filesystem::path(calibration).is_absolute()) s.calibration = calibration;
+  } else if (velodyne::traits(a.decoder.model).trailer != velodyne::TrailerKind::kGpsStatus) {
+    return rt::make_error(file + ": 'velodyne.calibration: stream' needs an S2.1 or S3; the " +
+                          model + " sends no calibration in its packets");
+  }
+  if (port <= 0 || port > 65535) return rt::make_error(file + ": 'velodyne.port' must be 1..65535");
+  s.port = static_cast<std::uint16_t>(port);
+  if (cut_deg < 0 || cut_deg >= 360) return rt::make_error(file + ": 'velodyne.cut_angle_deg' must be in [0, 360)");
+  a.cut_angle = static_cast<std::uint16_t>(std::lround(cut_deg * 100.0) % 36000);
+  if (a.min_rpm < 60 || a.min_rpm > 1200) return rt::make_error(file + ": 'velodyne.min_rpm' must be in 60..1200");
+  if (min_range < 0 || max_range <= min_range) {
+    return rt::make_error(file + ": need 0 <= 'velodyne.min_range_m' < 'velodyne.max_range_m'");
+  }
+  a.decoder.min_range_m = static_cast<float>(min_range);
+  a.decoder.max_range_m = static_cast<float>(max_range);
+  if (a.max_gap_s <= 0 || a.max_scan_duration_s <= 0) {
+    return rt::make_error(file + ": 'velodyne.max_gap_s' and 'velodyne.max_scan_duration_s' must be > 0");
+  }
+  if (s.scan_slots < 2 || s.scan_slots > 64) return rt::make_error(file + ": 'velodyne.scan_slots' must be in 2..64");
+  if (s.receive_buffer_bytes < 65536) {
+    return rt::make_error(file + ": 'velodyne.receive_buffer_bytes' must be at least 65536");
+  }
+  return s;
+}
+
+}  // namespace stac::tools

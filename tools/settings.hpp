@@ -1,0 +1,31 @@
+// The `velodyne:` section of config/stac.yaml, validated once at start-up. Missing or invalid
+// keys give an error naming the file and the key.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+
+#include "drivers/velodyne/scan_assembler.hpp"
+#include "rt/expected.hpp"
+
+namespace stac::tools {
+
+struct VelodyneSettings {
+  velodyne::ScanAssemblerConfig assembler;
+  std::filesystem::path calibration;  // empty: from the status stream
+  std::string bind_address = "0.0.0.0";
+  std::uint16_t port = velodyne::kPortData;
+  std::string sender_address;         // empty: any sender
+  int receive_buffer_bytes = 16 << 20;
+  int scan_slots = 4;
+};
+
+rt::Result<VelodyneSettings> load_velodyne_settings(const std::filesystem::path& config_file);
+
+// The default config file: $STAC_CONFIG, else config/stac.yaml of the source tree.
+std::filesystem::path default_config_path();
+// The --config option's value, or the default when it is empty.
+std::filesystem::path config_path(const std::string& option);
+
+}  // namespace stac::tools
