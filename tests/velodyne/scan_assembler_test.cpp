@@ -15,16 +15,7 @@ using stac::testing::make_stream;
 using stac::testing::StreamPacket;
 using stac::testing::StreamSpec;
 
-Calibration flat_calibration() {
-  // 64 lasers without offsets: azimuth of every point = block rotation exactly.
-  Calibration c;
-  for (int i = 0; i < 64; ++i) {
-    auto& l = c.lasers[static_cast<std::size_t>(i)];
-    l.laser_id = i;
-    l.vert_correction_rad = (-24.0 + 27.0 * i / 63.0) * 3.14159265358979 / 180.0;
-  }
-  return c;
-}
+using stac::testing::flat_calibration;
 
 struct Assembled {
   std::vector<ScanHeader> headers;

@@ -9,15 +9,7 @@
 namespace stac::velodyne {
 namespace {
 
-Calibration flat_calibration() {
-  Calibration c;
-  for (int i = 0; i < 64; ++i) {
-    auto& l = c.lasers[static_cast<std::size_t>(i)];
-    l.laser_id = i;
-    l.vert_correction_rad = (-24.0 + 27.0 * i / 63.0) * 3.14159265358979 / 180.0;
-  }
-  return c;
-}
+using stac::testing::flat_calibration;
 
 TEST(ScanStream, StampsPointsAtTheirFiringTimeNotTheReceiveTime) {
   testing::StreamSpec spec;

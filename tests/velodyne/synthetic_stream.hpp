@@ -7,9 +7,22 @@
 #include <functional>
 #include <vector>
 
+#include "drivers/velodyne/calibration.hpp"
 #include "drivers/velodyne/packet_builder.hpp"
 
 namespace stac::testing {
+
+// 64 lasers without offsets, elevations spread over -24..+3 deg: the azimuth of every point is
+// its block's rotation exactly.
+inline velodyne::Calibration flat_calibration() {
+  velodyne::Calibration c;
+  for (int i = 0; i < velodyne::kMaxLasers; ++i) {
+    auto& l = c.lasers[static_cast<std::size_t>(i)];
+    l.laser_id = i;
+    l.vert_correction_rad = (-24.0 + 27.0 * i / 63.0) * 3.14159265358979 / 180.0;
+  }
+  return c;
+}
 
 struct StreamPacket {
   std::array<std::uint8_t, velodyne::kPacketSize> bytes;
