@@ -29,4 +29,24 @@ struct BeamLine {
 BeamLine beam_line(const LaserCalibration& l, std::uint16_t rotation, double around_m,
                    bool gate_two_point) noexcept;
 
+// The same math with every laser's trigonometry and a rotation table computed once, for the
+// simulator's millions of beams per second.
+class BeamModel {
+ public:
+  BeamModel(const Calibration& calibration, bool gate_two_point);
+  Vec3 point(int laser, std::uint16_t rotation, double distance_m) const noexcept;
+  BeamLine line(int laser, std::uint16_t rotation, double around_m) const noexcept;
+
+  struct Laser {
+    double cos_vert, sin_vert, cos_rot, sin_rot, vert_offset, horiz_offset;
+    double dist, dist_x, dist_y;
+    bool two_pt;
+  };
+
+ private:
+  std::array<Laser, kMaxLasers> lasers_{};
+  std::array<double, 36000> cos_{}, sin_{};
+  bool gate_;
+};
+
 }  // namespace stac::velodyne

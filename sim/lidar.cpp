@@ -1,0 +1,204 @@
+#include "sim/lidar.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "drivers/velodyne/beam.hpp"
+#include "drivers/velodyne/packet_builder.hpp"
+
+namespace stac::sim {
+namespace {
+
+constexpr double kWindowS = 0.02;  // candidate bins are rebuilt every 20 ms of sensor time
+
+std::uint64_t mix(std::uint64_t x) {  // splitmix64
+  x += 0x9E3779B97F4A7C15ULL;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ULL;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBULL;
+  return x ^ (x >> 31);
+}
+double uniform(std::uint64_t h) { return static_cast<double>(h >> 11) * 0x1.0p-53; }
+double normal(std::uint64_t h) {  // Box-Muller from two hashes
+  const double u1 = std::max(uniform(mix(h)), 1e-300), u2 = uniform(mix(h ^ 0xABCDEF));
+  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * std::numbers::pi * u2);
+}
+
+// Sensor frame -> world: rotation by roll, pitch, yaw (Z-Y-X), then translation.
+struct Frame {
+  double r[3][3];
+  V3 t;
+  V3 apply(V3 p) const { return rotate(p) + t; }
+  V3 rotate(V3 p) const {
+    return {r[0][0] * p.x + r[0][1] * p.y + r[0][2] * p.z, r[1][0] * p.x + r[1][1] * p.y + r[1][2] * p.z,
+            r[2][0] * p.x + r[2][1] * p.y + r[2][2] * p.z};
+  }
+};
+
+Frame sensor_frame(const EgoState& e, double mount_height) {
+  const double cr = std::cos(e.roll), sr = std::sin(e.roll), cp = std::cos(e.pitch),
+               sp = std::sin(e.pitch), cy = std::cos(e.yaw), sy = std::sin(e.yaw);
+  Frame f{};
+  f.r[0][0] = cy * cp; f.r[0][1] = cy * sp * sr - sy * cr; f.r[0][2] = cy * sp * cr + sy * sr;
+  f.r[1][0] = sy * cp; f.r[1][1] = sy * sp * sr + cy * cr; f.r[1][2] = sy * sp * cr - cy * sr;
+  f.r[2][0] = -sp;     f.r[2][1] = cp * sr;                f.r[2][2] = cp * cr;
+  f.t = V3{e.x, e.y, e.z} + f.rotate(V3{0, 0, mount_height});
+  return f;
+}
+
+}  // namespace
+
+LidarSim::LidarSim(const velodyne::Calibration& calibration, const LidarConfig& config,
+                   const World& world, EgoFn ego)
+    : calibration_(calibration),
+      beams_(calibration, false),
+      config_(config),
+      world_(world),
+      ego_(std::move(ego)) {
+  const velodyne::ModelTraits& m = velodyne::traits(config.model);
+  const int per_firing = config.dual_return ? 4 : 2;
+  for (int b = 0; b < 12; ++b) {
+    for (int j = 0; j < 32; ++j) {
+      firing_offset_s_[static_cast<std::size_t>(b)][static_cast<std::size_t>(j)] =
+          1e-6 * (m.firing_period_us * (b / per_firing) + m.laser_group_us * (j / 4) +
+                  m.laser_in_group_us[static_cast<std::size_t>(j % 4)]);
+    }
+  }
+}
+
+double LidarSim::packets_per_second() const noexcept {
+  const velodyne::ModelTraits& m = velodyne::traits(config_.model);
+  return config_.dual_return ? m.packets_per_second_dual : m.packets_per_second_single;
+}
+
+std::uint16_t LidarSim::rotation_at(double t) const noexcept {
+  const double deg = std::fmod(config_.start_azimuth_deg + config_.rpm * 6.0 * t, 360.0);
+  return static_cast<std::uint16_t>(std::lround(deg * 100.0) % 36000);
+}
+
+void LidarSim::refresh_candidates(double t) {
+  window_start_ = t;
+  window_end_ = t + kWindowS;
+  for (auto& b : bins_) b.clear();
+  const double tm = t + kWindowS / 2;
+  const EgoState e = ego_(tm);
+  const double ego_travel = std::abs(e.speed) * kWindowS + 0.5;
+  for (std::size_t i = 0; i < world_.actors().size(); ++i) {
+    const Pose p = world_.actor_pose(i, tm);
+    const V3 v = world_.actors()[i].path.velocity_at(tm);
+    const double r = world_.actor_radius(i) + std::hypot(v.x, v.y) * kWindowS + ego_travel;
+    const double dx = p.x - e.x, dy = p.y - e.y;
+    const double dist = std::hypot(dx, dy);
+    if (dist - r > config_.max_range_m + 10.0) continue;
+    if (dist <= r + 1.0) {  // around the sensor: every direction
+      for (auto& b : bins_) b.push_back(static_cast<std::uint32_t>(i));
+      continue;
+    }
+    const double centre = std::atan2(dy, dx) * 180.0 / std::numbers::pi;
+    const double half = std::asin(std::min(1.0, r / dist)) * 180.0 / std::numbers::pi + 1.0;
+    for (int d = static_cast<int>(std::floor(centre - half)); d <= static_cast<int>(std::ceil(centre + half)); ++d) {
+      bins_[static_cast<std::size_t>(((d % 360) + 360) % 360)].push_back(static_cast<std::uint32_t>(i));
+    }
+  }
+}
+
+void LidarSim::make_packet(std::uint32_t k, std::array<std::uint8_t, velodyne::kPacketSize>& bytes,
+                           double& first_firing_s,
+                           const std::function<void(const BeamRecord&)>& record) {
+  using namespace velodyne;
+  const double t0 = k / packets_per_second();
+  first_firing_s = t0;
+  PacketBuilder builder;
+  const bool dual = config_.dual_return;
+  const int per_firing = dual ? 4 : 2;
+  for (int firing = 0; firing < 12 / per_firing; ++firing) {
+    const int first_block = firing * per_firing;
+    const double tf = t0 + firing_offset_s_[static_cast<std::size_t>(first_block)][0];
+    const std::uint16_t rotation = rotation_at(tf);
+    // The ego at the firing and 50 us later: every beam of the firing leaves in between, its
+    // origin interpolated linearly (the attitude changes by < 1e-4 deg in that time).
+    const Frame f0 = sensor_frame(ego_(tf), config_.mount_height_m);
+    const Frame f1 = sensor_frame(ego_(tf + 50e-6), config_.mount_height_m);
+    for (int bank = 0; bank < 2; ++bank) {
+      const int strongest_block = first_block + bank;
+      builder.set_block(strongest_block, bank == 0 ? kUpperBank : kLowerBank, rotation);
+      if (dual) builder.set_block(strongest_block + 2, bank == 0 ? kUpperBank : kLowerBank, rotation);
+      for (int j = 0; j < 32; ++j) {
+        const int laser = bank * 32 + j;
+        const LaserCalibration& l = calibration_.lasers[static_cast<std::size_t>(laser)];
+        const double t = t0 + firing_offset_s_[static_cast<std::size_t>(strongest_block)][static_cast<std::size_t>(j)];
+        if (t >= window_end_ || t < window_start_) refresh_candidates(t);
+        const std::uint64_t h = mix(config_.seed ^ mix((static_cast<std::uint64_t>(k) << 16) |
+                                                       static_cast<std::uint64_t>(strongest_block * 64 + laser)));
+        Frame f = f0;
+        f.t = f0.t + (f1.t - f0.t) * ((t - tf) / 50e-6);
+        // Cast along the decoder's beam line; re-linearise at the solution until exact.
+        double d = 20.0;
+        WorldHit hit;
+        double line_scale = 1.0;
+        Vec3 sensor_hit{};
+        for (int it = 0; it < 4; ++it) {
+          const BeamLine line = beams_.line(laser, rotation, d);
+          const V3 o{line.origin[0], line.origin[1], line.origin[2]};
+          const V3 dir{line.direction[0], line.direction[1], line.direction[2]};
+          line_scale = norm(dir);
+          const V3 ow = f.apply(o);
+          const V3 uw = f.rotate(dir * (1.0 / line_scale));
+          const double az = std::atan2(uw.y, uw.x) * 180.0 / std::numbers::pi;
+          const auto bin = static_cast<std::size_t>(((static_cast<int>(std::floor(az)) % 360) + 360) % 360);
+          hit = world_.cast(Ray{ow, uw}, tf, bins_[bin], poses_);
+          if (hit.t == kNoHit) break;
+          if (hit.translucent && uniform(mix(h ^ 0x77)) < 0.45) {
+            // Foliage: a part of the beam goes through to what lies behind.
+            const double step = hit.t + 0.6 + 0.6 * uniform(mix(h ^ 0x78));
+            const WorldHit behind = world_.cast(Ray{ow + uw * step, uw}, tf, bins_[bin], poses_);
+            if (behind.t < kNoHit) {
+              hit = behind;
+              hit.t += step;
+            }
+          }
+          const double d_new = hit.t / line_scale;
+          const Vec3 exact = beams_.point(laser, rotation, d_new);
+          const V3 on_line = o + dir * d_new;
+          sensor_hit = exact;
+          const double err = norm(V3{exact[0], exact[1], exact[2]} - on_line);
+          d = d_new;
+          if (err < 1e-5) break;
+        }
+        BeamRecord rec{k, static_cast<std::uint8_t>(strongest_block), static_cast<std::uint8_t>(laser),
+                       rotation, -2, t, {0, 0, 0}, {0, 0, 0}, false};
+        if (hit.t < kNoHit) {
+          rec.actor = hit.actor;
+          for (int i = 0; i < 3; ++i) rec.sensor_xyz[i] = sensor_hit[static_cast<std::size_t>(i)];
+          const V3 w = f.apply(V3{sensor_hit[0], sensor_hit[1], sensor_hit[2]});
+          rec.world_xyz[0] = w.x;
+          rec.world_xyz[1] = w.y;
+          rec.world_xyz[2] = w.z;
+          // Returns: lost when too far for the target's brightness, grazing, or at random.
+          const double range = hit.t;
+          const double incidence = std::abs(dot(hit.normal, (w - f.t) * (1.0 / std::max(range, 1e-6))));
+          const double reach = config_.max_range_m * std::sqrt(std::clamp(hit.reflectivity, 0.02, 1.0));
+          const bool lost = range > reach || range < 0.5 || incidence < 0.06 ||
+                            uniform(mix(h ^ 0x99)) < config_.dropout;
+          if (!lost) {
+            const double noisy = d + config_.range_noise_m * normal(mix(h ^ 0x55));
+            const double raw = std::round((noisy - l.dist_correction_m) / calibration_.distance_resolution_m);
+            if (raw >= 1.0 && raw <= 65535.0) {
+              const double falloff = 1.0 / (1.0 + range / 60.0);
+              const double value = 255.0 * hit.reflectivity * (0.35 + 0.65 * incidence) * falloff +
+                                   4.0 * normal(mix(h ^ 0x33));
+              const auto intensity = static_cast<std::uint8_t>(std::clamp(std::lround(value), 1L, 255L));
+              builder.set_return(strongest_block, j, static_cast<std::uint16_t>(raw), intensity);
+              if (dual) builder.set_return(strongest_block + 2, j, static_cast<std::uint16_t>(raw), intensity);
+              rec.returned = true;
+            }
+          }
+        }
+        if (record) record(rec);
+      }
+    }
+  }
+  std::copy(builder.bytes().begin(), builder.bytes().end(), bytes.begin());
+}
+
+}  // namespace stac::sim

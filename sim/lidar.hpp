@@ -1,0 +1,81 @@
+// A virtual HDL-64E: every laser is cast at its real firing time (REFERENCE §1 timing) from the
+// moving ego, along the decoder's own beam line (drivers/velodyne/beam.hpp), so decoding the
+// packets gives back every hit within the 2 mm quantisation before noise. Adds range noise,
+// intensity from reflectivity, incidence and distance, and missing returns (too far, too dark,
+// grazing). Deterministic: every random draw is a hash of (seed, packet, block, laser).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "drivers/velodyne/beam.hpp"
+#include "drivers/velodyne/calibration.hpp"
+#include "drivers/velodyne/model.hpp"
+#include "drivers/velodyne/packet.hpp"
+#include "sim/world.hpp"
+
+namespace stac::sim {
+
+struct LidarConfig {
+  velodyne::Model model = velodyne::Model::kS2_1;
+  double rpm = 600.0;
+  double start_azimuth_deg = 0.0;
+  bool dual_return = false;       // S3 only
+  double mount_height_m = 1.73;   // sensor origin above the ground under the ego origin
+  double range_noise_m = 0.012;   // 1 sigma (HDL-64E: < 2 cm)
+  double max_range_m = 120.0;     // for a white target; dark ones are lost sooner
+  double dropout = 0.004;         // returns lost at random
+  std::uint64_t seed = 1;
+};
+
+// The ego vehicle: where it is, its attitude follows the ground under it.
+struct EgoState {
+  double x = 0, y = 0, z = 0, roll = 0, pitch = 0, yaw = 0;  // world frame, rad
+  double speed = 0, yaw_rate = 0;                             // m/s, rad/s
+};
+
+// What happened to one beam, for truth and tests.
+struct BeamRecord {
+  std::uint32_t packet;
+  std::uint8_t block, laser;  // block 0..11, laser 0..63
+  std::uint16_t rotation;     // 0.01 deg
+  std::int64_t actor;         // -1 ground, -2 nothing hit
+  double time_s;              // firing time
+  double sensor_xyz[3];       // exact hit in the sensor frame at firing time, before noise
+  double world_xyz[3];
+  bool returned;              // a return was written (not lost, in range)
+};
+
+class LidarSim {
+ public:
+  using EgoFn = std::function<EgoState(double)>;
+  LidarSim(const velodyne::Calibration& calibration, const LidarConfig& config, const World& world,
+           EgoFn ego);
+
+  // Packet k of the run: its 1206 bytes (trailer GPS time left for the caller) and the time of
+  // its first firing (s from the start). Calls `record` for every beam when set.
+  void make_packet(std::uint32_t k, std::array<std::uint8_t, velodyne::kPacketSize>& bytes,
+                   double& first_firing_s, const std::function<void(const BeamRecord&)>& record);
+
+  double packets_per_second() const noexcept;
+  // Azimuth of the firing at time t (0.01 deg).
+  std::uint16_t rotation_at(double t) const noexcept;
+
+ private:
+  void refresh_candidates(double t);
+
+  velodyne::Calibration calibration_;
+  velodyne::BeamModel beams_;
+  LidarConfig config_;
+  const World& world_;
+  World::PoseCache poses_;
+  EgoFn ego_;
+  std::array<std::array<double, 32>, 12> firing_offset_s_{};  // [block][laser in block]
+  // Actors that may be hit, by 1-degree world azimuth bin around the sensor, for a window.
+  std::array<std::vector<std::uint32_t>, 360> bins_;
+  double window_start_ = -1.0, window_end_ = -1.0;
+};
+
+}  // namespace stac::sim

@@ -1,0 +1,360 @@
+#include "sim/scenario.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace stac::sim {
+namespace {
+
+// A small deterministic generator (splitmix64): the same seed gives the same world on every
+// machine, independent of the standard library's distributions.
+class Rng {
+ public:
+  explicit Rng(std::uint64_t seed) : state_(seed * 0x9E3779B97F4A7C15ULL + 0x1234567ULL) {}
+  std::uint64_t next() {
+    std::uint64_t z = (state_ += 0x9E3779B97F4A7C15ULL);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+    return z ^ (z >> 31);
+  }
+  double uniform(double lo, double hi) { return lo + (hi - lo) * static_cast<double>(next() >> 11) * 0x1.0p-53; }
+  bool chance(double p) { return uniform(0, 1) < p; }
+  int integer(int lo, int hi) { return lo + static_cast<int>(next() % static_cast<std::uint64_t>(hi - lo + 1)); }
+
+ private:
+  std::uint64_t state_;
+};
+
+class Builder {
+ public:
+  Builder(Scenario& s, std::uint64_t seed) : s_(s), rng_(seed) {}
+  Rng& rng() { return rng_; }
+
+  Actor& add(ObjectClass cls, Shape shape, V3 size, double reflectivity) {
+    Actor a;
+    a.id = static_cast<std::uint32_t>(s_.actors.size() + 1);
+    a.cls = cls;
+    a.shape = shape;
+    a.size = size;
+    a.reflectivity = reflectivity;
+    a.phase = rng_.uniform(0, 2 * std::numbers::pi);
+    s_.actors.push_back(a);
+    return s_.actors.back();
+  }
+  Actor& place(ObjectClass cls, Shape shape, V3 size, double refl, double x, double y, double yaw) {
+    Actor& a = add(cls, shape, size, refl);
+    a.path.points = {{x, y, 0}};
+    a.path.fixed_yaw = yaw;
+    return a;
+  }
+  // A vehicle of a random kind: sedan, van, truck (with a trailer now and then).
+  Actor& vehicle(double x, double y, double yaw) {
+    const double u = rng_.uniform(0, 1);
+    const double refl = rng_.uniform(0.15, 0.8);
+    if (u < 0.65) return place(ObjectClass::kCar, Shape::kSedan, {rng_.uniform(4.1, 4.9), rng_.uniform(1.72, 1.9), rng_.uniform(1.38, 1.55)}, refl, x, y, yaw);
+    if (u < 0.88) return place(ObjectClass::kCar, Shape::kVan, {rng_.uniform(4.9, 5.6), rng_.uniform(1.9, 2.05), rng_.uniform(1.9, 2.4)}, refl, x, y, yaw);
+    const double length = rng_.chance(0.3) ? rng_.uniform(13.0, 16.0) : rng_.uniform(7.0, 10.0);
+    return place(ObjectClass::kCar, Shape::kTruck, {length, rng_.uniform(2.4, 2.55), rng_.uniform(3.2, 3.9)}, refl, x, y, yaw);
+  }
+  Actor& pedestrian(double x, double y) {
+    const double u = rng_.uniform(0, 1);
+    const Shape shape = u < 0.82 ? Shape::kWalker : u < 0.91 ? Shape::kWalkerWithSuitcase : Shape::kWalkerWithBike;
+    const double h = rng_.uniform(1.5, 1.95);
+    // Truth boxes hold the swinging limbs (stride 0.39 m), a trailing suitcase, or the bike
+    // pushed beside the walker (walker at y = -0.3, bike at y = +0.35).
+    const V3 size = shape == Shape::kWalkerWithBike      ? V3{1.85, 1.3, h}
+                    : shape == Shape::kWalkerWithSuitcase ? V3{0.95, 0.9, h}
+                                                          : V3{0.8, 0.65, h};
+    return place(ObjectClass::kPedestrian, shape, size, rng_.uniform(0.15, 0.6), x, y, 0);
+  }
+  Actor& cyclist(double x, double y) {
+    return place(ObjectClass::kBicyclist, Shape::kCyclist, {1.8, 0.7, 1.8}, rng_.uniform(0.2, 0.6), x, y, 0);
+  }
+  // Moves `a` from (x0, y0) in direction yaw at speed v, with an optional stop of `stop_s`
+  // seconds at distance `stop_at` along the way.
+  void drive(Actor& a, double x0, double y0, double yaw, double v, double duration,
+             double stop_at = -1.0, double stop_s = 0.0) {
+    const double c = std::cos(yaw), s = std::sin(yaw);
+    a.path.points.clear();
+    a.path.points.push_back({x0, y0, 0});
+    double t = 0;
+    if (stop_at > 0 && stop_s > 0) {
+      t = stop_at / v;
+      a.path.points.push_back({x0 + c * stop_at, y0 + s * stop_at, t});
+      t += stop_s;
+      a.path.points.push_back({x0 + c * stop_at, y0 + s * stop_at, t});
+      const double rest = std::max(0.0, duration + 5.0 - t) * v;
+      a.path.points.push_back({x0 + c * (stop_at + rest), y0 + s * (stop_at + rest), duration + 5.0});
+    } else {
+      const double dist = v * (duration + 5.0);
+      a.path.points.push_back({x0 + c * dist, y0 + s * dist, duration + 5.0});
+    }
+    a.path.fixed_yaw = yaw;
+  }
+  // A turn: straight to the corner, a quarter circle of radius r, then straight on.
+  void turn(Actor& a, double x0, double y0, double yaw, double v, double to_corner, double r, int dir,
+            double duration) {
+    a.path.points.clear();
+    double x = x0, y = y0, t = 0;
+    a.path.points.push_back({x, y, t});
+    x += std::cos(yaw) * to_corner;
+    y += std::sin(yaw) * to_corner;
+    t += to_corner / v;
+    a.path.points.push_back({x, y, t});
+    const double cx = x - dir * std::sin(yaw) * r, cy = y + dir * std::cos(yaw) * r;
+    for (int i = 1; i <= 8; ++i) {
+      const double ang = yaw - dir * std::numbers::pi / 2 + dir * (std::numbers::pi / 2) * i / 8.0;
+      const double px = cx + r * std::cos(ang), py = cy + r * std::sin(ang);
+      t += std::hypot(px - x, py - y) / v;
+      x = px;
+      y = py;
+      a.path.points.push_back({x, y, t});
+    }
+    const double out = yaw + dir * std::numbers::pi / 2;
+    const double rest = std::max(0.0, duration + 5.0 - t) * v;
+    a.path.points.push_back({x + std::cos(out) * rest, y + std::sin(out) * rest, duration + 5.0});
+    a.path.fixed_yaw = yaw;
+  }
+
+  // Buildings, trees, poles, signs, bins, bushes, fences and clutter along a street on x in
+  // [x0, x1], sidewalks outside |y| = road_half_width.
+  void street_furniture(double x0, double x1, const GroundConfig& g) {
+    for (int side : {-1, 1}) {
+      const double walk_in = g.road_half_width, walk_out = g.road_half_width + g.sidewalk_width;
+      double x = x0;
+      while (x < x1) {  // building frontage with gaps
+        const double len = rng_.uniform(8, 30), depth = rng_.uniform(8, 20), gap = rng_.uniform(0, 9);
+        const double setback = rng_.uniform(0.5, 5.0);
+        const double cx = x + len / 2;
+        if (std::abs(cx - g.cross_road_x) > g.cross_half_width + g.sidewalk_width + len / 2) {
+          const double cy = side * (walk_out + setback + depth / 2);
+          place(rng_.chance(0.85) ? ObjectClass::kBuilding : ObjectClass::kWall, Shape::kBox,
+                {len, depth, rng_.uniform(4, 18)}, rng_.uniform(0.2, 0.7), cx, cy, 0);
+          if (gap > 4 && rng_.chance(0.5)) {  // a fence or bushes in the gap
+            if (rng_.chance(0.5)) {
+              place(ObjectClass::kFence, Shape::kFence, {gap, 0.06, rng_.uniform(1.0, 1.8)}, 0.3, x + len + gap / 2, side * (walk_out + 0.3), 0);
+            } else {
+              place(ObjectClass::kBush, Shape::kBush, {gap * 0.8, 1.5, rng_.uniform(0.8, 1.6)}, 0.25, x + len + gap / 2, side * (walk_out + 1.2), 0);
+            }
+          }
+        }
+        x += len + gap;
+      }
+      for (double px = x0 + rng_.uniform(0, 10); px < x1; px += rng_.uniform(6, 16)) {
+        if (std::abs(px - g.cross_road_x) < g.cross_half_width + 1.0) continue;
+        const double py = side * (walk_in + rng_.uniform(0.4, 0.9));
+        const double u = rng_.uniform(0, 1);
+        if (u < 0.35) {
+          place(ObjectClass::kTree, Shape::kTree, {rng_.uniform(2.5, 5), rng_.uniform(2.5, 5), rng_.uniform(5, 9)}, 0.3, px, py, 0);
+        } else if (u < 0.55) {
+          place(ObjectClass::kPole, Shape::kPole, {0.22, 0.22, rng_.uniform(5, 9)}, 0.45, px, py, 0);
+        } else if (u < 0.68) {
+          place(ObjectClass::kSign, Shape::kSign, {0.1, rng_.uniform(0.6, 1.0), rng_.uniform(2.2, 3.2)}, 0.9, px, py, 0);
+        } else if (u < 0.8) {
+          place(ObjectClass::kBin, Shape::kBox, {0.6, 0.6, rng_.uniform(0.8, 1.2)}, 0.35, px, py, rng_.uniform(0, 3));
+        } else if (u < 0.9) {
+          place(ObjectClass::kClutter, Shape::kBox, {rng_.uniform(0.3, 1.5), rng_.uniform(0.3, 1.0), rng_.uniform(0.3, 1.2)}, rng_.uniform(0.1, 0.6), px, side * (walk_out - 0.5), rng_.uniform(0, 3));
+        }
+      }
+    }
+  }
+
+ private:
+  Scenario& s_;
+  Rng rng_;
+};
+
+// Lanes of the default street (road_half_width 8): parking at |y| = 6.8, driving at 1.8 and 4.8.
+constexpr double kParking = 6.8, kInner = 1.8, kOuter = 4.8;
+
+void traffic(Builder& b, double x0, double x1, double cross_x, double duration, int cars, int walkers,
+             int cyclists, const GroundConfig& g) {
+  Rng& r = b.rng();
+  for (double x = x0 + r.uniform(0, 6); x < x1; x += r.uniform(5.5, 14)) {  // parked cars
+    for (int side : {-1, 1}) {
+      if (std::abs(x - cross_x) < g.cross_half_width + 6 || !r.chance(0.55)) continue;
+      b.vehicle(x, side * kParking, side > 0 ? std::numbers::pi : 0.0);
+    }
+  }
+  for (int i = 0; i < cars; ++i) {
+    const double u = r.uniform(0, 1);
+    const double v = r.uniform(6, 13);
+    Actor& car = b.vehicle(0, 0, 0);
+    if (u < 0.35) {  // same direction as the ego, stopping at the crossing now and then
+      const double start = r.uniform(x0, x1);
+      const double lane = r.chance(0.5) ? -kInner : -kOuter;
+      const bool stops = start < cross_x && r.chance(0.5);
+      b.drive(car, start, lane, 0.0, v, duration, stops ? cross_x - g.cross_half_width - 3 - start : -1, r.uniform(2, 6));
+    } else if (u < 0.7) {  // oncoming
+      b.drive(car, r.uniform(x0, x1 + 60), r.chance(0.5) ? kInner : kOuter, std::numbers::pi, v, duration);
+    } else if (u < 0.88) {  // on the crossing road
+      const int dir = r.chance(0.5) ? 1 : -1;
+      b.drive(car, cross_x + dir * -kInner, -dir * r.uniform(25, 90), dir * std::numbers::pi / 2, v, duration);
+    } else {  // turning from the main road into the crossing road
+      const double start = cross_x - r.uniform(20, 70);
+      b.turn(car, start, -kInner, 0.0, r.uniform(5, 8), cross_x - start - 6, 6.0 - kInner + 1.0, r.chance(0.5) ? 1 : -1, duration);
+    }
+  }
+  for (int i = 0; i < walkers; ++i) {
+    const int side = r.chance(0.5) ? 1 : -1;
+    const double y = side * (g.road_half_width + r.uniform(1.0, g.sidewalk_width - 0.4));
+    const double x = r.uniform(x0, x1);
+    const double v = r.chance(0.2) ? 0.0 : r.uniform(0.9, 1.7);
+    const int group = r.chance(0.25) ? r.integer(2, 4) : 1;
+    for (int k = 0; k < group; ++k) {
+      Actor& p = b.pedestrian(x + k * r.uniform(0.6, 1.2), y - side * k * 0.1);
+      if (v > 0) b.drive(p, x + k * 0.9, y, r.chance(0.5) ? 0.0 : std::numbers::pi, v, duration);
+    }
+  }
+  for (int i = 0; i < walkers / 6; ++i) {  // crossing the street at the crosswalk
+    const int dir = r.chance(0.5) ? 1 : -1;
+    Actor& p = b.pedestrian(0, 0);
+    const double x = cross_x + (r.chance(0.5) ? -1 : 1) * (g.cross_half_width + 1.5);
+    b.drive(p, x, -dir * (g.road_half_width + 2), dir * std::numbers::pi / 2, r.uniform(1.0, 1.6), duration,
+            r.uniform(0.5, 3), r.uniform(0, 8));
+  }
+  for (int i = 0; i < cyclists; ++i) {
+    Actor& c = b.cyclist(0, 0);
+    const bool with = r.chance(0.6);
+    b.drive(c, r.uniform(x0, x1), with ? -(kOuter + 1.3) : (kOuter + 1.3), with ? 0.0 : std::numbers::pi,
+            r.uniform(3.5, 7.5), duration);
+  }
+}
+
+}  // namespace
+
+const std::vector<std::string>& scenario_names() {
+  static const std::vector<std::string> names = {"urban", "intersection", "highway", "parking-lot", "crowd", "empty"};
+  return names;
+}
+
+rt::Result<Scenario> make_scenario(const std::string& name, std::uint64_t seed, double duration) {
+  Scenario s;
+  s.name = name;
+  Builder b(s, seed);
+  Rng& r = b.rng();
+  GroundConfig& g = s.ground;
+  g.road_half_width = 8.0;
+  g.slope_x = r.uniform(-0.015, 0.015);
+  g.slope_y = r.uniform(-0.01, 0.01);
+  g.wave_amplitude = r.uniform(0.1, 0.4);
+  g.wave_length = r.uniform(80, 200);
+  if (name == "urban" || name == "empty") {
+    const double v = r.uniform(7, 11);
+    const double cross = r.uniform(40, 90);
+    g.cross_road_x = cross;
+    const double x1 = v * duration + 120;
+    b.street_furniture(-80, x1, g);
+    if (name == "urban") traffic(b, -60, x1, cross, duration, 14 + r.integer(0, 8), 24 + r.integer(0, 12), 4 + r.integer(0, 4), g);
+    // Ego: right inner lane, stopping at the crossing for a few seconds.
+    s.ego_path.points = {{-20, -kInner, 0}};
+    const double stop_x = cross - g.cross_half_width - 4;
+    const double t_stop = (stop_x + 20) / v;
+    if (t_stop < duration) {
+      s.ego_path.points.push_back({stop_x, -kInner, t_stop});
+      s.ego_path.points.push_back({stop_x, -kInner, t_stop + 3.0});
+      s.ego_path.points.push_back({stop_x + v * (duration + 5), -kInner, t_stop + 3.0 + duration + 5});
+    } else {
+      s.ego_path.points.push_back({-20 + v * (duration + 5), -kInner, duration + 5});
+    }
+  } else if (name == "intersection") {
+    g.cross_road_x = 0.0;
+    b.street_furniture(-120, 120, g);
+    traffic(b, -120, 120, 0.0, duration, 40 + r.integer(0, 10), 30 + r.integer(0, 10), 8, g);
+    for (int i = 0; i < 16; ++i) {  // extra crossing traffic
+      Actor& car = b.vehicle(0, 0, 0);
+      const int dir = r.chance(0.5) ? 1 : -1;
+      b.drive(car, dir * -kInner, -dir * r.uniform(30, 150), dir * std::numbers::pi / 2, r.uniform(6, 12), duration);
+    }
+    s.ego_path.points = {{-g.cross_half_width - 6, -kInner, 0}};  // parked at the corner
+  } else if (name == "highway") {
+    g.road_half_width = 12.0;
+    g.sidewalk_width = 2.0;
+    const double v = r.uniform(22, 30);
+    const double x1 = v * duration + 400;
+    for (int side : {-1, 1}) {  // concrete barriers and the occasional sign
+      for (double x = -150; x < x1; x += 30) {
+        b.place(ObjectClass::kWall, Shape::kBox, {30, 0.5, 0.9}, 0.4, x + 15, side * 12.6, 0);
+        if (r.chance(0.08)) b.place(ObjectClass::kSign, Shape::kSign, {0.1, 2.5, 5}, 0.9, x, side * 13.5, 0);
+      }
+    }
+    for (int i = 0; i < 40; ++i) {
+      const bool with = r.chance(0.6);
+      const double lane = (r.integer(0, 2) * 3.6 + 1.8) * (with ? -1 : 1);
+      Actor& car = b.vehicle(0, 0, 0);
+      b.drive(car, r.uniform(-150, x1), lane, with ? 0.0 : std::numbers::pi, r.uniform(18, 36), duration);
+    }
+    s.ego_path.points = {{0, -5.4, 0}, {v * (duration + 5), -5.4, duration + 5}};
+  } else if (name == "parking-lot") {
+    g.has_road = false;
+    for (int row = -3; row <= 3; ++row) {
+      for (int k = -12; k <= 12; ++k) {
+        if (row == 0 || !r.chance(0.7)) continue;
+        b.vehicle(k * 2.9, row * 7.0 + (row > 0 ? -1.5 : 1.5), row > 0 ? -std::numbers::pi / 2 : std::numbers::pi / 2);
+      }
+      b.place(ObjectClass::kPole, Shape::kPole, {0.3, 0.3, 8}, 0.5, -40, row * 7.0, 0);
+      b.place(ObjectClass::kPole, Shape::kPole, {0.3, 0.3, 8}, 0.5, 40, row * 7.0, 0);
+    }
+    b.place(ObjectClass::kBuilding, Shape::kBox, {90, 15, 8}, 0.5, 0, 35, 0);
+    for (int i = 0; i < 5; ++i) {
+      Actor& car = b.vehicle(0, 0, 0);
+      b.drive(car, r.uniform(-40, 40), (r.integer(-1, 1) * 2 + 1) * 3.5, r.chance(0.5) ? 0 : std::numbers::pi, r.uniform(2, 4), duration);
+    }
+    for (int i = 0; i < 18; ++i) {
+      Actor& p = b.pedestrian(r.uniform(-35, 35), r.uniform(-20, 20));
+      if (r.chance(0.7)) b.drive(p, p.path.points[0].x, p.path.points[0].y, r.uniform(0, 2 * std::numbers::pi), r.uniform(0.8, 1.5), duration);
+    }
+    for (int i = 0; i < 2; ++i) {
+      Actor& c = b.cyclist(0, 0);
+      b.drive(c, r.uniform(-40, 0), 3.5, 0, r.uniform(3, 5), duration);
+    }
+    s.ego_path.points = {{-45, -3.5, 0}, {-45 + 3.0 * (duration + 5), -3.5, duration + 5}};
+  } else if (name == "crowd") {
+    g.cross_road_x = 1e9;
+    b.street_furniture(-60, 80, g);
+    for (int i = 0; i < 150; ++i) {  // pedestrians everywhere, the street closed to traffic
+      Actor& p = b.pedestrian(r.uniform(-40, 60), r.uniform(-11, 11));
+      if (r.chance(0.8)) {
+        b.drive(p, p.path.points[0].x, p.path.points[0].y, r.uniform(0, 2 * std::numbers::pi), r.uniform(0.6, 1.6), duration);
+      }
+    }
+    for (int i = 0; i < 6; ++i) {
+      Actor& c = b.cyclist(0, 0);
+      b.drive(c, r.uniform(-40, 40), r.uniform(-5, 5), r.chance(0.5) ? 0 : std::numbers::pi, r.uniform(3, 5), duration);
+    }
+    s.ego_path.points = {{-20, 0, 0}, {-20 + 1.0 * (duration + 5), 0, duration + 5}};
+  } else {
+    std::string list;
+    for (const auto& n : scenario_names()) list += (list.empty() ? "" : ", ") + n;
+    return rt::make_error("unknown scenario '" + name + "'; use one of: " + list);
+  }
+  return s;
+}
+
+EgoState ego_state(const World& world, const Trajectory& path, double t) {
+  const Pose p = path.pose_at(t);
+  EgoState e;
+  e.x = p.x;
+  e.y = p.y;
+  e.yaw = p.yaw;
+  e.z = world.ground_height(p.x, p.y);
+  // Attitude from the terrain under a 2.8 m wheelbase and 1.6 m track.
+  const double c = std::cos(p.yaw), s = std::sin(p.yaw);
+  const double front = world.terrain_height(p.x + 1.4 * c, p.y + 1.4 * s);
+  const double back = world.terrain_height(p.x - 1.4 * c, p.y - 1.4 * s);
+  const double left = world.terrain_height(p.x - 0.8 * s, p.y + 0.8 * c);
+  const double right = world.terrain_height(p.x + 0.8 * s, p.y - 0.8 * c);
+  e.pitch = -std::atan2(front - back, 2.8);  // nose up = negative pitch about y (x fwd, z up)
+  e.roll = std::atan2(right - left, 1.6);
+  const V3 v = path.velocity_at(t);
+  e.speed = std::hypot(v.x, v.y);
+  const double dt = 0.05;
+  double dyaw = path.pose_at(t + dt).yaw - path.pose_at(t - dt).yaw;
+  while (dyaw > std::numbers::pi) dyaw -= 2 * std::numbers::pi;
+  while (dyaw < -std::numbers::pi) dyaw += 2 * std::numbers::pi;
+  e.yaw_rate = dyaw / (2 * dt);
+  return e;
+}
+
+}  // namespace stac::sim
