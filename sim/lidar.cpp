@@ -82,7 +82,8 @@ void LidarSim::refresh_candidates(double t) {
   for (auto& b : bins_) b.clear();
   const double tm = t + kWindowS / 2;
   const EgoState e = ego_(tm);
-  const double ego_travel = std::abs(e.speed) * kWindowS + 0.5;
+  // The sensor moves during the window, and beams leave a few centimetres off its axis.
+  const double ego_travel = std::abs(e.speed) * kWindowS + 0.1;
   for (std::size_t i = 0; i < world_.actors().size(); ++i) {
     const Pose p = world_.actor_pose(i, tm);
     const V3 v = world_.actors()[i].path.velocity_at(tm);
@@ -95,7 +96,7 @@ void LidarSim::refresh_candidates(double t) {
       continue;
     }
     const double centre = std::atan2(dy, dx) * 180.0 / std::numbers::pi;
-    const double half = std::asin(std::min(1.0, r / dist)) * 180.0 / std::numbers::pi + 1.0;
+    const double half = std::asin(std::min(1.0, r / dist)) * 180.0 / std::numbers::pi + 0.5;
     for (int d = static_cast<int>(std::floor(centre - half)); d <= static_cast<int>(std::ceil(centre + half)); ++d) {
       bins_[static_cast<std::size_t>(((d % 360) + 360) % 360)].push_back(static_cast<std::uint32_t>(i));
     }

@@ -16,8 +16,9 @@ Hit hit_walker(const Ray& r, double h, double phase, double swing) {
   Hit best = hit_ellipsoid(r, {0, 0, 0.70 * h}, {0.13, 0.21, 0.17 * h});  // torso
   best = nearer(best, hit_ellipsoid(r, {0, 0, 0.93 * h}, {0.10, 0.09, 0.07 * h}));  // head
   const double stride = 0.32 * swing;
+  const double sin_phase = std::sin(phase);
   for (int side : {-1, 1}) {
-    const double s = side * std::sin(phase);
+    const double s = side * sin_phase;
     best = nearer(best, hit_segment(r, {0, side * 0.1, 0.52 * h}, {stride * s, side * 0.1, 0.04}, 0.07));
     best = nearer(best, hit_segment(r, {0, side * 0.22, 0.80 * h},
                                     {-0.7 * stride * s, side * 0.25, 0.46 * h}, 0.045));
@@ -305,16 +306,22 @@ WorldHit World::cast(const Ray& ray, double t, const std::vector<std::uint32_t>&
       cache.valid[i] = 1;
     }
     const Pose& p = cache.pose[i];
+    // Early outs: farther than what is already hit, then the actor's box (every shape lies in
+    // its truth box; the margin covers fence posts and rounding).
+    if (best.t < kNoHit) {
+      const double dx = p.x - ray.origin.x, dy = p.y - ray.origin.y, reach = best.t + radius_[i];
+      if (dx * dx + dy * dy > reach * reach) continue;
+    }
     const Ray local{p.to_local(ray.origin), p.rotate_to_local(ray.direction)};
-    // Early out: the actor's bounding box, with room for limbs, bikes and suitcases.
     const Actor& a = actors_[i];
-    const Hit bound = hit_box(local, {-a.size.x / 2 - 0.5, -a.size.y / 2 - 0.5, -0.3},
-                              {a.size.x / 2 + 0.5, a.size.y / 2 + 0.5, a.size.z + 0.3});
+    constexpr double kMargin = 0.15;
+    const Hit bound = hit_box(local, {-a.size.x / 2 - kMargin, -a.size.y / 2 - kMargin, -kMargin},
+                              {a.size.x / 2 + kMargin, a.size.y / 2 + kMargin, a.size.z + kMargin});
     if (bound.t >= best.t) {
       // Missed, or behind what is already hit; a ray starting inside the box still counts.
       const V3 o = local.origin;
-      const bool inside = std::abs(o.x) <= a.size.x / 2 + 0.5 && std::abs(o.y) <= a.size.y / 2 + 0.5 &&
-                          o.z >= -0.3 && o.z <= a.size.z + 0.3;
+      const bool inside = std::abs(o.x) <= a.size.x / 2 + kMargin && std::abs(o.y) <= a.size.y / 2 + kMargin &&
+                          o.z >= -kMargin && o.z <= a.size.z + kMargin;
       if (!inside) continue;
     }
     bool translucent = false;
