@@ -278,6 +278,10 @@ rt::Result<Calibration> load_calibration(const std::filesystem::path& path) {
                         "<boost_serialization> or a 'lasers:' list)");
 }
 
+rt::Result<bool> check_calibration(const Calibration& calibration) {
+  return check_ranges(calibration.source, calibration);
+}
+
 rt::Result<bool> save_ros_yaml(const Calibration& c, const std::filesystem::path& path) {
   YAML::Emitter out;
   out.SetDoublePrecision(17);
