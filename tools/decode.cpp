@@ -11,6 +11,7 @@
 #include "tools/decode.hpp"
 #include "tools/progress.hpp"
 #include "tools/scan_writers.hpp"
+#include "tools/sensor_status.hpp"
 #include "tools/settings.hpp"
 
 namespace stac::tools {
@@ -35,10 +36,6 @@ rt::Result<VelodyneSettings> settings_for(const DecodeOptions& o) {
     if (o.cut_angle_deg >= 360.0) return rt::make_error("--cut-angle must be in [0, 360)");
     s->assembler.cut_angle = static_cast<std::uint16_t>(std::lround(o.cut_angle_deg * 100.0) % 36000);
   }
-  if (s->calibration.empty()) {
-    return rt::make_error("the calibration from the sensor's status bytes ('stream') is not "
-                          "available yet; pass --calib with the unit's db.xml or ROS yaml");
-  }
   return s;
 }
 
@@ -48,7 +45,10 @@ int run_decode(const DecodeOptions& o) {
   auto settings = settings_for(o);
   if (!settings) return fail(settings.error().message);
   const auto& s = *settings;
-  auto calibration = velodyne::load_calibration(s.calibration);
+  // An empty path means 'stream': the calibration the unit sends in its status bytes.
+  auto calibration = s.calibration.empty()
+                         ? stream_calibration(o.in, s.port, s.assembler.decoder.model)
+                         : velodyne::load_calibration(s.calibration);
   if (!calibration) return fail(calibration.error().message);
   auto writer = make_scan_writer(o.format, o.out);
   if (!writer) return fail(writer.error().message);
@@ -138,7 +138,8 @@ void add_decode_command(CLI::App& app) {
       ->check(CLI::ExistingFile);
   cmd->add_option("--out", o->out, "output: a .csv file, or a folder for --format kitti")->required();
   cmd->add_option("--calib", o->calib,
-                  "calibration of the unit: Velodyne db.xml or ROS yaml. Default: the config's");
+                  "calibration of the unit: Velodyne db.xml, ROS yaml, or 'stream' for the one an "
+                  "S2.1/S3 sends in its status bytes. Default: the config's");
   cmd->add_option("--format", o->format, "csv or kitti")->check(CLI::IsMember({"csv", "kitti"}));
   cmd->add_option("--config", o->config, "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
   cmd->add_option("--model", o->model, "S2, S2.1 or S3 (default: the config's)");

@@ -1,10 +1,12 @@
 // stac sim: a simulated drive written as the real devices' bytes (pcap) plus its ground truth.
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 
 #include "drivers/io/pcap_writer.hpp"
 #include "drivers/velodyne/decoder.hpp"
+#include "drivers/velodyne/status.hpp"
 #include "sim/run.hpp"
 #include "tools/commands.hpp"
 #include "tools/progress.hpp"
@@ -47,6 +49,27 @@ int run_sim(const SimOptions& o) {
   std::ofstream truth(o.truth);
   if (!truth) return fail(o.truth + ": cannot create the truth file");
 
+  // The trailer an S2.1/S3 sends: GPS time past the hour and the status cycle, with the
+  // calibration the sim casts with in its dump (so `--calib stream` decodes the capture).
+  velodyne::SensorStatus sensor;
+  sensor.gps_raw = 'A';  // PPS and NMEA
+  sensor.temperature_c = 42;
+  sensor.firmware = 0x47;
+  velodyne::UnitParameters unit;
+  unit.upper_noise_threshold = unit.lower_noise_threshold = 24;
+  unit.calibration_date = velodyne::DateTime{2025, 6, 2, 10, 30, 0};
+  unit.humidity = 30;
+  unit.rpm = static_cast<std::uint16_t>(std::lround(rc.lidar.rpm));
+  unit.fov_end = 36000;
+  unit.run_hours = 1200;
+  unit.ip_source = {192, 168, 3, 43};
+  unit.ip_destination = {255, 255, 255, 255};
+  unit.return_mode = o.dual_return ? velodyne::ReturnMode::kDual : velodyne::ReturnMode::kStrongest;
+  unit.power_level = 0xA8;
+  unit.warnings = 0x60;  // PPS and GPS time present
+  auto trailer = velodyne::StatusTrailerWriter::create(rc.lidar.model, sensor, unit, *calibration);
+  if (!trailer) return fail("the calibration cannot be sent in the status cycle: " + trailer.error().message);
+
   const velodyne::PacketDecoder timing(*calibration, velodyne::DecoderConfig{.model = rc.lidar.model});
   const std::int64_t span_ns = timing.packet_span_ns(o.dual_return);
   std::uint64_t scans = 0, points = 0;
@@ -62,9 +85,7 @@ int run_sim(const SimOptions& o) {
   for (std::uint32_t k = 0; k < n; ++k) {
     std::int64_t first_ns = 0;
     (*run)->packet(k, bytes, first_ns, on_scan);
-    // Trailer: microseconds past the hour of the packet's first firing.
-    velodyne::store_u32(bytes.data() + velodyne::kPacketSize - 6,
-                        static_cast<std::uint32_t>((first_ns / 1000) % 3'600'000'000LL));
+    trailer->write(bytes.data() + velodyne::kPacketSize - 6, first_ns);
     io::Datagram d;
     d.payload = bytes;
     d.stamp_ns = first_ns + span_ns;  // received right after its last firing

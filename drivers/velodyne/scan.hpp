@@ -5,6 +5,7 @@
 #include <span>
 
 #include "drivers/velodyne/point.hpp"
+#include "drivers/velodyne/status.hpp"
 #include "rt/fixed_vector.hpp"
 
 namespace stac::velodyne {
@@ -20,6 +21,8 @@ struct ScanHeader {
   std::uint32_t late_firings = 0;    // reordered firings that arrived after their scan closed
   std::uint32_t points_dropped = 0;  // returns that did not fit the scan's capacity
   std::uint32_t device_usec_first = 0;  // trailer microseconds past the hour, first packet
+  std::int64_t device_utc_ns = 0;       // the same as UTC from the status cycle's date; 0 = unknown
+  GpsState gps = GpsState::kUnknown;    // the sensor's GPS input when the scan opened
   bool starts_at_cut = false;        // opened by a cut-angle crossing (not by start-up or a gap)
   bool ends_at_cut = false;          // closed by a cut-angle crossing (not by a gap or timeout)
   bool dual_return = false;

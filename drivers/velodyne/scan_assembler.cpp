@@ -39,6 +39,7 @@ std::size_t scan_capacity(const ScanAssemblerConfig& config) noexcept {
 ScanAssembler::ScanAssembler(const Calibration& calibration, const ScanAssemblerConfig& config)
     : config_(config),
       decoder_(calibration, config.decoder),
+      status_(config.decoder.model),
       max_gap_ns_(static_cast<std::int64_t>(config.max_gap_s * 1e9)),
       max_duration_ns_(static_cast<std::int64_t>(config.max_scan_duration_s * 1e9)),
       carry_points_(kPointsPerPacket) {
@@ -72,6 +73,8 @@ void ScanAssembler::open(Target& t, std::int64_t stamp_ns, std::uint16_t rotatio
   t.header->last_azimuth = rotation;
   t.header->starts_at_cut = at_cut;
   t.header->device_usec_first = device_usec;
+  t.header->device_utc_ns = utc_time_ns(status_.sensor(), device_usec).value_or(0);
+  t.header->gps = status_.sensor().valid ? status_.sensor().gps : GpsState::kUnknown;
   t.header->dual_return = dual;
   t.open = true;
   t.epoch = ++epochs_;
@@ -117,6 +120,7 @@ bool ScanAssembler::add_packet(std::span<const std::uint8_t> payload,
   if (target_ == &carry_) begin(*scan_);  // the caller did not take the closed scan: reuse it
   std::memcpy(last_trailer_.data(), packet->trailer, last_trailer_.size());
   const ModelTraits& model = decoder_.model();
+  if (model.trailer == TrailerKind::kGpsStatus) status_.add(packet->trailer[4], packet->trailer[5]);
   const std::uint32_t device_usec =
       model.trailer == TrailerKind::kGpsStatus ? load_u32(packet->trailer) : 0;
 

@@ -17,6 +17,7 @@
 
 #include "drivers/velodyne/decoder.hpp"
 #include "drivers/velodyne/scan.hpp"
+#include "drivers/velodyne/status.hpp"
 
 namespace stac::velodyne {
 
@@ -59,6 +60,8 @@ class ScanAssembler {
   const AssemblerCounters& counters() const noexcept { return counters_; }
   const DecodeCounters& decode_counters() const noexcept { return decoder_.counters(); }
   const PacketDecoder& decoder() const noexcept { return decoder_; }
+  // The S2.1/S3 status cycle of the accepted packets (GPS time, temperature, calibration dump).
+  const StatusDecoder& status() const noexcept { return status_; }
   // The 6 trailer bytes of the last accepted packet (see packet.hpp for both kinds).
   const std::array<std::uint8_t, 6>& last_trailer() const noexcept { return last_trailer_; }
 
@@ -82,6 +85,7 @@ class ScanAssembler {
 
   ScanAssemblerConfig config_;
   PacketDecoder decoder_;
+  StatusDecoder status_;
   std::int64_t max_gap_ns_;
   std::int64_t max_duration_ns_;
   Scan* scan_ = nullptr;

@@ -359,4 +359,44 @@ rt::Result<bool> encode_status_sequence(Model model, const SensorStatus& status,
   return true;
 }
 
+DateTime utc_date_time(std::int64_t utc_ns) noexcept {
+  const std::int64_t s = utc_ns >= 0 ? utc_ns / 1'000'000'000 : (utc_ns + 1) / 1'000'000'000 - 1;
+  std::int64_t z = (s >= 0 ? s : s - 86399) / 86400;  // days since 1970
+  const auto sod = static_cast<int>(s - z * 86400);
+  z += 719468;  // civil_from_days (proleptic Gregorian)
+  const std::int64_t era = (z >= 0 ? z : z - 146096) / 146097;
+  const auto doe = static_cast<int>(z - era * 146097);
+  const int yoe = (doe - doe / 1460 + doe / 36524 - doe / 146096) / 365;
+  const int doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+  const int mp = (5 * doy + 2) / 153;
+  const int day = doy - (153 * mp + 2) / 5 + 1;
+  const int month = mp < 10 ? mp + 3 : mp - 9;
+  const auto year = static_cast<int>(yoe + era * 400 + (month <= 2 ? 1 : 0));
+  return {year, month, day, sod / 3600, sod / 60 % 60, sod % 60};
+}
+
+rt::Result<StatusTrailerWriter> StatusTrailerWriter::create(Model model, const SensorStatus& status,
+                                                            const UnitParameters& unit,
+                                                            const Calibration& calibration) {
+  StatusTrailerWriter w;
+  w.sequence_.resize(kStatusDumpPackets);
+  w.status_ = status;
+  auto ok = encode_status_sequence(model, status, unit, calibration,
+                                   std::span<StatusByte, kStatusDumpPackets>(w.sequence_));
+  if (!ok) return rt::Unexpected<rt::Error>{ok.error()};
+  return w;
+}
+
+void StatusTrailerWriter::write(std::uint8_t* trailer, std::int64_t utc_ns) noexcept {
+  const auto k = static_cast<std::size_t>(next_++ % kStatusDumpPackets);
+  const int position = static_cast<int>(k % kStatusCyclePackets);
+  if (position == 0) status_.time = utc_date_time(utc_ns);
+  const StatusByte b =
+      position < kStatusTypedBytes ? typed_status_byte(position, status_) : sequence_[k];
+  const std::int64_t usec = (utc_ns / 1000) % 3'600'000'000LL;
+  store_u32(trailer, static_cast<std::uint32_t>(usec < 0 ? usec + 3'600'000'000LL : usec));
+  trailer[4] = b.type;
+  trailer[5] = b.value;
+}
+
 }  // namespace stac::velodyne

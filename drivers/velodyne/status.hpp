@@ -19,6 +19,7 @@
 #include <cstdint>
 #include <optional>
 #include <span>
+#include <vector>
 
 #include "drivers/velodyne/calibration.hpp"
 #include "drivers/velodyne/model.hpp"
@@ -132,5 +133,26 @@ StatusByte typed_status_byte(int position, const SensorStatus& status) noexcept;
 rt::Result<bool> encode_status_sequence(Model model, const SensorStatus& status,
                                         const UnitParameters& unit, const Calibration& calibration,
                                         std::span<StatusByte, kStatusDumpPackets> out);
+
+// The UTC calendar date and time of `utc_ns` (ns since 1970).
+DateTime utc_date_time(std::int64_t utc_ns) noexcept;
+
+// Writes the 6 trailer bytes an S2.1/S3 sends: microseconds past the hour of the packet's time
+// and the next status byte of the endlessly repeated status sequence, whose date and time follow
+// the packet times. For the simulator and synthetic captures.
+class StatusTrailerWriter {
+ public:
+  // `status` gives GPS state, temperature and firmware; its time is replaced per cycle.
+  static rt::Result<StatusTrailerWriter> create(Model model, const SensorStatus& status,
+                                                const UnitParameters& unit,
+                                                const Calibration& calibration);
+  void write(std::uint8_t* trailer, std::int64_t utc_ns) noexcept;
+
+ private:
+  StatusTrailerWriter() = default;
+  std::vector<StatusByte> sequence_;
+  SensorStatus status_;
+  std::uint64_t next_ = 0;
+};
 
 }  // namespace stac::velodyne

@@ -2,6 +2,7 @@
 #include <sys/wait.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <sstream>
 #include <thread>
@@ -9,6 +10,7 @@
 #include "drivers/io/pcap_reader.hpp"
 #include "drivers/io/pcap_writer.hpp"
 #include "drivers/io/udp_receiver.hpp"
+#include "drivers/velodyne/calibration.hpp"
 #include "shared_data.hpp"
 #include "velodyne/synthetic_stream.hpp"
 
@@ -61,7 +63,7 @@ std::filesystem::path write_capture(const std::filesystem::path& dir) {
 TEST(Cli, HelpExplainsEveryCommand) {
   const CliResult r = stac("--help");
   EXPECT_EQ(r.code, 0);
-  for (const char* word : {"decode", "record", "demo", "Examples"}) {
+  for (const char* word : {"decode", "record", "demo", "sim", "status", "Examples"}) {
     EXPECT_NE(r.output.find(word), std::string::npos) << word << " missing from:\n" << r.output;
   }
   const CliResult d = stac("decode --help");
@@ -215,6 +217,58 @@ TEST(Cli, RecordWritesWhatArrivesOnTheSocket) {
     ++n;
   }
   EXPECT_EQ(n, 200);
+}
+
+// The "points N" figure of a decode summary.
+long long decoded_points(const std::string& output) {
+  const auto at = output.find("points ");
+  return at == std::string::npos ? -1 : std::atoll(output.c_str() + at + 7);
+}
+
+TEST(Cli, StatusShowsTheSimulatedUnitAndStreamCalibrationDecodesLikeTheFile) {
+  STAC_REQUIRE_SHARED_DATA(kYaml);
+  const auto dir = fresh_dir("status");
+  const std::string yaml = stac::testing::shared_data(kYaml).string();
+  const auto pcap = (dir / "run.pcap").string();
+  CliResult sim = stac("sim --scenario parking-lot --seed 5 --duration 1.5 --calib " + yaml +
+                       " --out " + pcap + " --truth " + (dir / "run.jsonl").string());
+  ASSERT_EQ(sim.code, 0) << sim.output;
+
+  const auto unit_yaml = (dir / "unit.yaml").string();
+  CliResult st = stac("status --in " + pcap + " --calib-out " + unit_yaml);
+  ASSERT_EQ(st.code, 0) << st.output;
+  for (const char* word : {"1 dumps accepted", "0 out of sequence", "GPS PPS+NMEA", "600 rpm",
+                           "return mode strongest", "192.168.3.43", "2026-01-01 12:00:01 UTC"}) {
+    EXPECT_NE(st.output.find(word), std::string::npos) << word << " missing from:\n" << st.output;
+  }
+  auto sent = velodyne::load_calibration(unit_yaml);
+  auto file = velodyne::load_calibration(yaml);
+  ASSERT_TRUE(sent) << sent.error().message;
+  ASSERT_TRUE(file);
+  for (int i = 0; i < 64; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    EXPECT_NEAR(sent->lasers[k].vert_correction_rad, file->lasers[k].vert_correction_rad, 1e-4);
+    EXPECT_NEAR(sent->lasers[k].dist_correction_m, file->lasers[k].dist_correction_m, 5e-4 + 1e-9);
+  }
+
+  CliResult by_file = stac("decode --in " + pcap + " --calib " + yaml + " --out " + (dir / "a.csv").string());
+  CliResult by_stream = stac("decode --in " + pcap + " --calib stream --out " + (dir / "b.csv").string());
+  ASSERT_EQ(by_file.code, 0) << by_file.output;
+  ASSERT_EQ(by_stream.code, 0) << by_stream.output;
+  EXPECT_GT(decoded_points(by_file.output), 100'000);
+  EXPECT_EQ(decoded_points(by_stream.output), decoded_points(by_file.output));
+}
+
+TEST(Cli, StreamCalibrationSaysWhatToDoWhenTheCaptureCarriesNone) {
+  const auto dir = fresh_dir("no_stream");
+  const auto pcap = write_capture(dir);  // trailers without a status cycle
+  CliResult r = stac("decode --in " + pcap.string() + " --calib stream --out " + (dir / "x.csv").string());
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.output.find("no complete calibration"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("pass --calib"), std::string::npos) << r.output;
+  CliResult s2 = stac("status --in " + pcap.string() + " --model S2");
+  EXPECT_NE(s2.code, 0);
+  EXPECT_NE(s2.output.find("sends no status cycle"), std::string::npos) << s2.output;
 }
 
 }  // namespace

@@ -8,8 +8,10 @@
 #include <string_view>
 #include <vector>
 
+#include "drivers/velodyne/scan_assembler.hpp"
 #include "rt/testing/alloc_counter.hpp"
 #include "shared_data.hpp"
+#include "velodyne/synthetic_stream.hpp"
 
 namespace stac::velodyne {
 namespace {
@@ -290,6 +292,54 @@ TEST(StatusDecoder, DecodesWholeDumpsWithoutAllocating) {
   counter.stop();
   EXPECT_EQ(d.counters().dumps, 3u);
   EXPECT_EQ(counter.allocations(), 0u);
+}
+
+TEST(StatusTime, CalendarOfUtcNanoseconds) {
+  const DateTime t = utc_date_time(1'798'761'599'500'000'000);  // 2026-12-31T23:59:59.5Z
+  EXPECT_EQ(t.year, 2026);
+  EXPECT_EQ(t.month, 12);
+  EXPECT_EQ(t.day, 31);
+  EXPECT_EQ(t.hour, 23);
+  EXPECT_EQ(t.minute, 59);
+  EXPECT_EQ(t.second, 59);
+  const DateTime leap = utc_date_time(1'709'164'800'000'000'000);  // 2024-02-29T00:00:00Z
+  EXPECT_EQ(leap.month, 2);
+  EXPECT_EQ(leap.day, 29);
+}
+
+TEST(StatusTrailerWriter, ScanHeadersCarryUtcAndGpsStateAndTheCalibrationArrives) {
+  const Calibration flat = stac::testing::flat_calibration();
+  SensorStatus sensor = example_status();
+  auto writer = StatusTrailerWriter::create(Model::kS2_1, sensor, example_unit(), flat);
+  ASSERT_TRUE(writer) << writer.error().message;
+  stac::testing::StreamSpec spec;
+  spec.seconds = 1.5;  // more than one 4160-packet dump
+  spec.start_ns = 1'795'453'200'000'000'000 + 3'599'500'000'000;  // 0.5 s before 18:00 UTC
+  auto packets = stac::testing::make_stream(spec);
+  ScanAssemblerConfig config;
+  config.decoder.model = Model::kS2_1;
+  ScanAssembler assembler(flat, config);
+  Scan scan(scan_capacity(config));
+  assembler.begin(scan);
+  int checked = 0;
+  for (auto& p : packets) {
+    writer->write(p.bytes.data() + kPacketSize - 6, p.stamp_ns);
+    if (!assembler.add_packet(p.bytes, p.stamp_ns)) continue;
+    if (scan.header.device_utc_ns != 0) {
+      // The first packet's UTC, across the top of the hour, from the trailer and the cycle.
+      EXPECT_NEAR(static_cast<double>(scan.header.device_utc_ns),
+                  static_cast<double>(scan.header.stamp_ns), 1e6);
+      EXPECT_EQ(scan.header.gps, GpsState::kPpsAndNmea);
+      ++checked;
+    }
+    assembler.begin(scan);
+  }
+  EXPECT_GE(checked, 10);
+  EXPECT_TRUE(assembler.status().has_calibration());
+  EXPECT_EQ(assembler.status().counters().out_of_sequence, 0u);
+  auto stream = assembler.status().calibration();
+  ASSERT_TRUE(stream) << stream.error().message;
+  expect_same_within_quantisation(flat, *stream);
 }
 
 }  // namespace
