@@ -88,6 +88,20 @@ void expect_same_within_quantisation(const Calibration& a, const Calibration& b)
   }
 }
 
+// The real S3 calibration (unit #1090) and the 4160 status bytes that carry it.
+class RealS3Dump : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    STAC_REQUIRE_SHARED_DATA(kS3Yaml);
+    auto loaded = load_calibration(shared_data(kS3Yaml));
+    ASSERT_TRUE(loaded) << loaded.error().message;
+    file = *loaded;
+    bytes = sequence(Model::kS3, file);
+  }
+  Calibration file;
+  std::vector<StatusByte> bytes;
+};
+
 TEST(StatusCrc, MatchesTheCrc16Check) {
   // CRC-16 poly 0x8005, init 0, unreflected ("CRC-16/UMTS"): check value of "123456789".
   constexpr std::string_view text = "123456789";
@@ -96,19 +110,16 @@ TEST(StatusCrc, MatchesTheCrc16Check) {
   EXPECT_EQ(crc16_8005({}), 0);
 }
 
-TEST(StatusDecoder, RealS3CalibrationRoundTripsThroughTheDumpWithCrc) {
-  STAC_REQUIRE_SHARED_DATA(kS3Yaml);
-  auto file = load_calibration(shared_data(kS3Yaml));
-  ASSERT_TRUE(file) << file.error().message;
+TEST_F(RealS3Dump, CalibrationRoundTripsThroughTheDumpWithCrc) {
   StatusDecoder d(Model::kS3);
   EXPECT_FALSE(d.has_calibration());
   EXPECT_FALSE(d.calibration());
-  feed(d, sequence(Model::kS3, *file));
+  feed(d, bytes);
   ASSERT_TRUE(d.has_calibration());
   auto stream = d.calibration();
   ASSERT_TRUE(stream) << stream.error().message;
   EXPECT_EQ(stream->source, "status stream");
-  expect_same_within_quantisation(*file, *stream);
+  expect_same_within_quantisation(file, *stream);
   EXPECT_TRUE(d.unit().crc_checked);
   EXPECT_EQ(d.counters().dumps, 1u);
   EXPECT_EQ(d.counters().cycles, 260u);
@@ -127,12 +138,8 @@ TEST(StatusDecoder, RealS21CalibrationRoundTripsWithTheLengthChecksum) {
   EXPECT_FALSE(d.unit().crc_checked);  // the S2.1 writes 1820 where the S3 writes its CRC
 }
 
-TEST(StatusDecoder, DecodesTimeGpsTemperatureFirmwareAndUnitParameters) {
-  STAC_REQUIRE_SHARED_DATA(kS3Yaml);
-  auto file = load_calibration(shared_data(kS3Yaml));
-  ASSERT_TRUE(file);
+TEST_F(RealS3Dump, DecodesTimeGpsTemperatureFirmwareAndUnitParameters) {
   StatusDecoder d(Model::kS3);
-  const auto bytes = sequence(Model::kS3, *file);
   feed(d, bytes, 0, 9);  // one H..V run is enough for the sensor status
   const SensorStatus& s = d.sensor();
   ASSERT_TRUE(s.valid);
@@ -165,25 +172,18 @@ TEST(StatusDecoder, DecodesTimeGpsTemperatureFirmwareAndUnitParameters) {
   EXPECT_EQ(u.warnings, 0x60);  // from the S3's 'W' bytes
 }
 
-TEST(StatusDecoder, DualReturnModeAndUnsetCalibrationDate) {
-  STAC_REQUIRE_SHARED_DATA(kS3Yaml);
-  auto file = load_calibration(shared_data(kS3Yaml));
-  ASSERT_TRUE(file);
+TEST_F(RealS3Dump, DualReturnModeAndUnsetCalibrationDate) {
   UnitParameters unit = example_unit();
   unit.return_mode = ReturnMode::kDual;
   unit.calibration_date.reset();  // sent as 0xFF bytes
   StatusDecoder d(Model::kS3);
-  feed(d, sequence(Model::kS3, *file, unit));
+  feed(d, sequence(Model::kS3, file, unit));
   ASSERT_TRUE(d.has_calibration());
   EXPECT_EQ(d.unit().return_mode, ReturnMode::kDual);
   EXPECT_FALSE(d.unit().calibration_date);
 }
 
-TEST(StatusDecoder, LostPacketDropsTheDumpAndTheNextUnbrokenOneIsAccepted) {
-  STAC_REQUIRE_SHARED_DATA(kS3Yaml);
-  auto file = load_calibration(shared_data(kS3Yaml));
-  ASSERT_TRUE(file);
-  const auto bytes = sequence(Model::kS3, *file);
+TEST_F(RealS3Dump, LostPacketDropsTheDumpAndTheNextUnbrokenOneIsAccepted) {
   StatusDecoder d(Model::kS3);
   feed(d, bytes, 0, 2000);
   feed(d, bytes, 2001);  // packet 2000 lost
@@ -198,11 +198,7 @@ TEST(StatusDecoder, LostPacketDropsTheDumpAndTheNextUnbrokenOneIsAccepted) {
   EXPECT_EQ(d.counters().dumps, 1u);
 }
 
-TEST(StatusDecoder, StartingInTheMiddleWaitsForTheNextUnitMarker) {
-  STAC_REQUIRE_SHARED_DATA(kS3Yaml);
-  auto file = load_calibration(shared_data(kS3Yaml));
-  ASSERT_TRUE(file);
-  const auto bytes = sequence(Model::kS3, *file);
+TEST_F(RealS3Dump, StartingInTheMiddleWaitsForTheNextUnitMarker) {
   StatusDecoder d(Model::kS3);
   feed(d, bytes, 1003);  // joins mid-cycle, mid-dump
   EXPECT_FALSE(d.has_calibration());
@@ -212,11 +208,7 @@ TEST(StatusDecoder, StartingInTheMiddleWaitsForTheNextUnitMarker) {
   EXPECT_TRUE(d.has_calibration());
 }
 
-TEST(StatusDecoder, CorruptedLaserByteFailsTheS3Crc) {
-  STAC_REQUIRE_SHARED_DATA(kS3Yaml);
-  auto file = load_calibration(shared_data(kS3Yaml));
-  ASSERT_TRUE(file);
-  auto bytes = sequence(Model::kS3, *file);
+TEST_F(RealS3Dump, CorruptedLaserByteFailsTheS3Crc) {
   // Cycle 10 (laser 2, part 1), data byte 3: a correction byte.
   bytes[10 * kStatusCyclePackets + kStatusTypedBytes + 3].value ^= 0x10;
   StatusDecoder d(Model::kS3);
@@ -225,7 +217,7 @@ TEST(StatusDecoder, CorruptedLaserByteFailsTheS3Crc) {
   EXPECT_EQ(d.counters().bad_checksum, 1u);
 }
 
-TEST(StatusDecoder, GarbageTrailersNeverYieldACalibration) {
+TEST_F(RealS3Dump, GarbageTrailersNeverYieldACalibration) {
   std::mt19937 rng(7);
   std::uniform_int_distribution<int> byte(0, 255);
   StatusDecoder d(Model::kS3);
@@ -234,10 +226,7 @@ TEST(StatusDecoder, GarbageTrailersNeverYieldACalibration) {
   }
   EXPECT_FALSE(d.has_calibration());
   EXPECT_EQ(d.counters().packets, 100'000u);
-  STAC_REQUIRE_SHARED_DATA(kS3Yaml);
-  auto file = load_calibration(shared_data(kS3Yaml));
-  ASSERT_TRUE(file);
-  feed(d, sequence(Model::kS3, *file));  // and it recovers when real bytes come
+  feed(d, bytes);  // and it recovers when real bytes come
   EXPECT_TRUE(d.has_calibration());
 }
 
@@ -279,13 +268,9 @@ TEST(StatusTime, TopOfHourRolloverBetweenCycleAndPacket) {
   EXPECT_EQ(*u, new_year_2027 * 1'000'000'000 - 10'000'000);
 }
 
-TEST(StatusDecoder, DecodesWholeDumpsWithoutAllocating) {
+TEST_F(RealS3Dump, DecodesWholeDumpsWithoutAllocating) {
   static_assert(noexcept(std::declval<StatusDecoder&>().add(0, 0)));
   static_assert(noexcept(utc_time_ns(SensorStatus{}, 0U)));
-  STAC_REQUIRE_SHARED_DATA(kS3Yaml);
-  auto file = load_calibration(shared_data(kS3Yaml));
-  ASSERT_TRUE(file);
-  const auto bytes = sequence(Model::kS3, *file);
   StatusDecoder d(Model::kS3);
   stac::rt::testing::AllocationCounter counter;
   for (int run = 0; run < 3; ++run) feed(d, bytes);
