@@ -20,8 +20,10 @@ struct ScanHeader {
   std::uint32_t packets_lost = 0;    // estimated from azimuth steps larger than usual
   std::uint32_t late_firings = 0;    // reordered firings that arrived after their scan closed
   std::uint32_t points_dropped = 0;  // returns that did not fit the scan's capacity
-  std::uint32_t device_usec_first = 0;  // trailer microseconds past the hour, first packet
-  std::int64_t device_utc_ns = 0;       // the same as UTC from the status cycle's date; 0 = unknown
+  std::uint32_t device_usec_first = 0;  // trailer (microseconds past the hour) of the packet
+                                        // holding the first firing
+  std::int64_t device_utc_ns = 0;       // UTC of the first firing by the sensor's clock, from the
+                                        // trailer and the status cycle's date; 0 = unknown
   GpsState gps = GpsState::kUnknown;    // the sensor's GPS input when the scan opened
   bool starts_at_cut = false;        // opened by a cut-angle crossing (not by start-up or a gap)
   bool ends_at_cut = false;          // closed by a cut-angle crossing (not by a gap or timeout)

@@ -64,7 +64,8 @@ void ScanAssembler::begin(Scan& scan) noexcept {
 }
 
 void ScanAssembler::open(Target& t, std::int64_t stamp_ns, std::uint16_t rotation, bool at_cut,
-                         std::uint32_t device_usec, bool dual) noexcept {
+                         std::uint32_t device_usec, std::int32_t firing_in_packet_ns,
+                         bool dual) noexcept {
   *t.header = ScanHeader{};
   t.points->clear();
   t.header->stamp_ns = stamp_ns;
@@ -73,7 +74,8 @@ void ScanAssembler::open(Target& t, std::int64_t stamp_ns, std::uint16_t rotatio
   t.header->last_azimuth = rotation;
   t.header->starts_at_cut = at_cut;
   t.header->device_usec_first = device_usec;
-  t.header->device_utc_ns = utc_time_ns(status_.sensor(), device_usec).value_or(0);
+  const auto packet_utc = utc_time_ns(status_.sensor(), device_usec);
+  t.header->device_utc_ns = packet_utc ? *packet_utc + firing_in_packet_ns : 0;
   t.header->gps = status_.sensor().valid ? status_.sensor().gps : GpsState::kUnknown;
   t.header->dual_return = dual;
   t.open = true;
@@ -176,11 +178,12 @@ bool ScanAssembler::add_packet(std::span<const std::uint8_t> payload,
   bool wrote_carry = false;
   for (int first = 0; first < kBlocksPerPacket; first += group) {
     const std::uint16_t r = packet->blocks[first].rotation;
-    const std::int64_t t = stamp_ns + decoder_.firing_offset_ns(first, 0, dual);
+    const std::int32_t firing = decoder_.firing_offset_ns(first, 0, dual);
+    const std::int64_t t = stamp_ns + firing;
     if (!have_prev_) {
       have_prev_ = true;
       prev_rotation_ = r;
-      if (!target_->open) open(*target_, t, r, false, device_usec, dual);
+      if (!target_->open) open(*target_, t, r, false, device_usec, firing, dual);
     } else {
       const int d = forward(prev_rotation_, r);
       if (d != 0 && d < kHalfTurn) {
@@ -190,7 +193,7 @@ bool ScanAssembler::add_packet(std::span<const std::uint8_t> payload,
             close(true);
             completed = true;
           }
-          open(*target_, t, r, true, device_usec, dual);
+          open(*target_, t, r, true, device_usec, firing, dual);
         }
         prev_rotation_ = r;
       } else if (d >= kHalfTurn) {
@@ -202,7 +205,7 @@ bool ScanAssembler::add_packet(std::span<const std::uint8_t> payload,
           continue;
         }
       }
-      if (!target_->open) open(*target_, t, r, false, device_usec, dual);
+      if (!target_->open) open(*target_, t, r, false, device_usec, firing, dual);
     }
     ScanHeader& h = *target_->header;
     rt::FixedVector<Point>& pts = *target_->points;

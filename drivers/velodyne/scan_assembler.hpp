@@ -79,7 +79,7 @@ class ScanAssembler {
     std::uint64_t epoch = 0;
   };
   void open(Target& t, std::int64_t stamp_ns, std::uint16_t rotation, bool at_cut,
-            std::uint32_t device_usec, bool dual) noexcept;
+            std::uint32_t device_usec, std::int32_t firing_in_packet_ns, bool dual) noexcept;
   void close(bool at_cut) noexcept;
   bool is_duplicate(std::span<const std::uint8_t> payload) noexcept;
 

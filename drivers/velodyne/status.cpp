@@ -250,16 +250,25 @@ rt::Result<Calibration> StatusDecoder::calibration() const {
   return c;
 }
 
+std::optional<std::int64_t> resolve_past_hour_ns(std::uint32_t usec_past_hour,
+                                                 std::int64_t reference_ns) noexcept {
+  constexpr std::int64_t kHourNs = 3'600'000'000'000;
+  if (usec_past_hour >= 3'600'000'000U) return std::nullopt;
+  const std::int64_t hour = reference_ns >= 0 ? reference_ns / kHourNs
+                                              : (reference_ns + 1) / kHourNs - 1;
+  const std::int64_t t = hour * kHourNs + static_cast<std::int64_t>(usec_past_hour) * 1000;
+  if (t - reference_ns > kHourNs / 2) return t - kHourNs;  // still the previous hour
+  if (reference_ns - t > kHourNs / 2) return t + kHourNs;  // already the next hour
+  return t;
+}
+
 std::optional<std::int64_t> utc_time_ns(const SensorStatus& status,
                                         std::uint32_t usec_past_hour) noexcept {
-  if (!status.valid || usec_past_hour >= 3'600'000'000U) return std::nullopt;
+  if (!status.valid) return std::nullopt;
   const DateTime& t = status.time;
-  std::int64_t hour_s = days_from_civil(t.year, t.month, t.day) * 86400 + t.hour * 3600;
-  const std::int64_t status_s = t.minute * 60 + t.second;
-  const std::int64_t packet_s = usec_past_hour / 1'000'000;
-  if (packet_s + 1800 < status_s) hour_s += 3600;  // the hour rolled over after the cycle
-  if (packet_s > status_s + 1800) hour_s -= 3600;  // the cycle is already in the next hour
-  return hour_s * 1'000'000'000 + static_cast<std::int64_t>(usec_past_hour) * 1000;
+  const std::int64_t cycle_s =
+      days_from_civil(t.year, t.month, t.day) * 86400 + t.hour * 3600 + t.minute * 60 + t.second;
+  return resolve_past_hour_ns(usec_past_hour, cycle_s * 1'000'000'000);
 }
 
 StatusByte typed_status_byte(int position, const SensorStatus& s) noexcept {

@@ -116,6 +116,12 @@ class StatusDecoder {
 // CRC-16 with polynomial 0x8005, initial value 0, no reflection (the S3 dump checksum).
 std::uint16_t crc16_8005(std::span<const std::uint8_t> bytes) noexcept;
 
+// The absolute time of `usec_past_hour` in the hour that puts it closest to `reference_ns`
+// (any clock counting hours like UTC, e.g. an INS's UTC): resolves the top-of-hour rollover when
+// the reference is within half an hour. Fails (empty) for usec_past_hour >= 3.6e9.
+std::optional<std::int64_t> resolve_past_hour_ns(std::uint32_t usec_past_hour,
+                                                 std::int64_t reference_ns) noexcept;
+
 // UTC time (ns since 1970) of a packet from its microseconds past the hour and the cycle's date
 // and time, which may be up to a cycle older: an hour rollover in between is resolved by taking
 // the hour that puts the two closest. Empty when the status is not valid yet.

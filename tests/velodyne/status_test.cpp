@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <numbers>
 #include <random>
 #include <string_view>
@@ -279,6 +280,16 @@ TEST_F(RealS3Dump, DecodesWholeDumpsWithoutAllocating) {
   EXPECT_EQ(counter.allocations(), 0u);
 }
 
+TEST(StatusTime, PastHourResolvesAgainstAnyReferenceClock) {
+  const std::int64_t h = 1'795'453'200'000'000'000;  // 2026-11-23T17:00:00Z
+  // An INS says 17:59:59.9; the sensor's trailer already says 0.2 s past the hour.
+  EXPECT_EQ(resolve_past_hour_ns(200'000U, h + 3'599'900'000'000), h + 3'600'200'000'000);
+  // The INS already says 18:00:00.1; the trailer is still 17:59:59.95.
+  EXPECT_EQ(resolve_past_hour_ns(3'599'950'000U, h + 3'600'100'000'000), h + 3'599'950'000'000);
+  EXPECT_EQ(resolve_past_hour_ns(1'000'000U, h + 1'000'000'000), h + 1'000'000'000);
+  EXPECT_FALSE(resolve_past_hour_ns(3'600'000'000U, h));
+}
+
 TEST(StatusTime, CalendarOfUtcNanoseconds) {
   const DateTime t = utc_date_time(1'798'761'599'500'000'000);  // 2026-12-31T23:59:59.5Z
   EXPECT_EQ(t.year, 2026);
@@ -311,9 +322,10 @@ TEST(StatusTrailerWriter, ScanHeadersCarryUtcAndGpsStateAndTheCalibrationArrives
     writer->write(p.bytes.data() + kPacketSize - 6, p.stamp_ns);
     if (!assembler.add_packet(p.bytes, p.stamp_ns)) continue;
     if (scan.header.device_utc_ns != 0) {
-      // The first packet's UTC, across the top of the hour, from the trailer and the cycle.
-      EXPECT_NEAR(static_cast<double>(scan.header.device_utc_ns),
-                  static_cast<double>(scan.header.stamp_ns), 1e6);
+      // The first firing's UTC, across the top of the hour, from the trailer and the cycle
+      // (the trailer has whole microseconds).
+      EXPECT_LT(std::llabs(scan.header.device_utc_ns - scan.header.stamp_ns), 1000)
+          << scan.header.device_utc_ns << " vs " << scan.header.stamp_ns;
       EXPECT_EQ(scan.header.gps, GpsState::kPpsAndNmea);
       ++checked;
     }
