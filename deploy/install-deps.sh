@@ -5,7 +5,7 @@ set -euo pipefail
 
 packages=(
   build-essential cmake ninja-build pkg-config git
-  libeigen3-dev libpcap-dev libyaml-cpp-dev libtinyxml2-dev libcli11-dev
+  libeigen3-dev libgeographiclib-dev libpcap-dev libyaml-cpp-dev libtinyxml2-dev libcli11-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libopencv-dev  # pictures (bird's-eye views, plots) in tools/, never in the per-scan loop
 )
