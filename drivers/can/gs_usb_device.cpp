@@ -4,9 +4,10 @@
 
 #include <algorithm>
 #include <cstdio>
-#include <ctime>
 #include <string>
 #include <utility>
+
+#include "rt/clock.hpp"
 
 namespace stac::can {
 namespace {
@@ -33,12 +34,6 @@ int control(libusb_device_handle* h, std::uint8_t type, gs_usb::Request request,
             T& body) {
   return libusb_control_transfer(h, type, static_cast<std::uint8_t>(request), value, kInterface,
                                  reinterpret_cast<unsigned char*>(&body), sizeof(T), kControlTimeoutMs);
-}
-
-std::int64_t realtime_ns() noexcept {
-  timespec ts{};
-  clock_gettime(CLOCK_REALTIME, &ts);
-  return ts.tv_sec * 1'000'000'000LL + ts.tv_nsec;
 }
 
 }  // namespace
@@ -154,7 +149,7 @@ int GsUsbDevice::read(std::span<Frame> out, int timeout_ms) noexcept {
       continue;
     }
     out[0] = d.frame;
-    out[0].stamp_ns = realtime_ns();
+    out[0].stamp_ns = rt::realtime_ns();
     ++counters_.frames;
     return 1;
   }

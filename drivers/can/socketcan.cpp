@@ -11,8 +11,9 @@
 
 #include <cerrno>
 #include <cstring>
-#include <ctime>
 #include <utility>
+
+#include "rt/clock.hpp"
 
 namespace stac::can {
 namespace {
@@ -21,12 +22,6 @@ static_assert(sizeof(can_frame) == 16 && CAN_MTU == 16, "classic SocketCAN frame
 static_assert(CANFD_MTU == 72, "CAN FD SocketCAN frame is 72 bytes");
 
 std::string errno_text(int e) { return std::string(std::strerror(e)) + ", errno " + std::to_string(e); }
-
-std::int64_t realtime_ns() noexcept {
-  timespec ts{};
-  clock_gettime(CLOCK_REALTIME, &ts);
-  return ts.tv_sec * 1'000'000'000LL + ts.tv_nsec;
-}
 
 }  // namespace
 
@@ -182,7 +177,7 @@ int SocketCanReader::read(std::span<Frame> out, int timeout_ms) noexcept {
       }
     }
     if (!stamped) {
-      f.stamp_ns = realtime_ns();
+      f.stamp_ns = rt::realtime_ns();
       ++counters_.no_kernel_stamp;
     }
     ++counters_.frames;

@@ -10,25 +10,13 @@
 
 #include "drivers/can/candump.hpp"
 #include "drivers/can/dbc.hpp"
+#include "stac_cli.hpp"
 
 namespace stac::can {
 namespace {
 
-struct CliResult {
-  int code;
-  std::string output;  // stdout and stderr
-};
-
-CliResult stac(const std::string& args) {
-  const std::string cmd = std::string(STAC_CLI) + " " + args + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  if (p == nullptr) return {-1, "popen failed"};
-  std::string out;
-  char buf[4096];
-  while (std::size_t n = std::fread(buf, 1, sizeof(buf), p)) out.append(buf, n);
-  const int status = pclose(p);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
-}
+using stac::testing::CliResult;
+using stac::testing::stac;
 
 std::vector<std::string> lines_of(const std::filesystem::path& file) {
   std::ifstream in(file);
