@@ -95,6 +95,12 @@ OdometryUpdate OdometryDecoder::decode(const Frame& frame) noexcept {
   return u;
 }
 
+std::vector<CanIdFilter> OdometryDecoder::filters() const {
+  std::vector<CanIdFilter> f{{speed_.id, speed_.extended}};
+  if (yaw_rate_.id != speed_.id || yaw_rate_.extended != speed_.extended) f.push_back({yaw_rate_.id, yaw_rate_.extended});
+  return f;
+}
+
 const char* to_string(DeadReckoningStatus status) noexcept {
   switch (status) {
     case DeadReckoningStatus::kNoInput: return "no_input";

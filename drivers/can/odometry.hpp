@@ -9,9 +9,11 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "drivers/can/dbc.hpp"
 #include "drivers/can/frame.hpp"
+#include "drivers/can/socketcan.hpp"
 #include "rt/expected.hpp"
 
 namespace stac::can {
@@ -50,6 +52,8 @@ class OdometryDecoder {
   // No allocation, no I/O.
   OdometryUpdate decode(const Frame& frame) noexcept;
   const OdometryDecoderCounters& counters() const noexcept { return counters_; }
+  // The ids to let through a SocketCAN kernel filter (one, or two when the signals differ).
+  std::vector<CanIdFilter> filters() const;
 
   struct Channel {
     Signal signal;

@@ -47,6 +47,11 @@ TEST(OdometryDecoder, DecodesHandMadeFramesOfTheShippedDbc) {
   EXPECT_FALSE(d->decode(ext).has_speed);
   EXPECT_EQ(d->counters().frames, 4u);
   EXPECT_EQ(d->counters().decoded, 2u);
+  const auto filters = d->filters();  // what a SocketCAN reader lets through
+  ASSERT_EQ(filters.size(), 2u);
+  EXPECT_EQ(filters[0].id, 0x1A0u);
+  EXPECT_EQ(filters[1].id, 0x1B0u);
+  EXPECT_FALSE(filters[0].extended || filters[1].extended);
 }
 
 TEST(OdometryDecoder, ShortAndRemoteFramesAreCountedNotDecoded) {
@@ -76,6 +81,7 @@ TEST(OdometryDecoder, SignAndUnitConversionsFromTheMap) {
   ASSERT_TRUE(u.has_speed && u.has_yaw_rate);  // one frame can carry both
   EXPECT_NEAR(u.speed_mps, 10.0, 1e-12);
   EXPECT_NEAR(u.yaw_rate_dps, -180.0 / std::numbers::pi, 1e-9);
+  EXPECT_EQ(d->filters().size(), 1u);  // both signals in one message: one filter
   const auto bad_unit = OdometryDecoder::create(*db, {"M", "T", "M", "W", 1.0});
   ASSERT_FALSE(bad_unit);
   EXPECT_NE(bad_unit.error().message.find("unit 'degC'; expected km/h or m/s"), std::string::npos);
