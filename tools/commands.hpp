@@ -12,6 +12,7 @@ void add_record_command(CLI::App& app);
 void add_demo_command(CLI::App& app);
 void add_sim_command(CLI::App& app);
 void add_status_command(CLI::App& app);
+void add_candump_command(CLI::App& app);
 
 // Prints "stac: <message>" on stderr and returns the exit code 1, for command callbacks.
 int fail(const std::string& message);

@@ -30,12 +30,14 @@ int main(int argc, char** argv) {
       "  stac record --out live.pcap --duration 10   # capture the sensor's UDP stream\n"
       "  stac sim --scenario urban --seed 7 --duration 30 --out run.pcap --truth run.truth.jsonl\n"
       "  stac status --in run.pcap --calib-out unit.yaml   # the calibration the sensor sends\n"
+      "  stac candump --in drive.log --out odometry.csv  # vehicle speed and yaw rate from CAN\n"
       "Run 'stac <command> --help' for the options of each command.");
   stac::tools::add_decode_command(app);
   stac::tools::add_record_command(app);
   stac::tools::add_demo_command(app);
   stac::tools::add_sim_command(app);
   stac::tools::add_status_command(app);
+  stac::tools::add_candump_command(app);
   CLI11_PARSE(app, argc, argv);
   return 0;
 }

@@ -1,0 +1,28 @@
+// The `can:` section of config/stac.yaml, validated once at start-up. Every key is required;
+// errors name the file and the key (`can.<key>`). The DBC path is relative to the config file.
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+#include "drivers/can/gs_usb_device.hpp"
+#include "drivers/can/odometry.hpp"
+#include "drivers/can/socketcan.hpp"
+#include "rt/expected.hpp"
+
+namespace stac::can {
+
+enum class Transport : std::uint8_t { kSocketCan, kGsUsb };
+
+struct CanConfig {
+  Transport transport = Transport::kSocketCan;
+  SocketCanConfig socketcan;  // interface; filters are filled from the signal map
+  GsUsbConfig gs_usb;         // bitrate, channel, listen-only
+  std::filesystem::path dbc;
+  OdometrySignalMap signals;
+  DeadReckoningConfig dead_reckoning;
+};
+
+rt::Result<CanConfig> load_can_config(const std::filesystem::path& config_file);
+
+}  // namespace stac::can
