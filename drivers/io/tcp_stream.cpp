@@ -40,7 +40,6 @@ bool TcpReassembler::add(const TcpSegment& s) noexcept {
   current_ = {};
   finishing_ = false;
   ++counters_.segments;
-  std::span<const std::uint8_t> payload = s.payload;
   std::uint32_t seq = s.seq;
   bool new_stream = false;
   if ((s.flags & kTcpSyn) != 0 || !started_) {
@@ -48,65 +47,46 @@ bool TcpReassembler::add(const TcpSegment& s) noexcept {
     started_ = true;
     new_stream = true;
     ++counters_.streams;
-    expected_ = (s.flags & kTcpSyn) != 0 ? seq + 1 : seq;
     if ((s.flags & kTcpSyn) != 0) ++seq;  // the SYN takes one sequence number
+    expected_ = seq;
   }
-  if (payload.empty()) return new_stream;
+  if (s.payload.empty()) return new_stream;
   const std::int64_t start = seq_diff(seq, expected_);
-  const std::int64_t end = start + static_cast<std::int64_t>(payload.size());
-  if (end <= 0) {
+  if (start + static_cast<std::int64_t>(s.payload.size()) <= 0) {
     ++counters_.retransmitted;
-    return new_stream;
-  }
-  if (start <= 0) {
-    counters_.overlap_bytes += static_cast<std::uint64_t>(-start);
-    current_ = payload.subspan(static_cast<std::size_t>(-start));
     return new_stream;
   }
   Slot* free = nullptr;
   for (auto& slot : slots_) {
     if (!slot.used) { free = &slot; break; }
   }
-  if (free == nullptr || payload.size() > slot_bytes_) {
-    // No room to wait for the hole: skip it; stored bytes now behind us are part of the gap.
-    skip_to(seq);
-    for (auto& slot : slots_) {
-      if (slot.used && seq_diff(slot.seq + static_cast<std::uint32_t>(slot.length), expected_) <= 0) {
-        slot.used = false;
-      }
-    }
-    current_ = payload;
+  if (start <= 0 || free == nullptr || s.payload.size() > slot_bytes_) {
+    // In order, or no room to wait: next() delivers it (after skipping the hole if need be).
+    current_ = s.payload;
+    current_seq_ = seq;
     return new_stream;
   }
   ++counters_.out_of_order;
   const auto index = static_cast<std::size_t>(free - slots_.data());
-  std::memcpy(store_.data() + index * slot_bytes_, payload.data(), payload.size());
-  *free = Slot{seq, payload.size(), true};
+  std::memcpy(store_.data() + index * slot_bytes_, s.payload.data(), s.payload.size());
+  *free = Slot{seq, s.payload.size(), true};
   return new_stream;
 }
 
 bool TcpReassembler::next(std::span<const std::uint8_t>& out) noexcept {
   release_delivered();
-  if (!current_.empty()) {
-    out = current_;
-    current_ = {};
-    expected_ += static_cast<std::uint32_t>(out.size());
-    counters_.bytes += out.size();
-    return true;
-  }
-  for (bool again = true; again;) {
-    again = false;
+  while (true) {
+    // Stored segments that the stream has reached (or passed: then they were retransmitted).
     for (auto& slot : slots_) {
       if (!slot.used) continue;
       const std::int64_t start = seq_diff(slot.seq, expected_);
       const std::int64_t end = start + static_cast<std::int64_t>(slot.length);
-      if (end <= 0) {  // a stored copy of bytes that came again in order
+      if (start > 0) continue;
+      if (end <= 0) {
         ++counters_.retransmitted;
         slot.used = false;
-        again = true;
         continue;
       }
-      if (start > 0) continue;
       const auto index = static_cast<std::size_t>(&slot - slots_.data());
       out = {store_.data() + index * slot_bytes_ + static_cast<std::size_t>(-start),
              static_cast<std::size_t>(end)};
@@ -116,14 +96,32 @@ bool TcpReassembler::next(std::span<const std::uint8_t>& out) noexcept {
       delivered_ = &slot;
       return true;
     }
-    if (!again && finishing_) {
-      if (Slot* s = earliest()) {
-        skip_to(s->seq);
-        again = true;
+    Slot* first = earliest();
+    if (!current_.empty()) {
+      const std::int64_t start = seq_diff(current_seq_, expected_);
+      if (start > 0) {  // the store was full: skip the hole before the earliest bytes we hold
+        skip_to(first != nullptr && seq_diff(first->seq, current_seq_) < 0 ? first->seq : current_seq_);
+        continue;
       }
+      const std::int64_t end = start + static_cast<std::int64_t>(current_.size());
+      if (end <= 0) {
+        ++counters_.retransmitted;
+        current_ = {};
+        continue;
+      }
+      out = current_.subspan(static_cast<std::size_t>(-start));
+      counters_.overlap_bytes += static_cast<std::uint64_t>(-start);
+      current_ = {};
+      expected_ += static_cast<std::uint32_t>(out.size());
+      counters_.bytes += out.size();
+      return true;
     }
+    if (finishing_ && first != nullptr) {
+      skip_to(first->seq);
+      continue;
+    }
+    return false;
   }
-  return false;
 }
 
 void TcpReassembler::finish() noexcept { finishing_ = true; }

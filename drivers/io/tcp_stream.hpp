@@ -69,7 +69,8 @@ class TcpReassembler {
   std::vector<std::uint8_t> store_;  // slots x slot_bytes
   std::size_t slot_bytes_;
   Slot* delivered_ = nullptr;        // slot handed out by the last next(), freed on the next call
-  std::span<const std::uint8_t> current_;
+  std::span<const std::uint8_t> current_;  // the last added segment, not stored
+  std::uint32_t current_seq_ = 0;
   std::uint32_t expected_ = 0;       // next sequence number to deliver
   bool started_ = false;
   bool finishing_ = false;
