@@ -10,27 +10,12 @@
 #include <vector>
 
 #include "shared_data.hpp"
+#include "tools/run_stac.hpp"
 
 namespace stac::tools {
 namespace {
 
 constexpr const char* kCapture = "applanix/clearpath_basic_data_smoke.pcap";
-
-struct CliResult {
-  int code;
-  std::string output;  // stdout and stderr
-};
-
-CliResult stac(const std::string& args) {
-  const std::string cmd = std::string(STAC_CLI) + " " + args + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  if (p == nullptr) return {-1, "popen failed"};
-  std::string out;
-  char buf[4096];
-  while (std::size_t n = std::fread(buf, 1, sizeof(buf), p)) out.append(buf, n);
-  const int status = pclose(p);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
-}
 
 std::vector<std::string> split(const std::string& line) {
   std::vector<std::string> cells;

@@ -10,28 +10,13 @@
 #include "drivers/io/pcap_writer.hpp"
 #include "drivers/io/udp_receiver.hpp"
 #include "shared_data.hpp"
+#include "tools/run_stac.hpp"
 #include "velodyne/synthetic_stream.hpp"
 
 namespace stac::tools {
 namespace {
 
 constexpr const char* kYaml = "velodyne/calib/rosdrivers_64e_s2.1-sztaki.yaml";
-
-struct CliResult {
-  int code;
-  std::string output;  // stdout and stderr
-};
-
-CliResult stac(const std::string& args) {
-  const std::string cmd = std::string(STAC_CLI) + " " + args + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  if (p == nullptr) return {-1, "popen failed"};
-  std::string out;
-  char buf[4096];
-  while (std::size_t n = std::fread(buf, 1, sizeof(buf), p)) out.append(buf, n);
-  const int status = pclose(p);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
-}
 
 std::filesystem::path fresh_dir(const std::string& name) {
   const auto d = std::filesystem::temp_directory_path() / ("stac_cli_" + name);
