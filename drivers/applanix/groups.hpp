@@ -35,6 +35,7 @@ struct Group1 {  // vehicle navigation solution
   float rate_longitudinal_dps = 0, rate_transverse_dps = 0, rate_down_dps = 0;
   float accel_longitudinal_mps2 = 0, accel_transverse_mps2 = 0, accel_down_mps2 = 0;
   std::uint8_t alignment_status = 0;  // 0 full navigation ... 8 no valid solution
+  bool operator==(const Group1&) const = default;
 };
 
 struct Group2 {  // performance metrics, RMS
@@ -42,12 +43,14 @@ struct Group2 {  // performance metrics, RMS
   std::array<float, 3> velocity_rms_mps{};  // north, east, down
   std::array<float, 3> attitude_rms_deg{};  // roll, pitch, heading
   float ellipse_major_m = 0, ellipse_minor_m = 0, ellipse_orientation_deg = 0;
+  bool operator==(const Group2&) const = default;
 };
 
 struct GnssChannel {
   std::uint16_t prn = 0;
   std::uint16_t tracking_status = 0;
   float azimuth_deg = 0, elevation_deg = 0, l1_snr_dbhz = 0, l2_snr_dbhz = 0;
+  bool operator==(const GnssChannel&) const = default;
 };
 
 struct Group3 {  // primary GNSS receiver status

@@ -31,7 +31,8 @@ rt::Result<TcpClient> TcpClient::open(const TcpClientConfig& config) {
   const std::string where = "Applanix TCP " + config.address + ":" + std::to_string(config.port);
   TcpClient c;
   if (!io::parse_ipv4(config.address.c_str(), c.address_)) {
-    return rt::make_error(where + ": address '" + config.address + "' is not an IPv4 address");
+    return rt::make_error(where + ": address '" + config.address +
+                          "' is not an IPv4 address; set the POS computer's address (a.b.c.d)");
   }
   if (config.port == 0) return rt::make_error(where + ": port must be 1..65535");
   if (config.connect_timeout_ms < 1 || config.stall_timeout_ms < 1 || config.initial_backoff_ms < 1 ||

@@ -14,7 +14,7 @@
 namespace stac::applanix {
 
 struct TcpClientConfig {
-  std::string address = "192.168.53.100";  // the POS computer, IPv4
+  std::string address;                     // the POS computer, IPv4 (no default: site-specific)
   std::uint16_t port = 5602;               // Real-Time Data
   int connect_timeout_ms = 2000;           // one connection attempt
   int stall_timeout_ms = 1000;             // connected but silent this long: reconnect

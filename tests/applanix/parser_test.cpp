@@ -141,7 +141,7 @@ TEST(ApplanixGroups, RandomRoundTripsAreExact) {
     ASSERT_TRUE(parser.next(p));
     const auto* d1 = std::get_if<Group1>(&p.content);
     ASSERT_NE(d1, nullptr);
-    EXPECT_EQ(std::memcmp(d1, &g1, sizeof(g1)), 0);  // every field, bit for bit
+    EXPECT_TRUE(*d1 == g1);  // every field, exactly
     EXPECT_EQ(p.time.time1_s, t.time1_s);
     EXPECT_EQ(p.time.time2_s, t.time2_s);
     EXPECT_EQ(p.time.distance_tag_m, t.distance_tag_m);
@@ -150,13 +150,13 @@ TEST(ApplanixGroups, RandomRoundTripsAreExact) {
     ASSERT_TRUE(parser.next(p));
     const auto* d2 = std::get_if<Group2>(&p.content);
     ASSERT_NE(d2, nullptr);
-    EXPECT_EQ(std::memcmp(d2, &g2, sizeof(g2)), 0);
+    EXPECT_TRUE(*d2 == g2);
     ASSERT_TRUE(parser.next(p));
     const auto* d3 = std::get_if<Group3>(&p.content);
     ASSERT_NE(d3, nullptr);
     ASSERT_EQ(d3->channel_count, g3.channel_count);
     for (std::size_t c = 0; c < g3.channel_count; ++c) {
-      EXPECT_EQ(std::memcmp(&d3->channels[c], &g3.channels[c], sizeof(GnssChannel)), 0);
+      EXPECT_TRUE(d3->channels[c] == g3.channels[c]) << "channel " << c;
     }
     EXPECT_EQ(d3->solution_status, g3.solution_status);
     EXPECT_EQ(d3->sv_count, g3.sv_count);
