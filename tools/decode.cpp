@@ -133,10 +133,11 @@ void add_decode_command(CLI::App& app) {
       "Scans are framed where the azimuth crosses the cut angle. csv: one row per point with\n"
       "columns scan,laser,azimuth (0.01 deg),distance (m),x,y,z (m; x forward, y left, z up),\n"
       "intensity,time (s). kitti: one float32 x,y,z,reflectance(0..1) file per scan in --out/.");
-  cmd->add_option("--in", o->in, "pcap capture to read (Ethernet, Linux cooked or raw IP)")
-      ->required()
+  // --in/--out are checked in the callback, not marked required, so that the `applanix`
+  // subcommand (stac decode applanix --in ...) parses without them.
+  cmd->add_option("--in", o->in, "pcap capture to read (Ethernet, Linux cooked or raw IP) (required)")
       ->check(CLI::ExistingFile);
-  cmd->add_option("--out", o->out, "output: a .csv file, or a folder for --format kitti")->required();
+  cmd->add_option("--out", o->out, "output: a .csv file, or a folder for --format kitti (required)");
   cmd->add_option("--calib", o->calib,
                   "calibration of the unit: Velodyne db.xml, ROS yaml, or 'stream' for the one an "
                   "S2.1/S3 sends in its status bytes. Default: the config's");
@@ -146,7 +147,11 @@ void add_decode_command(CLI::App& app) {
   cmd->add_option("--port", o->port, "UDP data port in the capture (default: the config's, 2368)");
   cmd->add_option("--cut-angle", o->cut_angle_deg, "scan cut angle in degrees (default: the config's)");
   cmd->add_option("--png", o->png, "also draw the first complete scan from above into this PNG");
-  cmd->callback([o] {
+  CLI::App* applanix = add_decode_applanix_command(*cmd);
+  cmd->callback([o, applanix] {
+    if (applanix->parsed()) return;
+    if (o->in.empty()) throw CLI::RequiredError("--in");
+    if (o->out.empty()) throw CLI::RequiredError("--out");
     if (const int code = run_decode(*o); code != 0) throw CLI::RuntimeError(code);
   });
 }

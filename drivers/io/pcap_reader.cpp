@@ -17,6 +17,7 @@ constexpr std::uint16_t kEtherIpv4 = 0x0800;
 constexpr std::uint16_t kEtherVlan = 0x8100;
 constexpr std::uint16_t kEtherQinQ = 0x88A8;
 constexpr std::uint8_t kProtoUdp = 17;
+constexpr std::uint8_t kProtoTcp = 6;
 
 std::uint16_t be16(const std::uint8_t* p) noexcept {
   return static_cast<std::uint16_t>((p[0] << 8) | p[1]);
@@ -39,7 +40,8 @@ void PcapReader::Closer::operator()(pcap* p) const noexcept {
   if (p != nullptr) pcap_close(p);
 }
 
-rt::Result<PcapReader> PcapReader::open(const std::filesystem::path& path, const PcapFilter& filter) {
+rt::Result<PcapReader> PcapReader::open(const std::filesystem::path& path, const PcapFilter& filter,
+                                        const TcpFilter& tcp_filter) {
   char errbuf[PCAP_ERRBUF_SIZE] = {};
   pcap* p = pcap_open_offline_with_tstamp_precision(path.c_str(), PCAP_TSTAMP_PRECISION_NANO, errbuf);
   if (p == nullptr) {
@@ -49,6 +51,7 @@ rt::Result<PcapReader> PcapReader::open(const std::filesystem::path& path, const
   r.handle_.reset(p);
   r.path_ = path.string();
   r.filter_ = filter;
+  r.tcp_filter_ = tcp_filter;
   r.link_type_ = pcap_datalink(p);
   switch (r.link_type_) {
     case kLinkEthernet: case kLinkCooked: case kLinkCooked2: case kLinkRaw: case kLinkIpv4: break;
@@ -60,27 +63,28 @@ rt::Result<PcapReader> PcapReader::open(const std::filesystem::path& path, const
   return r;
 }
 
-bool PcapReader::parse(const std::uint8_t* f, std::uint32_t caplen, Datagram& out) noexcept {
+const std::uint8_t* PcapReader::ipv4(const std::uint8_t* f, std::uint32_t caplen,
+                                     std::uint32_t& ip_bytes) noexcept {
   std::uint32_t off = 0;
   std::uint16_t proto = kEtherIpv4;
   switch (link_type_) {
     case kLinkEthernet:
-      if (caplen < 14) { ++counters_.truncated_frame; return false; }
+      if (caplen < 14) { ++counters_.truncated_frame; return nullptr; }
       proto = be16(f + 12);
       off = 14;
       while (proto == kEtherVlan || proto == kEtherQinQ) {
-        if (caplen < off + 4) { ++counters_.truncated_frame; return false; }
+        if (caplen < off + 4) { ++counters_.truncated_frame; return nullptr; }
         proto = be16(f + off + 2);
         off += 4;
       }
       break;
     case kLinkCooked:
-      if (caplen < 16) { ++counters_.truncated_frame; return false; }
+      if (caplen < 16) { ++counters_.truncated_frame; return nullptr; }
       proto = be16(f + 14);
       off = 16;
       break;
     case kLinkCooked2:
-      if (caplen < 20) { ++counters_.truncated_frame; return false; }
+      if (caplen < 20) { ++counters_.truncated_frame; return nullptr; }
       proto = be16(f);
       off = 20;
       break;
@@ -93,20 +97,30 @@ bool PcapReader::parse(const std::uint8_t* f, std::uint32_t caplen, Datagram& ou
     } else {
       ++counters_.truncated_frame;
     }
-    return false;
+    return nullptr;
   }
   const std::uint8_t* ip = f + off;
   const std::uint32_t ihl = (ip[0] & 0x0Fu) * 4u;
   const std::uint16_t total = be16(ip + 2);
-  if (ihl < 20 || total < ihl) { ++counters_.bad_header; return false; }
+  if (ihl < 20 || total < ihl) { ++counters_.bad_header; return nullptr; }
+  ip_bytes = caplen - off;
+  return ip;
+}
+
+bool PcapReader::parse(const std::uint8_t* f, std::uint32_t caplen, Datagram& out) noexcept {
+  std::uint32_t ip_bytes = 0;
+  const std::uint8_t* ip = ipv4(f, caplen, ip_bytes);
+  if (ip == nullptr) return false;
+  const std::uint32_t ihl = (ip[0] & 0x0Fu) * 4u;
+  const std::uint16_t total = be16(ip + 2);
   if (ip[9] != kProtoUdp) { ++counters_.non_udp; return false; }
   const std::uint16_t frag = be16(ip + 6);
   if ((frag & 0x2000u) != 0 || (frag & 0x1FFFu) != 0) { ++counters_.fragments; return false; }
-  if (caplen < off + ihl + 8) { ++counters_.truncated_frame; return false; }
+  if (ip_bytes < ihl + 8) { ++counters_.truncated_frame; return false; }
   const std::uint8_t* udp = ip + ihl;
   const std::uint16_t udp_len = be16(udp + 4);
   if (udp_len < 8 || udp_len > total - ihl) { ++counters_.bad_header; return false; }
-  if (caplen < off + ihl + udp_len) { ++counters_.truncated_frame; return false; }
+  if (ip_bytes < ihl + udp_len) { ++counters_.truncated_frame; return false; }
   out.src_ip = be32(ip + 12);
   out.dst_ip = be32(ip + 16);
   out.src_port = be16(udp);
@@ -120,27 +134,77 @@ bool PcapReader::parse(const std::uint8_t* f, std::uint32_t caplen, Datagram& ou
   return true;
 }
 
+bool PcapReader::parse_tcp(const std::uint8_t* f, std::uint32_t caplen, TcpSegment& out) noexcept {
+  std::uint32_t ip_bytes = 0;
+  const std::uint8_t* ip = ipv4(f, caplen, ip_bytes);
+  if (ip == nullptr) return false;
+  const std::uint32_t ihl = (ip[0] & 0x0Fu) * 4u;
+  const std::uint16_t total = be16(ip + 2);
+  if (ip[9] != kProtoTcp) { ++counters_.non_tcp; return false; }
+  const std::uint16_t frag = be16(ip + 6);
+  if ((frag & 0x2000u) != 0 || (frag & 0x1FFFu) != 0) { ++counters_.fragments; return false; }
+  if (ip_bytes < ihl + 20) { ++counters_.truncated_frame; return false; }
+  const std::uint8_t* tcp = ip + ihl;
+  const std::uint32_t data_offset = (tcp[12] >> 4) * 4u;
+  if (data_offset < 20 || ihl + data_offset > total) { ++counters_.bad_header; return false; }
+  if (ip_bytes < total) { ++counters_.truncated_frame; return false; }
+  out.src_ip = be32(ip + 12);
+  out.dst_ip = be32(ip + 16);
+  out.src_port = be16(tcp);
+  out.dst_port = be16(tcp + 2);
+  if ((tcp_filter_.dst_port && out.dst_port != *tcp_filter_.dst_port) ||
+      (tcp_filter_.src_port && out.src_port != *tcp_filter_.src_port)) {
+    ++counters_.filtered_out;
+    return false;
+  }
+  out.seq = be32(tcp + 4);
+  out.flags = tcp[13];
+  out.payload = {tcp + data_offset, static_cast<std::size_t>(total - ihl - data_offset)};
+  return true;
+}
+
+const std::uint8_t* PcapReader::next_frame(std::int64_t& stamp_ns, std::uint32_t& caplen) noexcept {
+  if (!handle_ || !error_.empty()) return nullptr;
+  pcap_pkthdr* header = nullptr;
+  const std::uint8_t* data = nullptr;
+  const int rc = pcap_next_ex(handle_.get(), &header, &data);
+  if (rc == PCAP_ERROR_BREAK) return nullptr;  // end of file
+  if (rc != 1) {
+    // Only reached on a damaged file: building the message may allocate, once.
+    error_ = path_ + ": stopped after " + std::to_string(counters_.frames) +
+             " records: " + pcap_geterr(handle_.get()) + " (truncated or corrupt capture)";
+    return nullptr;
+  }
+  ++counters_.frames;
+  bytes_read_ += 16 + header->caplen;
+  // Nanosecond precision was requested at open: tv_usec holds nanoseconds.
+  stamp_ns = static_cast<std::int64_t>(header->ts.tv_sec) * 1'000'000'000 + header->ts.tv_usec;
+  caplen = header->caplen;
+  return data;
+}
+
 bool PcapReader::next(Datagram& out) noexcept {
-  if (!handle_ || !error_.empty()) return false;
-  while (true) {
-    pcap_pkthdr* header = nullptr;
-    const std::uint8_t* data = nullptr;
-    const int rc = pcap_next_ex(handle_.get(), &header, &data);
-    if (rc == PCAP_ERROR_BREAK) return false;  // end of file
-    if (rc != 1) {
-      // Only reached on a damaged file: building the message may allocate, once.
-      error_ = path_ + ": stopped after " + std::to_string(counters_.frames) +
-               " records: " + pcap_geterr(handle_.get()) + " (truncated or corrupt capture)";
-      return false;
-    }
-    ++counters_.frames;
-    bytes_read_ += 16 + header->caplen;
-    if (!parse(data, header->caplen, out)) continue;
-    // Nanosecond precision was requested at open: tv_usec holds nanoseconds.
-    out.stamp_ns = static_cast<std::int64_t>(header->ts.tv_sec) * 1'000'000'000 + header->ts.tv_usec;
+  std::int64_t stamp_ns = 0;
+  std::uint32_t caplen = 0;
+  while (const std::uint8_t* data = next_frame(stamp_ns, caplen)) {
+    if (!parse(data, caplen, out)) continue;
+    out.stamp_ns = stamp_ns;
     ++counters_.datagrams;
     return true;
   }
+  return false;
+}
+
+bool PcapReader::next_tcp(TcpSegment& out) noexcept {
+  std::int64_t stamp_ns = 0;
+  std::uint32_t caplen = 0;
+  while (const std::uint8_t* data = next_frame(stamp_ns, caplen)) {
+    if (!parse_tcp(data, caplen, out)) continue;
+    out.stamp_ns = stamp_ns;
+    ++counters_.segments;
+    return true;
+  }
+  return false;
 }
 
 }  // namespace stac::io

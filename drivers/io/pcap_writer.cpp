@@ -8,7 +8,7 @@
 namespace stac::io {
 namespace {
 
-constexpr std::size_t kEthernet = 14, kIpv4 = 20, kUdp = 8;
+constexpr std::size_t kEthernet = 14, kIpv4 = 20, kUdp = 8, kTcp = 20;
 constexpr std::size_t kMaxPayload = 65535 - kIpv4 - kUdp;
 
 void put16(std::uint8_t* p, std::uint32_t v) noexcept {
@@ -54,37 +54,63 @@ rt::Result<PcapWriter> PcapWriter::open(const std::filesystem::path& path) {
   return w;
 }
 
+void PcapWriter::write_frame(std::uint8_t protocol, std::uint32_t src_ip, std::uint32_t dst_ip,
+                             std::size_t l4_bytes, std::int64_t stamp_ns) noexcept {
+  std::uint8_t* f = frame_->data();
+  std::uint8_t* ip = f + kEthernet;
+  ip[0] = 0x45;
+  ip[1] = 0;
+  put16(ip + 2, static_cast<std::uint32_t>(kIpv4 + l4_bytes));
+  put16(ip + 4, ip_id_++);
+  put16(ip + 6, 0x4000);  // don't fragment
+  ip[8] = 64;
+  ip[9] = protocol;
+  put16(ip + 10, 0);
+  put32(ip + 12, src_ip);
+  put32(ip + 16, dst_ip);
+  put16(ip + 10, ipv4_checksum(ip));
+  pcap_pkthdr h{};
+  h.ts.tv_sec = static_cast<time_t>(stamp_ns / 1'000'000'000);
+  h.ts.tv_usec = static_cast<suseconds_t>(stamp_ns % 1'000'000'000);  // ns (nano precision)
+  h.caplen = h.len = static_cast<bpf_u_int32>(kEthernet + kIpv4 + l4_bytes);
+  pcap_dump(reinterpret_cast<u_char*>(dumper_.get()), &h, f);
+}
+
 rt::Result<bool> PcapWriter::write_udp(const Datagram& d) noexcept {
   if (!dumper_) return rt::make_error(path_ + ": already closed");
   if (d.payload.size() > kMaxPayload) {
     return rt::make_error(path_ + ": a UDP payload of " + std::to_string(d.payload.size()) +
                           " bytes does not fit one datagram");
   }
-  std::uint8_t* f = frame_->data();
-  std::uint8_t* ip = f + kEthernet;
+  std::uint8_t* udp = frame_->data() + kEthernet + kIpv4;
   const auto udp_len = static_cast<std::uint32_t>(kUdp + d.payload.size());
-  ip[0] = 0x45;
-  ip[1] = 0;
-  put16(ip + 2, static_cast<std::uint32_t>(kIpv4) + udp_len);
-  put16(ip + 4, ip_id_++);
-  put16(ip + 6, 0x4000);  // don't fragment
-  ip[8] = 64;
-  ip[9] = 17;
-  put16(ip + 10, 0);
-  put32(ip + 12, d.src_ip);
-  put32(ip + 16, d.dst_ip);
-  put16(ip + 10, ipv4_checksum(ip));
-  std::uint8_t* udp = ip + kIpv4;
   put16(udp, d.src_port);
   put16(udp + 2, d.dst_port);
   put16(udp + 4, udp_len);
   put16(udp + 6, 0);  // no UDP checksum (allowed for IPv4)
   if (!d.payload.empty()) std::memcpy(udp + kUdp, d.payload.data(), d.payload.size());
-  pcap_pkthdr h{};
-  h.ts.tv_sec = static_cast<time_t>(d.stamp_ns / 1'000'000'000);
-  h.ts.tv_usec = static_cast<suseconds_t>(d.stamp_ns % 1'000'000'000);  // ns (nano precision)
-  h.caplen = h.len = static_cast<bpf_u_int32>(kEthernet + kIpv4 + udp_len);
-  pcap_dump(reinterpret_cast<u_char*>(dumper_.get()), &h, f);
+  write_frame(17, d.src_ip, d.dst_ip, udp_len, d.stamp_ns);
+  return true;
+}
+
+rt::Result<bool> PcapWriter::write_tcp(const TcpSegment& s) noexcept {
+  if (!dumper_) return rt::make_error(path_ + ": already closed");
+  if (s.payload.size() > kMaxPayload + kUdp - kTcp) {
+    return rt::make_error(path_ + ": a TCP payload of " + std::to_string(s.payload.size()) +
+                          " bytes does not fit one segment");
+  }
+  std::uint8_t* tcp = frame_->data() + kEthernet + kIpv4;
+  put16(tcp, s.src_port);
+  put16(tcp + 2, s.dst_port);
+  put32(tcp + 4, s.seq);
+  put32(tcp + 8, 0);              // acknowledgement number
+  tcp[12] = (kTcp / 4) << 4;      // data offset, no options
+  tcp[13] = s.flags;
+  put16(tcp + 14, 65535);         // window
+  put16(tcp + 16, 0);             // checksum not computed
+  put16(tcp + 18, 0);             // urgent pointer
+  if (!s.payload.empty()) std::memcpy(tcp + kTcp, s.payload.data(), s.payload.size());
+  write_frame(6, s.src_ip, s.dst_ip, kTcp + s.payload.size(), s.stamp_ns);
   return true;
 }
 
