@@ -54,11 +54,10 @@ PoseSample LocalFrame::pose(const InsFix& fix) {
   }
   PoseSample p;
   p.stamp_ns = fix.stamp_ns;
-  std::vector<double> m(9);  // GeographicLib's API takes a vector; pose() runs at INS rate
   frame_.Forward(fix.position.lat_deg, fix.position.lon_deg, fix.position.alt_m, p.position_m.x(),
-                 p.position_m.y(), p.position_m.z(), m);
+                 p.position_m.y(), p.position_m.z(), rotation_);
   // Rows of M rotate the ENU at the fix into the ENU at the origin.
-  const Eigen::Matrix3d origin_from_fix = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(m.data());
+  const Eigen::Matrix3d origin_from_fix = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(rotation_.data());
   p.attitude = Eigen::Quaterniond(origin_from_fix *
                                   attitude_enu(fix.roll_deg, fix.pitch_deg, fix.heading_deg).toRotationMatrix())
                    .normalized();

@@ -9,6 +9,7 @@
 #include <GeographicLib/LocalCartesian.hpp>
 #include <cstdint>
 #include <optional>
+#include <vector>
 
 #include "ego/pose.hpp"
 
@@ -35,7 +36,7 @@ class LocalFrame {
   [[nodiscard]] Geodetic origin() const noexcept;
   // ENU coordinates (m) of a geodetic position; anchors at it when not anchored yet.
   Eigen::Vector3d to_local(const Geodetic& g);
-  // The vehicle pose of an INS fix; anchors at it when not anchored yet.
+  // The vehicle pose of an INS fix; anchors at it when not anchored yet. No allocation.
   PoseSample pose(const InsFix& fix);
 
   // Vehicle (x fwd, y left, z up) -> local ENU at the fix, from NED Tate-Bryant angles (deg).
@@ -44,6 +45,7 @@ class LocalFrame {
  private:
   GeographicLib::LocalCartesian frame_;
   bool anchored_ = false;
+  std::vector<double> rotation_ = std::vector<double>(9);  // GeographicLib's M, reused per fix
 };
 
 }  // namespace stac::ego

@@ -22,6 +22,7 @@ struct ScanHeader {
   std::uint32_t points_dropped = 0;  // returns that did not fit the scan's capacity
   std::uint32_t device_usec_first = 0;  // trailer (microseconds past the hour) of the packet
                                         // holding the first firing
+  std::int32_t first_firing_in_packet_ns = 0;  // the first firing's offset in that packet
   std::int64_t device_utc_ns = 0;       // UTC of the first firing by the sensor's clock, from the
                                         // trailer and the status cycle's date; 0 = unknown
   GpsState gps = GpsState::kUnknown;    // the sensor's GPS input when the scan opened

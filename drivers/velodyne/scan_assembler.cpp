@@ -74,6 +74,7 @@ void ScanAssembler::open(Target& t, std::int64_t stamp_ns, std::uint16_t rotatio
   t.header->last_azimuth = rotation;
   t.header->starts_at_cut = at_cut;
   t.header->device_usec_first = device_usec;
+  t.header->first_firing_in_packet_ns = firing_in_packet_ns;
   const auto packet_utc = utc_time_ns(status_.sensor(), device_usec);
   t.header->device_utc_ns = packet_utc ? *packet_utc + firing_in_packet_ns : 0;
   t.header->gps = status_.sensor().valid ? status_.sensor().gps : GpsState::kUnknown;

@@ -1,0 +1,68 @@
+// Where the vehicle is, from the INS when it is alive and from CAN odometry when it is not:
+// Applanix Group 1 fixes become poses on the UTC pose clock in the local frame; when no fix came
+// for `ins_timeout_ns`, speed and yaw rate are integrated from the last INS pose (height, roll
+// and pitch held) and pushed as dead-reckoned poses, until the INS returns. One thread (the
+// pose thread) calls it; the PoseHistory it writes is read lock-free by perception.
+#pragma once
+
+#include <cstdint>
+
+#include "drivers/applanix/stream_parser.hpp"
+#include "drivers/can/odometry.hpp"
+#include "ego/local_frame.hpp"
+#include "ego/pose_history.hpp"
+
+namespace stac::ego {
+
+// GPS time (ns since 1980-01-06) -> UTC (ns since 1970), GPS - UTC being `gps_utc_offset_s`.
+std::int64_t gps_to_utc_ns(std::int64_t gps_ns, double gps_utc_offset_s) noexcept;
+
+enum class EgoSource : std::uint8_t {
+  kNone,            // nothing received yet
+  kIns,             // the last pose came from the INS
+  kDeadReckoning,   // the INS is silent; poses come from CAN odometry
+  kLost,            // the INS is silent and odometry is stale or absent
+};
+const char* to_string(EgoSource s) noexcept;
+
+struct EgoEstimatorConfig {
+  std::int64_t ins_timeout_ns = 100'000'000;  // no fix for this long: the INS counts as lost
+  int max_alignment_status = 2;               // Group 1 worse than this (0 full navigation,
+                                              // 1 fine, 2 GC/coarse..., 8 none) is not used
+  std::int64_t dead_reckoning_period_ns = 5'000'000;  // pose rate while dead reckoning (200 Hz)
+  can::DeadReckoningConfig odometry;
+};
+
+struct EgoCounters {
+  std::uint64_t ins_fixes = 0;        // Group 1 turned into poses
+  std::uint64_t no_absolute_time = 0; // Group 1 before a Group 3 gave the GPS week: skipped
+  std::uint64_t not_aligned = 0;      // alignment status above the limit: skipped
+  std::uint64_t dead_reckoned = 0;    // poses pushed from odometry
+  std::uint64_t rejected = 0;         // poses the history refused (out of order)
+};
+
+class EgoEstimator {
+ public:
+  EgoEstimator(const EgoEstimatorConfig& config, LocalFrame& frame, PoseHistory& history) noexcept;
+
+  // One parsed Applanix message; `parser` gives the GPS-UTC offset of its last Group 3.
+  void add_ins(const applanix::Parsed& message, const applanix::StreamParser& parser) noexcept;
+  // One decoded CAN frame with speed and/or yaw rate.
+  void add_odometry(const can::OdometryUpdate& update) noexcept;
+
+  // What the poses come from at `now_ns` (pose clock), for health.
+  [[nodiscard]] EgoSource source(std::int64_t now_ns) const noexcept;
+  const EgoCounters& counters() const noexcept { return counters_; }
+
+ private:
+  EgoEstimatorConfig config_;
+  LocalFrame& frame_;
+  PoseHistory& history_;
+  can::DeadReckoning odometry_;
+  PoseSample last_ins_;
+  bool have_ins_ = false;
+  std::int64_t last_pushed_ns_ = 0;
+  EgoCounters counters_;
+};
+
+}  // namespace stac::ego

@@ -1,0 +1,115 @@
+#include "ego/ego_estimator.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include "drivers/applanix/groups.hpp"
+
+namespace stac::ego {
+namespace {
+
+constexpr double kOffset = 18.0;  // GPS - UTC, s
+constexpr std::uint32_t kWeek = 2394;
+constexpr Geodetic kOrigin{44.2449408681, -76.5096210157, 80.0};
+
+// A POS LV stream: Group 3 (week, offset) then Group 1 at 200 Hz driving east at 10 m/s.
+struct InsStream {
+  applanix::StreamParser parser;
+  std::vector<std::uint8_t> bytes = std::vector<std::uint8_t>(4096);
+
+  std::size_t group3() {
+    applanix::Group3 g;
+    g.gps_week = kWeek;
+    g.gps_utc_offset_s = kOffset;
+    applanix::TimeDistance t;
+    t.time1_s = 100.0;
+    t.time_types = 0x01;
+    return applanix::encode_group3(g, t, bytes);
+  }
+  std::size_t group1(double sow, double east_m, std::uint8_t alignment = 0) {
+    applanix::Group1 g;
+    // 1 deg of longitude at this latitude is about 79.8 km: a local east step.
+    g.latitude_deg = kOrigin.lat_deg;
+    g.longitude_deg = kOrigin.lon_deg + east_m / 79'800.0;
+    g.altitude_m = kOrigin.alt_m;
+    g.heading_deg = 90.0;
+    g.east_velocity_mps = 10.0f;
+    g.alignment_status = alignment;
+    applanix::TimeDistance t;
+    t.time1_s = sow;
+    t.time_types = 0x01;  // time1 GPS
+    return applanix::encode_group1(g, t, bytes);
+  }
+};
+
+TEST(EgoEstimator, InsFixesBecomeUtcPosesInTheLocalFrame) {
+  LocalFrame frame(kOrigin);
+  PoseHistory history(PoseHistoryConfig{.capacity = 100});
+  EgoEstimator ego(EgoEstimatorConfig{}, frame, history);
+  InsStream s;
+  applanix::Parsed m;
+  auto push = [&](std::size_t n) {
+    s.parser.feed(std::span<const std::uint8_t>(s.bytes.data(), n));
+    while (s.parser.next(m)) ego.add_ins(m, s.parser);
+  };
+  push(s.group1(100.0, 0.0));  // before any Group 3: no absolute time yet
+  EXPECT_EQ(ego.counters().no_absolute_time, 1u);
+  push(s.group3());
+  push(s.group1(100.005, 0.05));
+  push(s.group1(100.010, 0.10, 7));  // not aligned: skipped
+  EXPECT_EQ(ego.counters().ins_fixes, 1u);
+  EXPECT_EQ(ego.counters().not_aligned, 1u);
+  const std::int64_t utc = gps_to_utc_ns(static_cast<std::int64_t>(kWeek) * 604800 * 1'000'000'000 +
+                                             100'005'000'000, kOffset);
+  EXPECT_EQ(utc, 315'964'800'000'000'000 + static_cast<std::int64_t>(kWeek) * 604800 * 1'000'000'000 +
+                     100'005'000'000 - 18'000'000'000);
+  const PoseLookup l = history.at(utc);
+  ASSERT_EQ(l.status, PoseStatus::kInterpolated);
+  EXPECT_NEAR(l.pose.position_m.x(), 0.05, 0.01);
+  EXPECT_NEAR(l.pose.velocity_mps.x(), 10.0, 1e-6);
+  EXPECT_EQ(ego.source(utc), EgoSource::kIns);
+}
+
+TEST(EgoEstimator, CanOdometryCarriesThePoseWhenTheInsGoesSilent) {
+  LocalFrame frame(kOrigin);
+  PoseHistory history(PoseHistoryConfig{.capacity = 1000});
+  EgoEstimator ego(EgoEstimatorConfig{}, frame, history);
+  InsStream s;
+  applanix::Parsed m;
+  auto push = [&](std::size_t n) {
+    s.parser.feed(std::span<const std::uint8_t>(s.bytes.data(), n));
+    while (s.parser.next(m)) ego.add_ins(m, s.parser);
+  };
+  push(s.group3());
+  const std::int64_t t0 = gps_to_utc_ns(static_cast<std::int64_t>(kWeek) * 604800 * 1'000'000'000 +
+                                            200'000'000'000, kOffset);
+  for (int i = 0; i <= 20; ++i) push(s.group1(200.0 + 0.005 * i, 0.05 * i));  // 0.1 s of INS
+  ASSERT_EQ(ego.counters().ins_fixes, 21u);
+  const std::int64_t last_fix = t0 + 100'000'000;
+  // Then only CAN: 10 m/s, turning left at 10 deg/s, for one second at 100 Hz.
+  for (int i = 1; i <= 100; ++i) {
+    can::OdometryUpdate u;
+    u.stamp_ns = last_fix + i * 10'000'000;
+    u.has_speed = u.has_yaw_rate = true;
+    u.speed_mps = 10.0;
+    u.yaw_rate_dps = 10.0;
+    ego.add_odometry(u);
+  }
+  EXPECT_GT(ego.counters().dead_reckoned, 80u);  // 200 Hz at most, from 100 Hz frames
+  const std::int64_t end = last_fix + 1'000'000'000;
+  EXPECT_EQ(ego.source(end), EgoSource::kDeadReckoning);
+  const PoseLookup l = history.at(end - 5'000'000);
+  ASSERT_TRUE(l.ok()) << to_string(l.status);
+  // An arc of radius 57.3 m from (1.0, 0) heading east, turning left (counter-clockwise).
+  const double r = 10.0 / (10.0 * std::numbers::pi / 180.0);
+  const double yaw = 0.995 * 10.0 * std::numbers::pi / 180.0;
+  EXPECT_NEAR(l.pose.position_m.x(), 1.0 + r * std::sin(yaw), 0.15);
+  EXPECT_NEAR(l.pose.position_m.y(), r * (1.0 - std::cos(yaw)), 0.15);
+  EXPECT_EQ(ego.source(end + 1'000'000'000), EgoSource::kLost);  // and then odometry stops too
+}
+
+}  // namespace
+}  // namespace stac::ego
