@@ -11,6 +11,8 @@ void add_decode_command(CLI::App& app);
 void add_record_command(CLI::App& app);
 void add_demo_command(CLI::App& app);
 void add_sim_command(CLI::App& app);
+void add_replay_command(CLI::App& app);
+void add_sim_compare_command(CLI::App& app);
 
 // Prints "stac: <message>" on stderr and returns the exit code 1, for command callbacks.
 int fail(const std::string& message);

@@ -29,11 +29,14 @@ int main(int argc, char** argv) {
       "  stac decode --calib db.xml --in run.pcap --out scans/ --format kitti\n"
       "  stac record --out live.pcap --duration 10   # capture the sensor's UDP stream\n"
       "  stac sim --scenario urban --seed 7 --duration 30 --out run.pcap --truth run.truth.jsonl\n"
+      "  stac replay --in run.pcap --rate 1          # send it again over loopback UDP\n"
       "Run 'stac <command> --help' for the options of each command.");
   stac::tools::add_decode_command(app);
   stac::tools::add_record_command(app);
   stac::tools::add_demo_command(app);
   stac::tools::add_sim_command(app);
+  stac::tools::add_replay_command(app);
+  stac::tools::add_sim_compare_command(app);
   CLI11_PARSE(app, argc, argv);
   return 0;
 }
