@@ -75,7 +75,7 @@ rt::Result<bool> save_chart(const Chart& chart, const std::filesystem::path& png
     cv::putText(img, s.name, at + cv::Point(32, 5), cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
   }
   try {
-    if (!cv::imwrite(png.string(), img)) return rt::make_error(png.string() + ": cannot write the chart");
+    if (!cv::imwrite(png.string(), img, {cv::IMWRITE_PNG_COMPRESSION, 9})) return rt::make_error(png.string() + ": cannot write the chart");
   } catch (const cv::Exception& e) {
     return rt::make_error(png.string() + ": cannot write the chart: " + e.what());
   }

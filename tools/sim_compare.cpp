@@ -55,6 +55,7 @@ struct Stats {
   double range_median = 0, range_mean = 0, beyond_50m = 0;
   double ground_fraction = 0;
   double intensity_mean = 0, intensity_zero = 0;
+  std::vector<double> per_scan_points, per_scan_ground;  // in scan order
 
   void add(const std::vector<P>& pts, const CompareOptions& o) {
     ++scans;
@@ -95,6 +96,8 @@ struct Stats {
     range_mean += rsum * inv;
     beyond_50m += beyond * inv;
     ground_fraction += ground * inv;
+    per_scan_points.push_back(n);
+    per_scan_ground.push_back(ground * inv);
     intensity_mean += isum * inv;
     intensity_zero += izero * inv;
     int rings = 0;
@@ -186,10 +189,10 @@ std::string fmt(double v, int digits = 4) {
   return b;
 }
 
-template <std::size_t N>
-std::string json_array(const std::array<double, N>& a) {
+template <class Array>
+std::string json_array(const Array& a) {
   std::string s = "[";
-  for (std::size_t i = 0; i < N; ++i) {
+  for (std::size_t i = 0; i < a.size(); ++i) {
     if (i > 0) s += ',';
     s += fmt(a[i], 6);
   }
@@ -209,6 +212,8 @@ std::string json_stats(const Stats& s, int rings_found) {
        ",\"fraction_beyond_50m\":" + fmt(s.beyond_50m, 6) + ",\"bin_m\":" + fmt(kRangeBinM) +
        ",\"histogram\":" + json_array(s.range_hist) + "}";
   j += ",\"ground_fraction\":" + fmt(s.ground_fraction, 6);
+  j += ",\"per_scan\":{\"points\":" + json_array(s.per_scan_points) + ",\"ground_fraction\":" +
+       json_array(s.per_scan_ground) + "}";
   j += ",\"intensity\":{\"mean\":" + fmt(s.intensity_mean, 6) + ",\"fraction_zero\":" + fmt(s.intensity_zero, 6) +
        ",\"histogram\":" + json_array(s.intensity_hist) + "}";
   return j + "}";
@@ -231,7 +236,7 @@ rt::Result<bool> draw_pair(const std::vector<P>& sim, const std::string& sim_lab
                            const std::string& real_label, const std::filesystem::path& dir) {
   BirdsEyeOptions bo;
   bo.range_m = 40.0;
-  bo.size_px = 640;
+  bo.size_px = 520;
   const std::filesystem::path a = dir / "birds_eye_sim.png", b = dir / "birds_eye_kitti.png";
   for (int k = 0; k < 2; ++k) {
     BirdsEye pic(bo);
@@ -243,7 +248,7 @@ rt::Result<bool> draw_pair(const std::vector<P>& sim, const std::string& sim_lab
   }
   cv::Mat both;
   cv::hconcat(cv::imread(a.string()), cv::imread(b.string()), both);
-  if (!cv::imwrite((dir / "birds_eye_side_by_side.png").string(), both)) {
+  if (!cv::imwrite((dir / "birds_eye_side_by_side.png").string(), both, {cv::IMWRITE_PNG_COMPRESSION, 9})) {
     return rt::make_error((dir / "birds_eye_side_by_side.png").string() + ": cannot write the picture");
   }
   return true;
@@ -328,6 +333,7 @@ int run_compare(const CompareOptions& o) {
        << ",\"range\":\"3-D distance from the sensor origin\",\"range_bin_m\":" << fmt(kRangeBinM)
        << ",\"intensity_bins\":" << kIntensityBins << "}"
        << ",\"sim\":" << json_stats(sim, sim_rings) << ",\"kitti\":" << json_stats(real, real_rings) << "}\n";
+  json.close();
   if (!json) return fail((dir / "realism.json").string() + ": write failed");
 
   std::ofstream md(dir / "realism.md");
@@ -340,11 +346,15 @@ int run_compare(const CompareOptions& o) {
      << "Intensity: KITTI reflectance as stored (0..0.99 in steps of 0.01); simulated HDL-64E intensity byte / 255.\n\n"
      << "| quantity | sim | KITTI | sim - KITTI |\n|---|---|---|---|\n";
   auto row = [&](const std::string& what, double a, double b, bool relative = true) {
-    md << "| " << what << " | " << fmt(a, 5) << " | " << fmt(b, 5) << " | " << difference(a, b, relative) << " |\n";
+    md << "| " << what << " | " << fmt(a, 6) << " | " << fmt(b, 6) << " | " << difference(a, b, relative) << " |\n";
   };
   row("points per scan (mean)", sim.points_mean, real.points_mean);
   row("points per scan (min)", sim.points_min, real.points_min);
   row("points per scan (max)", sim.points_max, real.points_max);
+  const double low = 0.8 * real.points_mean;
+  const auto sim_low = std::count_if(sim.per_scan_points.begin(), sim.per_scan_points.end(), [&](double v) { return v < low; });
+  const auto real_low = std::count_if(real.per_scan_points.begin(), real.per_scan_points.end(), [&](double v) { return v < low; });
+  row("scans with < 80 % of KITTI's mean points", static_cast<double>(sim_low), static_cast<double>(real_low), false);
   row("rings found", sim_rings, real_rings, false);
   row("points in the lowest ring", sim.ring_points[0], real.ring_points[0]);
   row("points in the highest ring", sim.ring_points[kRings - 1], real.ring_points[kRings - 1]);
@@ -356,8 +366,9 @@ int run_compare(const CompareOptions& o) {
   row("ground fraction", sim.ground_fraction, real.ground_fraction);
   row("intensity mean (0..1)", sim.intensity_mean, real.intensity_mean);
   row("intensity fraction at 0", sim.intensity_zero, real.intensity_zero);
-  md << "\n![points per ring](points_per_ring.png)\n![ring elevation](ring_elevation.png)\n![range](range_histogram.png)\n"
+  md << "\n![points per scan](points_per_scan.png)\n![points per ring](points_per_ring.png)\n![ring elevation](ring_elevation.png)\n![range](range_histogram.png)\n"
      << "![intensity](intensity_histogram.png)\n![bird's-eye](birds_eye_side_by_side.png)\n";
+  md.close();
   if (!md) return fail((dir / "realism.md").string() + ": write failed");
 
   auto series = [](const std::string& name, auto first, std::size_t n, double x0, double dx) {
@@ -369,22 +380,25 @@ int run_compare(const CompareOptions& o) {
     }
     return s;
   };
-  Chart rings{"Points per ring (mean per scan), ring 0 = lowest beam", "ring", "points", {}, 800, 420};
+  Chart rings{"Points per ring (mean per scan), ring 0 = lowest beam", "ring", "points", {}, 640, 340};
   rings.series = {series("stac sim", sim.ring_points.begin(), kRings, 0, 1),
                   series("KITTI", real.ring_points.begin(), kRings, 0, 1)};
-  Chart elevation{"Elevation of each ring (median, deg)", "ring", "deg + 25", {}, 800, 420};
+  Chart per_scan{"Points per scan, in scan order (KITTI: its scans)", "scan", "points", {}, 640, 340};
+  per_scan.series = {series("stac sim", sim.per_scan_points.begin(), sim.per_scan_points.size(), 0, 1),
+                     series("KITTI", real.per_scan_points.begin(), real.per_scan_points.size(), 0, 1)};
+  Chart elevation{"Elevation of each ring (median, deg)", "ring", "deg + 25", {}, 640, 340};
   elevation.series = {series("stac sim", sim.ring_elevation.begin(), kRings, 0, 1),
                       series("KITTI", real.ring_elevation.begin(), kRings, 0, 1)};
   for (auto& ser : elevation.series) {
     for (double& y : ser.y) y += 25.0;  // the chart's y axis starts at 0
   }
-  Chart range{"Range histogram (fraction of points per 2 m)", "range (m)", "fraction", {}, 800, 420};
+  Chart range{"Range histogram (fraction of points per 2 m)", "range (m)", "fraction", {}, 640, 340};
   range.series = {series("stac sim", sim.range_hist.begin(), kRangeBins, kRangeBinM / 2, kRangeBinM),
                   series("KITTI", real.range_hist.begin(), kRangeBins, kRangeBinM / 2, kRangeBinM)};
-  Chart inten{"Intensity histogram (KITTI reflectance vs HDL-64E byte / 255)", "intensity (0..1)", "fraction", {}, 800, 420};
+  Chart inten{"Intensity histogram (KITTI reflectance vs HDL-64E byte / 255)", "intensity (0..1)", "fraction", {}, 640, 340};
   inten.series = {series("stac sim", sim.intensity_hist.begin(), kIntensityBins, 0.025, 0.05),
                   series("KITTI", real.intensity_hist.begin(), kIntensityBins, 0.025, 0.05)};
-  for (auto [chart, name] : {std::pair{&rings, "points_per_ring.png"},
+  for (auto [chart, name] : {std::pair{&rings, "points_per_ring.png"}, std::pair{&per_scan, "points_per_scan.png"},
                              std::pair{&elevation, "ring_elevation.png"}, std::pair{&range, "range_histogram.png"},
                              std::pair{&inten, "intensity_histogram.png"}}) {
     if (auto r = save_chart(*chart, dir / name); !r) return fail(r.error().message);
