@@ -131,8 +131,12 @@ rt::Result<ReplayReport> UdpReplay::run(const std::atomic<bool>& stop) {
     if (!reader) return rt::Unexpected<rt::Error>{reader.error()};
     Datagram d;
     std::int64_t prev_stamp = first_stamp_ns_;
+    bool interrupted = false;
     while (reader->next(d)) {
-      if (stop.load(std::memory_order_relaxed)) break;
+      if (stop.load(std::memory_order_relaxed)) {
+        interrupted = true;
+        break;
+      }
       UdpSender* sender = sender_for(d.dst_port);
       if (sender == nullptr) continue;  // a port beyond the 64 planned: cannot happen with --port
       if (d.stamp_ns < prev_stamp) ++report.stamps_backwards;
@@ -143,7 +147,10 @@ rt::Result<ReplayReport> UdpReplay::run(const std::atomic<bool>& stop) {
         // Never earlier than the datagram before: stamps that go backwards are sent at once.
         last_scheduled = std::max(last_scheduled, scheduled_ns(pass, d.stamp_ns));
         wait_until(start + last_scheduled, stop);
-        if (stop.load(std::memory_order_relaxed)) break;
+        if (stop.load(std::memory_order_relaxed)) {
+          interrupted = true;
+          break;
+        }
         now = rt::monotonic_ns();
         const std::int64_t error = std::abs(now - (start + last_scheduled));
         ++histogram[std::min<std::size_t>(static_cast<std::size_t>(error / 1000), kHistogramUs)];
@@ -158,11 +165,11 @@ rt::Result<ReplayReport> UdpReplay::run(const std::atomic<bool>& stop) {
       last_send = now;
     }
     if (!reader->error().empty()) return rt::make_error(reader->error());
+    if (!interrupted) ++report.passes;  // every datagram of the pass was sent
     if (stop.load(std::memory_order_relaxed)) {
       report.stopped = true;
       break;
     }
-    ++report.passes;
   }
   report.scheduled_ns = config_.fast ? 0 : last_scheduled;
   report.elapsed_ns = last_send - start;

@@ -42,7 +42,7 @@ struct ReplayReport {
   std::uint64_t packets = 0;        // datagrams sent (whole datagram accepted by the socket)
   std::uint64_t bytes = 0;          // their payload bytes
   std::uint64_t send_failures = 0;  // send() refused or short: counted, not retried
-  std::uint64_t passes = 0;         // complete passes over the capture
+  std::uint64_t passes = 0;         // passes whose every datagram was sent
   std::uint64_t stamps_backwards = 0;  // datagrams stamped before their predecessor: sent at once
   bool stopped = false;             // ended by the stop flag
   std::int64_t scheduled_ns = 0;    // scheduled time of the last datagram sent, from the first
