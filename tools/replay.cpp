@@ -24,7 +24,9 @@ struct ReplayOptions {
 std::atomic<bool> g_stop{false};
 static_assert(std::atomic<bool>::is_always_lock_free);  // safe to store from a signal handler
 
-extern "C" void on_sigint(int) { g_stop.store(true, std::memory_order_relaxed); }
+extern "C" void on_sigint(int) {
+  g_stop.store(true, std::memory_order_relaxed);
+}
 
 std::string rate_text(double rate) {
   char b[48];
@@ -35,20 +37,23 @@ std::string rate_text(double rate) {
 void print_report(const ReplayOptions& o, const io::ReplayPlan& plan, const io::ReplayReport& r) {
   const double elapsed_s = static_cast<double>(r.elapsed_ns) * 1e-9;
   const double span_s = static_cast<double>(plan.span_ns) * 1e-9;
-  const double recorded_pps = span_s > 0 && plan.packets > 1 ? static_cast<double>(plan.packets - 1) / span_s : 0.0;
+  const double recorded_pps =
+      span_s > 0 && plan.packets > 1 ? static_cast<double>(plan.packets - 1) / span_s : 0.0;
   const double recorded_mbps = span_s > 0 ? 8e-6 * static_cast<double>(plan.bytes) / span_s : 0.0;
-  const double pps = elapsed_s > 0 && r.packets > 1 ? static_cast<double>(r.packets - 1) / elapsed_s : 0.0;
+  const double pps =
+      elapsed_s > 0 && r.packets > 1 ? static_cast<double>(r.packets - 1) / elapsed_s : 0.0;
   const double mbps = elapsed_s > 0 ? 8e-6 * static_cast<double>(r.bytes) / elapsed_s : 0.0;
-  std::fprintf(stderr,
-               "stac replay: %s -> %s%s%s\n"
-               "  sent       %llu packets, %llu bytes in %.3f s (%llu full passes%s), %llu send failures\n"
-               "  rate       %.1f packets/s, %.2f Mbit/s (recorded %.1f packets/s, %.2f Mbit/s; %s)\n",
-               o.in.c_str(), o.to.c_str(), o.port > 0 ? (":" + std::to_string(o.port)).c_str() : "",
-               o.port > 0 ? "" : " (captured ports)", static_cast<unsigned long long>(r.packets),
-               static_cast<unsigned long long>(r.bytes), elapsed_s,
-               static_cast<unsigned long long>(r.passes), r.stopped ? ", stopped" : "",
-               static_cast<unsigned long long>(r.send_failures), pps, mbps, recorded_pps, recorded_mbps,
-               o.fast ? "--fast" : rate_text(o.rate).c_str());
+  std::fprintf(
+      stderr,
+      "stac replay: %s -> %s%s%s\n"
+      "  sent       %llu packets, %llu bytes in %.3f s (%llu full passes%s), %llu send failures\n"
+      "  rate       %.1f packets/s, %.2f Mbit/s (recorded %.1f packets/s, %.2f Mbit/s; %s)\n",
+      o.in.c_str(), o.to.c_str(), o.port > 0 ? (":" + std::to_string(o.port)).c_str() : "",
+      o.port > 0 ? "" : " (captured ports)", static_cast<unsigned long long>(r.packets),
+      static_cast<unsigned long long>(r.bytes), elapsed_s,
+      static_cast<unsigned long long>(r.passes), r.stopped ? ", stopped" : "",
+      static_cast<unsigned long long>(r.send_failures), pps, mbps, recorded_pps, recorded_mbps,
+      o.fast ? "--fast" : rate_text(o.rate).c_str());
   if (o.fast) {
     std::fprintf(stderr, "  pacing     none (--fast)\n");
   } else {
@@ -56,14 +61,18 @@ void print_report(const ReplayOptions& o, const io::ReplayPlan& plan, const io::
                  "  schedule   %.6f s scheduled for the last packet, %.6f s taken\n"
                  "  pacing error |sent - scheduled|: median %.1f us, p99 %.1f us, max %.1f us\n",
                  static_cast<double>(r.scheduled_ns) * 1e-9, elapsed_s,
-                 static_cast<double>(r.error_median_ns) * 1e-3, static_cast<double>(r.error_p99_ns) * 1e-3,
+                 static_cast<double>(r.error_median_ns) * 1e-3,
+                 static_cast<double>(r.error_p99_ns) * 1e-3,
                  static_cast<double>(r.error_max_ns) * 1e-3);
   }
   if (r.send_failures > 0) {
-    std::fprintf(stderr, "  note       send failures on loopback usually mean nothing listens on the port\n");
+    std::fprintf(
+        stderr,
+        "  note       send failures on loopback usually mean nothing listens on the port\n");
   }
   if (r.stamps_backwards > 0) {
-    std::fprintf(stderr, "  note       %llu packets stamped before their predecessor were sent at once\n",
+    std::fprintf(stderr,
+                 "  note       %llu packets stamped before their predecessor were sent at once\n",
                  static_cast<unsigned long long>(r.stamps_backwards));
   }
 }
@@ -81,15 +90,17 @@ int run_replay(const ReplayOptions& o) {
   const io::ReplayPlan& plan = replay->plan();
   std::string ports;
   for (auto p : plan.dst_ports) ports += (ports.empty() ? "" : ",") + std::to_string(p);
-  std::fprintf(stderr, "stac replay: %llu packets per pass over %.3f s recorded (captured ports %s)\n",
-               static_cast<unsigned long long>(plan.packets), static_cast<double>(plan.span_ns) * 1e-9,
-               ports.c_str());
+  std::fprintf(stderr,
+               "stac replay: %llu packets per pass over %.3f s recorded (captured ports %s)\n",
+               static_cast<unsigned long long>(plan.packets),
+               static_cast<double>(plan.span_ns) * 1e-9, ports.c_str());
 
   g_stop = false;
   struct sigaction sa {};
   sa.sa_handler = on_sigint;
   sigemptyset(&sa.sa_mask);
-  struct sigaction old_int {}, old_term {};
+  struct sigaction old_int {
+  }, old_term{};
   sigaction(SIGINT, &sa, &old_int);
   sigaction(SIGTERM, &sa, &old_term);
   auto report = replay->run(g_stop);
@@ -105,7 +116,8 @@ int run_replay(const ReplayOptions& o) {
 
 void add_replay_command(CLI::App& app) {
   auto o = std::make_shared<ReplayOptions>();
-  CLI::App* cmd = app.add_subcommand("replay", "Send a capture's UDP packets again at the recorded pace");
+  CLI::App* cmd =
+      app.add_subcommand("replay", "Send a capture's UDP packets again at the recorded pace");
   cmd->description(
       "Send the UDP payloads of a pcap capture to an address (default 127.0.0.1), each at its\n"
       "recorded time divided by --rate (or as fast as possible with --fast), optionally looping.\n"

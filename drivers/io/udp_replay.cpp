@@ -12,8 +12,8 @@
 namespace stac::io {
 namespace {
 
-constexpr std::int64_t kSpinNs = 50'000;          // busy-wait the last 50 us before a send
-constexpr std::size_t kHistogramUs = 100'000;     // 1 us bins up to 100 ms, then one overflow bin
+constexpr std::int64_t kSpinNs = 50'000;       // busy-wait the last 50 us before a send
+constexpr std::size_t kHistogramUs = 100'000;  // 1 us bins up to 100 ms, then one overflow bin
 constexpr std::size_t kMaxPorts = 64;
 
 PcapFilter filter_of(const ReplayConfig& c) {
@@ -39,7 +39,8 @@ void wait_until(std::int64_t due_ns, const std::atomic<bool>& stop) noexcept {
   }
 }
 
-std::int64_t percentile_ns(const std::vector<std::uint64_t>& histogram, std::uint64_t total, double q) {
+std::int64_t percentile_ns(const std::vector<std::uint64_t>& histogram, std::uint64_t total,
+                           double q) {
   const auto rank = static_cast<std::uint64_t>(std::ceil(q * static_cast<double>(total)));
   std::uint64_t seen = 0;
   for (std::size_t i = 0; i < histogram.size(); ++i) {
@@ -51,7 +52,8 @@ std::int64_t percentile_ns(const std::vector<std::uint64_t>& histogram, std::uin
 
 }  // namespace
 
-rt::Result<UdpReplay> UdpReplay::open(const std::filesystem::path& capture, const ReplayConfig& config) {
+rt::Result<UdpReplay> UdpReplay::open(const std::filesystem::path& capture,
+                                      const ReplayConfig& config) {
   if (!(config.rate > 0.0) || !std::isfinite(config.rate)) {
     return rt::make_error("replay rate must be a number > 0 (1 = recorded pace)");
   }
@@ -70,7 +72,8 @@ rt::Result<UdpReplay> UdpReplay::open(const std::filesystem::path& capture, cons
     auto& ports = r.plan_.dst_ports;
     if (std::find(ports.begin(), ports.end(), d.dst_port) == ports.end()) {
       if (ports.size() == kMaxPorts && !config.port) {
-        return rt::make_error(capture.string() + ": datagrams to more than 64 ports; pass --port "
+        return rt::make_error(capture.string() +
+                              ": datagrams to more than 64 ports; pass --port "
                               "(or --filter-port) to choose one");
       }
       if (ports.size() < kMaxPorts) ports.push_back(d.dst_port);
@@ -81,9 +84,10 @@ rt::Result<UdpReplay> UdpReplay::open(const std::filesystem::path& capture, cons
     const PcapCounters& c = reader->counters();
     std::string why = capture.string() + ": no UDP datagram to replay";
     if (config.filter_port) why += " to port " + std::to_string(*config.filter_port);
-    why += " (" + std::to_string(c.frames) + " frames: " + std::to_string(c.non_udp) + " IPv4 not UDP, " +
-           std::to_string(c.non_ipv4) + " not IPv4, " + std::to_string(c.filtered_out) +
-           " UDP to other ports, " + std::to_string(c.fragments) + " fragments)";
+    why += " (" + std::to_string(c.frames) + " frames: " + std::to_string(c.non_udp) +
+           " IPv4 not UDP, " + std::to_string(c.non_ipv4) + " not IPv4, " +
+           std::to_string(c.filtered_out) + " UDP to other ports, " + std::to_string(c.fragments) +
+           " fragments)";
     return rt::make_error(why);
   }
   r.plan_.span_ns = std::max<std::int64_t>(0, last - r.first_stamp_ns_);

@@ -20,8 +20,8 @@
 namespace stac::io {
 
 struct ReplayConfig {
-  std::string address = "127.0.0.1";        // destination IPv4 address
-  std::optional<std::uint16_t> port;         // destination port; default: each datagram's captured one
+  std::string address = "127.0.0.1";  // destination IPv4 address
+  std::optional<std::uint16_t> port;  // destination port; default: each datagram's captured one
   std::optional<std::uint16_t> filter_port;  // replay only datagrams captured to this port
   double rate = 1.0;                         // > 0: recorded time differences are divided by it
   bool fast = false;                         // no pacing: send as fast as the socket takes them
@@ -30,23 +30,23 @@ struct ReplayConfig {
 
 // What one pass over the capture holds (found by open()).
 struct ReplayPlan {
-  std::uint64_t packets = 0;            // matching datagrams per pass
-  std::uint64_t bytes = 0;              // their UDP payload bytes
-  std::int64_t span_ns = 0;             // recorded time from the first to the last datagram
-  std::int64_t pass_period_ns = 0;      // recorded time from one pass's start to the next one's:
-                                        // the span plus one mean gap between datagrams
-  std::vector<std::uint16_t> dst_ports; // distinct captured destination ports
+  std::uint64_t packets = 0;             // matching datagrams per pass
+  std::uint64_t bytes = 0;               // their UDP payload bytes
+  std::int64_t span_ns = 0;              // recorded time from the first to the last datagram
+  std::int64_t pass_period_ns = 0;       // recorded time from one pass's start to the next one's:
+                                         // the span plus one mean gap between datagrams
+  std::vector<std::uint16_t> dst_ports;  // distinct captured destination ports
 };
 
 struct ReplayReport {
-  std::uint64_t packets = 0;        // datagrams sent (whole datagram accepted by the socket)
-  std::uint64_t bytes = 0;          // their payload bytes
-  std::uint64_t send_failures = 0;  // send() refused or short: counted, not retried
-  std::uint64_t passes = 0;         // passes whose every datagram was sent
+  std::uint64_t packets = 0;           // datagrams sent (whole datagram accepted by the socket)
+  std::uint64_t bytes = 0;             // their payload bytes
+  std::uint64_t send_failures = 0;     // send() refused or short: counted, not retried
+  std::uint64_t passes = 0;            // passes whose every datagram was sent
   std::uint64_t stamps_backwards = 0;  // datagrams stamped before their predecessor: sent at once
-  bool stopped = false;             // ended by the stop flag
-  std::int64_t scheduled_ns = 0;    // scheduled time of the last datagram sent, from the first
-  std::int64_t elapsed_ns = 0;      // measured time from the first send to the last one
+  bool stopped = false;                // ended by the stop flag
+  std::int64_t scheduled_ns = 0;       // scheduled time of the last datagram sent, from the first
+  std::int64_t elapsed_ns = 0;         // measured time from the first send to the last one
   // |send time - scheduled time| over all datagrams sent, ns (median and p99 to 1 us, floor;
   // max exact). All -1 with fast.
   std::int64_t error_median_ns = -1, error_p99_ns = -1, error_max_ns = -1;
@@ -56,7 +56,8 @@ class UdpReplay {
  public:
   // Reads the capture once to plan the replay and opens the sockets. Fails naming the file when
   // it is missing or damaged, or holds no (matching) UDP datagram, or when rate <= 0.
-  static rt::Result<UdpReplay> open(const std::filesystem::path& capture, const ReplayConfig& config);
+  static rt::Result<UdpReplay> open(const std::filesystem::path& capture,
+                                    const ReplayConfig& config);
 
   const ReplayPlan& plan() const noexcept { return plan_; }
 

@@ -28,7 +28,8 @@ std::vector<Bytes> write_capture(const std::filesystem::path& path, int n, std::
   std::vector<Bytes> payloads;
   for (int i = 0; i < n; ++i) {
     Bytes b(static_cast<std::size_t>(100 + (i * 37) % 1107));
-    for (std::size_t j = 0; j < b.size(); ++j) b[j] = static_cast<std::uint8_t>(i * 7 + static_cast<int>(j));
+    for (std::size_t j = 0; j < b.size(); ++j)
+      b[j] = static_cast<std::uint8_t>(i * 7 + static_cast<int>(j));
     Datagram d;
     d.payload = b;
     d.stamp_ns = 1'700'000'000'000'000'000 + i * gap_ns;
@@ -75,7 +76,8 @@ struct Outcome {
   std::vector<Bytes> received;
 };
 
-Outcome replay_into_socket(const std::filesystem::path& capture, ReplayConfig config, std::size_t expected) {
+Outcome replay_into_socket(const std::filesystem::path& capture, ReplayConfig config,
+                           std::size_t expected) {
   UdpReceiver receiver = loopback_receiver();
   config.address = "127.0.0.1";
   config.port = receiver.port();
@@ -99,7 +101,8 @@ TEST(UdpReplay, EveryDatagramArrivesByteIdenticalAndInOrder) {
   EXPECT_EQ(o.plan.packets, 300u);
   EXPECT_EQ(o.plan.span_ns, 299 * 1'000'000);
   ASSERT_EQ(o.received.size(), sent.size());
-  for (std::size_t i = 0; i < sent.size(); ++i) EXPECT_EQ(o.received[i], sent[i]) << "datagram " << i;
+  for (std::size_t i = 0; i < sent.size(); ++i)
+    EXPECT_EQ(o.received[i], sent[i]) << "datagram " << i;
   EXPECT_EQ(o.report.packets, 300u);
   EXPECT_EQ(o.report.passes, 1u);
   EXPECT_EQ(o.report.send_failures, 0u);
@@ -131,7 +134,8 @@ TEST(UdpReplay, LoopingSendsTheCaptureNTimes) {
   c.rate = 2.0;
   const Outcome o = replay_into_socket(path, c, 3 * sent.size());
   ASSERT_EQ(o.received.size(), 3 * sent.size());
-  for (std::size_t i = 0; i < o.received.size(); ++i) EXPECT_EQ(o.received[i], sent[i % sent.size()]);
+  for (std::size_t i = 0; i < o.received.size(); ++i)
+    EXPECT_EQ(o.received[i], sent[i % sent.size()]);
   EXPECT_EQ(o.report.passes, 3u);
   EXPECT_EQ(o.report.packets, 150u);
   // A pass lasts the span plus one mean gap: the third pass starts 2 x 50 x 0.5 ms in.
@@ -165,7 +169,8 @@ TEST(UdpReplay, StopFlagEndsAnEndlessReplay) {
     std::array<Datagram, 32> batch{};
     std::size_t got = 0;
     const std::int64_t deadline = rt::monotonic_ns() + 10'000'000'000;
-    while (got < 100 && rt::monotonic_ns() < deadline) got += static_cast<std::size_t>(std::max(0, receiver.receive(batch, 100)));
+    while (got < 100 && rt::monotonic_ns() < deadline)
+      got += static_cast<std::size_t>(std::max(0, receiver.receive(batch, 100)));
     stop = true;
   });
   auto report = replay->run(stop);
