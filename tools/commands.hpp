@@ -15,6 +15,8 @@ void add_status_command(CLI::App& app);
 void add_candump_command(CLI::App& app);
 // `stac decode applanix`, a subcommand of `decode`; returns it so decode can tell it was used.
 CLI::App* add_decode_applanix_command(CLI::App& decode);
+void add_replay_command(CLI::App& app);
+void add_sim_compare_command(CLI::App& app);
 
 // Prints "stac: <message>" on stderr and returns the exit code 1, for command callbacks.
 int fail(const std::string& message);

@@ -51,7 +51,8 @@ std::filesystem::path write_capture(const std::filesystem::path& dir) {
 TEST(Cli, HelpExplainsEveryCommand) {
   const CliResult r = stac("--help");
   EXPECT_EQ(r.code, 0);
-  for (const char* word : {"decode", "record", "demo", "sim", "status", "Examples"}) {
+  for (const char* word : {"decode", "record", "demo", "sim", "status", "candump", "replay",
+                           "sim-compare", "Examples"}) {
     EXPECT_NE(r.output.find(word), std::string::npos) << word << " missing from:\n" << r.output;
   }
   const CliResult d = stac("decode --help");
@@ -257,6 +258,148 @@ TEST(Cli, StreamCalibrationSaysWhatToDoWhenTheCaptureCarriesNone) {
   CliResult s2 = stac("status --in " + pcap.string() + " --model S2");
   EXPECT_NE(s2.code, 0);
   EXPECT_NE(s2.output.find("sends no status cycle"), std::string::npos) << s2.output;
+}
+
+// A short simulated urban drive, written by `stac sim`.
+std::filesystem::path simulate(const std::filesystem::path& dir, double seconds) {
+  const auto pcap = dir / "sim.pcap";
+  const CliResult r = stac("sim --scenario urban --seed 1 --duration " + std::to_string(seconds) + " --calib " +
+                           stac::testing::shared_data(kYaml).string() + " --out " + pcap.string() +
+                           " --truth " + (dir / "sim.truth.jsonl").string());
+  EXPECT_EQ(r.code, 0) << r.output;
+  return pcap;
+}
+
+std::vector<std::vector<std::uint8_t>> payloads_of(const std::filesystem::path& pcap, std::int64_t& span_ns) {
+  std::vector<std::vector<std::uint8_t>> out;
+  auto r = io::PcapReader::open(pcap);
+  EXPECT_TRUE(r);
+  io::Datagram d;
+  std::int64_t first = 0;
+  while (r->next(d)) {
+    if (out.empty()) first = d.stamp_ns;
+    span_ns = d.stamp_ns - first;
+    out.emplace_back(d.payload.begin(), d.payload.end());
+  }
+  return out;
+}
+
+// Runs `stac replay <args> --port P` into a loopback socket and returns what arrived.
+std::vector<std::vector<std::uint8_t>> replay_into_socket(const std::string& args, std::size_t expected,
+                                                         CliResult& result) {
+  io::UdpReceiverConfig c;
+  c.bind_address = "127.0.0.1";
+  c.port = 0;
+  c.receive_buffer_bytes = 8 << 20;
+  auto receiver = io::UdpReceiver::open(c);
+  EXPECT_TRUE(receiver);
+  std::vector<std::vector<std::uint8_t>> got;
+  std::thread rx([&] {
+    std::array<io::Datagram, 32> batch{};
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+    while (got.size() < expected && std::chrono::steady_clock::now() < deadline) {
+      const int n = receiver->receive(batch, 50);
+      for (int i = 0; i < n; ++i) {
+        const auto& p = batch[static_cast<std::size_t>(i)].payload;
+        got.emplace_back(p.begin(), p.end());
+      }
+    }
+  });
+  result = stac("replay " + args + " --port " + std::to_string(receiver->port()));
+  rx.join();
+  return got;
+}
+
+double number_after(const std::string& text, const std::string& key, std::size_t from = 0) {
+  const std::size_t at = text.find(key, from);
+  if (at == std::string::npos) return -1e300;
+  return std::stod(text.substr(at + key.size()));
+}
+
+TEST(ReplayCli, SimulatedDriveArrivesByteIdenticalAtTheScaledSchedule) {
+  STAC_REQUIRE_SHARED_DATA(kYaml);
+  const auto dir = fresh_dir("replay");
+  const auto pcap = simulate(dir, 0.3);
+  std::int64_t span_ns = 0;
+  const auto sent = payloads_of(pcap, span_ns);
+  ASSERT_GT(sent.size(), 1000u);
+  CliResult r;
+  const auto got = replay_into_socket("--in " + pcap.string() + " --rate 2", sent.size(), r);
+  ASSERT_EQ(r.code, 0) << r.output;
+  ASSERT_EQ(got.size(), sent.size()) << r.output;
+  for (std::size_t i = 0; i < sent.size(); ++i) ASSERT_EQ(got[i], sent[i]) << "packet " << i;
+  // The last packet is scheduled at half the recorded span (printed to 1 us).
+  EXPECT_NEAR(number_after(r.output, "schedule   "), 0.5e-9 * static_cast<double>(span_ns), 1.5e-6) << r.output;
+  EXPECT_NE(r.output.find("pacing error"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(std::to_string(sent.size()) + " packets"), std::string::npos) << r.output;
+}
+
+TEST(ReplayCli, LoopSendsTheCaptureAgain) {
+  STAC_REQUIRE_SHARED_DATA(kYaml);
+  const auto dir = fresh_dir("replay_loop");
+  const auto pcap = simulate(dir, 0.2);
+  std::int64_t span_ns = 0;
+  const auto sent = payloads_of(pcap, span_ns);
+  CliResult r;
+  const auto got = replay_into_socket("--in " + pcap.string() + " --rate 4 --loop 2", 2 * sent.size(), r);
+  ASSERT_EQ(r.code, 0) << r.output;
+  ASSERT_EQ(got.size(), 2 * sent.size()) << r.output;
+  for (std::size_t i = 0; i < got.size(); ++i) ASSERT_EQ(got[i], sent[i % sent.size()]) << "packet " << i;
+  EXPECT_NE(r.output.find("2 full passes"), std::string::npos) << r.output;
+}
+
+TEST(ReplayCli, MissingFileAndNoMatchingPacketsAreClearErrors) {
+  const CliResult missing = stac("replay --in /nonexistent/run.pcap");
+  EXPECT_EQ(missing.code, 1);
+  EXPECT_NE(missing.output.find("/nonexistent/run.pcap"), std::string::npos) << missing.output;
+  const auto dir = fresh_dir("replay_empty");
+  const auto pcap = write_capture(dir);
+  const CliResult none = stac("replay --in " + pcap.string() + " --filter-port 9999");
+  EXPECT_EQ(none.code, 1);
+  EXPECT_NE(none.output.find("no UDP datagram to replay to port 9999"), std::string::npos) << none.output;
+  const CliResult both = stac("replay --in " + pcap.string() + " --fast --rate 2");
+  EXPECT_NE(both.code, 0);  // --fast and --rate exclude each other
+}
+
+TEST(SimCompareCli, WritesTheReportWithPlausibleFigures) {
+  STAC_REQUIRE_SHARED_DATA(kYaml);
+  STAC_REQUIRE_SHARED_DATA("kitti/000000.bin");
+  const auto dir = fresh_dir("sim_compare");
+  const auto pcap = simulate(dir, 0.35);
+  const auto report = dir / "report";
+  const CliResult r = stac("sim-compare --sim " + pcap.string() + " --kitti " +
+                           stac::testing::shared_data("kitti/000000.bin").string() + " --calib " +
+                           stac::testing::shared_data(kYaml).string() + " --report " + report.string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  for (const char* f : {"realism.md", "realism.json", "points_per_ring.png", "ring_elevation.png",
+                        "range_histogram.png", "intensity_histogram.png", "birds_eye_side_by_side.png"}) {
+    EXPECT_TRUE(std::filesystem::exists(report / f)) << f;
+  }
+  std::ifstream in(report / "realism.json");
+  const std::string json((std::istreambuf_iterator<char>(in)), {});
+  for (const char* key : {"\"sim\":", "\"kitti\":", "\"points_per_scan\":", "\"ring_count\":", "\"points_per_ring\":",
+                          "\"ring_elevation_deg\":", "\"range_m\":", "\"histogram\":", "\"ground_fraction\":",
+                          "\"intensity\":", "\"rules\":"}) {
+    EXPECT_NE(json.find(key), std::string::npos) << key << " missing from " << json;
+  }
+  const std::size_t kitti = json.find("\"kitti\":");
+  const std::size_t sim = json.find("\"sim\":");
+  ASSERT_NE(kitti, std::string::npos);
+  ASSERT_NE(sim, std::string::npos);
+  // KITTI 000000: 124668 points in 64 rings, about 58 % of them on the ground.
+  EXPECT_EQ(number_after(json, "\"scans\":", kitti), 1.0);
+  EXPECT_EQ(number_after(json, "\"mean\":", kitti), 124668.0);
+  EXPECT_EQ(number_after(json, "\"ring_count\":", kitti), 64.0);
+  EXPECT_NEAR(number_after(json, "\"ground_fraction\":", kitti), 0.595, 0.01);
+  // The simulated scans: complete ones, all 64 rings, a plausible point count and ground share.
+  EXPECT_GE(number_after(json, "\"scans\":", sim), 2.0);
+  EXPECT_EQ(number_after(json, "\"ring_count\":", sim), 64.0);
+  const double sim_points = number_after(json, "\"mean\":", sim);
+  EXPECT_GT(sim_points, 90'000.0);
+  EXPECT_LT(sim_points, 133'400.0);  // at most 64 lasers x 2084 firings
+  const double sim_ground = number_after(json, "\"ground_fraction\":", sim);
+  EXPECT_GT(sim_ground, 0.3);
+  EXPECT_LT(sim_ground, 0.85);
 }
 
 }  // namespace
