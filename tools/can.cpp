@@ -25,7 +25,7 @@ struct CandumpOptions {
 };
 
 int run_candump(const CandumpOptions& o) {
-  const auto config = can::load_can_config(config_path(o.config));
+  const auto config = load_can_settings(config_path(o.config));
   if (!config) return fail(config.error().message);
   const std::filesystem::path dbc_file = o.dbc.empty() ? config->dbc : std::filesystem::path(o.dbc);
   const auto db = can::load_dbc(dbc_file);

@@ -1,30 +1,11 @@
 #include "tools/settings.hpp"
 
-#include <yaml-cpp/yaml.h>
+#include "tools/config_section.hpp"
 
 #include <cmath>
 #include <cstdlib>
 
 namespace stac::tools {
-namespace {
-
-template <class T>
-rt::Result<T> get(const YAML::Node& section, const std::string& file, const char* key,
-                  bool optional = false, T fallback = {}) {
-  const YAML::Node v = section[key];
-  if (!v) {
-    if (optional) return fallback;
-    return rt::make_error(file + ": missing required key 'velodyne." + key + "'");
-  }
-  try {
-    return v.as<T>();
-  } catch (const YAML::Exception&) {
-    return rt::make_error(file + ": 'velodyne." + key + "' has the wrong type (line " +
-                          std::to_string(v.Mark().line + 1) + ")");
-  }
-}
-
-}  // namespace
 
 std::filesystem::path default_config_path() {
   if (const char* env = std::getenv("STAC_CONFIG"); env != nullptr && *env != '\0') return env;
@@ -37,23 +18,13 @@ std::filesystem::path config_path(const std::string& option) {
 
 rt::Result<VelodyneSettings> load_velodyne_settings(const std::filesystem::path& config_file) {
   const std::string file = config_file.string();
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(file);
-  } catch (const YAML::Exception& e) {
-    return rt::make_error(file + ": cannot read the configuration: " + e.what());
-  }
-  const YAML::Node v = root["velodyne"];
-  if (!v || !v.IsMap()) return rt::make_error(file + ": missing the 'velodyne:' section");
+  auto section = ConfigSection::open(config_file, "velodyne");
+  if (!section) return rt::Unexpected<rt::Error>{section.error()};
+  const ConfigSection& v = *section;
 
   VelodyneSettings s;
   auto& a = s.assembler;
-#define STAC_GET(type, key, dst, ...)                                \
-  do {                                                               \
-    auto r = get<type>(v, file, key __VA_OPT__(, ) __VA_ARGS__);     \
-    if (!r) return rt::Unexpected<rt::Error>{r.error()};             \
-    dst = *r;                                                        \
-  } while (0)
+#define STAC_GET(type, key, dst) STAC_CONFIG_GET(v, type, key, dst)
   std::string model, calibration;
   double cut_deg = 0, min_range = 0, max_range = 0;
   int port = 0;
@@ -61,7 +32,9 @@ rt::Result<VelodyneSettings> load_velodyne_settings(const std::filesystem::path&
   STAC_GET(std::string, "calibration", calibration);
   STAC_GET(std::string, "bind_address", s.bind_address);
   STAC_GET(int, "port", port);
-  STAC_GET(std::string, "sender_address", s.sender_address, true, std::string{});
+  auto sender = v.get_or<std::string>("sender_address", std::string{});
+  if (!sender) return rt::Unexpected<rt::Error>{sender.error()};
+  s.sender_address = *sender;
   STAC_GET(int, "receive_buffer_bytes", s.receive_buffer_bytes);
   STAC_GET(double, "cut_angle_deg", cut_deg);
   STAC_GET(double, "min_rpm", a.min_rpm);
@@ -78,8 +51,7 @@ rt::Result<VelodyneSettings> load_velodyne_settings(const std::filesystem::path&
   if (!parsed) return rt::make_error(file + ": 'velodyne.model' is '" + model + "'; use S2, S2.1 or S3");
   a.decoder.model = *parsed;
   if (calibration != "stream") {
-    s.calibration = config_file.parent_path() / calibration;
-    if (std::filesystem::path(calibration).is_absolute()) s.calibration = calibration;
+    s.calibration = v.path(calibration);
   } else if (velodyne::traits(a.decoder.model).trailer != velodyne::TrailerKind::kGpsStatus) {
     return rt::make_error(file + ": 'velodyne.calibration: stream' needs an S2.1 or S3; the " +
                           model + " sends no calibration in its packets");

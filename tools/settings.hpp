@@ -1,12 +1,17 @@
-// The `velodyne:` section of config/stac.yaml, validated once at start-up. Missing or invalid
-// keys give an error naming the file and the key.
+// The sections of config/stac.yaml, each validated once at start-up. Missing or invalid keys
+// give an error naming the file and the key (tools/config_section.hpp).
 #pragma once
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
 
+#include "drivers/can/config.hpp"
 #include "drivers/velodyne/scan_assembler.hpp"
+#include "ego/deskew.hpp"
+#include "ego/ego_estimator.hpp"
+#include "ego/local_frame.hpp"
 #include "rt/expected.hpp"
 
 namespace stac::tools {
@@ -22,6 +27,18 @@ struct VelodyneSettings {
 };
 
 rt::Result<VelodyneSettings> load_velodyne_settings(const std::filesystem::path& config_file);
+// The `ego:` section: extrinsics, local frame, pose history, INS, deskew.
+struct EgoSettings {
+  std::optional<ego::Geodetic> origin;  // empty: the first INS fix
+  ego::PoseHistoryConfig history;
+  ego::EgoEstimatorConfig estimator;
+  ego::DeskewConfig deskew;             // vehicle_T_sensor is the extrinsics
+  std::uint16_t ins_port = 5602;
+};
+rt::Result<EgoSettings> load_ego_settings(const std::filesystem::path& config_file);
+
+// The `can:` section: transport, DBC and signal map. Errors name `can.<key>`.
+rt::Result<can::CanConfig> load_can_settings(const std::filesystem::path& config_file);
 
 // The default config file: $STAC_CONFIG, else config/stac.yaml of the source tree.
 std::filesystem::path default_config_path();

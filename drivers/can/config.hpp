@@ -1,5 +1,5 @@
-// The `can:` section of config/stac.yaml, validated once at start-up. Every key is required;
-// errors name the file and the key (`can.<key>`). The DBC path is relative to the config file.
+// What the `can:` section of config/stac.yaml sets (loaded at the edge: tools/settings.hpp,
+// load_can_settings). The DBC path is relative to the config file.
 #pragma once
 
 #include <filesystem>
@@ -8,7 +8,6 @@
 #include "drivers/can/gs_usb_device.hpp"
 #include "drivers/can/odometry.hpp"
 #include "drivers/can/socketcan.hpp"
-#include "rt/expected.hpp"
 
 namespace stac::can {
 
@@ -22,7 +21,5 @@ struct CanConfig {
   OdometrySignalMap signals;
   DeadReckoningConfig dead_reckoning;
 };
-
-rt::Result<CanConfig> load_can_config(const std::filesystem::path& config_file);
 
 }  // namespace stac::can

@@ -1,44 +1,20 @@
-#include "drivers/can/config.hpp"
-
-#include <yaml-cpp/yaml.h>
-
+// The `can:` section of config/stac.yaml (see tools/settings.hpp).
 #include <cmath>
 
-namespace stac::can {
-namespace {
+#include "tools/config_section.hpp"
+#include "tools/settings.hpp"
 
-template <class T>
-rt::Result<T> get(const YAML::Node& section, const std::string& file, const char* key) {
-  const YAML::Node v = section[key];
-  if (!v) return rt::make_error(file + ": missing required key 'can." + key + "'");
-  try {
-    return v.as<T>();
-  } catch (const YAML::Exception&) {
-    return rt::make_error(file + ": 'can." + key + "' has the wrong type (line " +
-                          std::to_string(v.Mark().line + 1) + ")");
-  }
-}
+namespace stac::tools {
 
-}  // namespace
-
-rt::Result<CanConfig> load_can_config(const std::filesystem::path& config_file) {
+rt::Result<can::CanConfig> load_can_settings(const std::filesystem::path& config_file) {
   const std::string file = config_file.string();
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(file);
-  } catch (const YAML::Exception& e) {
-    return rt::make_error(file + ": cannot read the configuration: " + e.what());
-  }
-  const YAML::Node c = root["can"];
-  if (!c || !c.IsMap()) return rt::make_error(file + ": missing the 'can:' section");
+  auto section = ConfigSection::open(config_file, "can");
+  if (!section) return rt::Unexpected<rt::Error>{section.error()};
+  const ConfigSection& c = *section;
 
+  using namespace can;
   CanConfig cfg;
-#define STAC_GET(type, key, dst)                            \
-  do {                                                      \
-    auto r = get<type>(c, file, key);                       \
-    if (!r) return rt::Unexpected<rt::Error>{r.error()};    \
-    dst = *r;                                               \
-  } while (0)
+#define STAC_GET(type, key, dst) STAC_CONFIG_GET(c, type, key, dst)
   std::string transport, dbc;
   long long bitrate = 0;
   int channel = 0;
@@ -79,9 +55,8 @@ rt::Result<CanConfig> load_can_config(const std::filesystem::path& config_file) 
   if (!(stale_s > 0 && stale_s <= 10)) return rt::make_error(file + ": 'can.stale_timeout_s' must be in (0, 10]");
   cfg.dead_reckoning.stale_timeout_ns = std::llround(stale_s * 1e9);
   if (dbc.empty()) return rt::make_error(file + ": 'can.dbc' must name a DBC file");
-  cfg.dbc = std::filesystem::path(dbc).is_absolute() ? std::filesystem::path(dbc)
-                                                     : config_file.parent_path() / dbc;
+  cfg.dbc = c.path(dbc);
   return cfg;
 }
 
-}  // namespace stac::can
+}  // namespace stac::tools

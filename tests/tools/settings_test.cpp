@@ -1,0 +1,70 @@
+// The configuration readers of the edge: the shipped config/stac.yaml loads, and every broken
+// key is named.
+#include "tools/settings.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <regex>
+#include <sstream>
+
+namespace stac::tools {
+namespace {
+
+const std::filesystem::path kShipped = std::filesystem::path(STAC_SOURCE_DIR) / "config/stac.yaml";
+
+// The shipped file with one line of the ego section replaced.
+std::filesystem::path with_line(const std::string& pattern, const std::string& replacement) {
+  std::ifstream in(kShipped);
+  std::stringstream text;
+  text << in.rdbuf();
+  const std::string edited = std::regex_replace(text.str(), std::regex(pattern), replacement);
+  EXPECT_NE(edited, text.str()) << pattern;
+  const auto path = std::filesystem::temp_directory_path() / "stac_settings_test.yaml";
+  std::ofstream(path) << edited;
+  return path;
+}
+
+TEST(EgoSettings, TheShippedConfigLoads) {
+  auto s = load_ego_settings(kShipped);
+  ASSERT_TRUE(s) << s.error().message;
+  EXPECT_FALSE(s->origin);  // auto
+  EXPECT_NEAR(s->deskew.vehicle_T_sensor.translation().z(), 1.73, 1e-12);
+  EXPECT_EQ(s->history.capacity, 2500u);  // 10 s at 200 Hz + 25 %
+  EXPECT_EQ(s->deskew.bucket_ns, 100'000);
+  EXPECT_EQ(s->ins_port, 5602);
+}
+
+TEST(EgoSettings, OriginAndExtrinsicsAreRead) {
+  auto s = load_ego_settings(with_line("origin: auto", "origin: [44.2, -76.5, 80.0]"));
+  ASSERT_TRUE(s) << s.error().message;
+  ASSERT_TRUE(s->origin);
+  EXPECT_EQ(s->origin->lat_deg, 44.2);
+  auto yawed = load_ego_settings(with_line(R"(sensor_rpy_deg: \[0.0, 0.0, 0.0\])", "sensor_rpy_deg: [0, 0, 90]"));
+  ASSERT_TRUE(yawed) << yawed.error().message;
+  const Eigen::Vector3d x = yawed->deskew.vehicle_T_sensor.linear() * Eigen::Vector3d::UnitX();
+  EXPECT_NEAR(x.y(), 1.0, 1e-12);  // the sensor's forward points to the vehicle's left
+}
+
+TEST(EgoSettings, EveryBrokenKeyIsNamed) {
+  const std::pair<std::string, std::string> cases[] = {
+      {"origin: auto", "origin: somewhere"},
+      {"origin: auto", "origin: [95.0, 0.0, 0.0]"},
+      {R"(sensor_xyz_m: \[0.0, 0.0, 1.73\])", "sensor_xyz_m: [0.0, 1.73]"},
+      {"pose_history_s: 10.0", "pose_history_s: 0"},
+      {"ins_port: 5602", "ins_port: 70000"},
+      {"max_alignment_status: 2", "max_alignment_status: nine"},
+      {"deskew_bucket_us: 100", "deskew_buckets_us: 100"},
+  };
+  for (const auto& [pattern, replacement] : cases) {
+    auto s = load_ego_settings(with_line(pattern, replacement));
+    ASSERT_FALSE(s) << replacement;
+    const std::string key = replacement.substr(0, replacement.find(':'));
+    const std::string named = key == "deskew_buckets_us" ? "ego.deskew_bucket_us" : "ego." + key;
+    EXPECT_NE(s.error().message.find(named), std::string::npos) << s.error().message;
+  }
+}
+
+}  // namespace
+}  // namespace stac::tools

@@ -1,0 +1,63 @@
+// One section of config/stac.yaml, read once at start-up (STYLE rule 4): every key is required
+// unless read with get_or(), and every error names the file and `section.key`.
+//
+//   auto s = ConfigSection::open(file, "velodyne");     if (!s) return error;
+//   auto port = s->get<int>("port");                     if (!port) return port.error();
+//   if (*port > 65535) return s->error("port", "must be 1..65535");
+#pragma once
+
+#include <yaml-cpp/yaml.h>
+
+#include <filesystem>
+#include <string>
+
+#include "rt/expected.hpp"
+
+namespace stac::tools {
+
+class ConfigSection {
+ public:
+  static rt::Result<ConfigSection> open(const std::filesystem::path& file, const std::string& name);
+
+  template <class T>
+  rt::Result<T> get(const char* key) const {
+    const YAML::Node v = node_[key];
+    if (!v) return rt::make_error(file_ + ": missing required key '" + name_ + "." + key + "'");
+    return convert<T>(v, key);
+  }
+  template <class T>
+  rt::Result<T> get_or(const char* key, T fallback) const {
+    const YAML::Node v = node_[key];
+    if (!v) return fallback;
+    return convert<T>(v, key);
+  }
+  // "FILE: 'section.key' WHAT", as an error value.
+  rt::Unexpected<rt::Error> error(const char* key, const std::string& what) const {
+    return rt::make_error(file_ + ": '" + name_ + "." + key + "' " + what);
+  }
+  // A path written in the file, relative to the file's folder unless absolute.
+  std::filesystem::path path(const std::string& written) const;
+  const YAML::Node& node() const noexcept { return node_; }
+
+ private:
+  template <class T>
+  rt::Result<T> convert(const YAML::Node& v, const char* key) const {
+    try {
+      return v.as<T>();
+    } catch (const YAML::Exception&) {
+      return error(key, "has the wrong type (line " + std::to_string(v.Mark().line + 1) + ")");
+    }
+  }
+  YAML::Node node_;
+  std::string file_, name_;
+};
+
+}  // namespace stac::tools
+
+// Reads `key` of section `s` into `dst`, returning the error from the enclosing function.
+#define STAC_CONFIG_GET(s, type, key, dst)                  \
+  do {                                                      \
+    auto stac_value_ = (s).get<type>(key);                  \
+    if (!stac_value_) return rt::Unexpected<rt::Error>{stac_value_.error()}; \
+    dst = *stac_value_;                                     \
+  } while (0)
