@@ -91,7 +91,7 @@ nlohmann::json metrics_json(const EvalResult& r, const EvalConfig& c) {
     for (const auto& [b, k] : r.segmentation_by_band) j["segmentation_by_range"][band_name(b, c)] = seg_json(k);
   }
   j["config"] = {{"max_range_m", c.max_range_m}, {"min_points", c.min_points},
-                 {"range_band_m", c.range_band_m}, {"piece_share", c.piece_share},
+                 {"range_band_m", c.range_band_m}, {"count_coasting", c.count_coasting}, {"piece_share", c.piece_share},
                  {"foreign_share", c.foreign_share}, {"under_min_points", c.under_min_points},
                  {"zero_distance_m", c.zero_distance_m}};
   return j;
@@ -219,7 +219,8 @@ int write_report(const std::filesystem::path& dir, const EvalResult& r, const Ev
      << "- tracks: `" << o.tracks << "` (" << r.output_scans << " scans, " << r.paired_scans << " paired by time)\n"
      << "- evaluated: car, pedestrian, bicyclist within " << c.max_range_m << " m of the ego with at least "
      << c.min_points << " points; " << r.ignored_tracks
-     << " track-scans ignored (on background, unevaluated truth, or out of range)\n"
+     << " track-scans ignored (on background, unevaluated truth, or out of range); outputs: confirmed"
+     << (c.count_coasting ? " and coasting" : "") << " tracks\n"
      << "- definitions: docs/evaluation.md\n\n"
      << "## Summary\n\n"
      << "MOTA " << fmt(r.clear.mota()) << ", MOTP " << fmt(r.clear.motp()) << " (mean distance "
@@ -291,6 +292,8 @@ void add_eval_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--min-points", o->config.min_points, "evaluate truth objects with at least this many points")
       ->capture_default_str();
+  cmd->add_flag("--with-coasting", o->config.count_coasting,
+                "count coasting tracks (predicted, not updated in the scan) as outputs too");
   cmd->footer("Metric definitions: docs/evaluation.md.\nExample:\n"
               "  stac eval --truth run.truth.jsonl --tracks run.tracks.jsonl --report eval/");
   cmd->callback([o] {

@@ -214,7 +214,7 @@ EvalResult evaluate(const std::vector<TruthScanRecord>& truth_in, const std::vec
     }
     std::vector<const TrackRecord*> cands;
     for (const TrackRecord& t : os->tracks) {
-      if (t.state != "tentative") cands.push_back(&t);
+      if (t.state == "confirmed" || (c.count_coasting && t.state == "coasting")) cands.push_back(&t);
     }
     auto similarity = [&](const TruthObjectRecord& g, const TrackRecord& t, double* d_out) {
       const double d = std::hypot(g.x - t.x, g.y - t.y);

@@ -17,6 +17,8 @@ struct EvalConfig {
   std::uint32_t min_points = 20;  // truth objects with fewer returns are not evaluated
   double range_band_m = 10.0;     // width of the range bands of the breakdown
   double max_time_offset_s = 0.001;  // a truth scan and an output scan pair when this close
+  // Outputs are confirmed tracks (updated in the scan); coasting ones (predictions) only when set.
+  bool count_coasting = false;
   // Segmentation: a segment holding at least this share of an object's segmented points is a
   // "piece" of it; two or more pieces = over-segmented.
   double piece_share = 0.10;
