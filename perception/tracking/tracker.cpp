@@ -178,6 +178,10 @@ void Tracker::correct(Slot& s, const Detection& d, std::int64_t stamp_ns) noexce
 }
 
 void Tracker::spawn(const Detection& d, std::int64_t stamp_ns) noexcept {
+  if (!d.centroid.allFinite()) {  // never gated either: NaN fails every comparison
+    ++counters_.invalid_detections;
+    return;
+  }
   if (free_.empty()) {
     ++counters_.pool_overflow;
     return;
@@ -196,10 +200,10 @@ void Tracker::spawn(const Detection& d, std::int64_t stamp_ns) noexcept {
   Track& t = s.track;
   t.id = next_id_++;
   t.state = config_.confirm_hits <= 1 ? TrackState::kConfirmed : TrackState::kTentative;
-  t.length = d.length;
-  t.width = d.width;
-  t.height = d.height;
-  t.yaw = d.yaw;
+  t.length = std::isfinite(d.length) ? d.length : 0.0f;
+  t.width = std::isfinite(d.width) ? d.width : 0.0f;
+  t.height = std::isfinite(d.height) ? d.height : 0.0f;
+  t.yaw = std::isfinite(d.yaw) ? d.yaw : 0.0f;
   t.points = d.points;
   t.segment = static_cast<std::int32_t>(d.segment);
   t.hits = 1;

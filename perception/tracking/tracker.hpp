@@ -57,6 +57,7 @@ struct TrackerCounters {
   std::uint64_t deleted_tentative = 0;   // tentative track missed
   std::uint64_t pool_overflow = 0;       // detections that could not spawn: pool full
   std::uint64_t dropped_detections = 0;  // beyond max_detections
+  std::uint64_t invalid_detections = 0;  // non-finite centroid: neither matched nor spawned
   std::uint64_t stamp_regressions = 0;   // scan stamp not after the previous one (no predict)
   std::uint64_t solver_failures = 0;     // assignment refused (non-finite costs): no matches
 };

@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <map>
 #include <random>
 #include <set>
@@ -265,6 +266,20 @@ TEST(Tracker, DetectionsBeyondCapacityAndStampRegressionsAreCounted) {
   tracker.update(0, dets, out);  // earlier stamp: no prediction, still associates
   EXPECT_EQ(out.counters.stamp_regressions, 1u);
   EXPECT_EQ(out.tracks.size(), 3u);
+}
+
+TEST(Tracker, NonFiniteDetectionsAreCountedAndIgnored) {
+  Tracker tracker(TrackerConfig{});
+  TrackerOutput out(tracker.config().max_tracks);
+  for (int k = 0; k < 5; ++k) {
+    std::vector<Detection> dets = {det(k * 0.5, 0, 0), det(std::nan(""), 1, 1),
+                                   det(5, std::numeric_limits<double>::infinity(), 2)};
+    tracker.update(k * kScanNs, dets, out);
+    ASSERT_EQ(out.tracks.size(), 1u);
+    EXPECT_TRUE(out.tracks[0].position.allFinite());
+    EXPECT_EQ(out.tracks[0].segment, 0);
+  }
+  EXPECT_EQ(tracker.counters().invalid_detections, 10u);
 }
 
 TEST(Tracker, HolisticFeaturesOfATargetOnACircle) {
