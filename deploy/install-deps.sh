@@ -8,6 +8,7 @@ packages=(
   libeigen3-dev libgeographiclib-dev libpcap-dev libyaml-cpp-dev libtinyxml2-dev libcli11-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libusb-1.0-0-dev  # gs_usb / candleLight USB-CAN adapters (drivers/can)
+  nlohmann-json3-dev  # tracks and truth JSON lines (stac eval)
   libopencv-dev  # pictures (bird's-eye views, plots) in tools/, never in the per-scan loop
 )
 

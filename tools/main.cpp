@@ -32,6 +32,7 @@ int main(int argc, char** argv) {
       "  stac status --in run.pcap --calib-out unit.yaml   # the calibration the sensor sends\n"
       "  stac candump --in drive.log --out odometry.csv  # vehicle speed and yaw rate from CAN\n"
       "  stac replay --in run.pcap --rate 1          # send it again over loopback UDP\n"
+      "  stac eval --truth run.truth.jsonl --tracks run.tracks.jsonl --report eval/  # metrics\n"
       "Run 'stac <command> --help' for the options of each command.");
   stac::tools::add_decode_command(app);
   stac::tools::add_record_command(app);
@@ -41,6 +42,7 @@ int main(int argc, char** argv) {
   stac::tools::add_candump_command(app);
   stac::tools::add_replay_command(app);
   stac::tools::add_sim_compare_command(app);
+  stac::tools::add_eval_command(app);
   CLI11_PARSE(app, argc, argv);
   return 0;
 }

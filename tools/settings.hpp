@@ -12,6 +12,7 @@
 #include "ego/deskew.hpp"
 #include "ego/ego_estimator.hpp"
 #include "ego/local_frame.hpp"
+#include "perception/tracking/tracker.hpp"
 #include "rt/expected.hpp"
 
 namespace stac::tools {
@@ -36,6 +37,9 @@ struct EgoSettings {
   std::uint16_t ins_port = 5602;
 };
 rt::Result<EgoSettings> load_ego_settings(const std::filesystem::path& config_file);
+
+// The `tracking:` section, checked by the tracker's own validation too.
+rt::Result<tracking::TrackerConfig> load_tracking_config(const std::filesystem::path& config_file);
 
 // The `can:` section: transport, DBC and signal map. Errors name `can.<key>`.
 rt::Result<can::CanConfig> load_can_settings(const std::filesystem::path& config_file);

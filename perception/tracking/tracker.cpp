@@ -1,0 +1,340 @@
+#include "perception/tracking/tracker.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+
+namespace stac::tracking {
+namespace {
+
+using State = Eigen::Matrix<double, 5, 1>;      // px, py, pz, vx, vy
+using Cov = Eigen::Matrix<double, 5, 5>;
+using Meas = Eigen::Matrix<double, 3, 1>;       // px, py, pz
+using MeasCov = Eigen::Matrix<double, 3, 3>;
+using Gain = Eigen::Matrix<double, 5, 3>;
+
+constexpr double kForbidden = 1e9;  // cost of a pair outside the gate (dropped after solving)
+
+// Angle difference wrapped to [-pi/2, pi/2): box headings are defined modulo pi.
+double box_angle_diff(double a, double b) {
+  double d = std::fmod(a - b, std::numbers::pi);
+  if (d >= std::numbers::pi / 2) d -= std::numbers::pi;
+  if (d < -std::numbers::pi / 2) d += std::numbers::pi;
+  return d;
+}
+
+double wrap_pi(double a) {
+  a = std::fmod(a + std::numbers::pi, 2 * std::numbers::pi);
+  if (a < 0) a += 2 * std::numbers::pi;
+  return a - std::numbers::pi;
+}
+
+double position_std(const Cov& p) {
+  // Largest eigenvalue of the symmetric 2x2 x,y block, in closed form.
+  const double a = p(0, 0), b = p(0, 1), d = p(1, 1);
+  const double mean = 0.5 * (a + d);
+  const double spread = std::sqrt(0.25 * (a - d) * (a - d) + b * b);
+  return std::sqrt(std::max(0.0, mean + spread));
+}
+
+void check(bool ok, const char* what) {
+  if (!ok) throw std::invalid_argument(std::string("tracking config: ") + what);
+}
+
+}  // namespace
+
+const char* state_name(TrackState s) noexcept {
+  switch (s) {
+    case TrackState::kTentative: return "tentative";
+    case TrackState::kConfirmed: return "confirmed";
+    case TrackState::kCoasting: return "coasting";
+  }
+  return "unknown";
+}
+
+void HolisticFeatures::add_segment(const Eigen::Vector3f& centroid, std::int64_t stamp_ns,
+                                   double min_heading_speed_mps) noexcept {
+  ++segments_;
+  centroids_[static_cast<std::size_t>(head_)] = centroid;
+  stamps_[static_cast<std::size_t>(head_)] = stamp_ns;
+  head_ = (head_ + 1) % kWindow;
+  filled_ = std::min(filled_ + 1, kWindow);
+  if (filled_ < 2) return;
+  const auto newest = static_cast<std::size_t>((head_ + kWindow - 1) % kWindow);
+  const auto oldest = static_cast<std::size_t>((head_ + kWindow - filled_) % kWindow);
+  const double span_s = static_cast<double>(stamps_[newest] - stamps_[oldest]) * 1e-9;
+  if (!(span_s > 0)) return;
+  const Eigen::Vector2f v =
+      ((centroids_[newest] - centroids_[oldest]).head<2>() / static_cast<float>(span_s)).eval();
+  const float speed = v.norm();
+  max_speed_ = std::max(max_speed_, speed);
+  speed_sum_ += speed;
+  ++speed_count_;
+  if (have_velocity_) {
+    const double dt = static_cast<double>(stamp_ns - velocity_stamp_) * 1e-9;
+    if (dt > 0) {
+      const auto accel = static_cast<float>((v - velocity_).norm() / dt);
+      max_accel_ = std::max(max_accel_, accel);
+      accel_sum_ += accel;
+      ++accel_count_;
+      if (speed >= min_heading_speed_mps && velocity_.norm() >= min_heading_speed_mps) {
+        const double turn = wrap_pi(std::atan2(v.y(), v.x()) - std::atan2(velocity_.y(), velocity_.x()));
+        max_angular_ = std::max(max_angular_, static_cast<float>(std::abs(turn) / dt));
+      }
+    }
+  }
+  velocity_ = v;
+  velocity_stamp_ = stamp_ns;
+  have_velocity_ = true;
+}
+
+float HolisticFeatures::mean_speed_mps() const noexcept {
+  return speed_count_ == 0 ? 0.0f : static_cast<float>(speed_sum_ / speed_count_);
+}
+
+float HolisticFeatures::mean_accel_mps2() const noexcept {
+  return accel_count_ == 0 ? 0.0f : static_cast<float>(accel_sum_ / accel_count_);
+}
+
+struct Tracker::Slot {
+  Track track;
+  State x = State::Zero();
+  Cov p = Cov::Identity();
+};
+
+Tracker::Tracker(const TrackerConfig& c)
+    : config_(c),
+      live_(c.max_tracks),
+      free_(c.max_tracks),
+      solver_(c.max_tracks, c.max_detections) {
+  check(c.max_tracks >= 1 && c.max_tracks <= 100000, "max_tracks must be in 1..100000");
+  check(c.max_detections >= 1 && c.max_detections <= 100000, "max_detections must be in 1..100000");
+  check(c.accel_std_mps2 > 0 && c.z_velocity_std_mps > 0, "process noise must be > 0");
+  check(c.measurement_std_m > 0 && c.measurement_z_std_m > 0, "measurement noise must be > 0");
+  check(c.initial_velocity_std_mps > 0, "initial_velocity_std_mps must be > 0");
+  check(c.gate_mahalanobis_sq > 0 && c.gate_distance_m > 0, "gates must be > 0");
+  check(c.confirm_hits >= 1, "confirm_hits must be >= 1");
+  check(c.max_position_std_m > c.measurement_std_m, "max_position_std_m must exceed measurement_std_m");
+  check(c.box_smoothing > 0 && c.box_smoothing <= 1, "box_smoothing must be in (0, 1]");
+  slots_.resize(c.max_tracks);
+  for (std::size_t i = c.max_tracks; i-- > 0;) (void)free_.push_back(static_cast<std::uint32_t>(i));
+  cost_.assign(c.max_tracks * c.max_detections, 0.0);
+  pair_cost_.assign(c.max_tracks * c.max_detections, -1.0f);
+  row_to_col_.assign(std::max(c.max_tracks, c.max_detections), -1);
+  det_match_.assign(c.max_detections, -1);
+  rows_.assign(c.max_tracks, 0);
+  cols_.assign(c.max_detections, 0);
+  col_of_det_.assign(c.max_detections, -1);
+}
+
+Tracker::~Tracker() = default;
+
+void Tracker::predict(Slot& s, double dt) const noexcept {
+  if (dt <= 0) return;
+  Cov f = Cov::Identity();
+  f(0, 3) = dt;
+  f(1, 4) = dt;
+  s.x = f * s.x;
+  const double q = config_.accel_std_mps2 * config_.accel_std_mps2;
+  Cov qm = Cov::Zero();
+  for (int axis = 0; axis < 2; ++axis) {  // white-noise acceleration, per axis
+    qm(axis, axis) = q * dt * dt * dt * dt / 4;
+    qm(axis, axis + 3) = qm(axis + 3, axis) = q * dt * dt * dt / 2;
+    qm(axis + 3, axis + 3) = q * dt * dt;
+  }
+  qm(2, 2) = config_.z_velocity_std_mps * config_.z_velocity_std_mps * dt * dt;
+  s.p = f * s.p * f.transpose() + qm;
+}
+
+void Tracker::correct(Slot& s, const Detection& d, std::int64_t stamp_ns) noexcept {
+  const double r = config_.measurement_std_m * config_.measurement_std_m;
+  const double rz = config_.measurement_z_std_m * config_.measurement_z_std_m;
+  MeasCov sm = s.p.topLeftCorner<3, 3>();
+  sm.diagonal() += Meas(r, r, rz);
+  const Gain k = s.p.leftCols<3>() * sm.inverse();
+  const Meas innovation = d.centroid.cast<double>() - s.x.head<3>();
+  s.x += k * innovation;
+  Cov ikh = Cov::Identity();
+  ikh.leftCols<3>() -= k;
+  MeasCov rm = MeasCov::Zero();
+  rm.diagonal() = Meas(r, r, rz);
+  s.p = ikh * s.p * ikh.transpose() + k * rm * k.transpose();  // Joseph form: stays symmetric PSD
+
+  Track& t = s.track;
+  const double w = config_.box_smoothing;
+  t.length = static_cast<float>(t.length + w * (d.length - t.length));
+  t.width = static_cast<float>(t.width + w * (d.width - t.width));
+  t.height = static_cast<float>(t.height + w * (d.height - t.height));
+  t.yaw = static_cast<float>(wrap_pi(t.yaw + w * box_angle_diff(d.yaw, t.yaw)));
+  t.points = d.points;
+  t.segment = static_cast<std::int32_t>(d.segment);
+  ++t.hits;
+  t.misses = 0;
+  if (t.state == TrackState::kCoasting || t.hits >= config_.confirm_hits) t.state = TrackState::kConfirmed;
+  t.features.add_segment(d.centroid, stamp_ns, config_.min_heading_speed_mps);
+}
+
+void Tracker::spawn(const Detection& d, std::int64_t stamp_ns) noexcept {
+  if (!d.centroid.allFinite()) {  // never gated either: NaN fails every comparison
+    ++counters_.invalid_detections;
+    return;
+  }
+  if (free_.empty()) {
+    ++counters_.pool_overflow;
+    return;
+  }
+  const std::uint32_t index = free_.back();
+  free_.pop_back();
+  (void)live_.push_back(index);
+  Slot& s = slots_[index];
+  s.x = State::Zero();
+  s.x.head<3>() = d.centroid.cast<double>();
+  s.p = Cov::Zero();
+  const double r = config_.measurement_std_m * config_.measurement_std_m;
+  const double v = config_.initial_velocity_std_mps * config_.initial_velocity_std_mps;
+  s.p.diagonal() << r, r, config_.measurement_z_std_m * config_.measurement_z_std_m, v, v;
+  s.track = Track{};
+  Track& t = s.track;
+  t.id = next_id_++;
+  t.state = config_.confirm_hits <= 1 ? TrackState::kConfirmed : TrackState::kTentative;
+  t.length = std::isfinite(d.length) ? d.length : 0.0f;
+  t.width = std::isfinite(d.width) ? d.width : 0.0f;
+  t.height = std::isfinite(d.height) ? d.height : 0.0f;
+  t.yaw = std::isfinite(d.yaw) ? d.yaw : 0.0f;
+  t.points = d.points;
+  t.segment = static_cast<std::int32_t>(d.segment);
+  t.hits = 1;
+  t.features.add_segment(d.centroid, stamp_ns, config_.min_heading_speed_mps);
+  ++counters_.spawned;
+}
+
+void Tracker::update(std::int64_t stamp_ns, std::span<const Detection> detections,
+                     TrackerOutput& out) noexcept {
+  ++counters_.scans;
+  if (detections.size() > config_.max_detections) {
+    counters_.dropped_detections += detections.size() - config_.max_detections;
+    detections = detections.first(config_.max_detections);
+  }
+  // 1. Predict every track to the scan stamp.
+  double dt = 0;
+  if (have_stamp_) {
+    dt = static_cast<double>(stamp_ns - last_stamp_ns_) * 1e-9;
+    if (dt <= 0) ++counters_.stamp_regressions;
+  }
+  if (!have_stamp_ || dt > 0) last_stamp_ns_ = stamp_ns;
+  have_stamp_ = true;
+  for (const std::uint32_t i : live_) {
+    predict(slots_[i], dt);
+    Track& t = slots_[i].track;
+    t.segment = -1;
+    if (dt > 0) ++t.age;
+  }
+
+  // 2. Gate every (track, detection) pair; keep rows and columns with at least one allowed pair.
+  const std::size_t nt = live_.size(), nd = detections.size();
+  const double r = config_.measurement_std_m * config_.measurement_std_m;
+  std::size_t nrows = 0, ncols = 0;
+  std::fill_n(col_of_det_.begin(), nd, -1);
+  std::fill_n(det_match_.begin(), nd, -1);
+  for (std::size_t ti = 0; ti < nt; ++ti) {
+    const Slot& s = slots_[live_[ti]];
+    Eigen::Matrix2d sxy = s.p.topLeftCorner<2, 2>();
+    sxy.diagonal() += Eigen::Vector2d(r, r);
+    const Eigen::Matrix2d sinv = sxy.inverse();
+    bool any = false;
+    for (std::size_t di = 0; di < nd; ++di) {
+      const Eigen::Vector2d e = detections[di].centroid.head<2>().cast<double>() - s.x.head<2>();
+      const double m2 = e.dot(sinv * e);
+      const bool ok = m2 <= config_.gate_mahalanobis_sq && e.norm() <= config_.gate_distance_m;
+      pair_cost_[ti * nd + di] = ok ? static_cast<float>(m2) : -1.0f;
+      if (!ok) continue;
+      any = true;
+      if (col_of_det_[di] < 0) {
+        col_of_det_[di] = static_cast<std::int32_t>(ncols);
+        cols_[ncols++] = static_cast<std::uint32_t>(di);
+      }
+    }
+    if (any) rows_[nrows++] = static_cast<std::uint32_t>(ti);
+  }
+
+  // 3. Global assignment over the gated sub-matrix. Forbidden pairs cost kForbidden, so the
+  //    solution keeps as many allowed pairs as possible, then the smallest total distance.
+  if (nrows > 0) {
+    for (std::size_t ri = 0; ri < nrows; ++ri) {
+      for (std::size_t ci = 0; ci < ncols; ++ci) {
+        const float c = pair_cost_[rows_[ri] * nd + cols_[ci]];
+        cost_[ri * ncols + ci] = c < 0 ? kForbidden : static_cast<double>(c);
+      }
+    }
+    if (solver_.solve({cost_.data(), nrows * ncols}, nrows, ncols, {row_to_col_.data(), nrows})) {
+      for (std::size_t ri = 0; ri < nrows; ++ri) {
+        const int ci = row_to_col_[ri];
+        if (ci < 0 || cost_[ri * ncols + static_cast<std::size_t>(ci)] >= kForbidden) continue;
+        det_match_[cols_[static_cast<std::size_t>(ci)]] = static_cast<std::int32_t>(rows_[ri]);
+      }
+    } else {
+      ++counters_.solver_failures;
+    }
+  }
+
+  // 4. Update matched tracks; mark the others missed.
+  for (std::size_t di = 0; di < nd; ++di) {
+    if (det_match_[di] >= 0) {
+      correct(slots_[live_[static_cast<std::size_t>(det_match_[di])]], detections[di], stamp_ns);
+    }
+  }
+  // 5. Prune: misses and uncertainty (compacting the live list in place, order kept).
+  std::size_t kept = 0;
+  for (std::size_t ti = 0; ti < nt; ++ti) {
+    const std::uint32_t index = live_[ti];
+    Slot& s = slots_[index];
+    Track& t = s.track;
+    bool remove = false;
+    if (t.segment < 0) {
+      ++t.misses;
+      if (t.state == TrackState::kTentative) {
+        if (t.misses > config_.tentative_max_misses) {
+          remove = true;
+          ++counters_.deleted_tentative;
+        }
+      } else {
+        t.state = TrackState::kCoasting;
+        if (position_std(s.p) > config_.max_position_std_m) {
+          remove = true;
+          ++counters_.deleted_uncertain;
+        } else if (t.misses > config_.max_coast_scans) {
+          remove = true;
+          ++counters_.deleted_coasting;
+        }
+      }
+    }
+    if (remove) {
+      (void)free_.push_back(index);
+    } else {
+      live_[kept++] = index;
+    }
+  }
+  (void)live_.resize(kept);
+  // 6. Unmatched detections spawn tentative tracks.
+  for (std::size_t di = 0; di < nd; ++di) {
+    if (det_match_[di] < 0) spawn(detections[di], stamp_ns);
+  }
+
+  // 7. Report.
+  out.stamp_ns = stamp_ns;
+  out.tracks.clear();
+  for (const std::uint32_t i : live_) {
+    Slot& s = slots_[i];
+    Track& t = s.track;
+    t.position = s.x.head<3>().cast<float>();
+    t.velocity = s.x.tail<2>().cast<float>();
+    t.position_std_m = static_cast<float>(position_std(s.p));
+    if (!out.tracks.push_back(t)) break;
+  }
+  out.counters = counters_;
+}
+
+}  // namespace stac::tracking

@@ -1,0 +1,113 @@
+// Multi-object tracker on segment centroids in the world frame (thesis ch. 1): one linear Kalman
+// filter per track (constant velocity in x,y; z position only), gated association solved
+// globally (Hungarian), tentative -> confirmed -> coasting -> deleted, stable ids never reused.
+// Everything is allocated by the constructor; update() never allocates.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "perception/tracking/assignment.hpp"
+#include "perception/tracking/track.hpp"
+#include "rt/fixed_vector.hpp"
+
+namespace stac::tracking {
+
+// One segment of a scan, in the world frame (the caller applies the ego pose).
+struct Detection {
+  Eigen::Vector3f centroid = Eigen::Vector3f::Zero();  // m
+  float length = 0, width = 0, height = 0;             // oriented box, m
+  float yaw = 0;                                       // box heading, rad (mod pi)
+  std::uint32_t points = 0;
+  std::uint32_t segment = 0;  // index of the segment it came from
+};
+
+struct TrackerConfig {
+  std::size_t max_tracks = 512;       // track pool; spawns beyond it are counted, not made
+  std::size_t max_detections = 1024;  // per scan; detections beyond it are dropped and counted
+  // Kalman filter.
+  double accel_std_mps2 = 2.0;           // white-noise acceleration in x,y (m/s^2)
+  double z_velocity_std_mps = 0.5;       // z random walk (m/s)
+  double measurement_std_m = 0.25;       // centroid noise in x,y (m)
+  double measurement_z_std_m = 0.3;      // centroid noise in z (m)
+  double initial_velocity_std_mps = 6.0;  // velocity std of a new track (m/s)
+  // Association: a pair is allowed when both gates pass.
+  double gate_mahalanobis_sq = 9.21;  // squared Mahalanobis distance in x,y (chi^2, 2 dof, 99%)
+  double gate_distance_m = 3.0;       // Euclidean x,y distance to the prediction (m)
+  // Life cycle.
+  std::uint32_t confirm_hits = 3;         // hits that make a tentative track confirmed
+  std::uint32_t tentative_max_misses = 1;  // consecutive misses that delete a tentative track
+  std::uint32_t max_coast_scans = 20;     // consecutive misses that delete a coasting track
+  double max_position_std_m = 1.5;        // sqrt(max eigenvalue of the x,y covariance) (m)
+  // Box smoothing: weight of the new measurement in the exponential average (0..1].
+  double box_smoothing = 0.3;
+  // Holistic features: headings of slower smoothed velocities are not differentiated (m/s).
+  double min_heading_speed_mps = 0.5;
+};
+
+// Cumulative counters since construction (overflow and anomalies, never silent).
+struct TrackerCounters {
+  std::uint64_t scans = 0;
+  std::uint64_t spawned = 0;
+  std::uint64_t deleted_uncertain = 0;   // position uncertainty passed max_position_std_m
+  std::uint64_t deleted_coasting = 0;    // missed more than max_coast_scans
+  std::uint64_t deleted_tentative = 0;   // tentative track missed
+  std::uint64_t pool_overflow = 0;       // detections that could not spawn: pool full
+  std::uint64_t dropped_detections = 0;  // beyond max_detections
+  std::uint64_t invalid_detections = 0;  // non-finite centroid: neither matched nor spawned
+  std::uint64_t stamp_regressions = 0;   // scan stamp not after the previous one (no predict)
+  std::uint64_t solver_failures = 0;     // assignment refused (non-finite costs): no matches
+};
+
+// Caller-owned result of one update: every live track (deleted ones are gone).
+struct TrackerOutput {
+  explicit TrackerOutput(std::size_t max_tracks) : tracks(max_tracks) {}
+  std::int64_t stamp_ns = 0;
+  rt::FixedVector<Track> tracks;
+  TrackerCounters counters;  // copy of the tracker's counters after this update
+};
+
+class Tracker {
+ public:
+  explicit Tracker(const TrackerConfig& config);  // throws std::invalid_argument on bad config
+  ~Tracker();
+  Tracker(const Tracker&) = delete;
+  Tracker& operator=(const Tracker&) = delete;
+
+  // One scan: predict every track to stamp_ns, associate, update, spawn, prune, report.
+  // out.tracks must have capacity >= config.max_tracks (else it is filled up to its capacity).
+  void update(std::int64_t stamp_ns, std::span<const Detection> detections,
+              TrackerOutput& out) noexcept;
+
+  [[nodiscard]] const TrackerConfig& config() const noexcept { return config_; }
+  [[nodiscard]] const TrackerCounters& counters() const noexcept { return counters_; }
+  [[nodiscard]] std::size_t live_tracks() const noexcept { return live_.size(); }
+
+ private:
+  struct Slot;
+  void predict(Slot& s, double dt) const noexcept;
+  void correct(Slot& s, const Detection& d, std::int64_t stamp_ns) noexcept;
+  void spawn(const Detection& d, std::int64_t stamp_ns) noexcept;
+
+  TrackerConfig config_;
+  TrackerCounters counters_;
+  std::vector<Slot> slots_;             // the pool
+  rt::FixedVector<std::uint32_t> live_;  // slots in use
+  rt::FixedVector<std::uint32_t> free_;  // slots free
+  // Association workspace, rows = gated tracks, cols = gated detections.
+  AssignmentSolver solver_;
+  std::vector<double> cost_;
+  std::vector<int> row_to_col_;
+  std::vector<std::int32_t> det_match_;    // per detection: slot or -1
+  std::vector<std::uint32_t> rows_, cols_;  // compact index -> live index / detection index
+  std::vector<std::int32_t> col_of_det_;
+  std::vector<float> pair_cost_;         // live x detections: squared Mahalanobis, < 0 gated out
+  std::uint64_t next_id_ = 1;
+  std::int64_t last_stamp_ns_ = 0;
+  bool have_stamp_ = false;
+};
+
+}  // namespace stac::tracking

@@ -1,0 +1,351 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <map>
+#include <random>
+#include <set>
+#include <stdexcept>
+#include <vector>
+
+#include "perception/tracking/tracker.hpp"
+#include "rt/testing/alloc_counter.hpp"
+
+namespace stac::tracking {
+namespace {
+
+static_assert(noexcept(std::declval<Tracker&>().update(0, {}, std::declval<TrackerOutput&>())));
+
+constexpr std::int64_t kScanNs = 100'000'000;  // 10 Hz
+
+Detection det(double x, double y, std::uint32_t segment, double z = 0.8) {
+  Detection d;
+  d.centroid = Eigen::Vector3f(static_cast<float>(x), static_cast<float>(y), static_cast<float>(z));
+  d.length = 4.0f;
+  d.width = 1.8f;
+  d.height = 1.5f;
+  d.points = 100;
+  d.segment = segment;
+  return d;
+}
+
+const Track* by_segment(const TrackerOutput& out, std::uint32_t segment) {
+  for (const Track& t : out.tracks) {
+    if (t.segment == static_cast<std::int32_t>(segment)) return &t;
+  }
+  return nullptr;
+}
+
+const Track* by_id(const TrackerOutput& out, std::uint64_t id) {
+  for (const Track& t : out.tracks) {
+    if (t.id == id) return &t;
+  }
+  return nullptr;
+}
+
+TEST(Tracker, ConstantVelocityTargetsKeepStableIdsAndVelocities) {
+  Tracker tracker(TrackerConfig{});
+  TrackerOutput out(tracker.config().max_tracks);
+  std::mt19937 rng(7);
+  std::normal_distribution<double> noise(0.0, 0.08);
+  struct Target { double x, y, vx, vy; };
+  const std::vector<Target> targets = {{0, 5, 10, 0}, {10, -8, 0, 1.5}, {-15, -15, 0, 0}, {20, 20, -6, -6}};
+  std::vector<std::uint64_t> ids(targets.size(), 0);
+  std::vector<Detection> dets;
+  for (int k = 0; k < 60; ++k) {
+    const double t = k * 0.1;
+    dets.clear();
+    for (std::size_t i = 0; i < targets.size(); ++i) {
+      const Target& g = targets[i];
+      dets.push_back(det(g.x + g.vx * t + noise(rng), g.y + g.vy * t + noise(rng), static_cast<std::uint32_t>(i)));
+    }
+    tracker.update(k * kScanNs, dets, out);
+    for (std::size_t i = 0; i < targets.size(); ++i) {
+      const Track* tr = by_segment(out, static_cast<std::uint32_t>(i));
+      ASSERT_NE(tr, nullptr) << "target " << i << " scan " << k;
+      if (ids[i] == 0) ids[i] = tr->id;
+      EXPECT_EQ(tr->id, ids[i]) << "target " << i << " changed id at scan " << k;
+      if (k >= 2) EXPECT_EQ(tr->state, TrackState::kConfirmed);
+      else EXPECT_EQ(tr->state, TrackState::kTentative);
+    }
+  }
+  EXPECT_EQ(out.tracks.size(), targets.size());
+  for (std::size_t i = 0; i < targets.size(); ++i) {
+    const Track* tr = by_id(out, ids[i]);
+    EXPECT_NEAR(tr->velocity.x(), targets[i].vx, 0.4) << i;
+    EXPECT_NEAR(tr->velocity.y(), targets[i].vy, 0.4) << i;
+    EXPECT_EQ(tr->features.segment_count(), 60u);
+    // Noise of 0.08 m over the 0.4 s window alone makes a still target read about 0.35 m/s.
+    EXPECT_NEAR(tr->features.mean_speed_mps(), std::hypot(targets[i].vx, targets[i].vy), 0.5) << i;
+    EXPECT_EQ(tr->age, 59u);
+  }
+  EXPECT_EQ(tracker.counters().spawned, targets.size());
+}
+
+TEST(Tracker, TargetsCrossingPathsKeepTheirIds) {
+  // A walks along y = 0, B along x = 0; they pass the crossing 1 m apart in the same scan.
+  Tracker tracker(TrackerConfig{});
+  TrackerOutput out(tracker.config().max_tracks);
+  std::mt19937 rng(3);
+  std::normal_distribution<double> noise(0.0, 0.05);
+  std::uint64_t id_a = 0, id_b = 0;
+  for (int k = 0; k <= 100; ++k) {
+    const double t = k * 0.1;
+    const std::vector<Detection> dets = {det(-10 + 2 * t + noise(rng), noise(rng), 0),
+                                         det(noise(rng), -9 + 2 * t + noise(rng), 1)};
+    tracker.update(k * kScanNs, dets, out);
+    const Track* a = by_segment(out, 0);
+    const Track* b = by_segment(out, 1);
+    ASSERT_TRUE(a != nullptr && b != nullptr) << k;
+    if (k == 0) {
+      id_a = a->id;
+      id_b = b->id;
+    }
+    EXPECT_EQ(a->id, id_a) << "scan " << k;
+    EXPECT_EQ(b->id, id_b) << "scan " << k;
+  }
+  EXPECT_EQ(tracker.counters().spawned, 2u);
+}
+
+TEST(Tracker, GlobalAssignmentKeepsIdsWhereGreedyWouldSwap) {
+  // Two walkers side by side (y = 0 and y = 1) at 1.5 m/s. In scan 30 A's detection is pushed
+  // 0.55 m towards B and B's 0.9 m away from A: the single cheapest pair is (B, A's detection),
+  // and A cannot reach B's detection (gate 1.5 m), so greedy matching would hand A's detection
+  // to B and drop A. The global solution keeps both.
+  TrackerConfig c;
+  c.gate_mahalanobis_sq = 1e6;  // Euclidean gate only, to make the geometry exact
+  c.gate_distance_m = 1.5;
+  Tracker tracker(c);
+  TrackerOutput out(c.max_tracks);
+  std::uint64_t id_a = 0, id_b = 0;
+  for (int k = 0; k < 40; ++k) {
+    const double x = 1.5 * k * 0.1;
+    double ya = 0, yb = 1;
+    if (k == 30) {
+      ya += 0.55;
+      yb += 0.9;
+      // The trap is real: the cheapest pair is B with A's detection; A-to-B's is out of the gate.
+      const Track* a = by_id(out, id_a);
+      const Track* b = by_id(out, id_b);
+      const double pa_da = std::abs(ya - a->position.y()), pb_da = std::abs(ya - b->position.y());
+      const double pa_db = std::abs(yb - a->position.y()), pb_db = std::abs(yb - b->position.y());
+      ASSERT_LT(pb_da, pa_da);
+      ASSERT_LT(pb_da, pb_db);
+      ASSERT_GT(pa_db, c.gate_distance_m);
+    }
+    tracker.update(k * kScanNs, std::vector<Detection>{det(x, ya, 0), det(x, yb, 1)}, out);
+    const Track* a = by_segment(out, 0);
+    const Track* b = by_segment(out, 1);
+    ASSERT_TRUE(a != nullptr && b != nullptr) << k;
+    if (k == 0) {
+      id_a = a->id;
+      id_b = b->id;
+    }
+    EXPECT_EQ(a->id, id_a) << "scan " << k;
+    EXPECT_EQ(b->id, id_b) << "scan " << k;
+  }
+  EXPECT_EQ(tracker.counters().spawned, 2u);
+}
+
+TEST(Tracker, OccludedTargetCoastsAndIsReassociated) {
+  Tracker tracker(TrackerConfig{});
+  TrackerOutput out(tracker.config().max_tracks);
+  std::uint64_t id = 0;
+  for (int k = 0; k < 40; ++k) {
+    const double x = 5.0 * k * 0.1;
+    std::vector<Detection> dets;
+    const bool occluded = k >= 20 && k < 25;
+    if (!occluded) dets.push_back(det(x, 2.0, 0));
+    tracker.update(k * kScanNs, dets, out);
+    ASSERT_EQ(out.tracks.size(), 1u) << "scan " << k;
+    const Track& t = out.tracks[0];
+    if (k == 0) id = t.id;
+    EXPECT_EQ(t.id, id) << "scan " << k;
+    if (occluded) {
+      EXPECT_EQ(t.state, TrackState::kCoasting) << k;
+      EXPECT_EQ(t.segment, -1);
+      EXPECT_EQ(t.misses, static_cast<std::uint32_t>(k - 19));
+      EXPECT_NEAR(t.position.x(), x, 0.3) << "prediction during the occlusion, scan " << k;
+    } else if (k >= 2) {
+      EXPECT_EQ(t.state, TrackState::kConfirmed) << k;
+    }
+  }
+  EXPECT_EQ(tracker.counters().spawned, 1u);
+}
+
+TEST(Tracker, TargetThatLeavesIsDeletedWhenUncertaintyPassesTheThreshold) {
+  TrackerConfig c;
+  c.max_coast_scans = 1000;  // only the uncertainty can end it
+  Tracker tracker(c);
+  TrackerOutput out(c.max_tracks);
+  for (int k = 0; k < 20; ++k) tracker.update(k * kScanNs, std::vector<Detection>{det(k * 0.3, 0, 0)}, out);
+  ASSERT_EQ(out.tracks.size(), 1u);
+  float previous_std = out.tracks[0].position_std_m;
+  int k = 20;
+  for (; k < 200 && !out.tracks.empty(); ++k) {
+    tracker.update(k * kScanNs, {}, out);
+    if (out.tracks.empty()) break;
+    EXPECT_EQ(out.tracks[0].state, TrackState::kCoasting);
+    EXPECT_GT(out.tracks[0].position_std_m, previous_std) << "uncertainty grows while coasting";
+    EXPECT_LE(out.tracks[0].position_std_m, c.max_position_std_m);
+    previous_std = out.tracks[0].position_std_m;
+  }
+  EXPECT_TRUE(out.tracks.empty()) << "still alive after " << k - 20 << " missed scans";
+  EXPECT_GT(k - 20, 3);
+  EXPECT_EQ(tracker.counters().deleted_uncertain, 1u);
+  EXPECT_EQ(tracker.counters().deleted_coasting, 0u);
+  EXPECT_EQ(tracker.live_tracks(), 0u);
+}
+
+TEST(Tracker, CoastingTooLongDeletesTheTrack) {
+  TrackerConfig c;
+  c.max_coast_scans = 3;
+  c.max_position_std_m = 100.0;
+  Tracker tracker(c);
+  TrackerOutput out(c.max_tracks);
+  for (int k = 0; k < 10; ++k) tracker.update(k * kScanNs, std::vector<Detection>{det(0, 0, 0)}, out);
+  for (int k = 10; k < 13; ++k) {
+    tracker.update(k * kScanNs, {}, out);
+    EXPECT_EQ(out.tracks.size(), 1u) << k;
+  }
+  tracker.update(13 * kScanNs, {}, out);
+  EXPECT_TRUE(out.tracks.empty());
+  EXPECT_EQ(tracker.counters().deleted_coasting, 1u);
+}
+
+TEST(Tracker, ClutterSpawnsTentativeTracksThatNeverConfirm) {
+  Tracker tracker(TrackerConfig{});
+  TrackerOutput out(tracker.config().max_tracks);
+  std::mt19937 rng(99);
+  std::uniform_real_distribution<double> where(-100.0, 100.0);
+  std::set<std::uint64_t> ids;
+  std::uint64_t max_id = 0;
+  for (int k = 0; k < 200; ++k) {
+    std::vector<Detection> dets;
+    for (std::uint32_t i = 0; i < 10; ++i) dets.push_back(det(where(rng), where(rng), i));
+    tracker.update(k * kScanNs, dets, out);
+    for (const Track& t : out.tracks) {
+      EXPECT_EQ(t.state, TrackState::kTentative) << "clutter confirmed at scan " << k;
+      if (ids.insert(t.id).second) {
+        EXPECT_GT(t.id, max_id) << "ids are never reused";
+        max_id = t.id;
+      }
+    }
+    EXPECT_LE(out.tracks.size(), 20u);
+  }
+  EXPECT_GE(tracker.counters().spawned, 1900u);
+  EXPECT_EQ(tracker.counters().deleted_tentative + tracker.live_tracks(), tracker.counters().spawned);
+}
+
+TEST(Tracker, PoolOverflowIsCounted) {
+  TrackerConfig c;
+  c.max_tracks = 4;
+  Tracker tracker(c);
+  TrackerOutput out(c.max_tracks);
+  std::vector<Detection> dets;
+  for (std::uint32_t i = 0; i < 6; ++i) dets.push_back(det(20.0 * i, 0, i));
+  tracker.update(0, dets, out);
+  EXPECT_EQ(out.tracks.size(), 4u);
+  EXPECT_EQ(out.counters.pool_overflow, 2u);
+  tracker.update(kScanNs, dets, out);
+  EXPECT_EQ(out.tracks.size(), 4u);
+  EXPECT_EQ(out.counters.pool_overflow, 4u);
+  for (const Track& t : out.tracks) EXPECT_LT(t.segment, 4) << "the first four keep their tracks";
+}
+
+TEST(Tracker, DetectionsBeyondCapacityAndStampRegressionsAreCounted) {
+  TrackerConfig c;
+  c.max_detections = 3;
+  Tracker tracker(c);
+  TrackerOutput out(c.max_tracks);
+  std::vector<Detection> dets;
+  for (std::uint32_t i = 0; i < 5; ++i) dets.push_back(det(20.0 * i, 0, i));
+  tracker.update(kScanNs, dets, out);
+  EXPECT_EQ(out.tracks.size(), 3u);
+  EXPECT_EQ(out.counters.dropped_detections, 2u);
+  tracker.update(0, dets, out);  // earlier stamp: no prediction, still associates
+  EXPECT_EQ(out.counters.stamp_regressions, 1u);
+  EXPECT_EQ(out.tracks.size(), 3u);
+}
+
+TEST(Tracker, NonFiniteDetectionsAreCountedAndIgnored) {
+  Tracker tracker(TrackerConfig{});
+  TrackerOutput out(tracker.config().max_tracks);
+  for (int k = 0; k < 5; ++k) {
+    std::vector<Detection> dets = {det(k * 0.5, 0, 0), det(std::nan(""), 1, 1),
+                                   det(5, std::numeric_limits<double>::infinity(), 2)};
+    tracker.update(k * kScanNs, dets, out);
+    ASSERT_EQ(out.tracks.size(), 1u);
+    EXPECT_TRUE(out.tracks[0].position.allFinite());
+    EXPECT_EQ(out.tracks[0].segment, 0);
+  }
+  EXPECT_EQ(tracker.counters().invalid_detections, 10u);
+}
+
+TEST(Tracker, HolisticFeaturesOfATargetOnACircle) {
+  // 5 m/s on a circle of radius 10 m: angular velocity 0.5 rad/s, centripetal accel 2.5 m/s^2.
+  Tracker tracker(TrackerConfig{});
+  TrackerOutput out(tracker.config().max_tracks);
+  for (int k = 0; k < 100; ++k) {
+    const double a = 0.5 * k * 0.1;
+    tracker.update(k * kScanNs, std::vector<Detection>{det(10 * std::cos(a), 10 * std::sin(a), 0)}, out);
+  }
+  ASSERT_EQ(out.tracks.size(), 1u);
+  const HolisticFeatures& f = out.tracks[0].features;
+  EXPECT_EQ(f.segment_count(), 100u);
+  EXPECT_NEAR(f.max_speed_mps(), 5.0, 0.05);
+  EXPECT_NEAR(f.mean_speed_mps(), 5.0, 0.05);
+  EXPECT_NEAR(f.max_angular_velocity_rps(), 0.5, 0.03);
+  EXPECT_NEAR(f.mean_accel_mps2(), 2.5, 0.2);
+  EXPECT_NEAR(f.smoothed_velocity().norm(), 5.0, 0.05);
+}
+
+TEST(Tracker, BoxIsSmoothedAndYawWrapsModuloPi) {
+  TrackerConfig c;
+  c.box_smoothing = 0.5;
+  Tracker tracker(c);
+  TrackerOutput out(c.max_tracks);
+  Detection d = det(0, 0, 0);
+  d.yaw = 1.5f;
+  tracker.update(0, std::vector<Detection>{d}, out);
+  d.yaw = -1.5f;  // the same box heading flipped by pi, about 0.14 rad away
+  d.length = 5.0f;
+  tracker.update(kScanNs, std::vector<Detection>{d}, out);
+  ASSERT_EQ(out.tracks.size(), 1u);
+  EXPECT_NEAR(out.tracks[0].length, 4.5f, 1e-5);
+  const double yaw = out.tracks[0].yaw;
+  EXPECT_NEAR(std::abs(std::remainder(yaw - 1.5 - 0.0708, 3.14159265)), 0.0, 1e-3) << yaw;
+}
+
+TEST(Tracker, NoHeapAllocationPerScanAfterWarmUp) {
+  Tracker tracker(TrackerConfig{});
+  TrackerOutput out(tracker.config().max_tracks);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> where(-60.0, 60.0);
+  std::vector<Detection> dets;
+  dets.reserve(200);
+  auto scan = [&](int k) {
+    dets.clear();
+    for (std::uint32_t i = 0; i < 60; ++i) dets.push_back(det(-50.0 + 2.0 * i + 0.5 * k * 0.1, 3.0 * (i % 7), i));
+    for (std::uint32_t i = 0; i < 40; ++i) dets.push_back(det(where(rng), where(rng), 60 + i));
+    tracker.update(k * kScanNs, dets, out);
+  };
+  for (int k = 0; k < 20; ++k) scan(k);
+  rt::testing::AllocationCounter counter;
+  for (int k = 20; k < 120; ++k) scan(k);
+  counter.stop();
+  EXPECT_EQ(counter.allocations(), 0u) << counter.bytes() << " bytes";
+  EXPECT_GE(out.tracks.size(), 60u);
+}
+
+TEST(Tracker, RejectsInvalidConfig) {
+  TrackerConfig c;
+  c.max_tracks = 0;
+  EXPECT_THROW(Tracker{c}, std::invalid_argument);
+  c = TrackerConfig{};
+  c.box_smoothing = 0;
+  EXPECT_THROW(Tracker{c}, std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace stac::tracking
