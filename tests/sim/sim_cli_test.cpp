@@ -2,6 +2,7 @@
 // its candump log, and byte-identical output for the same scenario and seed. Every file is read
 // back with the project's own readers (applanix::CaptureReader, `stac candump`, `stac decode`).
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -34,7 +35,10 @@ constexpr const char* kScenario = "urban";
 constexpr std::uint64_t kSeed = 7;
 constexpr double kSeconds = 2.5;
 
-std::filesystem::path dir() { return std::filesystem::temp_directory_path() / "stac_sim_sensors"; }
+// One folder per test process: ctest runs each test in its own process, in parallel.
+std::filesystem::path dir() {
+  return std::filesystem::temp_directory_path() / ("stac_sim_sensors_" + std::to_string(::getpid()));
+}
 std::string calib() { return stac::testing::shared_data(kCalib).string(); }
 
 std::string read_file(const std::filesystem::path& p) {
@@ -74,6 +78,7 @@ class SimSensors : public ::testing::Test {
     ok_ = r.code == 0;
     output_ = r.output;
   }
+  static void TearDownTestSuite() { std::filesystem::remove_all(dir()); }
   void SetUp() override {
     STAC_REQUIRE_SHARED_DATA(kCalib);
     ASSERT_TRUE(ok_) << output_;
