@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <optional>
 
 #include "drivers/can/candump.hpp"
 #include "drivers/can/config.hpp"
@@ -102,29 +103,40 @@ rt::Result<ego::Geodetic> parse_origin(const std::string& text) {
   return g;
 }
 
-// Writes the vehicle CAN frames of the whole run to a candump log.
-int write_can_log(const SimOptions& o, const sim::SimRun& run, const sim::RunConfig& rc) {
+// The vehicle CAN bus of the run and its candump log, opened before the simulation so that a
+// bad can: configuration or an unwritable path stops it at once.
+struct CanLog {
+  sim::VehicleCanSim bus;
+  can::CandumpWriter log;
+};
+
+rt::Result<CanLog> open_can_log(const SimOptions& o, const sim::SimRun& run, const sim::RunConfig& rc) {
   const auto config = can::load_can_config(config_path(o.config));
-  if (!config) return fail(config.error().message);
+  if (!config) return rt::Unexpected<rt::Error>{config.error()};
   const auto db = can::load_dbc(config->dbc);
-  if (!db) return fail(db.error().message);
+  if (!db) return rt::Unexpected<rt::Error>{db.error()};
   sim::VehicleCanConfig vc;
   vc.start_ns = rc.start_ns;
   auto bus = sim::VehicleCanSim::create(*db, config->signals, vc, [&run](double t) { return run.ego(t); });
-  if (!bus) return fail(config->dbc.string() + ": " + bus.error().message + " (see can: in the configuration)");
+  if (!bus) return rt::make_error(config->dbc.string() + ": " + bus.error().message + " (see can: in the configuration)");
   auto log = can::CandumpWriter::open(o.can, config->socketcan.interface);
-  if (!log) return fail(log.error().message);
+  if (!log) return rt::Unexpected<rt::Error>{log.error()};
+  return CanLog{std::move(*bus), std::move(*log)};
+}
+
+// Writes the vehicle CAN frames of the whole run.
+int write_can_log(CanLog& c, const std::string& path, const sim::RunConfig& rc) {
   const std::int64_t end_ns = rc.start_ns + std::llround(rc.duration_s * 1e9);
   can::Frame f;
-  while (bus->next_stamp_ns() <= end_ns) {
-    if (bus->next(f) && !log->write(f)) return fail(o.can + ": write failed");
+  while (c.bus.next_stamp_ns() <= end_ns) {
+    if (c.bus.next(f) && !c.log.write(f)) return fail(path + ": write failed");
   }
-  if (!log->close()) return fail(o.can + ": write failed");
-  std::fprintf(stderr, "  CAN: %llu frames -> %s", static_cast<unsigned long long>(bus->counters().frames),
-               o.can.c_str());
-  if (bus->counters().unencodable > 0) {
+  if (!c.log.close()) return fail(path + ": write failed");
+  std::fprintf(stderr, "  CAN: %llu frames -> %s", static_cast<unsigned long long>(c.bus.counters().frames),
+               path.c_str());
+  if (c.bus.counters().unencodable > 0) {
     std::fprintf(stderr, " (%llu values outside their DBC signal's range not sent)",
-                 static_cast<unsigned long long>(bus->counters().unencodable));
+                 static_cast<unsigned long long>(c.bus.counters().unencodable));
   }
   std::fprintf(stderr, "\n");
   return 0;
@@ -155,6 +167,12 @@ int run_sim(const SimOptions& o) {
   ic.start_ns = rc.start_ns;
   auto run = sim::SimRun::create(*calibration, rc);
   if (!run) return fail(run.error().message);
+  std::optional<CanLog> can_log;
+  if (!o.can.empty()) {
+    auto c = open_can_log(o, **run, rc);
+    if (!c) return fail(c.error().message);
+    can_log.emplace(std::move(*c));
+  }
   auto pcap = io::PcapWriter::open(o.out);
   if (!pcap) return fail(pcap.error().message);
   std::ofstream truth(o.truth);
@@ -234,7 +252,7 @@ int run_sim(const SimOptions& o) {
   std::fprintf(stderr, "  INS: %llu Applanix messages (Group 1 at 200 Hz, Groups 2 and 3 at 1 Hz), GPS week %u, %s port %u\n",
                static_cast<unsigned long long>(ins_messages), ins.gps_week(), o.ins_udp ? "UDP" : "TCP",
                static_cast<unsigned>(InsPcapStream::kPort));
-  if (!o.can.empty()) return write_can_log(o, **run, rc);
+  if (can_log) return write_can_log(*can_log, o.can, rc);
   return 0;
 }
 

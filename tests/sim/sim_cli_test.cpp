@@ -288,8 +288,9 @@ TEST_F(SimSensors, CandumpGivesTheEgoSpeedYawRateAndPath) {
   EXPECT_NEAR(dr_left, left, 0.05);
 }
 
-// --ins-udp sends each message as a datagram to port 5602 instead; --origin moves the anchor.
-TEST_F(SimSensors, InsUdpAndOriginOptions) {
+// --ins-udp sends each message as a datagram to port 5602 instead; --origin moves the anchor;
+// a bad --origin or --can path is refused with a message naming it.
+TEST_F(SimSensors, InsUdpOriginAndCanOptions) {
   const auto d = dir();
   const CliResult r = stac(std::string("sim --scenario ") + kScenario + " --seed 7 --duration 1 --calib " +
                            calib() + " --out " + (d / "udp.pcap").string() + " --truth " +
@@ -325,6 +326,13 @@ TEST_F(SimSensors, InsUdpAndOriginOptions) {
                              " --origin 95,11,500");
   EXPECT_NE(bad.code, 0);
   EXPECT_NE(bad.output.find("--origin '95,11,500'"), std::string::npos) << bad.output;
+  // An unwritable candump path stops the run before it simulates anything.
+  const CliResult no_log = stac(std::string("sim --scenario empty --duration 0.2 --calib ") + calib() + " --out " +
+                                (d / "nolog.pcap").string() + " --truth " + (d / "nolog.jsonl").string() +
+                                " --can " + (d / "missing" / "x.candump").string());
+  EXPECT_NE(no_log.code, 0);
+  EXPECT_NE(no_log.output.find("x.candump"), std::string::npos) << no_log.output;
+  EXPECT_FALSE(std::filesystem::exists(d / "nolog.pcap"));
 }
 
 }  // namespace
