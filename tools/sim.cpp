@@ -3,11 +3,16 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <optional>
 
+#include "drivers/can/candump.hpp"
+#include "drivers/can/config.hpp"
 #include "drivers/io/pcap_writer.hpp"
 #include "drivers/velodyne/decoder.hpp"
 #include "drivers/velodyne/status.hpp"
+#include "sim/ins.hpp"
 #include "sim/run.hpp"
+#include "sim/vehicle_can.hpp"
 #include "tools/commands.hpp"
 #include "tools/progress.hpp"
 #include "tools/settings.hpp"
@@ -24,7 +29,118 @@ struct SimOptions {
   std::string calib;
   std::string config;
   bool dual_return = false;
+  std::string origin;  // "LAT,LON,ALT"; empty: sim::InsConfig's default
+  bool ins_udp = false;
+  std::string can;     // candump log to write; empty: none
 };
+
+// The POS LV's Real-Time Data stream (port 5602) into the pcap: one TCP connection from the
+// vehicle computer (handshake just before the first message), then each message as one segment
+// from the POS; or with --ins-udp each message as one broadcast datagram to port 5602.
+class InsPcapStream {
+ public:
+  static constexpr std::uint32_t kPosIp = 0xC0A83564;       // 192.168.53.100, the POS LV
+  static constexpr std::uint32_t kHostIp = 0xC0A8350A;      // 192.168.53.10, the vehicle computer
+  static constexpr std::uint32_t kBroadcastIp = 0xC0A835FF;  // 192.168.53.255
+  static constexpr std::uint16_t kPort = 5602;               // Real-Time Data
+  static constexpr std::uint16_t kHostPort = 50'602;
+  static constexpr std::uint8_t kTcpPsh = 0x08;
+
+  InsPcapStream(io::PcapWriter& pcap, bool udp) : pcap_(pcap), udp_(udp) {}
+
+  rt::Result<bool> write(const sim::InsMessage& m) {
+    if (udp_) {
+      io::Datagram d;
+      d.payload = m.bytes;
+      d.stamp_ns = m.stamp_ns;
+      d.src_ip = kPosIp;
+      d.dst_ip = kBroadcastIp;
+      d.src_port = d.dst_port = kPort;
+      return pcap_.write_udp(d);
+    }
+    if (!connected_) {
+      connected_ = true;
+      const std::uint32_t host_isn = 0x0BADC0DE;
+      for (auto w : {pcap_.write_tcp(segment(m.stamp_ns - 3'000'000, false, host_isn, io::kTcpSyn)),
+                     pcap_.write_tcp(segment(m.stamp_ns - 2'000'000, true, kPosIsn, io::kTcpSyn | io::kTcpAck)),
+                     pcap_.write_tcp(segment(m.stamp_ns - 1'000'000, false, host_isn + 1, io::kTcpAck))}) {
+        if (!w) return w;
+      }
+    }
+    io::TcpSegment s = segment(m.stamp_ns, true, seq_, io::kTcpAck | kTcpPsh);
+    s.payload = m.bytes;
+    seq_ += static_cast<std::uint32_t>(m.bytes.size());
+    return pcap_.write_tcp(s);
+  }
+
+ private:
+  static constexpr std::uint32_t kPosIsn = 0x1A2B3C4D;
+  static io::TcpSegment segment(std::int64_t stamp_ns, bool from_pos, std::uint32_t seq, std::uint8_t flags) {
+    io::TcpSegment s;
+    s.stamp_ns = stamp_ns;
+    s.src_ip = from_pos ? kPosIp : kHostIp;
+    s.dst_ip = from_pos ? kHostIp : kPosIp;
+    s.src_port = from_pos ? kPort : kHostPort;
+    s.dst_port = from_pos ? kHostPort : kPort;
+    s.seq = seq;
+    s.flags = flags;
+    return s;
+  }
+
+  io::PcapWriter& pcap_;
+  bool udp_;
+  bool connected_ = false;
+  std::uint32_t seq_ = kPosIsn + 1;  // the SYN takes one sequence number
+};
+
+rt::Result<ego::Geodetic> parse_origin(const std::string& text) {
+  ego::Geodetic g;
+  char tail = 0;
+  if (std::sscanf(text.c_str(), "%lf,%lf,%lf%c", &g.lat_deg, &g.lon_deg, &g.alt_m, &tail) != 3 ||
+      !(std::abs(g.lat_deg) < 90.0) || !(std::abs(g.lon_deg) <= 180.0) || !std::isfinite(g.alt_m)) {
+    return rt::make_error("--origin '" + text + "': expected LAT,LON,ALT (deg, deg, m), e.g. 44.2449408681,-76.5096210157,77");
+  }
+  return g;
+}
+
+// The vehicle CAN bus of the run and its candump log, opened before the simulation so that a
+// bad can: configuration or an unwritable path stops it at once.
+struct CanLog {
+  sim::VehicleCanSim bus;
+  can::CandumpWriter log;
+};
+
+rt::Result<CanLog> open_can_log(const SimOptions& o, const sim::SimRun& run, const sim::RunConfig& rc) {
+  const auto config = can::load_can_config(config_path(o.config));
+  if (!config) return rt::Unexpected<rt::Error>{config.error()};
+  const auto db = can::load_dbc(config->dbc);
+  if (!db) return rt::Unexpected<rt::Error>{db.error()};
+  sim::VehicleCanConfig vc;
+  vc.start_ns = rc.start_ns;
+  auto bus = sim::VehicleCanSim::create(*db, config->signals, vc, [&run](double t) { return run.ego(t); });
+  if (!bus) return rt::make_error(config->dbc.string() + ": " + bus.error().message + " (see can: in the configuration)");
+  auto log = can::CandumpWriter::open(o.can, config->socketcan.interface);
+  if (!log) return rt::Unexpected<rt::Error>{log.error()};
+  return CanLog{std::move(*bus), std::move(*log)};
+}
+
+// Writes the vehicle CAN frames of the whole run.
+int write_can_log(CanLog& c, const std::string& path, const sim::RunConfig& rc) {
+  const std::int64_t end_ns = rc.start_ns + std::llround(rc.duration_s * 1e9);
+  can::Frame f;
+  while (c.bus.next_stamp_ns() <= end_ns) {
+    if (c.bus.next(f) && !c.log.write(f)) return fail(path + ": write failed");
+  }
+  if (!c.log.close()) return fail(path + ": write failed");
+  std::fprintf(stderr, "  CAN: %llu frames -> %s", static_cast<unsigned long long>(c.bus.counters().frames),
+               path.c_str());
+  if (c.bus.counters().unencodable > 0) {
+    std::fprintf(stderr, " (%llu values outside their DBC signal's range not sent)",
+                 static_cast<unsigned long long>(c.bus.counters().unencodable));
+  }
+  std::fprintf(stderr, "\n");
+  return 0;
+}
 
 int run_sim(const SimOptions& o) {
   auto settings = load_velodyne_settings(config_path(o.config));
@@ -42,8 +158,21 @@ int run_sim(const SimOptions& o) {
   rc.lidar.seed = o.seed;
   rc.lidar.dual_return = o.dual_return;
   rc.lidar.model = o.dual_return ? velodyne::Model::kS3 : velodyne::Model::kS2_1;
+  sim::InsConfig ic;
+  if (!o.origin.empty()) {
+    auto origin = parse_origin(o.origin);
+    if (!origin) return fail(origin.error().message);
+    ic.origin = *origin;
+  }
+  ic.start_ns = rc.start_ns;
   auto run = sim::SimRun::create(*calibration, rc);
   if (!run) return fail(run.error().message);
+  std::optional<CanLog> can_log;
+  if (!o.can.empty()) {
+    auto c = open_can_log(o, **run, rc);
+    if (!c) return fail(c.error().message);
+    can_log.emplace(std::move(*c));
+  }
   auto pcap = io::PcapWriter::open(o.out);
   if (!pcap) return fail(pcap.error().message);
   std::ofstream truth(o.truth);
@@ -81,10 +210,21 @@ int run_sim(const SimOptions& o) {
   const std::uint32_t n = (*run)->packet_count();
   Progress progress("sim " + o.scenario, n);
   const auto wall0 = std::chrono::steady_clock::now();
+  sim::InsSim ins(ic, [r = run->get()](double t) { return r->ego(t); });
+  InsPcapStream ins_out(*pcap, o.ins_udp);
+  std::uint64_t ins_messages = 0;
+  auto write_ins_until = [&](std::int64_t stamp_ns) -> rt::Result<bool> {
+    while (ins.next_stamp_ns() <= stamp_ns) {
+      if (auto w = ins_out.write(ins.next()); !w) return w;
+      ++ins_messages;
+    }
+    return true;
+  };
   std::array<std::uint8_t, velodyne::kPacketSize> bytes{};
   for (std::uint32_t k = 0; k < n; ++k) {
     std::int64_t first_ns = 0;
     (*run)->packet(k, bytes, first_ns, on_scan);
+    if (auto w = write_ins_until(first_ns + span_ns); !w) return fail(w.error().message);
     trailer->write(bytes.data() + velodyne::kPacketSize - 6, first_ns);
     io::Datagram d;
     d.payload = bytes;
@@ -97,6 +237,7 @@ int run_sim(const SimOptions& o) {
     progress.update(k);
   }
   (void)(*run)->finish(on_scan);
+  if (auto w = write_ins_until(rc.start_ns + std::llround(rc.duration_s * 1e9)); !w) return fail(w.error().message);
   progress.finish();
   if (auto c = pcap->close(); !c) return fail(c.error().message);
   truth.close();
@@ -108,6 +249,10 @@ int run_sim(const SimOptions& o) {
                o.scenario.c_str(), static_cast<unsigned long long>(o.seed), o.duration_s, n,
                static_cast<unsigned long long>(scans), static_cast<unsigned long long>(points),
                o.out.c_str(), o.truth.c_str(), (*run)->world().actors().size(), o.duration_s / wall, wall);
+  std::fprintf(stderr, "  INS: %llu Applanix messages (Group 1 at 200 Hz, Groups 2 and 3 at 1 Hz), GPS week %u, %s port %u\n",
+               static_cast<unsigned long long>(ins_messages), ins.gps_week(), o.ins_udp ? "UDP" : "TCP",
+               static_cast<unsigned>(InsPcapStream::kPort));
+  if (can_log) return write_can_log(*can_log, o.can, rc);
   return 0;
 }
 
@@ -120,7 +265,10 @@ void add_sim_command(CLI::App& app) {
       "Simulate a drive: a virtual HDL-64E (each laser cast at its firing time with the angles and\n"
       "offsets of a real calibration) in a street scene, written as the sensor's UDP packets in a\n"
       "pcap, with the ground truth of every scan as JSON lines (ego pose; per object id, class,\n"
-      "box, velocity and points hit). Same scenario and seed give byte-identical files.");
+      "box, velocity and points hit). The same pcap carries the Applanix POS LV Real-Time Data\n"
+      "stream of the ego trajectory (port 5602, TCP: Group 1 at 200 Hz, Groups 2 and 3 at 1 Hz,\n"
+      "GPS time); --can writes the vehicle's speed and yaw rate as CAN frames (candump log).\n"
+      "Same scenario and seed give byte-identical files.");
   std::string names;
   for (const auto& n : sim::scenario_names()) names += (names.empty() ? "" : ", ") + n;
   cmd->add_option("--scenario", o->scenario, "one of: " + names)
@@ -133,6 +281,12 @@ void add_sim_command(CLI::App& app) {
   cmd->add_option("--calib", o->calib, "calibration of the virtual unit (default: the config's)");
   cmd->add_option("--config", o->config, "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
   cmd->add_flag("--dual-return", o->dual_return, "an S3 in dual-return mode (strongest and last)");
+  cmd->add_option("--origin", o->origin,
+                  "geodetic anchor of the sim world LAT,LON,ALT (deg, deg, m ellipsoidal; default "
+                  "44.2449408681,-76.5096210157,77)");
+  cmd->add_flag("--ins-udp", o->ins_udp, "send the Applanix stream as UDP datagrams to port 5602 (default: TCP)");
+  cmd->add_option("--can", o->can, "also write the vehicle's speed and yaw-rate CAN frames to this candump log "
+                                   "(DBC signal map of the config's can: section)");
   cmd->callback([o] {
     if (const int code = run_sim(*o); code != 0) throw CLI::RuntimeError(code);
   });
