@@ -111,7 +111,7 @@ struct CanLog {
 };
 
 rt::Result<CanLog> open_can_log(const SimOptions& o, const sim::SimRun& run, const sim::RunConfig& rc) {
-  const auto config = can::load_can_config(config_path(o.config));
+  const auto config = load_can_settings(config_path(o.config));
   if (!config) return rt::Unexpected<rt::Error>{config.error()};
   const auto db = can::load_dbc(config->dbc);
   if (!db) return rt::Unexpected<rt::Error>{db.error()};
