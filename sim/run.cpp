@@ -10,14 +10,19 @@ int forward(int from, int to) { return (to - from + 36000) % 36000; }
 
 }  // namespace
 
-std::string to_json(const TruthScan& s) {
+std::string to_json(const TruthScan& s, const double* origin) {
   std::string out;
   char buf[512];
+  if (origin != nullptr) {
+    std::snprintf(buf, sizeof(buf), "{\"origin\":[%.10f,%.10f,%.4f],", origin[0], origin[1], origin[2]);
+    out += buf;
+  }
   std::snprintf(buf, sizeof(buf),
-                "{\"scan\":%llu,\"time\":%lld.%09lld,\"end_time\":%lld.%09lld,\"points\":%u,"
+                "%s\"scan\":%llu,\"time\":%lld.%09lld,\"end_time\":%lld.%09lld,\"points\":%u,"
                 "\"ground_points\":%u,\"ego\":{\"x\":%.4f,\"y\":%.4f,\"z\":%.4f,\"roll\":%.6f,"
                 "\"pitch\":%.6f,\"yaw\":%.6f,\"speed\":%.4f,\"yaw_rate\":%.6f},\"objects\":[",
-                static_cast<unsigned long long>(s.scan), static_cast<long long>(s.start_ns / 1'000'000'000),
+                origin != nullptr ? "" : "{", static_cast<unsigned long long>(s.scan),
+                static_cast<long long>(s.start_ns / 1'000'000'000),
                 static_cast<long long>(s.start_ns % 1'000'000'000), static_cast<long long>(s.end_ns / 1'000'000'000),
                 static_cast<long long>(s.end_ns % 1'000'000'000), s.points, s.ground_points, s.ego.x, s.ego.y,
                 s.ego.z, s.ego.roll, s.ego.pitch, s.ego.yaw, s.ego.speed, s.ego.yaw_rate);

@@ -41,8 +41,9 @@ struct TruthScan {
   std::uint32_t points = 0, ground_points = 0;
 };
 
-// One JSON line.
-std::string to_json(const TruthScan& scan);
+// One JSON line. With `origin` (the world's geodetic anchor: lat, lon in deg, alt in m), the line
+// says it, so the world frame of the truth can be rebuilt from the INS stream.
+std::string to_json(const TruthScan& scan, const double* origin_lat_lon_alt = nullptr);
 
 class SimRun {
  public:

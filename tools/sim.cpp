@@ -202,8 +202,9 @@ int run_sim(const SimOptions& o) {
   const velodyne::PacketDecoder timing(*calibration, velodyne::DecoderConfig{.model = rc.lidar.model});
   const std::int64_t span_ns = timing.packet_span_ns(o.dual_return);
   std::uint64_t scans = 0, points = 0;
+  const double origin_lat_lon_alt[3] = {ic.origin.lat_deg, ic.origin.lon_deg, ic.origin.alt_m};
   auto on_scan = [&](const sim::TruthScan& s) {
-    truth << sim::to_json(s) << '\n';
+    truth << sim::to_json(s, origin_lat_lon_alt) << '\n';
     ++scans;
     points += s.points;
   };

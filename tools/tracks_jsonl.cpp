@@ -227,6 +227,13 @@ rt::Result<TracksScan> parse_tracks_line(std::string_view line) {
 
 rt::Result<TruthScanRecord> parse_truth_line(std::string_view line) {
   return parse<TruthScanRecord>(line, [](const json& j, TruthScanRecord& s) {
+    if (const auto o = j.find("origin"); o != j.end()) {
+      if (!o->is_array() || o->size() != 3 || !(*o)[0].is_number() || !(*o)[1].is_number() ||
+          !(*o)[2].is_number()) {
+        throw FieldError{"'origin' must be [lat, lon, alt]"};
+      }
+      s.origin = std::array<double, 3>{(*o)[0].get<double>(), (*o)[1].get<double>(), (*o)[2].get<double>()};
+    }
     s.scan = integer<std::uint64_t>(j, "scan");
     s.stamp_ns = stamp(j);
     s.ego = ego(j);

@@ -3,7 +3,9 @@
 // seconds printed with 9 decimals (parsed back to ns within about 0.3 us: a double).
 #pragma once
 
+#include <array>
 #include <cstdint>
+#include <optional>
 #include <filesystem>
 #include <functional>
 #include <string>
@@ -56,6 +58,7 @@ struct TruthObjectRecord {
 };
 
 struct TruthScanRecord {
+  std::optional<std::array<double, 3>> origin;  // the world's geodetic anchor (lat, lon, alt)
   std::uint64_t scan = 0;
   std::int64_t stamp_ns = 0;
   EgoRecord ego;
