@@ -13,6 +13,7 @@ void add_demo_command(CLI::App& app);
 void add_sim_command(CLI::App& app);
 void add_status_command(CLI::App& app);
 void add_candump_command(CLI::App& app);
+void add_segment_command(CLI::App& app);
 // `stac decode applanix`, a subcommand of `decode`; returns it so decode can tell it was used.
 CLI::App* add_decode_applanix_command(CLI::App& decode);
 

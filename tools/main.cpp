@@ -31,6 +31,7 @@ int main(int argc, char** argv) {
       "  stac sim --scenario urban --seed 7 --duration 30 --out run.pcap --truth run.truth.jsonl\n"
       "  stac status --in run.pcap --calib-out unit.yaml   # the calibration the sensor sends\n"
       "  stac candump --in drive.log --out odometry.csv  # vehicle speed and yaw rate from CAN\n"
+      "  stac segment --in scan.bin --out segments.csv --png bev.png  # obstacles of one scan\n"
       "Run 'stac <command> --help' for the options of each command.");
   stac::tools::add_decode_command(app);
   stac::tools::add_record_command(app);
@@ -38,6 +39,7 @@ int main(int argc, char** argv) {
   stac::tools::add_sim_command(app);
   stac::tools::add_status_command(app);
   stac::tools::add_candump_command(app);
+  stac::tools::add_segment_command(app);
   CLI11_PARSE(app, argc, argv);
   return 0;
 }
