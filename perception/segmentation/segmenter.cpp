@@ -42,14 +42,16 @@ const char* validate(const SegmenterConfig& c) noexcept {
   return "";
 }
 
-// Dense grids carry a scan stamp so that nothing is cleared per scan; per occupied cell the data
+// The dense fine grid maps a cell to its slot (kNone when empty) and is reset cell by cell after
+// each scan; it is stored in 8 x 8 tiles so that the neighbouring returns of a ring hit the same
+// cache lines. The small coarse grid carries a scan stamp instead. Per occupied cell the data
 // sits in compact "slot" arrays in the order the cells were first hit.
 struct Segmenter::State {
   explicit State(const SegmenterConfig& c)
       : n(cells_across(c.range_m, c.cell_m)),
         m(cells_across(c.range_m, c.ground_cell_m)),
-        stamp(std::size_t{n} * n, 0),
-        slot_of(std::size_t{n} * n, 0),
+        tiles((n + 7) / 8),
+        slot_of(std::size_t{tiles} * tiles * 64, kNone),
         ground_stamp(std::size_t{m} * m, 0),
         ground_min(std::size_t{m} * m, 0.0f),
         ground_min2(std::size_t{m} * m, 0.0f),
@@ -67,8 +69,13 @@ struct Segmenter::State {
         component_cells(c.max_occupied_cells) {}
 
   std::uint32_t n, m;  // fine and coarse cells across
+  std::uint32_t tiles;  // 8 x 8 tiles across the fine grid
+
+  [[nodiscard]] std::size_t dense(std::uint32_t ix, std::uint32_t iy) const noexcept {
+    return ((std::size_t{iy >> 3} * tiles + (ix >> 3)) << 6) | ((iy & 7u) << 3) | (ix & 7u);
+  }
   std::uint32_t scan = 0;
-  std::vector<std::uint32_t> stamp, slot_of;  // fine grid
+  std::vector<std::uint32_t> slot_of;         // fine grid, tiled
   std::vector<std::uint32_t> ground_stamp;    // coarse grid
   std::vector<float> ground_min, ground_min2, ground;
   struct Neighbour {
@@ -79,7 +86,8 @@ struct Segmenter::State {
   rt::FixedVector<std::uint32_t> ground_cells;  // coarse cells hit this scan
   rt::FixedVector<std::uint32_t> point_slot;    // per point: its slot, or kNone
   // Per slot (occupied fine cell).
-  rt::FixedVector<std::uint32_t> cell_id, coarse_id;
+  rt::FixedVector<std::uint32_t> cell_id;    // iy << 16 | ix
+  rt::FixedVector<std::uint32_t> coarse_id;
   rt::FixedVector<float> z_min, band_max;
   rt::FixedVector<std::uint32_t> obstacle_count, label, offset;
   // Flood fill.
@@ -119,7 +127,6 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
   k.points_in = points.count;
 
   if (++s.scan == 0) {  // stamp wrap-around: once every 2^32 scans
-    std::fill(s.stamp.begin(), s.stamp.end(), 0u);
     std::fill(s.ground_stamp.begin(), s.ground_stamp.end(), 0u);
     s.scan = 1;
   }
@@ -136,66 +143,67 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
   std::size_t slots = 0;
   const std::size_t max_slots = s.cell_id.capacity();
 
-  // 1. Bin the points: per fine cell the lowest point, per coarse cell the lowest point.
+  // 1. Bin the points: per fine cell its lowest point.
+  constexpr float kMaxAbsZ = 1e4f;  // also rejects NaN and infinities
   for (std::size_t i = 0; i < count; ++i) {
     float x, y, z;
     points.read(i, x, y, z);
     s.point_slot[i] = kNone;
-    if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) {
-      ++k.ignored_invalid;
-      continue;
-    }
-    if (!(std::fabs(x) < range && std::fabs(y) < range) || x * x + y * y < min_range2) {
-      ++k.ignored_out_of_range;
+    if (!(std::fabs(x) < range && std::fabs(y) < range && std::fabs(z) < kMaxAbsZ) ||
+        x * x + y * y < min_range2) {
+      if (std::isfinite(x) && std::isfinite(y) && std::isfinite(z)) {
+        ++k.ignored_out_of_range;
+      } else {
+        ++k.ignored_invalid;
+      }
       continue;
     }
     const auto ix = std::min(static_cast<std::uint32_t>((x + range) * inv_cell), s.n - 1);
     const auto iy = std::min(static_cast<std::uint32_t>((y + range) * inv_cell), s.n - 1);
-    const std::size_t id = std::size_t{iy} * s.n + ix;
-    std::uint32_t slot;
-    if (s.stamp[id] == scan) {
-      slot = s.slot_of[id];
-      s.z_min[slot] = std::min(s.z_min[slot], z);
+    std::uint32_t& cell = s.slot_of[s.dense(ix, iy)];
+    if (cell != kNone) {
+      s.z_min[cell] = std::min(s.z_min[cell], z);
     } else {
       if (slots == max_slots) {
         ++k.dropped_cell_overflow;
         continue;
       }
-      slot = static_cast<std::uint32_t>(slots++);
-      s.stamp[id] = scan;
-      s.slot_of[id] = slot;
-      s.cell_id[slot] = static_cast<std::uint32_t>(id);
+      cell = static_cast<std::uint32_t>(slots++);
+      s.cell_id[cell] = iy << 16 | ix;
       const auto gx = std::min(static_cast<std::uint32_t>((x + range) * inv_ground_cell), s.m - 1);
       const auto gy = std::min(static_cast<std::uint32_t>((y + range) * inv_ground_cell), s.m - 1);
-      const std::uint32_t g = gy * s.m + gx;
-      s.coarse_id[slot] = g;
-      s.z_min[slot] = z;
-      s.band_max[slot] = -std::numeric_limits<float>::infinity();
-      s.obstacle_count[slot] = 0;
-      if (s.ground_stamp[g] != scan) {
-        s.ground_stamp[g] = scan;
-        s.ground_min[g] = std::numeric_limits<float>::infinity();
-        s.ground_min2[g] = std::numeric_limits<float>::infinity();
-        (void)s.ground_cells.push_back(g);  // capacity m*m: never full
-      }
+      s.coarse_id[cell] = gy * s.m + gx;
+      s.z_min[cell] = z;
     }
+    s.point_slot[i] = cell;
+  }
+  (void)s.cell_id.resize(slots);
+  k.occupied_cells = slots;
+
+  // 2. Local ground: per coarse cell the second lowest of its fine cells' lowest points (a stray
+  // return below the road counts once; the lowest when alone); then the
+  // lowest over the cells within ground_radius_m of their value + max_slope x distance. A curb,
+  // or a cell where a car hides the road, thus gets the ground of the road around it.
+  const float inf = std::numeric_limits<float>::infinity();
+  for (std::size_t slot = 0; slot < slots; ++slot) {
+    s.band_max[slot] = -inf;
+    s.obstacle_count[slot] = 0;
     const std::uint32_t g = s.coarse_id[slot];
-    if (z < s.ground_min[g]) {
+    const float z = s.z_min[slot];
+    if (s.ground_stamp[g] != scan) {
+      s.ground_stamp[g] = scan;
+      s.ground_min[g] = z;
+      s.ground_min2[g] = inf;
+      (void)s.ground_cells.push_back(g);  // capacity m*m: never full
+    } else if (z < s.ground_min[g]) {
       s.ground_min2[g] = s.ground_min[g];
       s.ground_min[g] = z;
     } else if (z < s.ground_min2[g]) {
       s.ground_min2[g] = z;
     }
-    s.point_slot[i] = slot;
   }
-  (void)s.cell_id.resize(slots);
-  k.occupied_cells = slots;
-
-  // 2. Local ground: per coarse cell its second lowest point (its lowest when alone); then the
-  // lowest over the cells within ground_radius_m of their value + max_slope x distance. A curb,
-  // or a cell where a car hides the road, thus gets the ground of the road around it.
   for (const std::uint32_t g : s.ground_cells) {
-    if (std::isfinite(s.ground_min2[g])) s.ground_min[g] = s.ground_min2[g];
+    if (s.ground_min2[g] != inf) s.ground_min[g] = s.ground_min2[g];
   }
   const int m = static_cast<int>(s.m);
   for (const std::uint32_t g : s.ground_cells) {
@@ -263,15 +271,14 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
     for (std::size_t head = 0; head < s.component_cells.size(); ++head) {
       const std::uint32_t slot = s.component_cells[head];
       const std::uint32_t id = s.cell_id[slot];
-      const std::uint32_t cx = id % n, cy = id / n;
+      const std::uint32_t cx = id & 0xFFFFu, cy = id >> 16;
       x0 = std::min(x0, cx), x1 = std::max(x1, cx), y0 = std::min(y0, cy), y1 = std::max(y1, cy);
       pts += s.obstacle_count[slot];
       const bool spreads_weak = s.depth[slot] < c.weak_join_cells;
       for (std::uint32_t yy = cy == 0 ? 0 : cy - 1; yy <= std::min(cy + 1, n - 1); ++yy) {
         for (std::uint32_t xx = cx == 0 ? 0 : cx - 1; xx <= std::min(cx + 1, n - 1); ++xx) {
-          const std::size_t j = std::size_t{yy} * n + xx;
-          if (s.stamp[j] != scan) continue;
-          const std::uint32_t other = s.slot_of[j];
+          const std::uint32_t other = s.slot_of[s.dense(xx, yy)];
+          if (other == kNone) continue;
           if (s.label[other] == kUnvisited) {
             s.depth[other] = 0;
           } else if (s.label[other] == kWeak && spreads_weak) {
@@ -320,6 +327,8 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
       k.obstacle_points += s.obstacle_count[slot];
     }
   }
+
+  for (const std::uint32_t id : s.cell_id) s.slot_of[s.dense(id & 0xFFFFu, id >> 16)] = kNone;  // empty again
 
   // 6. Scatter the point indices of kept segments, contiguous per segment.
   (void)out.point_indices.resize(cursor);
