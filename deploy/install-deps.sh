@@ -9,6 +9,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libusb-1.0-0-dev  # gs_usb / candleLight USB-CAN adapters (drivers/can)
   libopencv-dev  # pictures (bird's-eye views, plots) in tools/, never in the per-scan loop
+  libpcl-dev  # benchmarks only: PCL Euclidean clustering as the baseline of perception/segmentation
 )
 
 missing=()

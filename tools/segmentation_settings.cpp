@@ -46,12 +46,13 @@ rt::Result<segmentation::SegmenterConfig> load_segmentation_settings(const std::
   if (!node || !node.IsMap()) return rt::make_error(file + ": missing the 'segmentation:' section");
   const Section s(node, file);
   segmentation::SegmenterConfig c;
-  // Counts: integers in 1..limit.
-  auto count = [&](const char* key, std::uint64_t limit, auto& dst) -> rt::Result<bool> {
+  // Counts: integers in lowest..limit.
+  auto count = [&](const char* key, std::uint64_t limit, auto& dst, std::int64_t lowest = 1) -> rt::Result<bool> {
     std::int64_t v = 0;
     if (auto r = s.get(key, v); !r) return r;
-    if (v < 1 || static_cast<std::uint64_t>(v) > limit) {
-      return rt::make_error(file + ": 'segmentation." + key + "' must be in 1.." + std::to_string(limit));
+    if (v < lowest || static_cast<std::uint64_t>(v) > limit) {
+      return rt::make_error(file + ": 'segmentation." + key + "' must be in " + std::to_string(lowest) + ".." +
+                            std::to_string(limit));
     }
     dst = static_cast<std::remove_reference_t<decltype(dst)>>(v);
     return true;
@@ -64,7 +65,7 @@ rt::Result<segmentation::SegmenterConfig> load_segmentation_settings(const std::
                         s.get("ground_clearance_m", c.ground_clearance_m),
                         s.get("obstacle_height_m", c.obstacle_height_m),
                         s.get("obstacle_spread_m", c.obstacle_spread_m), s.get("max_height_m", c.max_height_m),
-                        count("weak_join_cells", 10, c.weak_join_cells),
+                        count("weak_join_cells", 10, c.weak_join_cells, 0),
                         count("min_segment_points", kMaxCount, c.min_segment_points),
                         count("max_segment_points", kMaxCount, c.max_segment_points),
                         s.get("max_segment_extent_m", c.max_segment_extent_m),
