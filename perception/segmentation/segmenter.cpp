@@ -44,7 +44,7 @@ const char* validate(const SegmenterConfig& c) noexcept {
 
 // The dense fine grid maps a cell to its slot (kNone when empty) and is reset cell by cell after
 // each scan; it is stored in 8 x 8 tiles so that the neighbouring returns of a ring hit the same
-// cache lines. The small coarse grid carries a scan stamp instead. Per occupied cell the data
+// cache lines. The coarse ground grid is reset the same way. Per occupied cell the data
 // sits in compact "slot" arrays in the order the cells were first hit.
 struct Segmenter::State {
   explicit State(const SegmenterConfig& c)
@@ -52,11 +52,12 @@ struct Segmenter::State {
         m(cells_across(c.range_m, c.ground_cell_m)),
         tiles((n + 7) / 8),
         slot_of(std::size_t{tiles} * tiles * 64, kNone),
-        ground_stamp(std::size_t{m} * m, 0),
-        ground_min(std::size_t{m} * m, 0.0f),
-        ground_min2(std::size_t{m} * m, 0.0f),
-        ground(std::size_t{m} * m, 0.0f),
-        ground_cells(std::size_t{m} * m),
+        pad(static_cast<std::uint32_t>(std::ceil(c.ground_radius_m / c.ground_cell_m))),
+        mp(m + 2 * pad),
+        ground_min(std::size_t{mp} * mp, std::numeric_limits<float>::infinity()),
+        ground_min2(std::size_t{mp} * mp, 0.0f),
+        ground(std::size_t{mp} * mp, 0.0f),
+        ground_cells(std::size_t{mp} * mp),
         point_slot(c.max_points),
         cell_id(c.max_occupied_cells),
         coarse_id(c.max_occupied_cells),
@@ -74,13 +75,14 @@ struct Segmenter::State {
   [[nodiscard]] std::size_t dense(std::uint32_t ix, std::uint32_t iy) const noexcept {
     return ((std::size_t{iy >> 3} * tiles + (ix >> 3)) << 6) | ((iy & 7u) << 3) | (ix & 7u);
   }
-  std::uint32_t scan = 0;
   std::vector<std::uint32_t> slot_of;         // fine grid, tiled
-  std::vector<std::uint32_t> ground_stamp;    // coarse grid
+  // Coarse grid with a border of `pad` cells (the ground window never leaves it); index
+  // (gy + pad) * mp + gx + pad. ground_min is +inf where empty, reset cell by cell after use.
+  std::uint32_t pad, mp;
   std::vector<float> ground_min, ground_min2, ground;
   struct Neighbour {
-    int dx, dy;
-    float rise;  // max_slope x distance (m)
+    std::ptrdiff_t offset;  // in the padded coarse grid
+    float rise;             // max_slope x distance (m)
   };
   std::vector<Neighbour> window;  // the coarse cells within ground_radius_m
   rt::FixedVector<std::uint32_t> ground_cells;  // coarse cells hit this scan
@@ -105,7 +107,8 @@ Segmenter::Segmenter(const SegmenterConfig& config) : config_(config) {
     for (int dx = -r; dx <= r; ++dx) {
       const double d = std::hypot(dx, dy) * config.ground_cell_m;
       if (d <= config.ground_radius_m + 1e-9) {
-        state_->window.push_back({dx, dy, static_cast<float>(d * config.ground_max_slope)});
+        state_->window.push_back({static_cast<std::ptrdiff_t>(dy) * state_->mp + dx,
+                                  static_cast<float>(d * config.ground_max_slope)});
       }
     }
   }
@@ -126,11 +129,6 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
   SegmentCounters& k = out.counters;
   k.points_in = points.count;
 
-  if (++s.scan == 0) {  // stamp wrap-around: once every 2^32 scans
-    std::fill(s.ground_stamp.begin(), s.ground_stamp.end(), 0u);
-    s.scan = 1;
-  }
-  const std::uint32_t scan = s.scan;
   const float range = static_cast<float>(c.range_m);
   const float min_range2 = static_cast<float>(c.min_range_m * c.min_range_m);
   const float inv_cell = static_cast<float>(1.0 / c.cell_m);
@@ -172,7 +170,7 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
       s.cell_id[cell] = iy << 16 | ix;
       const auto gx = std::min(static_cast<std::uint32_t>((x + range) * inv_ground_cell), s.m - 1);
       const auto gy = std::min(static_cast<std::uint32_t>((y + range) * inv_ground_cell), s.m - 1);
-      s.coarse_id[cell] = gy * s.m + gx;
+      s.coarse_id[cell] = (gy + s.pad) * s.mp + gx + s.pad;
       s.z_min[cell] = z;
     }
     s.point_slot[i] = cell;
@@ -190,8 +188,7 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
     s.obstacle_count[slot] = 0;
     const std::uint32_t g = s.coarse_id[slot];
     const float z = s.z_min[slot];
-    if (s.ground_stamp[g] != scan) {
-      s.ground_stamp[g] = scan;
+    if (s.ground_min[g] == inf) {
       s.ground_min[g] = z;
       s.ground_min2[g] = inf;
       (void)s.ground_cells.push_back(g);  // capacity m*m: never full
@@ -205,18 +202,12 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
   for (const std::uint32_t g : s.ground_cells) {
     if (s.ground_min2[g] != inf) s.ground_min[g] = s.ground_min2[g];
   }
-  const int m = static_cast<int>(s.m);
   for (const std::uint32_t g : s.ground_cells) {
-    const int gx = static_cast<int>(g % s.m), gy = static_cast<int>(g / s.m);
     float low = s.ground_min[g];
-    for (const State::Neighbour& w : s.window) {
-      const int xx = gx + w.dx, yy = gy + w.dy;
-      if (xx < 0 || yy < 0 || xx >= m || yy >= m) continue;
-      const std::size_t j = static_cast<std::size_t>(yy) * s.m + static_cast<std::size_t>(xx);
-      if (s.ground_stamp[j] == scan) low = std::min(low, s.ground_min[j] + w.rise);
-    }
+    for (const State::Neighbour& w : s.window) low = std::min(low, s.ground_min[g + w.offset] + w.rise);
     s.ground[g] = low;
   }
+  for (const std::uint32_t g : s.ground_cells) s.ground_min[g] = inf;  // empty again
 
   // 3. Points against their local ground: ground, above, or obstacle candidates per cell.
   const float clearance = static_cast<float>(c.ground_clearance_m);
@@ -340,23 +331,23 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
 
   // 7. Per segment: centroid, height span, oriented box from the XY principal axis.
   for (Segment& seg : out.segments) {
-    double sx = 0, sy = 0, sz = 0;
-    float zlo = std::numeric_limits<float>::infinity(), zhi = -zlo;
+    // Sums relative to the first point keep the second moments well conditioned.
+    float x0, y0, z0;
+    points.read(out.point_indices[seg.first], x0, y0, z0);
+    double sx = 0, sy = 0, sz = 0, sxx = 0, sxy = 0, syy = 0;
+    float zlo = z0, zhi = z0;
     for (const std::uint32_t i : out.indices(seg)) {
       float x, y, z;
       points.read(i, x, y, z);
-      sx += x, sy += y, sz += z;
+      const double dx = x - x0, dy = y - y0;
+      sx += dx, sy += dy, sz += z;
+      sxx += dx * dx, sxy += dx * dy, syy += dy * dy;
       zlo = std::min(zlo, z), zhi = std::max(zhi, z);
     }
     const double inv = 1.0 / seg.count;
-    const double mx = sx * inv, my = sy * inv;
-    double cxx = 0, cxy = 0, cyy = 0;
-    for (const std::uint32_t i : out.indices(seg)) {
-      float x, y, z;
-      points.read(i, x, y, z);
-      const double dx = x - mx, dy = y - my;
-      cxx += dx * dx, cxy += dx * dy, cyy += dy * dy;
-    }
+    const double mx = x0 + sx * inv, my = y0 + sy * inv;
+    const double cxx = sxx * inv - sx * sx * inv * inv, cxy = sxy * inv - sx * sy * inv * inv,
+                 cyy = syy * inv - sy * sy * inv * inv;
     const double yaw = 0.5 * std::atan2(2.0 * cxy, cxx - cyy);
     const double ca = std::cos(yaw), sa = std::sin(yaw);
     double u0 = std::numeric_limits<double>::infinity(), u1 = -u0, v0 = u0, v1 = -u0;
