@@ -253,6 +253,22 @@ TEST(Segmenter, RepeatedScansGiveIdenticalResultsWithoutAllocating) {
   EXPECT_EQ(out.segments[0].count, first_count);
 }
 
+TEST(Segmenter, EmptyScanGivesNoSegmentsAndClearsThePreviousOutput) {
+  Scene scene;
+  scene.flat_ground();
+  scene.box(8.0f, 0.0f, 2.0f, 1.0f, 1.2f);
+  Segmenter segmenter(test_config());
+  Segments out = segmenter.make_segments();
+  segmenter.segment(scene.view(), out);
+  ASSERT_EQ(out.segments.size(), 1u);
+  segmenter.segment(PointView{nullptr, 0, 16}, out);
+  EXPECT_EQ(out.segments.size(), 0u);
+  EXPECT_EQ(out.point_indices.size(), 0u);
+  EXPECT_EQ(out.counters.points_in, 0u);
+  segmenter.segment(scene.view(), out);  // the grids were left empty: same result again
+  ASSERT_EQ(out.segments.size(), 1u);
+}
+
 TEST(Segmenter, RejectsInvalidConfiguration) {
   SegmenterConfig c;
   c.cell_m = 0.0;
