@@ -122,7 +122,7 @@ int report(const SegmentOptions& o, const segmentation::SegmenterConfig& config,
   std::fprintf(stderr,
                "stac segment: %s\n"
                "  points     %llu in: ground %llu, obstacle %llu (in segments %zu), above %llu,\n"
-               "             out of range %llu, invalid %llu\n"
+               "             below ground %llu, out of range %llu, invalid %llu\n"
                "  cells      %llu occupied, %llu obstacle\n"
                "  segments   %zu of %llu clusters; dropped: too small %llu, too large %llu\n"
                "  overflow   points %llu, cells %llu, segments %llu\n"
@@ -130,6 +130,7 @@ int report(const SegmentOptions& o, const segmentation::SegmenterConfig& config,
                what.c_str(), static_cast<unsigned long long>(k.points_in),
                static_cast<unsigned long long>(k.ground_points), static_cast<unsigned long long>(k.obstacle_points),
                out.point_indices.size(), static_cast<unsigned long long>(k.ignored_above),
+               static_cast<unsigned long long>(k.ignored_below),
                static_cast<unsigned long long>(k.ignored_out_of_range),
                static_cast<unsigned long long>(k.ignored_invalid),
                static_cast<unsigned long long>(k.occupied_cells), static_cast<unsigned long long>(k.obstacle_cells),

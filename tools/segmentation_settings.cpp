@@ -59,13 +59,15 @@ rt::Result<segmentation::SegmenterConfig> load_segmentation_settings(const std::
   };
   constexpr std::uint64_t kMaxCount = 100'000'000;
   for (const auto& r : {s.get("cell_m", c.cell_m), s.get("range_m", c.range_m),
-                        s.get("min_range_m", c.min_range_m), s.get("ground_cell_m", c.ground_cell_m),
+                        s.get("min_range_m", c.min_range_m), s.get("sensor_height_m", c.sensor_height_m), s.get("below_ground_m", c.below_ground_m),
+                        s.get("below_ground_slope", c.below_ground_slope), s.get("ground_cell_m", c.ground_cell_m),
                         s.get("ground_radius_m", c.ground_radius_m),
                         s.get("ground_max_slope", c.ground_max_slope),
                         s.get("ground_clearance_m", c.ground_clearance_m),
                         s.get("obstacle_height_m", c.obstacle_height_m),
                         s.get("obstacle_spread_m", c.obstacle_spread_m), s.get("max_height_m", c.max_height_m),
                         count("weak_join_cells", 10, c.weak_join_cells, 0),
+                        s.get("bridge_m", c.bridge_m), s.get("bridge_height_m", c.bridge_height_m),
                         count("min_segment_points", kMaxCount, c.min_segment_points),
                         count("max_segment_points", kMaxCount, c.max_segment_points),
                         s.get("max_segment_extent_m", c.max_segment_extent_m),

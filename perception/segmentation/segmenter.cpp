@@ -25,6 +25,9 @@ const char* validate(const SegmenterConfig& c) noexcept {
   if (!(c.range_m > 0 && c.range_m <= 500)) return "range_m must be in (0, 500] m";
   if (!(c.min_range_m >= 0 && c.min_range_m < c.range_m)) return "min_range_m must be in [0, range_m)";
   if (cells_across(c.range_m, c.cell_m) > 20000) return "range_m / cell_m gives a grid over 20000 cells across";
+  if (!(c.sensor_height_m >= 0 && c.sensor_height_m <= 10)) return "sensor_height_m must be in [0, 10] m";
+  if (!(c.below_ground_m >= 0)) return "below_ground_m must be >= 0 m";
+  if (!(c.below_ground_slope >= 0 && c.below_ground_slope <= 1)) return "below_ground_slope must be in [0, 1] m/m";
   if (!(c.ground_cell_m >= c.cell_m && c.ground_cell_m <= 20)) return "ground_cell_m must be in [cell_m, 20] m";
   if (!(c.ground_radius_m >= 0 && c.ground_radius_m <= 20)) return "ground_radius_m must be in [0, 20] m";
   if (!(c.ground_max_slope >= 0 && c.ground_max_slope <= 1)) return "ground_max_slope must be in [0, 1] m/m";
@@ -33,6 +36,8 @@ const char* validate(const SegmenterConfig& c) noexcept {
   if (!(c.obstacle_spread_m > 0)) return "obstacle_spread_m must be > 0 m";
   if (!(c.max_height_m > c.obstacle_height_m)) return "max_height_m must be > obstacle_height_m";
   if (c.weak_join_cells > 10) return "weak_join_cells must be in 0..10";
+  if (!(c.bridge_m >= 0 && c.bridge_m <= 10)) return "bridge_m must be in [0, 10] m";
+  if (!(c.bridge_height_m >= 0)) return "bridge_height_m must be >= 0 m";
   if (c.min_segment_points < 1) return "min_segment_points must be >= 1";
   if (c.max_segment_points < c.min_segment_points) return "max_segment_points must be >= min_segment_points";
   if (!(c.max_segment_extent_m > 0)) return "max_segment_extent_m must be > 0 m";
@@ -143,6 +148,8 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
 
   // 1. Bin the points: per fine cell its lowest point.
   constexpr float kMaxAbsZ = 1e4f;  // also rejects NaN and infinities
+  const float lowest = -static_cast<float>(c.sensor_height_m + c.below_ground_m);
+  const float below_slope = static_cast<float>(c.below_ground_slope);
   for (std::size_t i = 0; i < count; ++i) {
     float x, y, z;
     points.read(i, x, y, z);
@@ -154,6 +161,10 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
       } else {
         ++k.ignored_invalid;
       }
+      continue;
+    }
+    if (z < lowest - below_slope * std::sqrt(x * x + y * y)) {
+      ++k.ignored_below;
       continue;
     }
     const auto ix = std::min(static_cast<std::uint32_t>((x + range) * inv_cell), s.n - 1);
@@ -249,6 +260,42 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
   const std::uint32_t n = s.n;
   std::uint32_t cursor = 0;
   std::uint32_t component = 0;
+  // Across unseen cells along the sensor's ray: the roof of a car beside the sensor is hit by
+  // rings far apart (1 m and more at 8 m) with nothing seen between them (the roof between
+  // rings is not sampled, the road under it is hidden). A strong cell links to the first strong
+  // cell within bridge_m outward or inward along its ray when every cell crossed is empty and
+  // their tops differ by at most bridge_height_m; the first cell where anything was seen ends
+  // the walk (a cell of the component itself walks on from there when its turn comes).
+  const int bridge_steps = static_cast<int>(c.bridge_m / c.cell_m);  // steps of one cell
+  const float bridge_height = static_cast<float>(c.bridge_height_m);
+  const float cell = static_cast<float>(c.cell_m);
+  auto bridge = [&](std::uint32_t slot, std::uint32_t cx, std::uint32_t cy, std::uint32_t comp) {
+    const float px = (static_cast<float>(cx) + 0.5f) * cell - range;
+    const float py = (static_cast<float>(cy) + 0.5f) * cell - range;
+    const float r = std::sqrt(px * px + py * py);
+    if (r < cell) return;
+    const float ux = cell * px / r, uy = cell * py / r;
+    for (const float sign : {1.0f, -1.0f}) {
+      std::uint32_t last = cy << 16 | cx;
+      for (int step = 1; step <= bridge_steps; ++step) {
+        const float qx = px + sign * static_cast<float>(step) * ux + range;
+        const float qy = py + sign * static_cast<float>(step) * uy + range;
+        if (qx < 0 || qy < 0) break;
+        const auto ix = static_cast<std::uint32_t>(qx * inv_cell), iy = static_cast<std::uint32_t>(qy * inv_cell);
+        if (ix >= n || iy >= n) break;
+        if ((iy << 16 | ix) == last) continue;
+        last = iy << 16 | ix;
+        const std::uint32_t other = s.slot_of[s.dense(ix, iy)];
+        if (other == kNone) continue;  // nothing seen here: keep walking
+        if (s.label[other] == kUnvisited && std::fabs(s.band_max[other] - s.band_max[slot]) <= bridge_height) {
+          s.label[other] = comp;
+          s.depth[other] = 0;
+          (void)s.component_cells.push_back(other);
+        }
+        break;
+      }
+    }
+  };
   for (std::size_t seed = 0; seed < slots; ++seed) {
     if (s.label[seed] != kUnvisited) continue;  // components start at strong cells only
     // Breadth first: component_cells is the queue. depth: 0 for strong cells, else the weak
@@ -281,6 +328,7 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
           (void)s.component_cells.push_back(other);
         }
       }
+      if (s.depth[slot] == 0 && bridge_steps > 0) bridge(slot, cx, cy, component);
     }
     ++component;
     ++k.clusters;

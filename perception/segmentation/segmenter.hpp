@@ -38,6 +38,10 @@ struct SegmenterConfig {
   double range_m = 80.0;         // the grid covers |x|, |y| < range_m (m); points beyond are ignored
   double min_range_m = 1.0;      // points closer than this in x,y are ignored (m): the vehicle itself
   // Ground.
+  double sensor_height_m = 1.73;   // sensor origin above the ground under the vehicle (m)
+  double below_ground_m = 0.5;     // returns lower than -(sensor_height_m + below_ground_m +
+  double below_ground_slope = 0.1; // below_ground_slope x range) are from under the road
+                                   // (reflections, multipath): ignored (m, m/m)
   double ground_cell_m = 1.05;   // coarse ground grid resolution (m): per cell its second lowest
                                  // point (one stray return below the road does not count)
   double ground_radius_m = 3.0;  // local ground = lowest over the coarse cells within this radius
@@ -48,6 +52,9 @@ struct SegmenterConfig {
   double obstacle_spread_m = 0.25;   // ...or whose points spread this much vertically (max - min z, m)
   std::uint32_t weak_join_cells = 2;  // cells with points only between the clearance and
                                       // obstacle_height_m join an obstacle this many cells deep
+  double bridge_m = 1.5;          // strong cells link along the sensor's ray across cells where
+  double bridge_height_m = 0.3;   // nothing was seen, up to this far, when their tops differ by
+                                  // at most bridge_height_m (car roofs hit by rings far apart)
   double max_height_m = 3.5;     // points higher than this above the local ground are ignored (m)
   // Segments.
   std::uint32_t min_segment_points = 8;       // fewer obstacle points: dropped (too small)

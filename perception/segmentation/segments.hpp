@@ -26,13 +26,15 @@ struct Segment {
   std::uint32_t cells = 0;        // obstacle grid cells it covers
 };
 
-// Per scan. Every input point ends in exactly one of: ignored_out_of_range, ignored_invalid,
-// ignored_over_capacity, dropped_cell_overflow, ground_points, ignored_above, obstacle_points.
+// Per scan. Every input point ends in exactly one of: ignored_invalid, ignored_out_of_range,
+// ignored_over_capacity, ignored_below, dropped_cell_overflow, ground_points, ignored_above,
+// obstacle_points.
 struct SegmentCounters {
   std::uint64_t points_in = 0;
   std::uint64_t ignored_invalid = 0;        // NaN or infinite coordinates
   std::uint64_t ignored_out_of_range = 0;   // outside [min_range_m, range_m]
   std::uint64_t ignored_over_capacity = 0;  // beyond max_points
+  std::uint64_t ignored_below = 0;          // impossibly far below the ground (reflections)
   std::uint64_t dropped_cell_overflow = 0;  // their cell could not be added (max_occupied_cells)
   std::uint64_t ground_points = 0;          // at most ground_clearance_m above ground, or in a ground cell
   std::uint64_t ignored_above = 0;          // more than max_height_m above ground

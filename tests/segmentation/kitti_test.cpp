@@ -46,7 +46,7 @@ TEST(SegmenterKitti, OdometryScansSegmentPlausiblyWithoutOverflowOrAllocation) {
     EXPECT_GT(k.points_in, 110000u);
     EXPECT_GT(k.ground_points, k.points_in / 3);  // an urban street: much of the scan is road
     EXPECT_GT(k.obstacle_points, k.points_in / 10);
-    EXPECT_EQ(k.ignored_invalid + k.ignored_out_of_range + k.ground_points + k.ignored_above +
+    EXPECT_EQ(k.ignored_invalid + k.ignored_out_of_range + k.ignored_below + k.ground_points + k.ignored_above +
                   k.obstacle_points, k.points_in);
     std::uint64_t in_segments = 0;
     for (const Segment& s : out.segments) {

@@ -31,7 +31,7 @@ Segments run(const Scene& scene, const SegmenterConfig& config = test_config()) 
 }
 
 std::uint64_t accounted(const SegmentCounters& k) {
-  return k.ignored_invalid + k.ignored_out_of_range + k.ignored_over_capacity + k.dropped_cell_overflow +
+  return k.ignored_invalid + k.ignored_out_of_range + k.ignored_over_capacity + k.ignored_below + k.dropped_cell_overflow +
          k.ground_points + k.ignored_above + k.obstacle_points;
 }
 
@@ -125,6 +125,43 @@ TEST(Segmenter, PedestrianHalfAMetreFromCarIsSeparate) {
   EXPECT_NEAR(ped.box.length, 0.5f, 0.15f);
 }
 
+// A car beside the sensor: its near side, and its roof hit by two rings 0.85 and 1.75 m behind
+// it; nothing is seen between them (the roof between rings is not sampled, the road is hidden).
+Scene car_with_roof_rings() {
+  Scene scene;
+  scene.ground(20.0f, 0.1f, [](float, float) { return 0.0f; });
+  Scene kept;
+  for (std::size_t i = 0; i < scene.size(); ++i) {
+    const float x = scene.xyzi[4 * i], y = scene.xyzi[4 * i + 1];
+    if (std::fabs(x) < 2.5f && y > 7.6f && y < 11.0f) continue;  // hidden by the car
+    kept.add(x, y, scene.xyzi[4 * i + 2]);
+  }
+  for (float x = -2.0f; x <= 2.0f; x += 0.05f) {
+    for (float z = -1.5f; z <= -0.25f; z += 0.05f) kept.add(x, 7.65f, z);
+    kept.add(x, 8.5f, -0.25f);
+    kept.add(x, 9.4f, -0.25f);
+  }
+  return kept;
+}
+
+TEST(Segmenter, CarRoofRingsAcrossUnseenCellsAreOneSegment) {
+  const Scene scene = car_with_roof_rings();
+  const Segments out = run(scene);
+  ASSERT_EQ(out.segments.size(), 1u);
+  EXPECT_NEAR(out.segments[0].box.width, 9.4f - 7.65f, 0.1f);
+  SegmenterConfig no_bridge = test_config();
+  no_bridge.bridge_m = 0.0;
+  EXPECT_EQ(run(scene, no_bridge).segments.size(), 3u);  // side and two roof lines
+}
+
+TEST(Segmenter, SeenGroundKeepsObjectsOnOneRayApart) {
+  Scene scene;
+  scene.flat_ground();
+  scene.cylinder(0.0f, 8.0f, 0.25f, 1.8f);
+  scene.cylinder(0.0f, 9.2f, 0.25f, 1.8f);  // 0.7 m behind the first, ground visible between
+  EXPECT_EQ(run(scene).segments.size(), 2u);
+}
+
 TEST(Segmenter, OrientedBoxFollowsARotatedCar) {
   Scene car;
   car.box(0.0f, 0.0f, 4.5f, 1.8f, 1.5f);
@@ -178,6 +215,21 @@ TEST(Segmenter, IgnoresPointsOutOfRangeInvalidAndOverhead) {
   EXPECT_EQ(out.counters.ignored_invalid, 1u);
   EXPECT_EQ(out.counters.ignored_above, 1u);
   EXPECT_EQ(out.segments.size(), 0u);
+  EXPECT_EQ(accounted(out.counters), scene.size());
+}
+
+TEST(Segmenter, ReturnsFromBelowTheRoadDoNotLowerTheGround) {
+  Scene scene;
+  scene.flat_ground();
+  scene.box(10.0f, 0.0f, 4.5f, 1.8f, 1.5f);
+  // Two reflections 2.7 m under the road beside the car (as in KITTI object frame 000003): taken
+  // as ground they would lift the road around them into one obstacle blob.
+  scene.add(10.0f, 1.5f, -testing::kSensorHeight - 2.7f);
+  scene.add(10.1f, 1.5f, -testing::kSensorHeight - 2.7f);
+  const Segments out = run(scene);
+  EXPECT_EQ(out.counters.ignored_below, 2u);
+  ASSERT_EQ(out.segments.size(), 1u);
+  EXPECT_NEAR(out.segments[0].box.length, 4.5f, 0.2f);
   EXPECT_EQ(accounted(out.counters), scene.size());
 }
 
