@@ -55,7 +55,7 @@ struct SegmenterConfig {
   double bridge_m = 1.5;          // strong cells link along the sensor's ray across cells where
   double bridge_height_m = 0.3;   // nothing was seen, up to this far, when their tops differ by
                                   // at most bridge_height_m (car roofs hit by rings far apart)
-  double max_height_m = 3.5;     // points higher than this above the local ground are ignored (m)
+  double max_height_m = 2.5;     // points higher than this above the local ground are ignored (m)
   // Segments.
   std::uint32_t min_segment_points = 8;       // fewer obstacle points: dropped (too small)
   std::uint32_t max_segment_points = 30000;   // more: dropped (too large)

@@ -162,6 +162,23 @@ TEST(Segmenter, SeenGroundKeepsObjectsOnOneRayApart) {
   EXPECT_EQ(run(scene).segments.size(), 2u);
 }
 
+TEST(Segmenter, PedestrianUnderATreeCanopyIsNotJoinedToTheTree) {
+  Scene scene;
+  scene.flat_ground();
+  scene.cylinder(10.0f, 0.0f, 0.2f, 2.8f);  // trunk
+  for (float x = 7.5f; x <= 12.5f; x += 0.1f) {  // canopy 2.8..3.4 m above the ground
+    for (float y = -2.5f; y <= 2.5f; y += 0.1f) {
+      if (std::hypot(x - 10.0f, y) > 2.5f) continue;
+      for (float z = 2.8f; z <= 3.4f; z += 0.3f) scene.add(x, y, -testing::kSensorHeight + z);
+    }
+  }
+  scene.cylinder(10.0f, 1.5f, 0.25f, 1.8f);  // pedestrian under it
+  const Segments out = run(scene);
+  ASSERT_EQ(out.segments.size(), 2u);  // the trunk and the pedestrian
+  EXPECT_GT(out.counters.ignored_above, 0u);
+  for (const Segment& seg : out.segments) EXPECT_LT(seg.box.length, 0.7f);
+}
+
 TEST(Segmenter, OrientedBoxFollowsARotatedCar) {
   Scene car;
   car.box(0.0f, 0.0f, 4.5f, 1.8f, 1.5f);
