@@ -4,16 +4,14 @@
 // wraps) on the SAME obstacle points STAC found, raw or after a 0.1 / 0.2 m voxel grid. Each
 // iteration segments one scan (round robin); per-iteration times give the median, p99 and max.
 #include <benchmark/benchmark.h>
-
 #include <pcl/filters/voxel_grid.h>
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 #include <pcl/search/kdtree.h>
 #include <pcl/segmentation/extract_clusters.h>
-
-#include <algorithm>
 #include <time.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -32,15 +30,18 @@ const std::vector<std::vector<float>>& scans() {
   static const std::vector<std::vector<float>> all = [] {
     std::vector<std::vector<float>> out;
     for (int i = 0; i < 6; ++i) {
-      const auto path = std::filesystem::path(STAC_SHARED_DATA_DIR) / ("kitti/00000" + std::to_string(i) + ".bin");
+      const auto path = std::filesystem::path(STAC_SHARED_DATA_DIR) /
+                        ("kitti/00000" + std::to_string(i) + ".bin");
       std::ifstream f(path, std::ios::binary | std::ios::ate);
       if (!f) {
-        std::fprintf(stderr, "segmentation_bench: %s is absent (shared/data beside the checkout)\n", path.c_str());
+        std::fprintf(stderr, "segmentation_bench: %s is absent (shared/data beside the checkout)\n",
+                     path.c_str());
         std::exit(1);
       }
       std::vector<float> v(static_cast<std::size_t>(f.tellg()) / sizeof(float));
       f.seekg(0);
-      f.read(reinterpret_cast<char*>(v.data()), static_cast<std::streamsize>(v.size() * sizeof(float)));
+      f.read(reinterpret_cast<char*>(v.data()),
+             static_cast<std::streamsize>(v.size() * sizeof(float)));
       out.push_back(std::move(v));
     }
     return out;
@@ -48,7 +49,9 @@ const std::vector<std::vector<float>>& scans() {
   return all;
 }
 
-PointView view(const std::vector<float>& xyzi) { return {xyzi.data(), xyzi.size() / 4, 16}; }
+PointView view(const std::vector<float>& xyzi) {
+  return {xyzi.data(), xyzi.size() / 4, 16};
+}
 
 // The obstacle points of each scan as STAC classifies them (every obstacle cluster kept).
 const std::vector<pcl::PointCloud<pcl::PointXYZ>::Ptr>& obstacle_clouds() {
@@ -94,7 +97,8 @@ struct Times {
     cpu0 = cpu_ms();
   }
   void stop() {
-    wall.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    wall.push_back(
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
     cpu.push_back(cpu_ms() - cpu0);
   }
 };
@@ -168,9 +172,21 @@ void BM_PclEuclideanClusters(benchmark::State& state) {
   const auto n = static_cast<double>(t.wall.size());
   report(state, t, points / n, segments / n);
 }
-BENCHMARK(BM_PclEuclideanClusters)->Arg(0)->Iterations(12)->ArgName("voxel_cm")->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_PclEuclideanClusters)->Arg(10)->Iterations(30)->ArgName("voxel_cm")->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_PclEuclideanClusters)->Arg(20)->Iterations(60)->ArgName("voxel_cm")->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_PclEuclideanClusters)
+    ->Arg(0)
+    ->Iterations(12)
+    ->ArgName("voxel_cm")
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_PclEuclideanClusters)
+    ->Arg(10)
+    ->Iterations(30)
+    ->ArgName("voxel_cm")
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_PclEuclideanClusters)
+    ->Arg(20)
+    ->Iterations(60)
+    ->ArgName("voxel_cm")
+    ->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

@@ -9,6 +9,7 @@
 
 namespace stac::tools {
 
-rt::Result<segmentation::SegmenterConfig> load_segmentation_settings(const std::filesystem::path& config_file);
+rt::Result<segmentation::SegmenterConfig> load_segmentation_settings(
+    const std::filesystem::path& config_file);
 
 }  // namespace stac::tools

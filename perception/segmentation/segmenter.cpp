@@ -23,26 +23,36 @@ std::uint32_t cells_across(double range_m, double cell_m) {
 const char* validate(const SegmenterConfig& c) noexcept {
   if (!(c.cell_m >= 0.02 && c.cell_m <= 5.0)) return "cell_m must be in [0.02, 5] m";
   if (!(c.range_m > 0 && c.range_m <= 500)) return "range_m must be in (0, 500] m";
-  if (!(c.min_range_m >= 0 && c.min_range_m < c.range_m)) return "min_range_m must be in [0, range_m)";
-  if (cells_across(c.range_m, c.cell_m) > 20000) return "range_m / cell_m gives a grid over 20000 cells across";
-  if (!(c.sensor_height_m >= 0 && c.sensor_height_m <= 10)) return "sensor_height_m must be in [0, 10] m";
+  if (!(c.min_range_m >= 0 && c.min_range_m < c.range_m))
+    return "min_range_m must be in [0, range_m)";
+  if (cells_across(c.range_m, c.cell_m) > 20000)
+    return "range_m / cell_m gives a grid over 20000 cells across";
+  if (!(c.sensor_height_m >= 0 && c.sensor_height_m <= 10))
+    return "sensor_height_m must be in [0, 10] m";
   if (!(c.below_ground_m >= 0)) return "below_ground_m must be >= 0 m";
-  if (!(c.below_ground_slope >= 0 && c.below_ground_slope <= 1)) return "below_ground_slope must be in [0, 1] m/m";
-  if (!(c.ground_cell_m >= c.cell_m && c.ground_cell_m <= 20)) return "ground_cell_m must be in [cell_m, 20] m";
-  if (!(c.ground_radius_m >= 0 && c.ground_radius_m <= 20)) return "ground_radius_m must be in [0, 20] m";
-  if (!(c.ground_max_slope >= 0 && c.ground_max_slope <= 1)) return "ground_max_slope must be in [0, 1] m/m";
+  if (!(c.below_ground_slope >= 0 && c.below_ground_slope <= 1))
+    return "below_ground_slope must be in [0, 1] m/m";
+  if (!(c.ground_cell_m >= c.cell_m && c.ground_cell_m <= 20))
+    return "ground_cell_m must be in [cell_m, 20] m";
+  if (!(c.ground_radius_m >= 0 && c.ground_radius_m <= 20))
+    return "ground_radius_m must be in [0, 20] m";
+  if (!(c.ground_max_slope >= 0 && c.ground_max_slope <= 1))
+    return "ground_max_slope must be in [0, 1] m/m";
   if (!(c.ground_clearance_m >= 0)) return "ground_clearance_m must be >= 0 m";
-  if (!(c.obstacle_height_m > c.ground_clearance_m)) return "obstacle_height_m must be > ground_clearance_m";
+  if (!(c.obstacle_height_m > c.ground_clearance_m))
+    return "obstacle_height_m must be > ground_clearance_m";
   if (!(c.obstacle_spread_m > 0)) return "obstacle_spread_m must be > 0 m";
   if (!(c.max_height_m > c.obstacle_height_m)) return "max_height_m must be > obstacle_height_m";
   if (c.weak_join_cells > 10) return "weak_join_cells must be in 0..10";
   if (!(c.bridge_m >= 0 && c.bridge_m <= 10)) return "bridge_m must be in [0, 10] m";
   if (!(c.bridge_height_m >= 0)) return "bridge_height_m must be >= 0 m";
   if (c.min_segment_points < 1) return "min_segment_points must be >= 1";
-  if (c.max_segment_points < c.min_segment_points) return "max_segment_points must be >= min_segment_points";
+  if (c.max_segment_points < c.min_segment_points)
+    return "max_segment_points must be >= min_segment_points";
   if (!(c.max_segment_extent_m > 0)) return "max_segment_extent_m must be > 0 m";
   if (c.max_points < 1 || c.max_points > kUnvisited) return "max_points must be in 1..4294967293";
-  if (c.max_occupied_cells < 1 || c.max_occupied_cells > kUnvisited) return "max_occupied_cells must be >= 1";
+  if (c.max_occupied_cells < 1 || c.max_occupied_cells > kUnvisited)
+    return "max_occupied_cells must be >= 1";
   if (c.max_segments < 1) return "max_segments must be >= 1";
   return "";
 }
@@ -74,13 +84,13 @@ struct Segmenter::State {
         depth(c.max_occupied_cells),
         component_cells(c.max_occupied_cells) {}
 
-  std::uint32_t n, m;  // fine and coarse cells across
+  std::uint32_t n, m;   // fine and coarse cells across
   std::uint32_t tiles;  // 8 x 8 tiles across the fine grid
 
   [[nodiscard]] std::size_t dense(std::uint32_t ix, std::uint32_t iy) const noexcept {
     return ((std::size_t{iy >> 3} * tiles + (ix >> 3)) << 6) | ((iy & 7u) << 3) | (ix & 7u);
   }
-  std::vector<std::uint32_t> slot_of;         // fine grid, tiled
+  std::vector<std::uint32_t> slot_of;  // fine grid, tiled
   // Coarse grid with a border of `pad` cells (the ground window never leaves it); index
   // (gy + pad) * mp + gx + pad. ground_min is +inf where empty, reset cell by cell after use.
   std::uint32_t pad, mp;
@@ -89,11 +99,11 @@ struct Segmenter::State {
     std::ptrdiff_t offset;  // in the padded coarse grid
     float rise;             // max_slope x distance (m)
   };
-  std::vector<Neighbour> window;  // the coarse cells within ground_radius_m
+  std::vector<Neighbour> window;                // the coarse cells within ground_radius_m
   rt::FixedVector<std::uint32_t> ground_cells;  // coarse cells hit this scan
   rt::FixedVector<std::uint32_t> point_slot;    // per point: its slot, or kNone
   // Per slot (occupied fine cell).
-  rt::FixedVector<std::uint32_t> cell_id;    // iy << 16 | ix
+  rt::FixedVector<std::uint32_t> cell_id;  // iy << 16 | ix
   rt::FixedVector<std::uint32_t> coarse_id;
   rt::FixedVector<float> z_min, band_max;
   rt::FixedVector<std::uint32_t> obstacle_count, label, offset;
@@ -123,7 +133,9 @@ Segmenter::Segmenter(Segmenter&&) noexcept = default;
 Segmenter& Segmenter::operator=(Segmenter&&) noexcept = default;
 Segmenter::~Segmenter() = default;
 
-Segments Segmenter::make_segments() const { return Segments(config_.max_segments, config_.max_points); }
+Segments Segmenter::make_segments() const {
+  return Segments(config_.max_segments, config_.max_points);
+}
 
 void Segmenter::segment(const PointView& points, Segments& out) noexcept {
   State& s = *state_;
@@ -215,7 +227,8 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
   }
   for (const std::uint32_t g : s.ground_cells) {
     float low = s.ground_min[g];
-    for (const State::Neighbour& w : s.window) low = std::min(low, s.ground_min[g + w.offset] + w.rise);
+    for (const State::Neighbour& w : s.window)
+      low = std::min(low, s.ground_min[g + w.offset] + w.rise);
     s.ground[g] = low;
   }
   for (const std::uint32_t g : s.ground_cells) s.ground_min[g] = inf;  // empty again
@@ -251,7 +264,8 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
     s.offset[slot] = kNone;
     if (s.obstacle_count[slot] == 0) continue;
     const float top = s.band_max[slot];
-    const bool strong = top - s.ground[s.coarse_id[slot]] > obstacle_height || top - s.z_min[slot] > obstacle_spread;
+    const bool strong = top - s.ground[s.coarse_id[slot]] > obstacle_height ||
+                        top - s.z_min[slot] > obstacle_spread;
     s.label[slot] = strong ? kUnvisited : kWeak;
   }
 
@@ -281,13 +295,15 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
         const float qx = px + sign * static_cast<float>(step) * ux + range;
         const float qy = py + sign * static_cast<float>(step) * uy + range;
         if (qx < 0 || qy < 0) break;
-        const auto ix = static_cast<std::uint32_t>(qx * inv_cell), iy = static_cast<std::uint32_t>(qy * inv_cell);
+        const auto ix = static_cast<std::uint32_t>(qx * inv_cell),
+                   iy = static_cast<std::uint32_t>(qy * inv_cell);
         if (ix >= n || iy >= n) break;
         if ((iy << 16 | ix) == last) continue;
         last = iy << 16 | ix;
         const std::uint32_t other = s.slot_of[s.dense(ix, iy)];
         if (other == kNone) continue;  // nothing seen here: keep walking
-        if (s.label[other] == kUnvisited && std::fabs(s.band_max[other] - s.band_max[slot]) <= bridge_height) {
+        if (s.label[other] == kUnvisited &&
+            std::fabs(s.band_max[other] - s.band_max[slot]) <= bridge_height) {
           s.label[other] = comp;
           s.depth[other] = 0;
           (void)s.component_cells.push_back(other);
@@ -336,7 +352,8 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
       ++k.dropped_too_small;
       continue;
     }
-    if (pts > c.max_segment_points || (x1 - x0 + 1) > max_extent_cells || (y1 - y0 + 1) > max_extent_cells) {
+    if (pts > c.max_segment_points || (x1 - x0 + 1) > max_extent_cells ||
+        (y1 - y0 + 1) > max_extent_cells) {
       ++k.dropped_too_large;
       continue;
     }
@@ -367,7 +384,8 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
     }
   }
 
-  for (const std::uint32_t id : s.cell_id) s.slot_of[s.dense(id & 0xFFFFu, id >> 16)] = kNone;  // empty again
+  for (const std::uint32_t id : s.cell_id)
+    s.slot_of[s.dense(id & 0xFFFFu, id >> 16)] = kNone;  // empty again
 
   // 6. Scatter the point indices of kept segments, contiguous per segment.
   (void)out.point_indices.resize(cursor);

@@ -1,8 +1,9 @@
 // Grid segmentation of one scan (STAC chapter 1, as on Junior): points are binned into a 2D
-// grid over x,y; a cell is an obstacle when its points rise above the local ground estimate or
-// spread vertically; 8-connected obstacle cells form segments (flood fill with a fixed queue);
-// segments too small or too large are dropped. Everything is allocated at construction;
-// segment() allocates nothing, never throws and counts every overflow per cause.
+// grid over x,y; a cell is an obstacle when its points rise above a local ground estimate or
+// spread vertically; 8-connected obstacle cells (plus links across unseen cells along the
+// sensor's rays) form segments by a flood fill with a fixed queue; segments too small or too
+// large are dropped. Everything is allocated at construction; segment() allocates nothing,
+// never throws and counts every drop and overflow per cause.
 #pragma once
 
 #include <cstddef>
@@ -32,34 +33,39 @@ struct PointView {
   }
 };
 
+// Every length in metres, slopes in m/m. Defaults = config/stac.yaml (docs/segmentation.md).
 struct SegmenterConfig {
   // Grid.
-  double cell_m = 0.15;          // obstacle grid resolution (m); Junior used 0.15
-  double range_m = 80.0;         // the grid covers |x|, |y| < range_m (m); points beyond are ignored
-  double min_range_m = 1.0;      // points closer than this in x,y are ignored (m): the vehicle itself
-  // Ground.
-  double sensor_height_m = 1.73;   // sensor origin above the ground under the vehicle (m)
-  double below_ground_m = 0.5;     // returns lower than -(sensor_height_m + below_ground_m +
-  double below_ground_slope = 0.1; // below_ground_slope x range) are from under the road
-                                   // (reflections, multipath): ignored (m, m/m)
-  double ground_cell_m = 1.05;   // coarse ground grid resolution (m): per cell its second lowest
-                                 // point (one stray return below the road does not count)
-  double ground_radius_m = 3.0;  // local ground = lowest over the coarse cells within this radius
-  double ground_max_slope = 0.05;  // ...of their ground + max_slope x distance (m/m): the ground
-                                   // of a curb or of a cell a car hides comes from the road around
-  double ground_clearance_m = 0.15;  // points at most this above the local ground are ground (m)
-  double obstacle_height_m = 0.30;   // a cell whose highest point is this far above ground is an obstacle (m)
-  double obstacle_spread_m = 0.25;   // ...or whose points spread this much vertically (max - min z, m)
-  std::uint32_t weak_join_cells = 2;  // cells with points only between the clearance and
-                                      // obstacle_height_m join an obstacle this many cells deep
-  double bridge_m = 1.5;          // strong cells link along the sensor's ray across cells where
-  double bridge_height_m = 0.3;   // nothing was seen, up to this far, when their tops differ by
-                                  // at most bridge_height_m (car roofs hit by rings far apart)
-  double max_height_m = 2.5;     // points higher than this above the local ground are ignored (m)
+  double cell_m = 0.15;      // obstacle grid resolution; Junior used 0.15
+  double range_m = 80.0;     // the grid covers |x|, |y| < range_m; points beyond are ignored
+  double min_range_m = 1.0;  // points closer than this in x,y are the vehicle itself: ignored
+  // Ground. Returns below -(sensor_height_m + below_ground_m + below_ground_slope x range)
+  // come from under the road (reflections, multipath) and are ignored.
+  double sensor_height_m = 1.73;  // sensor origin above the ground under the vehicle
+  double below_ground_m = 0.5;
+  double below_ground_slope = 0.1;
+  // Local ground: per coarse cell the second lowest of its fine cells' lowest points; then the
+  // lowest, over the coarse cells within ground_radius_m, of that + ground_max_slope x distance
+  // (a curb, or a cell a car hides, gets the ground of the road around it).
+  double ground_cell_m = 1.05;
+  double ground_radius_m = 3.0;
+  double ground_max_slope = 0.05;
+  double ground_clearance_m = 0.15;  // points at most this above the local ground are ground
+  // A cell is a strong obstacle when its top is obstacle_height_m above the ground or its points
+  // spread obstacle_spread_m vertically; with lower points above the clearance only it is weak
+  // and joins an obstacle at most weak_join_cells cells deep.
+  double obstacle_height_m = 0.30;
+  double obstacle_spread_m = 0.25;
+  std::uint32_t weak_join_cells = 2;
+  // Strong cells link along the sensor's ray across cells where nothing was seen, up to
+  // bridge_m, when their tops differ by at most bridge_height_m (car roofs hit by distant rings).
+  double bridge_m = 1.5;
+  double bridge_height_m = 0.3;
+  double max_height_m = 2.5;  // points higher above the local ground are ignored (canopies)
   // Segments.
-  std::uint32_t min_segment_points = 8;       // fewer obstacle points: dropped (too small)
-  std::uint32_t max_segment_points = 30000;   // more: dropped (too large)
-  double max_segment_extent_m = 15.0;  // a footprint side (axis-aligned cell bounds) longer: dropped (m)
+  std::uint32_t min_segment_points = 8;      // fewer obstacle points: dropped (too small)
+  std::uint32_t max_segment_points = 30000;  // more: dropped (too large)
+  double max_segment_extent_m = 15.0;        // a longer footprint side (cell bounds): dropped
   // Capacities (allocated at construction).
   std::size_t max_points = 300000;          // points per scan; beyond: counted, ignored
   std::size_t max_occupied_cells = 200000;  // occupied fine cells per scan; beyond: counted
@@ -79,8 +85,9 @@ class Segmenter {
   Segmenter& operator=(Segmenter&&) noexcept;
   ~Segmenter();
 
-  // Segments one scan into `out` (cleared first; it must come from make_segments() of this
-  // segmenter or have at least its capacities). No allocation, no exception.
+  // Segments one scan into `out` (cleared first; from make_segments(): smaller capacities only
+  // count more overflow). `points` must hold `count` readable records. No allocation, no
+  // exception, no I/O.
   void segment(const PointView& points, Segments& out) noexcept;
 
   // Output storage sized for this configuration.

@@ -18,8 +18,8 @@ struct OrientedBox {
 };
 
 struct Segment {
-  std::uint32_t first = 0;   // its point indices: Segments::point_indices[first, first + count)
-  std::uint32_t count = 0;   // obstacle points
+  std::uint32_t first = 0;  // its point indices: Segments::point_indices[first, first + count)
+  std::uint32_t count = 0;  // obstacle points
   float centroid[3] = {0, 0, 0};  // mean of its points (m)
   float z_min = 0, z_max = 0;     // height span (m, sensor frame)
   OrientedBox box;                // yaw from the principal axis of the XY footprint
@@ -36,14 +36,14 @@ struct SegmentCounters {
   std::uint64_t ignored_over_capacity = 0;  // beyond max_points
   std::uint64_t ignored_below = 0;          // impossibly far below the ground (reflections)
   std::uint64_t dropped_cell_overflow = 0;  // their cell could not be added (max_occupied_cells)
-  std::uint64_t ground_points = 0;          // at most ground_clearance_m above ground, or in a ground cell
+  std::uint64_t ground_points = 0;          // near the ground, or low bumps no obstacle reached
   std::uint64_t ignored_above = 0;          // more than max_height_m above ground
-  std::uint64_t obstacle_points = 0;        // in obstacle cells, above the clearance
+  std::uint64_t obstacle_points = 0;  // above the clearance in obstacle cells (kept or dropped)
   std::uint64_t occupied_cells = 0;
   std::uint64_t obstacle_cells = 0;
-  std::uint64_t clusters = 0;               // connected components of obstacle cells
-  std::uint64_t dropped_too_small = 0;      // clusters under min_segment_points
-  std::uint64_t dropped_too_large = 0;      // over max_segment_points or max_segment_extent_m
+  std::uint64_t clusters = 0;                  // connected components of obstacle cells
+  std::uint64_t dropped_too_small = 0;         // clusters under min_segment_points
+  std::uint64_t dropped_too_large = 0;         // over max_segment_points or max_segment_extent_m
   std::uint64_t dropped_segment_overflow = 0;  // kept clusters beyond max_segments
 };
 

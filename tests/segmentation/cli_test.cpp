@@ -32,16 +32,20 @@ long summary_number(const std::string& output, const std::string& label) {
 TEST(SegmentCli, KittiScanGivesCsvPictureAndSummary) {
   STAC_REQUIRE_SHARED_DATA("kitti/000000.bin");
   const auto dir = fresh_dir("kitti");
-  const CliResult r = stac("segment --in " + stac::testing::shared_data("kitti/000000.bin").string() +
-                           " --out " + (dir / "s.csv").string() + " --png " + (dir / "s.png").string());
+  const CliResult r =
+      stac("segment --in " + stac::testing::shared_data("kitti/000000.bin").string() + " --out " +
+           (dir / "s.csv").string() + " --png " + (dir / "s.png").string());
   ASSERT_EQ(r.code, 0) << r.output;
   const long segments = summary_number(r.output, "segments   ");
   EXPECT_GT(segments, 30) << r.output;
-  EXPECT_NE(r.output.find("overflow   points 0, cells 0, segments 0"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("overflow   points 0, cells 0, segments 0"), std::string::npos)
+      << r.output;
   std::ifstream csv(dir / "s.csv");
   std::string header, line;
   std::getline(csv, header);
-  EXPECT_EQ(header, "id,points,centroid_x,centroid_y,centroid_z,box_x,box_y,length,width,height,yaw,z_min,z_max");
+  EXPECT_EQ(
+      header,
+      "id,points,centroid_x,centroid_y,centroid_z,box_x,box_y,length,width,height,yaw,z_min,z_max");
   long rows = 0;
   while (std::getline(csv, line)) {
     ++rows;
@@ -70,7 +74,8 @@ TEST(SegmentCli, SimulatedCaptureIsDecodedAndSegmented) {
 
   const CliResult missing = stac("segment --in " + pcap + " --scan 40");
   EXPECT_EQ(missing.code, 1);
-  EXPECT_NE(missing.output.find("--scan 40 is not among them"), std::string::npos) << missing.output;
+  EXPECT_NE(missing.output.find("--scan 40 is not among them"), std::string::npos)
+      << missing.output;
 }
 
 TEST(SegmentCli, RejectsAFileThatIsNotAKittiScan) {
@@ -93,9 +98,12 @@ TEST(SegmentCli, ConfigErrorsNameTheKey) {
     const auto at = yaml.find("  ground_radius_m:");
     yaml.erase(at, yaml.find('\n', at) - at + 1);
     std::ofstream(dir / "missing.yaml") << yaml;
-    const CliResult r = stac("segment --config " + (dir / "missing.yaml").string() + " --in " + scan);
+    const CliResult r =
+        stac("segment --config " + (dir / "missing.yaml").string() + " --in " + scan);
     EXPECT_EQ(r.code, 1);
-    EXPECT_NE(r.output.find("missing required key 'segmentation.ground_radius_m'"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("missing required key 'segmentation.ground_radius_m'"),
+              std::string::npos)
+        << r.output;
   }
   {
     std::string yaml = text.str();

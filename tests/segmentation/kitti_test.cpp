@@ -3,7 +3,6 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
-
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -26,7 +25,9 @@ std::vector<float> load_bin(const std::string& relative) {
   return v;
 }
 
-PointView view(const std::vector<float>& xyzi) { return {xyzi.data(), xyzi.size() / 4, 16}; }
+PointView view(const std::vector<float>& xyzi) {
+  return {xyzi.data(), xyzi.size() / 4, 16};
+}
 
 TEST(SegmenterKitti, OdometryScansSegmentPlausiblyWithoutOverflowOrAllocation) {
   STAC_REQUIRE_SHARED_DATA("kitti/000005.bin");
@@ -46,8 +47,9 @@ TEST(SegmenterKitti, OdometryScansSegmentPlausiblyWithoutOverflowOrAllocation) {
     EXPECT_GT(k.points_in, 110000u);
     EXPECT_GT(k.ground_points, k.points_in / 3);  // an urban street: much of the scan is road
     EXPECT_GT(k.obstacle_points, k.points_in / 10);
-    EXPECT_EQ(k.ignored_invalid + k.ignored_out_of_range + k.ignored_below + k.ground_points + k.ignored_above +
-                  k.obstacle_points, k.points_in);
+    EXPECT_EQ(k.ignored_invalid + k.ignored_out_of_range + k.ignored_below + k.ground_points +
+                  k.ignored_above + k.obstacle_points,
+              k.points_in);
     std::uint64_t in_segments = 0;
     for (const Segment& s : out.segments) {
       in_segments += s.count;
@@ -71,7 +73,8 @@ struct LabelBox {
   double length, width, height, yaw;
 };
 
-Eigen::Matrix<double, 3, 4> read_matrix(const std::string& calib, const std::string& key, int cols) {
+Eigen::Matrix<double, 3, 4> read_matrix(const std::string& calib, const std::string& key,
+                                        int cols) {
   std::ifstream f(testing::shared_data(calib));
   std::string line;
   Eigen::Matrix<double, 3, 4> m = Eigen::Matrix<double, 3, 4>::Zero();
@@ -96,7 +99,8 @@ std::vector<LabelBox> read_labels(const std::string& frame) {
   std::string type;
   double trunc, alpha, l2, t2, r2, b2, h, w, l, x, y, z, ry;
   int occluded;
-  while (f >> type >> trunc >> occluded >> alpha >> l2 >> t2 >> r2 >> b2 >> h >> w >> l >> x >> y >> z >> ry) {
+  while (f >> type >> trunc >> occluded >> alpha >> l2 >> t2 >> r2 >> b2 >> h >> w >> l >> x >> y >>
+         z >> ry) {
     if (type == "DontCare") continue;
     const Eigen::Vector3d rect(x, y - h / 2, z);  // label: bottom centre, camera y down
     const Eigen::Vector3d cam = r0.inverse() * rect;
@@ -142,14 +146,17 @@ TEST(SegmenterKitti, LabeledTruckCarAndCyclistOfObjectFrame000001AreSegments) {
     ++checked;
     SCOPED_TRACE(label.type + " with " + std::to_string(inside) + " returns in its box");
     ASSERT_FALSE(votes.empty());
-    const auto best = static_cast<std::size_t>(std::max_element(votes.begin(), votes.end()) - votes.begin());
+    const auto best =
+        static_cast<std::size_t>(std::max_element(votes.begin(), votes.end()) - votes.begin());
     const Segment& s = out.segments[best];
     EXPECT_GE(votes[best] * 2, static_cast<int>(inside));  // the segment holds most of the object
     EXPECT_TRUE(in_box(label, s.centroid[0], s.centroid[1], s.centroid[2], 1.0))
         << "centroid (" << s.centroid[0] << ", " << s.centroid[1] << ", " << s.centroid[2] << ")";
     int in_label = 0;
-    for (const std::uint32_t i : out.indices(s)) in_label += in_box(label, cloud[4 * i], cloud[4 * i + 1], cloud[4 * i + 2], 0.5) ? 1 : 0;
-    EXPECT_GE(in_label * 10, static_cast<int>(s.count) * 8) << "segment of " << s.count << " points";  // not merged
+    for (const std::uint32_t i : out.indices(s))
+      in_label += in_box(label, cloud[4 * i], cloud[4 * i + 1], cloud[4 * i + 2], 0.5) ? 1 : 0;
+    EXPECT_GE(in_label * 10, static_cast<int>(s.count) * 8)
+        << "segment of " << s.count << " points";  // not merged
   }
   EXPECT_EQ(checked, 3);
 }

@@ -32,7 +32,8 @@ struct Scene {
   }
   // Axis-aligned box standing on flat ground: its four sides and top, every step metres.
   void box(float cx, float cy, float length, float width, float height, float step = 0.05f) {
-    const float x0 = cx - length / 2, x1 = cx + length / 2, y0 = cy - width / 2, y1 = cy + width / 2;
+    const float x0 = cx - length / 2, x1 = cx + length / 2, y0 = cy - width / 2,
+                y1 = cy + width / 2;
     const float zb = -kSensorHeight, zt = zb + height;
     for (float z = zb + step; z <= zt; z += step) {
       for (float x = x0; x <= x1; x += step) add(x, y0, z), add(x, y1, z);
@@ -48,7 +49,8 @@ struct Scene {
     for (float z = -kSensorHeight + step; z <= -kSensorHeight + height; z += step) {
       for (int k = 0; k < around; ++k) {
         const double a = 2 * M_PI * k / around;
-        add(cx + radius * static_cast<float>(std::cos(a)), cy + radius * static_cast<float>(std::sin(a)), z);
+        add(cx + radius * static_cast<float>(std::cos(a)),
+            cy + radius * static_cast<float>(std::sin(a)), z);
       }
     }
   }

@@ -15,7 +15,7 @@ namespace {
 using testing::Scene;
 
 static_assert(noexcept(std::declval<Segmenter&>().segment(std::declval<const PointView&>(),
-                                                           std::declval<Segments&>())));
+                                                          std::declval<Segments&>())));
 
 SegmenterConfig test_config() {
   SegmenterConfig c;
@@ -31,8 +31,8 @@ Segments run(const Scene& scene, const SegmenterConfig& config = test_config()) 
 }
 
 std::uint64_t accounted(const SegmentCounters& k) {
-  return k.ignored_invalid + k.ignored_out_of_range + k.ignored_over_capacity + k.ignored_below + k.dropped_cell_overflow +
-         k.ground_points + k.ignored_above + k.obstacle_points;
+  return k.ignored_invalid + k.ignored_out_of_range + k.ignored_over_capacity + k.ignored_below +
+         k.dropped_cell_overflow + k.ground_points + k.ignored_above + k.obstacle_points;
 }
 
 TEST(Segmenter, TwoBoxesOneMetreApartAreTwoSegments) {
@@ -78,7 +78,8 @@ TEST(Segmenter, SegmentIndicesPointAtObstaclePointsOnly) {
     const float* p = scene.xyzi.data() + 4 * i;
     EXPECT_NEAR(p[0], -6.0f, 0.51f);
     EXPECT_NEAR(p[1], 5.0f, 0.51f);
-    EXPECT_GT(p[2], -testing::kSensorHeight + test_config().ground_clearance_m);  // above the clearance
+    EXPECT_GT(p[2],
+              -testing::kSensorHeight + test_config().ground_clearance_m);  // above the clearance
   }
 }
 
@@ -91,8 +92,8 @@ TEST(Segmenter, SlopedRoadAndCurbGiveNoSegment) {
   const Segments out = run(scene);
   EXPECT_EQ(out.segments.size(), 0u);
   EXPECT_EQ(out.counters.obstacle_cells, 0u);
-  EXPECT_EQ(out.counters.ground_points, scene.size() - out.counters.ignored_out_of_range -
-                                            out.counters.ignored_over_capacity);
+  EXPECT_EQ(out.counters.ground_points,
+            scene.size() - out.counters.ignored_out_of_range - out.counters.ignored_over_capacity);
 }
 
 TEST(Segmenter, PedestrianOnSidewalkOfSlopedRoadIsFound) {
@@ -117,7 +118,8 @@ TEST(Segmenter, PedestrianHalfAMetreFromCarIsSeparate) {
   scene.cylinder(10.0f, 0.9f + 0.5f + 0.25f, 0.25f, 1.7f);  // pedestrian 0.5 m from its side
   const Segments out = run(scene);
   ASSERT_EQ(out.segments.size(), 2u);
-  const Segment& car = out.segments[0].count > out.segments[1].count ? out.segments[0] : out.segments[1];
+  const Segment& car =
+      out.segments[0].count > out.segments[1].count ? out.segments[0] : out.segments[1];
   const Segment& ped = &car == &out.segments[0] ? out.segments[1] : out.segments[0];
   EXPECT_NEAR(car.box.length, 4.5f, 0.2f);
   EXPECT_NEAR(car.box.width, 1.8f, 0.2f);
@@ -165,7 +167,7 @@ TEST(Segmenter, SeenGroundKeepsObjectsOnOneRayApart) {
 TEST(Segmenter, PedestrianUnderATreeCanopyIsNotJoinedToTheTree) {
   Scene scene;
   scene.flat_ground();
-  scene.cylinder(10.0f, 0.0f, 0.2f, 2.8f);  // trunk
+  scene.cylinder(10.0f, 0.0f, 0.2f, 2.8f);       // trunk
   for (float x = 7.5f; x <= 12.5f; x += 0.1f) {  // canopy 2.8..3.4 m above the ground
     for (float y = -2.5f; y <= 2.5f; y += 0.1f) {
       if (std::hypot(x - 10.0f, y) > 2.5f) continue;
@@ -221,11 +223,12 @@ TEST(Segmenter, IgnoresPointsOutOfRangeInvalidAndOverhead) {
   scene.flat_ground(10.0f);
   std::uint64_t near = 0;  // ground inside min_range_m: the vehicle's own footprint
   for (std::size_t i = 0; i < scene.size(); ++i) {
-    near += std::hypot(scene.xyzi[4 * i], scene.xyzi[4 * i + 1]) < test_config().min_range_m ? 1 : 0;
+    near +=
+        std::hypot(scene.xyzi[4 * i], scene.xyzi[4 * i + 1]) < test_config().min_range_m ? 1 : 0;
   }
-  scene.add(50.0f, 0.0f, -1.0f);                     // beyond range_m
-  scene.add(0.2f, 0.1f, -1.0f);                      // inside min_range_m
-  scene.add(std::nanf(""), 1.0f, 0.0f);              // invalid
+  scene.add(50.0f, 0.0f, -1.0f);                          // beyond range_m
+  scene.add(0.2f, 0.1f, -1.0f);                           // inside min_range_m
+  scene.add(std::nanf(""), 1.0f, 0.0f);                   // invalid
   scene.add(4.0f, 4.0f, -testing::kSensorHeight + 5.0f);  // overhead, above max_height_m
   const Segments out = run(scene);
   EXPECT_EQ(out.counters.ignored_out_of_range, near + 2);
