@@ -10,6 +10,7 @@ packages=(
   libusb-1.0-0-dev  # gs_usb / candleLight USB-CAN adapters (drivers/can)
   nlohmann-json3-dev  # tracks and truth JSON lines (stac eval)
   libopencv-dev  # pictures (bird's-eye views, plots) in tools/, never in the per-scan loop
+  libpcl-dev  # benchmarks only: PCL Euclidean clustering as the baseline of perception/segmentation
 )
 
 missing=()

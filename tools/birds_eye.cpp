@@ -39,12 +39,29 @@ BirdsEye::BirdsEye(const BirdsEyeOptions& options)
 }
 
 void BirdsEye::add_point(float x, float y, float z) noexcept {
+  add_point(x, y, ramp((z - options_.z_min_m) / (options_.z_max_m - options_.z_min_m)));
+}
+
+void BirdsEye::add_point(float x, float y, const cv::Vec3b& bgr) noexcept {
   // x forward is up in the picture, y left is left.
   const int col = static_cast<int>(std::lround(options_.size_px / 2.0 - y * px_per_m_));
   const int row = static_cast<int>(std::lround(options_.size_px / 2.0 - x * px_per_m_));
   if (col < 0 || row < 0 || col >= options_.size_px || row >= options_.size_px) return;
-  image_.at<cv::Vec3b>(row, col) =
-      ramp((z - options_.z_min_m) / (options_.z_max_m - options_.z_min_m));
+  image_.at<cv::Vec3b>(row, col) = bgr;
+}
+
+void BirdsEye::add_box(float cx, float cy, float length, float width, float yaw, const cv::Scalar& bgr) {
+  const double c = std::cos(yaw), s = std::sin(yaw);
+  const double corners[4][2] = {{length / 2.0, width / 2.0}, {-length / 2.0, width / 2.0},
+                                {-length / 2.0, -width / 2.0}, {length / 2.0, -width / 2.0}};
+  cv::Point px[4];
+  for (int i = 0; i < 4; ++i) {
+    const double x = cx + c * corners[i][0] - s * corners[i][1];
+    const double y = cy + s * corners[i][0] + c * corners[i][1];
+    px[i] = cv::Point(static_cast<int>(std::lround(options_.size_px / 2.0 - y * px_per_m_)),
+                      static_cast<int>(std::lround(options_.size_px / 2.0 - x * px_per_m_)));
+  }
+  for (int i = 0; i < 4; ++i) cv::line(image_, px[i], px[(i + 1) % 4], bgr, 1, cv::LINE_AA);
 }
 
 void BirdsEye::add_legend(const std::string& line) {
@@ -54,15 +71,16 @@ void BirdsEye::add_legend(const std::string& line) {
 
 rt::Result<bool> BirdsEye::save(const std::filesystem::path& png) const {
   cv::Mat out = image_.clone();
-  // Height colour bar, bottom left.
-  const int bar_w = 200, bar_h = 10, x0 = 10, y0 = options_.size_px - 30;
-  for (int i = 0; i < bar_w; ++i) {
-    cv::line(out, {x0 + i, y0}, {x0 + i, y0 + bar_h}, cv::Scalar(ramp(i / (bar_w - 1.0))), 1);
+  if (options_.height_bar) {  // height colour bar, bottom left
+    const int bar_w = 200, bar_h = 10, x0 = 10, y0 = options_.size_px - 30;
+    for (int i = 0; i < bar_w; ++i) {
+      cv::line(out, {x0 + i, y0}, {x0 + i, y0 + bar_h}, cv::Scalar(ramp(i / (bar_w - 1.0))), 1);
+    }
+    char label[64];
+    std::snprintf(label, sizeof(label), "z %.1f m .. %.1f m", options_.z_min_m, options_.z_max_m);
+    cv::putText(out, label, {x0, y0 - 5}, cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(200, 200, 200),
+                1, cv::LINE_AA);
   }
-  char label[64];
-  std::snprintf(label, sizeof(label), "z %.1f m .. %.1f m", options_.z_min_m, options_.z_max_m);
-  cv::putText(out, label, {x0, y0 - 5}, cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(200, 200, 200),
-              1, cv::LINE_AA);
   try {
     if (!cv::imwrite(png.string(), out)) {
       return rt::make_error(png.string() + ": cannot write the picture (is the folder there?)");

@@ -17,6 +17,7 @@ struct BirdsEyeOptions {
   int size_px = 900;      // square picture side
   double z_min_m = -2.5;  // colour scale of heights (sensor frame)
   double z_max_m = 2.5;
+  bool height_bar = true;  // draw the height colour bar (off when points are coloured otherwise)
 };
 
 class BirdsEye {
@@ -25,6 +26,10 @@ class BirdsEye {
 
   // A point coloured by its height.
   void add_point(float x, float y, float z) noexcept;
+  // A point in a given colour (BGR).
+  void add_point(float x, float y, const cv::Vec3b& bgr) noexcept;
+  // An oriented rectangle: centre (m), length along yaw (rad, from x), width across.
+  void add_box(float cx, float cy, float length, float width, float yaw, const cv::Scalar& bgr);
   // A text line in the legend (top left).
   void add_legend(const std::string& line);
   rt::Result<bool> save(const std::filesystem::path& png) const;

@@ -14,6 +14,8 @@ void add_sim_command(CLI::App& app);
 void add_status_command(CLI::App& app);
 void add_candump_command(CLI::App& app);
 void add_eval_command(CLI::App& app);
+void add_segment_command(CLI::App& app);
+void add_process_command(CLI::App& app);
 // `stac decode applanix`, a subcommand of `decode`; returns it so decode can tell it was used.
 CLI::App* add_decode_applanix_command(CLI::App& decode);
 void add_replay_command(CLI::App& app);

@@ -31,6 +31,14 @@ class ConfigSection {
     if (!v) return fallback;
     return convert<T>(v, key);
   }
+  // get() into an existing variable, for reading many keys in one list.
+  template <class T>
+  rt::Result<bool> read(const char* key, T& out) const {
+    auto v = get<T>(key);
+    if (!v) return rt::Unexpected<rt::Error>{v.error()};
+    out = *v;
+    return true;
+  }
   // "FILE: 'section.key' WHAT", as an error value.
   rt::Unexpected<rt::Error> error(const char* key, const std::string& what) const {
     return rt::make_error(file_ + ": '" + name_ + "." + key + "' " + what);

@@ -45,10 +45,7 @@ int run_decode(const DecodeOptions& o) {
   auto settings = settings_for(o);
   if (!settings) return fail(settings.error().message);
   const auto& s = *settings;
-  // An empty path means 'stream': the calibration the unit sends in its status bytes.
-  auto calibration = s.calibration.empty()
-                         ? stream_calibration(o.in, s.port, s.assembler.decoder.model)
-                         : velodyne::load_calibration(s.calibration);
+  auto calibration = capture_calibration(s.calibration, o.in, s.port, s.assembler.decoder.model);
   if (!calibration) return fail(calibration.error().message);
   auto writer = make_scan_writer(o.format, o.out);
   if (!writer) return fail(writer.error().message);

@@ -33,6 +33,8 @@ int main(int argc, char** argv) {
       "  stac candump --in drive.log --out odometry.csv  # vehicle speed and yaw rate from CAN\n"
       "  stac replay --in run.pcap --rate 1          # send it again over loopback UDP\n"
       "  stac eval --truth run.truth.jsonl --tracks run.tracks.jsonl --report eval/  # metrics\n"
+      "  stac segment --in scan.bin --out segments.csv --png bev.png  # obstacles of one scan\n"
+      "  stac process run.pcap --truth run.truth.jsonl --tracks run.tracks.jsonl  # segment+track\n"
       "Run 'stac <command> --help' for the options of each command.");
   stac::tools::add_decode_command(app);
   stac::tools::add_record_command(app);
@@ -43,6 +45,8 @@ int main(int argc, char** argv) {
   stac::tools::add_replay_command(app);
   stac::tools::add_sim_compare_command(app);
   stac::tools::add_eval_command(app);
+  stac::tools::add_segment_command(app);
+  stac::tools::add_process_command(app);
   CLI11_PARSE(app, argc, argv);
   return 0;
 }

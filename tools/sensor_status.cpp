@@ -46,6 +46,13 @@ rt::Result<velodyne::Calibration> stream_calibration(const std::filesystem::path
   return calibration;
 }
 
+rt::Result<velodyne::Calibration> capture_calibration(const std::filesystem::path& calibration_file,
+                                                      const std::filesystem::path& capture,
+                                                      std::uint16_t port, velodyne::Model model) {
+  return calibration_file.empty() ? stream_calibration(capture, port, model)
+                                  : velodyne::load_calibration(calibration_file);
+}
+
 namespace {
 
 struct StatusOptions {

@@ -28,4 +28,10 @@ rt::Result<CaptureStatus> read_capture_status(const std::filesystem::path& captu
 rt::Result<velodyne::Calibration> stream_calibration(const std::filesystem::path& capture,
                                                      std::uint16_t port, velodyne::Model model);
 
+// The calibration `settings` name for decoding `capture`: its file, or (empty path, 'stream')
+// the one the unit sent in the capture's status bytes.
+rt::Result<velodyne::Calibration> capture_calibration(const std::filesystem::path& calibration_file,
+                                                      const std::filesystem::path& capture,
+                                                      std::uint16_t port, velodyne::Model model);
+
 }  // namespace stac::tools

@@ -12,6 +12,7 @@
 #include "ego/deskew.hpp"
 #include "ego/ego_estimator.hpp"
 #include "ego/local_frame.hpp"
+#include "perception/segmentation/segmenter.hpp"
 #include "perception/tracking/tracker.hpp"
 #include "rt/expected.hpp"
 
@@ -37,6 +38,9 @@ struct EgoSettings {
   std::uint16_t ins_port = 5602;
 };
 rt::Result<EgoSettings> load_ego_settings(const std::filesystem::path& config_file);
+
+// The `segmentation:` section, checked by the segmenter's own validation too.
+rt::Result<segmentation::SegmenterConfig> load_segmentation_settings(const std::filesystem::path& config_file);
 
 // The `tracking:` section, checked by the tracker's own validation too.
 rt::Result<tracking::TrackerConfig> load_tracking_config(const std::filesystem::path& config_file);

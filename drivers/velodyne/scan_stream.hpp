@@ -30,8 +30,9 @@ class ScanStream {
   // Producer, at the end of input: publishes the scan in progress (marked incomplete).
   bool finish() noexcept;
 
-  // Consumer: the oldest complete scan not yet released, or nullptr.
-  const Scan* take() noexcept { return exchange_.take(); }
+  // Consumer: the oldest complete scan not yet released, or nullptr. The consumer owns it until
+  // release() and may change it in place (deskew).
+  Scan* take() noexcept { return exchange_.take(); }
   void release() noexcept { exchange_.release(); }
 
   const ScanAssembler& assembler() const noexcept { return assembler_; }

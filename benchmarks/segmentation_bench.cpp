@@ -1,0 +1,193 @@
+// Segmentation of the six real KITTI scans (HDL-64E, about 124k points each) on one core:
+// STAC's grid segmenter on the whole scan (ground + obstacle grid + flood fill + boxes) against
+// PCL's EuclideanClusterExtraction (tolerance 0.5 m, the approach Autoware's euclidean_cluster
+// wraps) on the SAME obstacle points STAC found, raw or after a 0.1 / 0.2 m voxel grid. Each
+// iteration segments one scan (round robin); per-iteration times give the median, p99 and max.
+#include <benchmark/benchmark.h>
+#include <pcl/filters/voxel_grid.h>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+#include <pcl/search/kdtree.h>
+#include <pcl/segmentation/extract_clusters.h>
+#include <time.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "perception/segmentation/segmenter.hpp"
+
+namespace {
+
+using namespace stac::segmentation;
+
+const std::vector<std::vector<float>>& scans() {
+  static const std::vector<std::vector<float>> all = [] {
+    std::vector<std::vector<float>> out;
+    for (int i = 0; i < 6; ++i) {
+      const auto path = std::filesystem::path(STAC_SHARED_DATA_DIR) /
+                        ("kitti/00000" + std::to_string(i) + ".bin");
+      std::ifstream f(path, std::ios::binary | std::ios::ate);
+      if (!f) {
+        std::fprintf(stderr, "segmentation_bench: %s is absent (shared/data beside the checkout)\n",
+                     path.c_str());
+        std::exit(1);
+      }
+      std::vector<float> v(static_cast<std::size_t>(f.tellg()) / sizeof(float));
+      f.seekg(0);
+      f.read(reinterpret_cast<char*>(v.data()),
+             static_cast<std::streamsize>(v.size() * sizeof(float)));
+      out.push_back(std::move(v));
+    }
+    return out;
+  }();
+  return all;
+}
+
+PointView view(const std::vector<float>& xyzi) {
+  return {xyzi.data(), xyzi.size() / 4, 16};
+}
+
+// The obstacle points of each scan as STAC classifies them (every obstacle cluster kept).
+const std::vector<pcl::PointCloud<pcl::PointXYZ>::Ptr>& obstacle_clouds() {
+  static const std::vector<pcl::PointCloud<pcl::PointXYZ>::Ptr> all = [] {
+    SegmenterConfig c;
+    c.min_segment_points = 1;
+    c.max_segment_points = 100'000'000;
+    c.max_segment_extent_m = 1e6;
+    Segmenter segmenter(c);
+    Segments out = segmenter.make_segments();
+    std::vector<pcl::PointCloud<pcl::PointXYZ>::Ptr> clouds;
+    for (const auto& scan : scans()) {
+      segmenter.segment(view(scan), out);
+      auto cloud = pcl::PointCloud<pcl::PointXYZ>::Ptr(new pcl::PointCloud<pcl::PointXYZ>);
+      for (const std::uint32_t i : out.point_indices) {
+        cloud->push_back(pcl::PointXYZ(scan[4 * i], scan[4 * i + 1], scan[4 * i + 2]));
+      }
+      clouds.push_back(cloud);
+    }
+    return clouds;
+  }();
+  return all;
+}
+
+// This thread's CPU time (ms): on a shared machine wall time also counts the other processes.
+double cpu_ms() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) * 1e3 + static_cast<double>(ts.tv_nsec) * 1e-6;
+}
+
+// Per-iteration times: wall (steady clock) and CPU, each as median, p99 and max.
+struct Times {
+  std::vector<double> wall, cpu;
+  double wall0 = 0, cpu0 = 0;
+  std::chrono::steady_clock::time_point t0;
+  Times() {
+    wall.reserve(100000);
+    cpu.reserve(100000);
+  }
+  void start() {
+    t0 = std::chrono::steady_clock::now();
+    cpu0 = cpu_ms();
+  }
+  void stop() {
+    wall.push_back(
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    cpu.push_back(cpu_ms() - cpu0);
+  }
+};
+
+void report(benchmark::State& state, Times& t, double points, double segments) {
+  for (auto* v : {&t.wall, &t.cpu}) std::sort(v->begin(), v->end());
+  const auto at = [](const std::vector<double>& v, double q) {
+    return v[std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size())))];
+  };
+  state.counters["median_ms"] = at(t.wall, 0.5);
+  state.counters["p99_ms"] = at(t.wall, 0.99);
+  state.counters["max_ms"] = t.wall.back();
+  state.counters["cpu_median_ms"] = at(t.cpu, 0.5);
+  state.counters["cpu_p99_ms"] = at(t.cpu, 0.99);
+  state.counters["points"] = points;
+  state.counters["segments"] = segments;
+}
+
+void BM_StacSegmenter(benchmark::State& state) {
+  Segmenter segmenter{SegmenterConfig{}};
+  Segments out = segmenter.make_segments();
+  segmenter.segment(view(scans()[0]), out);  // warm-up
+  Times t;
+  std::size_t k = 0;
+  double points = 0, segments = 0;
+  for (auto _ : state) {
+    const auto& scan = scans()[k++ % scans().size()];
+    t.start();
+    segmenter.segment(view(scan), out);
+    t.stop();
+    benchmark::DoNotOptimize(out.segments.data());
+    points += static_cast<double>(scan.size() / 4);
+    segments += static_cast<double>(out.segments.size());
+  }
+  const auto n = static_cast<double>(t.wall.size());
+  report(state, t, points / n, segments / n);
+}
+BENCHMARK(BM_StacSegmenter)->Iterations(1200)->Unit(benchmark::kMillisecond);
+
+// voxel_cm = 0: the raw obstacle points; else a voxel grid of that leaf size first (timed).
+void BM_PclEuclideanClusters(benchmark::State& state) {
+  const float leaf = static_cast<float>(state.range(0)) / 100.0f;
+  Times t;
+  std::size_t k = 0;
+  double points = 0, segments = 0;
+  for (auto _ : state) {
+    const auto& obstacle = obstacle_clouds()[k++ % obstacle_clouds().size()];
+    t.start();
+    pcl::PointCloud<pcl::PointXYZ>::Ptr cloud = obstacle;
+    if (leaf > 0) {
+      cloud.reset(new pcl::PointCloud<pcl::PointXYZ>);
+      pcl::VoxelGrid<pcl::PointXYZ> grid;
+      grid.setInputCloud(obstacle);
+      grid.setLeafSize(leaf, leaf, leaf);
+      grid.filter(*cloud);
+    }
+    pcl::search::KdTree<pcl::PointXYZ>::Ptr tree(new pcl::search::KdTree<pcl::PointXYZ>);
+    tree->setInputCloud(cloud);
+    std::vector<pcl::PointIndices> clusters;
+    pcl::EuclideanClusterExtraction<pcl::PointXYZ> ec;
+    ec.setClusterTolerance(0.5);
+    ec.setMinClusterSize(8);  // as min_segment_points
+    ec.setMaxClusterSize(30000);
+    ec.setSearchMethod(tree);
+    ec.setInputCloud(cloud);
+    ec.extract(clusters);
+    t.stop();
+    points += static_cast<double>(obstacle->size());
+    segments += static_cast<double>(clusters.size());
+  }
+  const auto n = static_cast<double>(t.wall.size());
+  report(state, t, points / n, segments / n);
+}
+BENCHMARK(BM_PclEuclideanClusters)
+    ->Arg(0)
+    ->Iterations(12)
+    ->ArgName("voxel_cm")
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_PclEuclideanClusters)
+    ->Arg(10)
+    ->Iterations(30)
+    ->ArgName("voxel_cm")
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_PclEuclideanClusters)
+    ->Arg(20)
+    ->Iterations(60)
+    ->ArgName("voxel_cm")
+    ->Unit(benchmark::kMillisecond);
+
+}  // namespace
+
+BENCHMARK_MAIN();

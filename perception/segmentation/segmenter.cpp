@@ -1,0 +1,449 @@
+#include "perception/segmentation/segmenter.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <vector>
+
+namespace stac::segmentation {
+namespace {
+
+constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+constexpr std::uint32_t kUnvisited = kNone - 1;  // an obstacle cell not yet in a component
+constexpr std::uint32_t kWeak = kNone - 2;       // points above the clearance, but low: joins a
+                                                 // component it touches, never starts one
+
+std::uint32_t cells_across(double range_m, double cell_m) {
+  return static_cast<std::uint32_t>(std::ceil(2.0 * range_m / cell_m));
+}
+
+}  // namespace
+
+const char* validate(const SegmenterConfig& c) noexcept {
+  if (!(c.cell_m >= 0.02 && c.cell_m <= 5.0)) return "cell_m must be in [0.02, 5] m";
+  if (!(c.range_m > 0 && c.range_m <= 500)) return "range_m must be in (0, 500] m";
+  if (!(c.min_range_m >= 0 && c.min_range_m < c.range_m))
+    return "min_range_m must be in [0, range_m)";
+  if (cells_across(c.range_m, c.cell_m) > 20000)
+    return "range_m / cell_m gives a grid over 20000 cells across";
+  if (!(c.sensor_height_m >= 0 && c.sensor_height_m <= 10))
+    return "sensor_height_m must be in [0, 10] m";
+  if (!(c.below_ground_m >= 0)) return "below_ground_m must be >= 0 m";
+  if (!(c.below_ground_slope >= 0 && c.below_ground_slope <= 1))
+    return "below_ground_slope must be in [0, 1] m/m";
+  if (!(c.ground_cell_m >= c.cell_m && c.ground_cell_m <= 20))
+    return "ground_cell_m must be in [cell_m, 20] m";
+  if (!(c.ground_radius_m >= 0 && c.ground_radius_m <= 20))
+    return "ground_radius_m must be in [0, 20] m";
+  if (!(c.ground_max_slope >= 0 && c.ground_max_slope <= 1))
+    return "ground_max_slope must be in [0, 1] m/m";
+  if (!(c.ground_clearance_m >= 0)) return "ground_clearance_m must be >= 0 m";
+  if (!(c.obstacle_height_m > c.ground_clearance_m))
+    return "obstacle_height_m must be > ground_clearance_m";
+  if (!(c.obstacle_spread_m > 0)) return "obstacle_spread_m must be > 0 m";
+  if (!(c.max_height_m > c.obstacle_height_m)) return "max_height_m must be > obstacle_height_m";
+  if (c.weak_join_cells > 10) return "weak_join_cells must be in 0..10";
+  if (!(c.bridge_m >= 0 && c.bridge_m <= 10)) return "bridge_m must be in [0, 10] m";
+  if (!(c.bridge_height_m >= 0)) return "bridge_height_m must be >= 0 m";
+  if (c.min_segment_points < 1) return "min_segment_points must be >= 1";
+  if (c.max_segment_points < c.min_segment_points)
+    return "max_segment_points must be >= min_segment_points";
+  if (!(c.max_segment_extent_m > 0)) return "max_segment_extent_m must be > 0 m";
+  if (c.max_points < 1 || c.max_points > kUnvisited) return "max_points must be in 1..4294967293";
+  if (c.max_occupied_cells < 1 || c.max_occupied_cells > kUnvisited)
+    return "max_occupied_cells must be >= 1";
+  if (c.max_segments < 1) return "max_segments must be >= 1";
+  return "";
+}
+
+// The dense fine grid maps a cell to its slot (kNone when empty) and is reset cell by cell after
+// each scan; it is stored in 8 x 8 tiles so that the neighbouring returns of a ring hit the same
+// cache lines. The coarse ground grid is reset the same way. Per occupied cell the data
+// sits in compact "slot" arrays in the order the cells were first hit.
+struct Segmenter::State {
+  explicit State(const SegmenterConfig& c)
+      : n(cells_across(c.range_m, c.cell_m)),
+        m(cells_across(c.range_m, c.ground_cell_m)),
+        tiles((n + 7) / 8),
+        slot_of(std::size_t{tiles} * tiles * 64, kNone),
+        pad(static_cast<std::uint32_t>(std::ceil(c.ground_radius_m / c.ground_cell_m))),
+        mp(m + 2 * pad),
+        ground_min(std::size_t{mp} * mp, std::numeric_limits<float>::infinity()),
+        ground_min2(std::size_t{mp} * mp, 0.0f),
+        ground(std::size_t{mp} * mp, 0.0f),
+        ground_cells(std::size_t{mp} * mp),
+        point_slot(c.max_points),
+        cell_id(c.max_occupied_cells),
+        coarse_id(c.max_occupied_cells),
+        z_min(c.max_occupied_cells),
+        band_max(c.max_occupied_cells),
+        obstacle_count(c.max_occupied_cells),
+        label(c.max_occupied_cells),
+        offset(c.max_occupied_cells),
+        depth(c.max_occupied_cells),
+        component_cells(c.max_occupied_cells) {}
+
+  std::uint32_t n, m;   // fine and coarse cells across
+  std::uint32_t tiles;  // 8 x 8 tiles across the fine grid
+
+  [[nodiscard]] std::size_t dense(std::uint32_t ix, std::uint32_t iy) const noexcept {
+    return ((std::size_t{iy >> 3} * tiles + (ix >> 3)) << 6) | ((iy & 7u) << 3) | (ix & 7u);
+  }
+  std::vector<std::uint32_t> slot_of;  // fine grid, tiled
+  // Coarse grid with a border of `pad` cells (the ground window never leaves it); index
+  // (gy + pad) * mp + gx + pad. ground_min is +inf where empty, reset cell by cell after use.
+  std::uint32_t pad, mp;
+  std::vector<float> ground_min, ground_min2, ground;
+  struct Neighbour {
+    std::ptrdiff_t offset;  // in the padded coarse grid
+    float rise;             // max_slope x distance (m)
+  };
+  std::vector<Neighbour> window;                // the coarse cells within ground_radius_m
+  rt::FixedVector<std::uint32_t> ground_cells;  // coarse cells hit this scan
+  rt::FixedVector<std::uint32_t> point_slot;    // per point: its slot, or kNone
+  // Per slot (occupied fine cell).
+  rt::FixedVector<std::uint32_t> cell_id;  // iy << 16 | ix
+  rt::FixedVector<std::uint32_t> coarse_id;
+  rt::FixedVector<float> z_min, band_max;
+  rt::FixedVector<std::uint32_t> obstacle_count, label, offset;
+  // Flood fill.
+  rt::FixedVector<std::uint8_t> depth;
+  rt::FixedVector<std::uint32_t> component_cells;
+};
+
+Segmenter::Segmenter(const SegmenterConfig& config) : config_(config) {
+  if (const char* why = validate(config); *why != '\0') {
+    throw std::invalid_argument(std::string("segmentation: ") + why);
+  }
+  state_ = std::make_unique<State>(config);
+  const int r = static_cast<int>(std::ceil(config.ground_radius_m / config.ground_cell_m));
+  for (int dy = -r; dy <= r; ++dy) {
+    for (int dx = -r; dx <= r; ++dx) {
+      const double d = std::hypot(dx, dy) * config.ground_cell_m;
+      if (d <= config.ground_radius_m + 1e-9) {
+        state_->window.push_back({static_cast<std::ptrdiff_t>(dy) * state_->mp + dx,
+                                  static_cast<float>(d * config.ground_max_slope)});
+      }
+    }
+  }
+}
+
+Segmenter::Segmenter(Segmenter&&) noexcept = default;
+Segmenter& Segmenter::operator=(Segmenter&&) noexcept = default;
+Segmenter::~Segmenter() = default;
+
+Segments Segmenter::make_segments() const {
+  return Segments(config_.max_segments, config_.max_points);
+}
+
+void Segmenter::segment(const PointView& points, Segments& out) noexcept {
+  State& s = *state_;
+  const SegmenterConfig& c = config_;
+  out.segments.clear();
+  out.point_indices.clear();
+  out.counters = SegmentCounters{};
+  SegmentCounters& k = out.counters;
+  k.points_in = points.count;
+
+  const float range = static_cast<float>(c.range_m);
+  const float min_range2 = static_cast<float>(c.min_range_m * c.min_range_m);
+  const float inv_cell = static_cast<float>(1.0 / c.cell_m);
+  const float inv_ground_cell = static_cast<float>(1.0 / c.ground_cell_m);
+  const std::size_t count = std::min(points.count, std::min(c.max_points, s.point_slot.capacity()));
+  k.ignored_over_capacity = points.count - count;
+  s.ground_cells.clear();
+  s.cell_id.clear();
+  (void)s.point_slot.resize(count);
+  std::size_t slots = 0;
+  const std::size_t max_slots = s.cell_id.capacity();
+
+  // 1. Bin the points: per fine cell its lowest point.
+  constexpr float kMaxAbsZ = 1e4f;  // also rejects NaN and infinities
+  const float lowest = -static_cast<float>(c.sensor_height_m + c.below_ground_m);
+  const float below_slope = static_cast<float>(c.below_ground_slope);
+  for (std::size_t i = 0; i < count; ++i) {
+    float x, y, z;
+    points.read(i, x, y, z);
+    s.point_slot[i] = kNone;
+    if (!(std::fabs(x) < range && std::fabs(y) < range && std::fabs(z) < kMaxAbsZ) ||
+        x * x + y * y < min_range2) {
+      if (std::isfinite(x) && std::isfinite(y) && std::isfinite(z)) {
+        ++k.ignored_out_of_range;
+      } else {
+        ++k.ignored_invalid;
+      }
+      continue;
+    }
+    if (z < lowest - below_slope * std::sqrt(x * x + y * y)) {
+      ++k.ignored_below;
+      continue;
+    }
+    const auto ix = std::min(static_cast<std::uint32_t>((x + range) * inv_cell), s.n - 1);
+    const auto iy = std::min(static_cast<std::uint32_t>((y + range) * inv_cell), s.n - 1);
+    std::uint32_t& cell = s.slot_of[s.dense(ix, iy)];
+    if (cell != kNone) {
+      s.z_min[cell] = std::min(s.z_min[cell], z);
+    } else {
+      if (slots == max_slots) {
+        ++k.dropped_cell_overflow;
+        continue;
+      }
+      cell = static_cast<std::uint32_t>(slots++);
+      s.cell_id[cell] = iy << 16 | ix;
+      const auto gx = std::min(static_cast<std::uint32_t>((x + range) * inv_ground_cell), s.m - 1);
+      const auto gy = std::min(static_cast<std::uint32_t>((y + range) * inv_ground_cell), s.m - 1);
+      s.coarse_id[cell] = (gy + s.pad) * s.mp + gx + s.pad;
+      s.z_min[cell] = z;
+    }
+    s.point_slot[i] = cell;
+  }
+  (void)s.cell_id.resize(slots);
+  k.occupied_cells = slots;
+
+  // 2. Local ground: per coarse cell the second lowest of its fine cells' lowest points (a stray
+  // return below the road counts once; the lowest when alone); then the
+  // lowest over the cells within ground_radius_m of their value + max_slope x distance. A curb,
+  // or a cell where a car hides the road, thus gets the ground of the road around it.
+  const float inf = std::numeric_limits<float>::infinity();
+  for (std::size_t slot = 0; slot < slots; ++slot) {
+    s.band_max[slot] = -inf;
+    s.obstacle_count[slot] = 0;
+    const std::uint32_t g = s.coarse_id[slot];
+    const float z = s.z_min[slot];
+    if (s.ground_min[g] == inf) {
+      s.ground_min[g] = z;
+      s.ground_min2[g] = inf;
+      (void)s.ground_cells.push_back(g);  // capacity m*m: never full
+    } else if (z < s.ground_min[g]) {
+      s.ground_min2[g] = s.ground_min[g];
+      s.ground_min[g] = z;
+    } else if (z < s.ground_min2[g]) {
+      s.ground_min2[g] = z;
+    }
+  }
+  for (const std::uint32_t g : s.ground_cells) {
+    if (s.ground_min2[g] != inf) s.ground_min[g] = s.ground_min2[g];
+  }
+  for (const std::uint32_t g : s.ground_cells) {
+    float low = s.ground_min[g];
+    for (const State::Neighbour& w : s.window)
+      low = std::min(low, s.ground_min[g + w.offset] + w.rise);
+    s.ground[g] = low;
+  }
+  for (const std::uint32_t g : s.ground_cells) s.ground_min[g] = inf;  // empty again
+
+  // 3. Points against their local ground: ground, above, or obstacle candidates per cell.
+  const float clearance = static_cast<float>(c.ground_clearance_m);
+  const float max_height = static_cast<float>(c.max_height_m);
+  for (std::size_t i = 0; i < count; ++i) {
+    const std::uint32_t slot = s.point_slot[i];
+    if (slot == kNone) continue;
+    float x, y, z;
+    points.read(i, x, y, z);
+    const float h = z - s.ground[s.coarse_id[slot]];
+    if (h <= clearance) {
+      ++k.ground_points;
+      s.point_slot[i] = kNone;
+    } else if (h > max_height) {
+      ++k.ignored_above;
+      s.point_slot[i] = kNone;
+    } else {
+      ++s.obstacle_count[slot];
+      s.band_max[slot] = std::max(s.band_max[slot], z);
+    }
+  }
+
+  // 4. Obstacle cells: high above the ground, or spread vertically (Junior's criterion). Cells
+  // with only low points above the clearance are weak: they join an obstacle they touch (a
+  // bumper, feet, the lower returns of a far car) up to weak_join_cells deep, never start one.
+  const float obstacle_height = static_cast<float>(c.obstacle_height_m);
+  const float obstacle_spread = static_cast<float>(c.obstacle_spread_m);
+  for (std::size_t slot = 0; slot < slots; ++slot) {
+    s.label[slot] = kNone;
+    s.offset[slot] = kNone;
+    if (s.obstacle_count[slot] == 0) continue;
+    const float top = s.band_max[slot];
+    const bool strong = top - s.ground[s.coarse_id[slot]] > obstacle_height ||
+                        top - s.z_min[slot] > obstacle_spread;
+    s.label[slot] = strong ? kUnvisited : kWeak;
+  }
+
+  // 5. Flood fill 8-connected obstacle cells (a fixed queue, no recursion); keep or drop each.
+  const double max_extent_cells = c.max_segment_extent_m / c.cell_m;
+  const std::uint32_t n = s.n;
+  std::uint32_t cursor = 0;
+  std::uint32_t component = 0;
+  // Across unseen cells along the sensor's ray: the roof of a car beside the sensor is hit by
+  // rings far apart (1 m and more at 8 m) with nothing seen between them (the roof between
+  // rings is not sampled, the road under it is hidden). A strong cell links to the first strong
+  // cell within bridge_m outward or inward along its ray when every cell crossed is empty and
+  // their tops differ by at most bridge_height_m; the first cell where anything was seen ends
+  // the walk (a cell of the component itself walks on from there when its turn comes).
+  const int bridge_steps = static_cast<int>(c.bridge_m / c.cell_m);  // steps of one cell
+  const float bridge_height = static_cast<float>(c.bridge_height_m);
+  const float cell = static_cast<float>(c.cell_m);
+  auto bridge = [&](std::uint32_t slot, std::uint32_t cx, std::uint32_t cy, std::uint32_t comp) {
+    const float px = (static_cast<float>(cx) + 0.5f) * cell - range;
+    const float py = (static_cast<float>(cy) + 0.5f) * cell - range;
+    const float r = std::sqrt(px * px + py * py);
+    if (r < cell) return;
+    const float ux = cell * px / r, uy = cell * py / r;
+    for (const float sign : {1.0f, -1.0f}) {
+      std::uint32_t last = cy << 16 | cx;
+      for (int step = 1; step <= bridge_steps; ++step) {
+        const float qx = px + sign * static_cast<float>(step) * ux + range;
+        const float qy = py + sign * static_cast<float>(step) * uy + range;
+        if (qx < 0 || qy < 0) break;
+        const auto ix = static_cast<std::uint32_t>(qx * inv_cell),
+                   iy = static_cast<std::uint32_t>(qy * inv_cell);
+        if (ix >= n || iy >= n) break;
+        if ((iy << 16 | ix) == last) continue;
+        last = iy << 16 | ix;
+        const std::uint32_t other = s.slot_of[s.dense(ix, iy)];
+        if (other == kNone) continue;  // nothing seen here: keep walking
+        if (s.label[other] == kUnvisited &&
+            std::fabs(s.band_max[other] - s.band_max[slot]) <= bridge_height) {
+          s.label[other] = comp;
+          s.depth[other] = 0;
+          (void)s.component_cells.push_back(other);
+        }
+        break;
+      }
+    }
+  };
+  for (std::size_t seed = 0; seed < slots; ++seed) {
+    if (s.label[seed] != kUnvisited) continue;  // components start at strong cells only
+    // Breadth first: component_cells is the queue. depth: 0 for strong cells, else the weak
+    // steps from the nearest strong cell; weak cells spread only up to weak_join_cells deep.
+    s.component_cells.clear();
+    s.label[seed] = component;
+    s.depth[seed] = 0;
+    (void)s.component_cells.push_back(static_cast<std::uint32_t>(seed));  // each cell once
+    std::uint64_t pts = 0;
+    std::uint32_t x0 = n, x1 = 0, y0 = n, y1 = 0;
+    for (std::size_t head = 0; head < s.component_cells.size(); ++head) {
+      const std::uint32_t slot = s.component_cells[head];
+      const std::uint32_t id = s.cell_id[slot];
+      const std::uint32_t cx = id & 0xFFFFu, cy = id >> 16;
+      x0 = std::min(x0, cx), x1 = std::max(x1, cx), y0 = std::min(y0, cy), y1 = std::max(y1, cy);
+      pts += s.obstacle_count[slot];
+      const bool spreads_weak = s.depth[slot] < c.weak_join_cells;
+      for (std::uint32_t yy = cy == 0 ? 0 : cy - 1; yy <= std::min(cy + 1, n - 1); ++yy) {
+        for (std::uint32_t xx = cx == 0 ? 0 : cx - 1; xx <= std::min(cx + 1, n - 1); ++xx) {
+          const std::uint32_t other = s.slot_of[s.dense(xx, yy)];
+          if (other == kNone) continue;
+          if (s.label[other] == kUnvisited) {
+            s.depth[other] = 0;
+          } else if (s.label[other] == kWeak && spreads_weak) {
+            s.depth[other] = static_cast<std::uint8_t>(s.depth[slot] + 1);
+          } else {
+            continue;
+          }
+          s.label[other] = component;
+          (void)s.component_cells.push_back(other);
+        }
+      }
+      if (s.depth[slot] == 0 && bridge_steps > 0) bridge(slot, cx, cy, component);
+    }
+    ++component;
+    ++k.clusters;
+    if (pts < c.min_segment_points) {
+      ++k.dropped_too_small;
+      continue;
+    }
+    if (pts > c.max_segment_points || (x1 - x0 + 1) > max_extent_cells ||
+        (y1 - y0 + 1) > max_extent_cells) {
+      ++k.dropped_too_large;
+      continue;
+    }
+    Segment* seg = out.segments.append();
+    if (seg == nullptr || cursor + pts > out.point_indices.capacity()) {
+      if (seg != nullptr) out.segments.pop_back();
+      ++k.dropped_segment_overflow;
+      continue;
+    }
+    *seg = Segment{};
+    seg->first = cursor;
+    seg->count = static_cast<std::uint32_t>(pts);
+    seg->cells = static_cast<std::uint32_t>(s.component_cells.size());
+    for (const std::uint32_t slot : s.component_cells) {
+      s.offset[slot] = cursor;
+      cursor += s.obstacle_count[slot];
+    }
+  }
+
+  // Points of weak cells no obstacle reached are ground (a low bump: curb edge, camber).
+  for (std::size_t slot = 0; slot < slots; ++slot) {
+    if (s.label[slot] == kNone) continue;
+    if (s.label[slot] == kWeak) {
+      k.ground_points += s.obstacle_count[slot];
+    } else {
+      ++k.obstacle_cells;
+      k.obstacle_points += s.obstacle_count[slot];
+    }
+  }
+
+  for (const std::uint32_t id : s.cell_id)
+    s.slot_of[s.dense(id & 0xFFFFu, id >> 16)] = kNone;  // empty again
+
+  // 6. Scatter the point indices of kept segments, contiguous per segment.
+  (void)out.point_indices.resize(cursor);
+  for (std::size_t i = 0; i < count; ++i) {
+    const std::uint32_t slot = s.point_slot[i];
+    if (slot == kNone || s.offset[slot] == kNone) continue;
+    out.point_indices[s.offset[slot]++] = static_cast<std::uint32_t>(i);
+  }
+
+  // 7. Per segment: centroid, height span, oriented box from the XY principal axis.
+  for (Segment& seg : out.segments) {
+    // Sums relative to the first point keep the second moments well conditioned.
+    float x0, y0, z0;
+    points.read(out.point_indices[seg.first], x0, y0, z0);
+    double sx = 0, sy = 0, sz = 0, sxx = 0, sxy = 0, syy = 0;
+    float zlo = z0, zhi = z0;
+    for (const std::uint32_t i : out.indices(seg)) {
+      float x, y, z;
+      points.read(i, x, y, z);
+      const double dx = x - x0, dy = y - y0;
+      sx += dx, sy += dy, sz += z;
+      sxx += dx * dx, sxy += dx * dy, syy += dy * dy;
+      zlo = std::min(zlo, z), zhi = std::max(zhi, z);
+    }
+    const double inv = 1.0 / seg.count;
+    const double mx = x0 + sx * inv, my = y0 + sy * inv;
+    const double cxx = sxx * inv - sx * sx * inv * inv, cxy = sxy * inv - sx * sy * inv * inv,
+                 cyy = syy * inv - sy * sy * inv * inv;
+    const double yaw = 0.5 * std::atan2(2.0 * cxy, cxx - cyy);
+    const double ca = std::cos(yaw), sa = std::sin(yaw);
+    double u0 = std::numeric_limits<double>::infinity(), u1 = -u0, v0 = u0, v1 = -u0;
+    for (const std::uint32_t i : out.indices(seg)) {
+      float x, y, z;
+      points.read(i, x, y, z);
+      const double dx = x - mx, dy = y - my;
+      const double u = ca * dx + sa * dy, v = -sa * dx + ca * dy;
+      u0 = std::min(u0, u), u1 = std::max(u1, u), v0 = std::min(v0, v), v1 = std::max(v1, v);
+    }
+    const double uc = 0.5 * (u0 + u1), vc = 0.5 * (v0 + v1);
+    seg.centroid[0] = static_cast<float>(mx);
+    seg.centroid[1] = static_cast<float>(my);
+    seg.centroid[2] = static_cast<float>(sz * inv);
+    seg.z_min = zlo;
+    seg.z_max = zhi;
+    OrientedBox& b = seg.box;
+    b.cx = static_cast<float>(mx + ca * uc - sa * vc);
+    b.cy = static_cast<float>(my + sa * uc + ca * vc);
+    b.cz = 0.5f * (zlo + zhi);
+    b.length = static_cast<float>(u1 - u0);
+    b.width = static_cast<float>(v1 - v0);
+    b.height = zhi - zlo;
+    double box_yaw = yaw;
+    if (b.width > b.length) {
+      std::swap(b.length, b.width);
+      box_yaw += box_yaw > 0 ? -M_PI / 2 : M_PI / 2;
+    }
+    b.yaw = static_cast<float>(box_yaw);
+  }
+}
+
+}  // namespace stac::segmentation

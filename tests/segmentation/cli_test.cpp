@@ -1,0 +1,120 @@
+// `stac segment` as a user runs it: KITTI scans, simulated captures, bad input, bad config.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "shared_data.hpp"
+#include "stac_cli.hpp"
+
+namespace stac::segmentation {
+namespace {
+
+using stac::testing::CliResult;
+using stac::testing::stac;
+
+std::filesystem::path fresh_dir(const std::string& name) {
+  const auto d = std::filesystem::temp_directory_path() / ("stac_segment_" + name);
+  std::filesystem::remove_all(d);
+  std::filesystem::create_directories(d);
+  return d;
+}
+
+// The number after `label` in the summary, e.g. "segments   217 of ...".
+long summary_number(const std::string& output, const std::string& label) {
+  const auto at = output.find(label);
+  if (at == std::string::npos) return -1;
+  return std::stol(output.substr(at + label.size()));
+}
+
+TEST(SegmentCli, KittiScanGivesCsvPictureAndSummary) {
+  STAC_REQUIRE_SHARED_DATA("kitti/000000.bin");
+  const auto dir = fresh_dir("kitti");
+  const CliResult r =
+      stac("segment --in " + stac::testing::shared_data("kitti/000000.bin").string() + " --out " +
+           (dir / "s.csv").string() + " --png " + (dir / "s.png").string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  const long segments = summary_number(r.output, "segments   ");
+  EXPECT_GT(segments, 30) << r.output;
+  EXPECT_NE(r.output.find("overflow   points 0, cells 0, segments 0"), std::string::npos)
+      << r.output;
+  std::ifstream csv(dir / "s.csv");
+  std::string header, line;
+  std::getline(csv, header);
+  EXPECT_EQ(
+      header,
+      "id,points,centroid_x,centroid_y,centroid_z,box_x,box_y,length,width,height,yaw,z_min,z_max");
+  long rows = 0;
+  while (std::getline(csv, line)) {
+    ++rows;
+    std::istringstream in(line);
+    std::string field;
+    int fields = 0;
+    while (std::getline(in, field, ',')) ++fields;
+    EXPECT_EQ(fields, 13) << line;
+  }
+  EXPECT_EQ(rows, segments);
+  EXPECT_GT(std::filesystem::file_size(dir / "s.png"), 20'000u);
+}
+
+TEST(SegmentCli, SimulatedCaptureIsDecodedAndSegmented) {
+  STAC_REQUIRE_SHARED_DATA("velodyne/calib/rosdrivers_64e_s2.1-sztaki.yaml");
+  const auto dir = fresh_dir("capture");
+  const auto pcap = (dir / "run.pcap").string();
+  const CliResult sim = stac("sim --scenario parking-lot --seed 11 --duration 0.5 --out " + pcap +
+                             " --truth " + (dir / "run.jsonl").string());
+  ASSERT_EQ(sim.code, 0) << sim.output;
+  const CliResult r = stac("segment --in " + pcap + " --scan 1");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("run.pcap scan 1"), std::string::npos) << r.output;
+  EXPECT_GT(summary_number(r.output, "points     "), 50'000) << r.output;
+  EXPECT_GT(summary_number(r.output, "segments   "), 10) << r.output;  // parked cars, poles
+
+  const CliResult missing = stac("segment --in " + pcap + " --scan 40");
+  EXPECT_EQ(missing.code, 1);
+  EXPECT_NE(missing.output.find("--scan 40 is not among them"), std::string::npos)
+      << missing.output;
+}
+
+TEST(SegmentCli, RejectsAFileThatIsNotAKittiScan) {
+  const auto dir = fresh_dir("notscan");
+  std::ofstream(dir / "odd.bin") << "seventeen bytes!!";
+  const CliResult r = stac("segment --in " + (dir / "odd.bin").string());
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.output.find("17 bytes is not a KITTI scan"), std::string::npos) << r.output;
+}
+
+TEST(SegmentCli, ConfigErrorsNameTheKey) {
+  STAC_REQUIRE_SHARED_DATA("kitti/000000.bin");
+  const auto dir = fresh_dir("config");
+  std::ifstream in(std::string(STAC_SOURCE_DIR) + "/config/stac.yaml");
+  std::stringstream text;
+  text << in.rdbuf();
+  const std::string scan = stac::testing::shared_data("kitti/000000.bin").string();
+  {
+    std::string yaml = text.str();
+    const auto at = yaml.find("  ground_radius_m:");
+    yaml.erase(at, yaml.find('\n', at) - at + 1);
+    std::ofstream(dir / "missing.yaml") << yaml;
+    const CliResult r =
+        stac("segment --config " + (dir / "missing.yaml").string() + " --in " + scan);
+    EXPECT_EQ(r.code, 1);
+    EXPECT_NE(r.output.find("missing required key 'segmentation.ground_radius_m'"),
+              std::string::npos)
+        << r.output;
+  }
+  {
+    std::string yaml = text.str();
+    const auto at = yaml.find("  cell_m: 0.15");
+    yaml.replace(at, 14, "  cell_m: 0.0");
+    std::ofstream(dir / "zero.yaml") << yaml;
+    const CliResult r = stac("segment --config " + (dir / "zero.yaml").string() + " --in " + scan);
+    EXPECT_EQ(r.code, 1);
+    EXPECT_NE(r.output.find("segmentation.cell_m must be in"), std::string::npos) << r.output;
+  }
+}
+
+}  // namespace
+}  // namespace stac::segmentation

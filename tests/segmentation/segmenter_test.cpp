@@ -1,0 +1,355 @@
+#include "perception/segmentation/segmenter.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <stdexcept>
+#include <type_traits>
+
+#include "rt/testing/alloc_counter.hpp"
+#include "segmentation/scenes.hpp"
+
+namespace stac::segmentation {
+namespace {
+
+using testing::Scene;
+
+static_assert(noexcept(std::declval<Segmenter&>().segment(std::declval<const PointView&>(),
+                                                          std::declval<Segments&>())));
+
+SegmenterConfig test_config() {
+  SegmenterConfig c;
+  c.range_m = 30.0;
+  return c;
+}
+
+Segments run(const Scene& scene, const SegmenterConfig& config = test_config()) {
+  Segmenter segmenter(config);
+  Segments out = segmenter.make_segments();
+  segmenter.segment(scene.view(), out);
+  return out;
+}
+
+std::uint64_t accounted(const SegmentCounters& k) {
+  return k.ignored_invalid + k.ignored_out_of_range + k.ignored_over_capacity + k.ignored_below +
+         k.dropped_cell_overflow + k.ground_points + k.ignored_above + k.obstacle_points;
+}
+
+TEST(Segmenter, TwoBoxesOneMetreApartAreTwoSegments) {
+  Scene scene;
+  scene.flat_ground();
+  scene.box(8.0f, 0.0f, 2.0f, 1.0f, 1.2f);
+  scene.box(8.0f, 2.0f, 2.0f, 1.0f, 1.2f);  // gap 1 m between the boxes
+  const Segments out = run(scene);
+  ASSERT_EQ(out.segments.size(), 2u);
+  EXPECT_EQ(accounted(out.counters), scene.size());
+  for (const Segment& s : out.segments) {
+    EXPECT_NEAR(s.centroid[0], 8.0f, 0.1f);
+    EXPECT_NEAR(s.box.length, 2.0f, 0.2f);
+    EXPECT_NEAR(s.box.width, 1.0f, 0.2f);
+    EXPECT_NEAR(std::fabs(s.box.yaw), 0.0f, 0.05f);  // long side along x
+    EXPECT_NEAR(s.z_max, -testing::kSensorHeight + 1.2f, 0.06f);
+    EXPECT_EQ(out.indices(s).size(), s.count);
+  }
+  EXPECT_NEAR(out.segments[0].centroid[1] + out.segments[1].centroid[1], 2.0f, 0.1f);
+  EXPECT_EQ(out.counters.dropped_segment_overflow + out.counters.dropped_cell_overflow, 0u);
+}
+
+TEST(Segmenter, TouchingBoxesAreOneSegment) {
+  Scene scene;
+  scene.flat_ground();
+  scene.box(8.0f, 0.0f, 2.0f, 1.0f, 1.2f);
+  scene.box(8.0f, 1.0f, 2.0f, 1.0f, 1.2f);
+  const Segments out = run(scene);
+  ASSERT_EQ(out.segments.size(), 1u);
+  EXPECT_NEAR(out.segments[0].box.length, 2.0f, 0.2f);
+  EXPECT_NEAR(out.segments[0].box.width, 2.0f, 0.2f);
+}
+
+TEST(Segmenter, SegmentIndicesPointAtObstaclePointsOnly) {
+  Scene scene;
+  scene.flat_ground();
+  scene.box(-6.0f, 5.0f, 1.0f, 1.0f, 1.0f);
+  const Segments out = run(scene);
+  ASSERT_EQ(out.segments.size(), 1u);
+  const Segment& s = out.segments[0];
+  EXPECT_EQ(s.count, out.counters.obstacle_points);
+  for (const std::uint32_t i : out.indices(s)) {
+    const float* p = scene.xyzi.data() + 4 * i;
+    EXPECT_NEAR(p[0], -6.0f, 0.51f);
+    EXPECT_NEAR(p[1], 5.0f, 0.51f);
+    EXPECT_GT(p[2],
+              -testing::kSensorHeight + test_config().ground_clearance_m);  // above the clearance
+  }
+}
+
+TEST(Segmenter, SlopedRoadAndCurbGiveNoSegment) {
+  Scene scene;
+  // 5% slope along x and a 15 cm curb (sidewalk) for y > 3 m; plus road camber noise.
+  scene.ground(25.0f, 0.1f, [](float x, float y) {
+    return 0.05f * x + (y > 3.0f ? 0.15f : 0.0f) + 0.01f * std::sin(7.0f * x + 3.0f * y);
+  });
+  const Segments out = run(scene);
+  EXPECT_EQ(out.segments.size(), 0u);
+  EXPECT_EQ(out.counters.obstacle_cells, 0u);
+  EXPECT_EQ(out.counters.ground_points,
+            scene.size() - out.counters.ignored_out_of_range - out.counters.ignored_over_capacity);
+}
+
+TEST(Segmenter, PedestrianOnSidewalkOfSlopedRoadIsFound) {
+  Scene scene;
+  scene.ground(20.0f, 0.1f, [](float x, float y) { return 0.05f * x + (y > 3.0f ? 0.15f : 0.0f); });
+  // A 1.7 m pedestrian on the sidewalk at x = 10 (ground there 0.5 + 0.15 m above the flat road).
+  Scene person;
+  person.cylinder(10.0f, 5.0f, 0.25f, 1.7f);
+  for (std::size_t i = 0; i < person.size(); ++i) {
+    scene.add(person.xyzi[4 * i], person.xyzi[4 * i + 1], person.xyzi[4 * i + 2] + 0.65f);
+  }
+  const Segments out = run(scene);
+  ASSERT_EQ(out.segments.size(), 1u);
+  EXPECT_NEAR(out.segments[0].centroid[0], 10.0f, 0.1f);
+  EXPECT_NEAR(out.segments[0].centroid[1], 5.0f, 0.1f);
+}
+
+TEST(Segmenter, PedestrianHalfAMetreFromCarIsSeparate) {
+  Scene scene;
+  scene.flat_ground();
+  scene.box(10.0f, 0.0f, 4.5f, 1.8f, 1.5f);                 // car, side at y = 0.9
+  scene.cylinder(10.0f, 0.9f + 0.5f + 0.25f, 0.25f, 1.7f);  // pedestrian 0.5 m from its side
+  const Segments out = run(scene);
+  ASSERT_EQ(out.segments.size(), 2u);
+  const Segment& car =
+      out.segments[0].count > out.segments[1].count ? out.segments[0] : out.segments[1];
+  const Segment& ped = &car == &out.segments[0] ? out.segments[1] : out.segments[0];
+  EXPECT_NEAR(car.box.length, 4.5f, 0.2f);
+  EXPECT_NEAR(car.box.width, 1.8f, 0.2f);
+  EXPECT_NEAR(ped.centroid[1], 1.65f, 0.1f);
+  EXPECT_NEAR(ped.box.length, 0.5f, 0.15f);
+}
+
+// A car beside the sensor: its near side, and its roof hit by two rings 0.85 and 1.75 m behind
+// it; nothing is seen between them (the roof between rings is not sampled, the road is hidden).
+Scene car_with_roof_rings() {
+  Scene scene;
+  scene.ground(20.0f, 0.1f, [](float, float) { return 0.0f; });
+  Scene kept;
+  for (std::size_t i = 0; i < scene.size(); ++i) {
+    const float x = scene.xyzi[4 * i], y = scene.xyzi[4 * i + 1];
+    if (std::fabs(x) < 2.5f && y > 7.6f && y < 11.0f) continue;  // hidden by the car
+    kept.add(x, y, scene.xyzi[4 * i + 2]);
+  }
+  for (float x = -2.0f; x <= 2.0f; x += 0.05f) {
+    for (float z = -1.5f; z <= -0.25f; z += 0.05f) kept.add(x, 7.65f, z);
+    kept.add(x, 8.5f, -0.25f);
+    kept.add(x, 9.4f, -0.25f);
+  }
+  return kept;
+}
+
+TEST(Segmenter, CarRoofRingsAcrossUnseenCellsAreOneSegment) {
+  const Scene scene = car_with_roof_rings();
+  const Segments out = run(scene);
+  ASSERT_EQ(out.segments.size(), 1u);
+  EXPECT_NEAR(out.segments[0].box.width, 9.4f - 7.65f, 0.1f);
+  SegmenterConfig no_bridge = test_config();
+  no_bridge.bridge_m = 0.0;
+  EXPECT_EQ(run(scene, no_bridge).segments.size(), 3u);  // side and two roof lines
+}
+
+TEST(Segmenter, SeenGroundKeepsObjectsOnOneRayApart) {
+  Scene scene;
+  scene.flat_ground();
+  scene.cylinder(0.0f, 8.0f, 0.25f, 1.8f);
+  scene.cylinder(0.0f, 9.2f, 0.25f, 1.8f);  // 0.7 m behind the first, ground visible between
+  EXPECT_EQ(run(scene).segments.size(), 2u);
+}
+
+TEST(Segmenter, PedestrianUnderATreeCanopyIsNotJoinedToTheTree) {
+  Scene scene;
+  scene.flat_ground();
+  scene.cylinder(10.0f, 0.0f, 0.2f, 2.8f);       // trunk
+  for (float x = 7.5f; x <= 12.5f; x += 0.1f) {  // canopy 2.8..3.4 m above the ground
+    for (float y = -2.5f; y <= 2.5f; y += 0.1f) {
+      if (std::hypot(x - 10.0f, y) > 2.5f) continue;
+      for (float z = 2.8f; z <= 3.4f; z += 0.3f) scene.add(x, y, -testing::kSensorHeight + z);
+    }
+  }
+  scene.cylinder(10.0f, 1.5f, 0.25f, 1.8f);  // pedestrian under it
+  const Segments out = run(scene);
+  ASSERT_EQ(out.segments.size(), 2u);  // the trunk and the pedestrian
+  EXPECT_GT(out.counters.ignored_above, 0u);
+  for (const Segment& seg : out.segments) EXPECT_LT(seg.box.length, 0.7f);
+}
+
+TEST(Segmenter, OrientedBoxFollowsARotatedCar) {
+  Scene car;
+  car.box(0.0f, 0.0f, 4.5f, 1.8f, 1.5f);
+  Scene scene;
+  scene.flat_ground();
+  const float yaw = 0.6f, c = std::cos(yaw), s = std::sin(yaw);
+  for (std::size_t i = 0; i < car.size(); ++i) {
+    const float x = car.xyzi[4 * i], y = car.xyzi[4 * i + 1];
+    scene.add(7.0f + c * x - s * y, -4.0f + s * x + c * y, car.xyzi[4 * i + 2]);
+  }
+  const Segments out = run(scene);
+  ASSERT_EQ(out.segments.size(), 1u);
+  const OrientedBox& b = out.segments[0].box;
+  EXPECT_NEAR(b.yaw, yaw, 0.05f);
+  EXPECT_NEAR(b.length, 4.5f, 0.2f);
+  EXPECT_NEAR(b.width, 1.8f, 0.2f);
+  EXPECT_NEAR(b.cx, 7.0f, 0.1f);
+  EXPECT_NEAR(b.cy, -4.0f, 0.1f);
+  // Segments hold the points above the ground clearance: the box starts there.
+  EXPECT_NEAR(b.height, 1.5f - static_cast<float>(test_config().ground_clearance_m), 0.06f);
+}
+
+TEST(Segmenter, DropsClustersTooSmallAndTooLarge) {
+  Scene scene;
+  scene.flat_ground(25.0f);
+  scene.add(5.0f, 5.0f, -1.0f);  // one stray point: too small
+  scene.add(5.0f, 5.0f, -0.9f);
+  scene.box(0.0f, -10.0f, 20.0f, 0.3f, 2.0f, 0.1f);  // a 20 m wall: too large (extent 15 m)
+  scene.box(8.0f, 3.0f, 1.0f, 1.0f, 1.0f);
+  const Segments out = run(scene);
+  EXPECT_EQ(out.segments.size(), 1u);
+  EXPECT_EQ(out.counters.clusters, 3u);
+  EXPECT_EQ(out.counters.dropped_too_small, 1u);
+  EXPECT_EQ(out.counters.dropped_too_large, 1u);
+  EXPECT_EQ(accounted(out.counters), scene.size());
+}
+
+TEST(Segmenter, IgnoresPointsOutOfRangeInvalidAndOverhead) {
+  Scene scene;
+  scene.flat_ground(10.0f);
+  std::uint64_t near = 0;  // ground inside min_range_m: the vehicle's own footprint
+  for (std::size_t i = 0; i < scene.size(); ++i) {
+    near +=
+        std::hypot(scene.xyzi[4 * i], scene.xyzi[4 * i + 1]) < test_config().min_range_m ? 1 : 0;
+  }
+  scene.add(50.0f, 0.0f, -1.0f);                          // beyond range_m
+  scene.add(0.2f, 0.1f, -1.0f);                           // inside min_range_m
+  scene.add(std::nanf(""), 1.0f, 0.0f);                   // invalid
+  scene.add(4.0f, 4.0f, -testing::kSensorHeight + 5.0f);  // overhead, above max_height_m
+  const Segments out = run(scene);
+  EXPECT_EQ(out.counters.ignored_out_of_range, near + 2);
+  EXPECT_EQ(out.counters.ignored_invalid, 1u);
+  EXPECT_EQ(out.counters.ignored_above, 1u);
+  EXPECT_EQ(out.segments.size(), 0u);
+  EXPECT_EQ(accounted(out.counters), scene.size());
+}
+
+TEST(Segmenter, ReturnsFromBelowTheRoadDoNotLowerTheGround) {
+  Scene scene;
+  scene.flat_ground();
+  scene.box(10.0f, 0.0f, 4.5f, 1.8f, 1.5f);
+  // Two reflections 2.7 m under the road beside the car (as in KITTI object frame 000003): taken
+  // as ground they would lift the road around them into one obstacle blob.
+  scene.add(10.0f, 1.5f, -testing::kSensorHeight - 2.7f);
+  scene.add(10.1f, 1.5f, -testing::kSensorHeight - 2.7f);
+  const Segments out = run(scene);
+  EXPECT_EQ(out.counters.ignored_below, 2u);
+  ASSERT_EQ(out.segments.size(), 1u);
+  EXPECT_NEAR(out.segments[0].box.length, 4.5f, 0.2f);
+  EXPECT_EQ(accounted(out.counters), scene.size());
+}
+
+TEST(Segmenter, CountsEveryCapacityOverflow) {
+  Scene scene;
+  scene.flat_ground();
+  scene.box(8.0f, 0.0f, 2.0f, 1.0f, 1.2f);
+  scene.box(8.0f, 4.0f, 2.0f, 1.0f, 1.2f);
+  scene.box(-8.0f, 4.0f, 2.0f, 1.0f, 1.2f);
+  {
+    SegmenterConfig c = test_config();
+    c.max_segments = 2;
+    const Segments out = run(scene, c);
+    EXPECT_EQ(out.segments.size(), 2u);
+    EXPECT_EQ(out.counters.dropped_segment_overflow, 1u);
+  }
+  {
+    SegmenterConfig c = test_config();
+    c.max_points = 1000;
+    const Segments out = run(scene, c);
+    EXPECT_EQ(out.counters.ignored_over_capacity, scene.size() - 1000);
+    EXPECT_EQ(accounted(out.counters), scene.size());
+  }
+  {
+    SegmenterConfig c = test_config();
+    c.max_occupied_cells = 500;
+    const Segments out = run(scene, c);
+    EXPECT_EQ(out.counters.occupied_cells, 500u);
+    EXPECT_GT(out.counters.dropped_cell_overflow, 0u);
+    EXPECT_EQ(accounted(out.counters), scene.size());
+  }
+}
+
+TEST(Segmenter, StrideReadsTheDriversPointLayout) {
+  Scene scene;
+  scene.flat_ground();
+  scene.box(8.0f, 0.0f, 2.0f, 1.0f, 1.2f);
+  struct DriverLikePoint {  // the layout of drivers/velodyne/point.hpp: x, y, z first, 32 bytes
+    float x, y, z, intensity, distance;
+    std::int32_t time;
+    std::uint32_t rest[2];
+  };
+  static_assert(sizeof(DriverLikePoint) == 32);
+  std::vector<DriverLikePoint> pts(scene.size());
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    pts[i] = {scene.xyzi[4 * i], scene.xyzi[4 * i + 1], scene.xyzi[4 * i + 2], 0, 0, 0, {0, 0}};
+  }
+  Segmenter segmenter(test_config());
+  Segments a = segmenter.make_segments(), b = segmenter.make_segments();
+  segmenter.segment(scene.view(), a);
+  segmenter.segment(PointView{&pts[0].x, pts.size(), sizeof(DriverLikePoint)}, b);
+  ASSERT_EQ(a.segments.size(), 1u);
+  ASSERT_EQ(b.segments.size(), 1u);
+  EXPECT_EQ(a.segments[0].count, b.segments[0].count);
+  EXPECT_FLOAT_EQ(a.segments[0].centroid[0], b.segments[0].centroid[0]);
+}
+
+TEST(Segmenter, RepeatedScansGiveIdenticalResultsWithoutAllocating) {
+  Scene scene;
+  scene.flat_ground();
+  scene.box(8.0f, 0.0f, 2.0f, 1.0f, 1.2f);
+  scene.cylinder(-5.0f, 3.0f, 0.25f, 1.7f);
+  Segmenter segmenter(test_config());
+  Segments out = segmenter.make_segments();
+  segmenter.segment(scene.view(), out);
+  const std::size_t n = out.segments.size();
+  const std::uint32_t first_count = out.segments[0].count;
+  rt::testing::AllocationCounter counter;
+  for (int i = 0; i < 5; ++i) segmenter.segment(scene.view(), out);
+  counter.stop();
+  EXPECT_EQ(counter.allocations(), 0u);
+  ASSERT_EQ(out.segments.size(), n);
+  EXPECT_EQ(out.segments[0].count, first_count);
+}
+
+TEST(Segmenter, EmptyScanGivesNoSegmentsAndClearsThePreviousOutput) {
+  Scene scene;
+  scene.flat_ground();
+  scene.box(8.0f, 0.0f, 2.0f, 1.0f, 1.2f);
+  Segmenter segmenter(test_config());
+  Segments out = segmenter.make_segments();
+  segmenter.segment(scene.view(), out);
+  ASSERT_EQ(out.segments.size(), 1u);
+  segmenter.segment(PointView{nullptr, 0, 16}, out);
+  EXPECT_EQ(out.segments.size(), 0u);
+  EXPECT_EQ(out.point_indices.size(), 0u);
+  EXPECT_EQ(out.counters.points_in, 0u);
+  segmenter.segment(scene.view(), out);  // the grids were left empty: same result again
+  ASSERT_EQ(out.segments.size(), 1u);
+}
+
+TEST(Segmenter, RejectsInvalidConfiguration) {
+  SegmenterConfig c;
+  c.cell_m = 0.0;
+  EXPECT_THROW(Segmenter{c}, std::invalid_argument);
+  c = SegmenterConfig{};
+  c.obstacle_height_m = 0.1;  // below the ground clearance
+  EXPECT_STRNE(validate(c), "");
+  EXPECT_STREQ(validate(SegmenterConfig{}), "");
+}
+
+}  // namespace
+}  // namespace stac::segmentation

@@ -1,0 +1,94 @@
+// `stac process` and `stac eval` run as a user would, on a short simulated drive.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "shared_data.hpp"
+#include "stac_cli.hpp"
+#include "tools/tracks_jsonl.hpp"
+
+namespace stac::tools {
+namespace {
+
+using stac::testing::CliResult;
+using stac::testing::stac;
+
+constexpr const char* kYaml = "velodyne/calib/rosdrivers_64e_s2.1-sztaki.yaml";
+
+std::filesystem::path fresh_dir(const std::string& name) {
+  const auto d = std::filesystem::temp_directory_path() / ("stac_process_" + name);
+  std::filesystem::remove_all(d);
+  std::filesystem::create_directories(d);
+  return d;
+}
+
+TEST(ProcessCli, SimulatedDriveGivesOneLinePerScanWithSegmentsTracksAndTruthThatEvalReads) {
+  STAC_REQUIRE_SHARED_DATA(kYaml);
+  const auto dir = fresh_dir("drive");
+  const std::string pcap = (dir / "run.pcap").string(), truth = (dir / "run.jsonl").string();
+  const CliResult sim = stac("sim --scenario parking-lot --seed 11 --duration 2 --calib " +
+                             stac::testing::shared_data(kYaml).string() + " --out " + pcap +
+                             " --truth " + truth);
+  ASSERT_EQ(sim.code, 0) << sim.output;
+  const std::string tracks = (dir / "run.tracks.jsonl").string();
+  const CliResult p = stac("process " + pcap + " --truth " + truth + " --tracks " + tracks);
+  ASSERT_EQ(p.code, 0) << p.output;
+  for (const char* word : {"complete scans", "INS fixes", "hour from the INS", "0 scans without a pose",
+                           "segment", "track", "median", "p99"}) {
+    EXPECT_NE(p.output.find(word), std::string::npos) << word << " missing from:\n" << p.output;
+  }
+  auto out = read_tracks_file(tracks);
+  ASSERT_TRUE(out) << out.error().message;
+  auto truth_scans = read_truth_file(truth);
+  ASSERT_TRUE(truth_scans) << truth_scans.error().message;
+  ASSERT_GE(out->size(), 17u);  // 2 s at 10 Hz, complete scans only
+  std::size_t segments = 0, with_truth = 0, confirmed = 0;
+  for (const TracksScan& s : *out) {
+    for (const SegmentRecord& seg : s.segments) {
+      ++segments;
+      with_truth += seg.has_truth ? 1 : 0;
+      std::uint32_t n = 0;
+      for (const auto& [id, count] : seg.truth) n += count;
+      EXPECT_EQ(n, seg.points);  // every point of a segment is accounted for
+    }
+    for (const TrackRecord& t : s.tracks) confirmed += t.state == "confirmed" ? 1 : 0;
+  }
+  EXPECT_GT(segments, 100u);
+  EXPECT_EQ(with_truth, segments);
+  EXPECT_GT(confirmed, 50u);
+  // The ego of each scan is where the truth says (same world frame, rebuilt from the INS stream).
+  const TruthScanRecord* t0 = nullptr;
+  for (const auto& t : *truth_scans) {
+    if (std::llabs(t.stamp_ns - out->front().stamp_ns) < 1'000'000) t0 = &t;
+  }
+  ASSERT_NE(t0, nullptr);
+  EXPECT_NEAR(out->front().ego.x, t0->ego.x, 0.05);
+  EXPECT_NEAR(out->front().ego.y, t0->ego.y, 0.05);
+
+  const CliResult e = stac("eval --truth " + truth + " --tracks " + tracks + " --report " + (dir / "eval").string());
+  ASSERT_EQ(e.code, 0) << e.output;
+  EXPECT_TRUE(std::filesystem::exists(dir / "eval" / "metrics.json"));
+
+  // Without the INS the sensor frame is the world: still one line per scan, and it says so.
+  const CliResult parked = stac("process " + pcap + " --no-deskew --tracks " + (dir / "parked.jsonl").string());
+  ASSERT_EQ(parked.code, 0) << parked.output;
+  EXPECT_NE(parked.output.find("parked sensor"), std::string::npos) << parked.output;
+  auto parked_out = read_tracks_file(dir / "parked.jsonl");
+  ASSERT_TRUE(parked_out);
+  EXPECT_EQ(parked_out->size(), out->size());
+}
+
+TEST(ProcessCli, BadInputsAreNamed) {
+  const auto dir = fresh_dir("errors");
+  const CliResult missing = stac("process /nonexistent.pcap --tracks " + (dir / "x.jsonl").string());
+  EXPECT_NE(missing.code, 0);
+  EXPECT_NE(missing.output.find("nonexistent.pcap"), std::string::npos) << missing.output;
+  const CliResult origin = stac("process " + std::string(STAC_SOURCE_DIR) + "/README.md --origin 95,0,0 --tracks " +
+                                (dir / "x.jsonl").string());
+  EXPECT_NE(origin.code, 0);
+}
+
+}  // namespace
+}  // namespace stac::tools

@@ -1,0 +1,317 @@
+// stac process: a capture through the whole per-scan pipeline, offline, as fast as possible and
+// deterministic: decode -> (INS poses) deskew -> segment -> track -> a tracks file, with
+// per-stage CPU time statistics at the end.
+#include <time.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "drivers/io/pcap_reader.hpp"
+#include "drivers/velodyne/scan_stream.hpp"
+#include "ego/deskew.hpp"
+#include "ego/time_sync.hpp"
+#include "perception/segmentation/segmenter.hpp"
+#include "perception/tracking/tracker.hpp"
+#include "tools/capture_poses.hpp"
+#include "tools/commands.hpp"
+#include "tools/progress.hpp"
+#include "tools/sensor_status.hpp"
+#include "tools/settings.hpp"
+#include "tools/tracks_jsonl.hpp"
+
+namespace stac::tools {
+namespace {
+
+struct ProcessOptions {
+  std::string in, tracks, truth, config, calib, origin;
+  bool no_deskew = false;
+};
+
+// CPU time of this thread (ns): a stage's cost on one core, whatever else the machine does.
+std::int64_t cpu_ns() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<std::int64_t>(t.tv_sec) * 1'000'000'000 + t.tv_nsec;
+}
+
+struct Stage {
+  const char* name;
+  std::vector<double> ms;
+};
+
+void print_stats(const std::vector<Stage>& stages) {
+  std::fprintf(stderr, "  %-12s %9s %9s %9s   (CPU ms per scan, one core)\n", "stage", "median", "p99", "max");
+  for (const Stage& s : stages) {
+    if (s.ms.empty()) continue;
+    std::vector<double> v = s.ms;
+    std::sort(v.begin(), v.end());
+    const auto at = [&](double q) { return v[std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size())))]; };
+    std::fprintf(stderr, "  %-12s %9.3f %9.3f %9.3f\n", s.name, at(0.5), at(0.99), v.back());
+  }
+}
+
+double yaw_of(const Eigen::Matrix3d& r) { return std::atan2(r(1, 0), r(0, 0)); }
+
+// Which truth object each segment point lies in (the smallest box holding it, grown by 5 cm),
+// counted per segment; -1 for points in no box.
+void truth_composition(const TruthScanRecord& truth, const velodyne::Scan& scan,
+                       const segmentation::Segments& segments, const Eigen::Isometry3d& world_T_sensor,
+                       std::vector<SegmentRecord>& out) {
+  constexpr double kGrow = 0.05;
+  for (std::size_t si = 0; si < segments.segments.size(); ++si) {
+    const segmentation::Segment& seg = segments.segments[si];
+    const Eigen::Vector3d c = world_T_sensor * Eigen::Vector3d(seg.centroid[0], seg.centroid[1], seg.centroid[2]);
+    const double reach = 0.5 * std::hypot(seg.box.length, seg.box.width) + 1.0;
+    std::vector<const TruthObjectRecord*> near;
+    for (const TruthObjectRecord& o : truth.objects) {
+      if (std::hypot(o.x - c.x(), o.y - c.y()) < reach + 0.5 * std::hypot(o.length, o.width)) near.push_back(&o);
+    }
+    std::vector<std::pair<std::int64_t, std::uint32_t>> counts;
+    auto add = [&](std::int64_t id) {
+      for (auto& [k, n] : counts) {
+        if (k == id) return void(++n);
+      }
+      counts.emplace_back(id, 1);
+    };
+    for (std::uint32_t idx : segments.indices(seg)) {
+      const velodyne::Point& p = scan.points[idx];
+      const Eigen::Vector3d w = world_T_sensor * Eigen::Vector3d(p.x, p.y, p.z);
+      const TruthObjectRecord* best = nullptr;
+      double best_volume = 0;
+      for (const TruthObjectRecord* o : near) {
+        const double dx = w.x() - o->x, dy = w.y() - o->y;
+        const double u = std::cos(o->yaw) * dx + std::sin(o->yaw) * dy;
+        const double v = -std::sin(o->yaw) * dx + std::cos(o->yaw) * dy;
+        if (std::abs(u) > o->length / 2 + kGrow || std::abs(v) > o->width / 2 + kGrow ||
+            std::abs(w.z() - o->z) > o->height / 2 + kGrow) {
+          continue;
+        }
+        const double volume = o->length * o->width * o->height;
+        if (best == nullptr || volume < best_volume) best = o, best_volume = volume;
+      }
+      add(best == nullptr ? -1 : static_cast<std::int64_t>(best->id));
+    }
+    out[si].truth = std::move(counts);
+    out[si].has_truth = true;
+  }
+}
+
+rt::Result<ego::Geodetic> parse_origin(const std::string& text) {
+  ego::Geodetic g;
+  if (std::sscanf(text.c_str(), "%lf,%lf,%lf", &g.lat_deg, &g.lon_deg, &g.alt_m) != 3 ||
+      std::abs(g.lat_deg) > 90 || std::abs(g.lon_deg) > 180) {
+    return rt::make_error("--origin '" + text + "': expected LAT,LON,ALT (deg, deg, m)");
+  }
+  return g;
+}
+
+int run_process(const ProcessOptions& o) {
+  const std::filesystem::path config = config_path(o.config);
+  auto velodyne_settings = load_velodyne_settings(config);
+  if (!velodyne_settings) return fail(velodyne_settings.error().message);
+  auto ego_settings = load_ego_settings(config);
+  if (!ego_settings) return fail(ego_settings.error().message);
+  auto segmenter_config = load_segmentation_settings(config);
+  if (!segmenter_config) return fail(segmenter_config.error().message);
+  auto tracker_config = load_tracking_config(config);
+  if (!tracker_config) return fail(tracker_config.error().message);
+  VelodyneSettings& vs = *velodyne_settings;
+  if (!o.calib.empty()) vs.calibration = o.calib == "stream" ? std::filesystem::path{} : std::filesystem::path(o.calib);
+  auto calibration = capture_calibration(vs.calibration, o.in, vs.port, vs.assembler.decoder.model);
+  if (!calibration) return fail(calibration.error().message);
+
+  // The truth (for segmentation metrics) and the frame it is written in.
+  std::vector<TruthScanRecord> truth;
+  if (!o.truth.empty()) {
+    auto t = read_truth_file(o.truth);
+    if (!t) return fail(t.error().message);
+    truth = std::move(*t);
+    if (!truth.empty() && truth.front().origin && !ego_settings->origin) {
+      const auto& g = *truth.front().origin;
+      ego_settings->origin = ego::Geodetic{g[0], g[1], g[2]};
+    }
+  }
+  if (!o.origin.empty()) {
+    auto g = parse_origin(o.origin);
+    if (!g) return fail(g.error().message);
+    ego_settings->origin = *g;
+  }
+  std::optional<CapturePoses> poses;
+  if (!o.no_deskew) {
+    auto p = load_capture_poses(o.in, *ego_settings);
+    if (!p) return fail(p.error().message);
+    poses = std::move(*p);
+  }
+
+  auto reader = io::PcapReader::open(o.in, io::PcapFilter{.udp_dst_port = vs.port, .udp_src_port = {}});
+  if (!reader) return fail(reader.error().message);
+  std::ofstream out(o.tracks);
+  if (!out) return fail(o.tracks + ": cannot create the tracks file");
+
+  // Everything the per-scan loop uses is allocated here.
+  velodyne::ScanStream stream(*calibration, vs.assembler, 2);
+  ego::Deskewer deskewer(ego_settings->deskew);
+  segmentation::Segmenter segmenter(*segmenter_config);
+  segmentation::Segments segments = segmenter.make_segments();
+  tracking::Tracker tracker(*tracker_config);
+  tracking::TrackerOutput tracked(tracker_config->max_tracks);
+  std::vector<tracking::Detection> detections;
+  detections.reserve(segmenter_config->max_segments);
+  const velodyne::TrailerKind trailer = velodyne::traits(vs.assembler.decoder.model).trailer;
+  const Eigen::Isometry3d sensor_T_vehicle = ego_settings->deskew.vehicle_T_sensor.inverse();
+
+  std::vector<Stage> stages{{"decode", {}}, {"deskew", {}}, {"segment", {}}, {"track", {}}, {"total", {}}};
+  std::uint64_t scans = 0, without_pose = 0, truth_matched = 0;
+  std::size_t truth_next = 0;
+  std::string line;
+  std::int64_t decode_ns = 0;
+  ego::ScanClockSource clock_source = ego::ScanClockSource::kReceive;
+
+  auto handle = [&](velodyne::Scan& scan) {
+    const std::int64_t t0 = cpu_ns();
+    const ego::ScanClock clock = ego::scan_clock(
+        scan.header, trailer,
+        poses ? std::optional<std::int64_t>(poses->history->newest_stamp_ns()) : std::nullopt);
+    clock_source = clock.source;
+    Eigen::Isometry3d world_T_sensor = ego_settings->deskew.vehicle_T_sensor;  // parked: vehicle = world
+    Eigen::Isometry3d world_T_vehicle_start = Eigen::Isometry3d::Identity();
+    if (poses) {
+      const ego::DeskewResult r = deskewer.apply(scan, *poses->history, clock.scan_to_pose_ns);
+      if (r.ok()) {
+        world_T_sensor = r.world_T_sensor;
+        const ego::PoseLookup start = poses->history->at(scan.header.stamp_ns + clock.scan_to_pose_ns);
+        world_T_vehicle_start = start.ok() ? ego::to_isometry(start.pose) : r.world_T_sensor * sensor_T_vehicle;
+      } else {
+        ++without_pose;
+      }
+    }
+    const std::int64_t t1 = cpu_ns();
+    segmenter.segment(segmentation::PointView{&scan.points.data()->x, scan.points.size(), sizeof(velodyne::Point)},
+                      segments);
+    const std::int64_t t2 = cpu_ns();
+    detections.clear();
+    const double sensor_yaw = yaw_of(world_T_sensor.linear());
+    for (std::size_t i = 0; i < segments.segments.size(); ++i) {
+      const segmentation::Segment& s = segments.segments[i];
+      const Eigen::Vector3d c = world_T_sensor * Eigen::Vector3d(s.centroid[0], s.centroid[1], s.centroid[2]);
+      detections.push_back({c.cast<float>(), s.box.length, s.box.width, s.box.height,
+                            static_cast<float>(s.box.yaw + sensor_yaw), s.count, static_cast<std::uint32_t>(i)});
+    }
+    const std::int64_t stamp = scan.header.stamp_ns + clock.scan_to_pose_ns;
+    tracker.update(stamp, detections, tracked);
+    const std::int64_t t3 = cpu_ns();
+    stages[0].ms.push_back(static_cast<double>(decode_ns) * 1e-6);
+    stages[1].ms.push_back(static_cast<double>(t1 - t0) * 1e-6);
+    stages[2].ms.push_back(static_cast<double>(t2 - t1) * 1e-6);
+    stages[3].ms.push_back(static_cast<double>(t3 - t2) * 1e-6);
+    stages[4].ms.push_back(static_cast<double>(decode_ns + t3 - t0) * 1e-6);
+    decode_ns = 0;
+
+    // The record (outside the timed stages).
+    TracksScan rec;
+    rec.scan = scan.header.sequence;
+    rec.stamp_ns = stamp;
+    rec.ego = {world_T_vehicle_start.translation().x(), world_T_vehicle_start.translation().y(),
+               world_T_vehicle_start.translation().z(), yaw_of(world_T_vehicle_start.linear())};
+    rec.segments.resize(segments.segments.size());
+    for (std::size_t i = 0; i < segments.segments.size(); ++i) {
+      const segmentation::Segment& s = segments.segments[i];
+      const Eigen::Vector3d b = world_T_sensor * Eigen::Vector3d(s.box.cx, s.box.cy, s.box.cz);
+      rec.segments[i] = {static_cast<std::uint32_t>(i), s.count, b.x(), b.y(), b.z(), s.box.length,
+                         s.box.width, s.box.height, s.box.yaw + sensor_yaw, {}, false};
+    }
+    for (const tracking::Track& t : tracked.tracks) rec.tracks.push_back(track_record(t));
+    if (!truth.empty()) {
+      while (truth_next + 1 < truth.size() &&
+             std::llabs(truth[truth_next + 1].stamp_ns - stamp) <= std::llabs(truth[truth_next].stamp_ns - stamp)) {
+        ++truth_next;
+      }
+      if (std::llabs(truth[truth_next].stamp_ns - stamp) <= 1'000'000) {
+        truth_composition(truth[truth_next], scan, segments, world_T_sensor, rec.segments);
+        ++truth_matched;
+      }
+    }
+    line.clear();
+    append_json_line(rec, line);
+    out << line;
+    ++scans;
+  };
+
+  Progress progress("process", static_cast<double>(std::filesystem::file_size(o.in)));
+  io::Datagram d;
+  while (reader->next(d)) {
+    const std::int64_t c0 = cpu_ns();
+    const bool closed = stream.add_packet(d.payload, d.stamp_ns);
+    decode_ns += cpu_ns() - c0;
+    if (closed) {
+      while (velodyne::Scan* scan = stream.take()) {
+        if (scan->header.complete()) handle(*scan);
+        stream.release();
+      }
+    }
+    progress.update(static_cast<double>(reader->bytes_read()));
+  }
+  progress.finish();
+  out.close();
+  if (!out) return fail(o.tracks + ": write failed");
+  if (!reader->error().empty()) std::fprintf(stderr, "stac process: warning: %s\n", reader->error().c_str());
+
+  std::fprintf(stderr, "stac process: %s -> %s: %llu complete scans\n", o.in.c_str(), o.tracks.c_str(),
+               static_cast<unsigned long long>(scans));
+  if (poses) {
+    std::fprintf(stderr, "  ego         %llu INS fixes (%llu skipped before a GPS week, %llu not aligned); "
+                 "scan clock: %s; %llu scans without a pose (not deskewed)\n",
+                 static_cast<unsigned long long>(poses->counters.ins_fixes),
+                 static_cast<unsigned long long>(poses->counters.no_absolute_time),
+                 static_cast<unsigned long long>(poses->counters.not_aligned), ego::to_string(clock_source),
+                 static_cast<unsigned long long>(without_pose));
+  } else {
+    std::fprintf(stderr, "  ego         %s: parked sensor, world = vehicle frame\n",
+                 o.no_deskew ? "--no-deskew" : ("no INS stream on port " + std::to_string(ego_settings->ins_port)).c_str());
+  }
+  const auto& tc = tracker.counters();
+  std::fprintf(stderr, "  tracks      %llu spawned, %llu live at the end; pool overflow %llu, detections dropped %llu\n",
+               static_cast<unsigned long long>(tc.spawned), static_cast<unsigned long long>(tracker.live_tracks()),
+               static_cast<unsigned long long>(tc.pool_overflow), static_cast<unsigned long long>(tc.dropped_detections));
+  if (!truth.empty()) {
+    std::fprintf(stderr, "  truth       %llu of %llu scans matched to a truth scan (segment composition written)\n",
+                 static_cast<unsigned long long>(truth_matched), static_cast<unsigned long long>(scans));
+  }
+  print_stats(stages);
+  if (scans == 0) return fail(o.in + ": no complete scan in the capture");
+  return 0;
+}
+
+}  // namespace
+
+void add_process_command(CLI::App& app) {
+  auto o = std::make_shared<ProcessOptions>();
+  CLI::App* cmd = app.add_subcommand("process", "Run a capture through decode, deskew, segmentation and tracking");
+  cmd->description(
+      "Runs a capture through the per-scan pipeline as fast as possible, deterministically:\n"
+      "decode -> deskew (with the capture's Applanix INS stream, when it has one) -> segment ->\n"
+      "track, and writes one JSON line per scan (segments and tracks in the world frame,\n"
+      "docs/evaluation.md). With --truth (a `stac sim` truth file) each segment also says which\n"
+      "truth objects its points fall in, for `stac eval`. Prints CPU time per stage at the end.");
+  cmd->add_option("capture", o->in, "pcap capture (HDL-64E UDP, optionally the POS LV stream)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--tracks", o->tracks, "output: the tracks file (JSON lines)")->required();
+  cmd->add_option("--truth", o->truth, "truth file of a simulated drive (adds segment composition)")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--config", o->config, "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
+  cmd->add_option("--calib", o->calib, "calibration file or 'stream' (default: the config's)");
+  cmd->add_option("--origin", o->origin,
+                  "LAT,LON,ALT of the world frame (default: the truth's, else the config's ego.origin)");
+  cmd->add_flag("--no-deskew", o->no_deskew, "ignore the INS stream: no deskew, sensor frame = world");
+  cmd->callback([o] {
+    if (const int code = run_process(*o); code != 0) throw CLI::RuntimeError(code);
+  });
+}
+
+}  // namespace stac::tools
