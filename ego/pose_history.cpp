@@ -48,11 +48,12 @@ bool PoseHistory::push(const PoseSample& sample) noexcept {
                              sample.angular_rate_rps.x(), sample.angular_rate_rps.y(),
                              sample.angular_rate_rps.z(), 0.0,
                              0.0,                         0.0};
+  // Seqlock without fences (which ThreadSanitizer cannot follow): every field is stored with
+  // release, so a reader that sees any new field also sees the odd sequence stored before it.
   Slot& slot = slots_[i % config_.capacity];
   slot.sequence.store(2 * i + 1, std::memory_order_relaxed);
-  std::atomic_thread_fence(std::memory_order_release);
-  slot.stamp_ns.store(sample.stamp_ns, std::memory_order_relaxed);
-  for (int k = 0; k < kFields; ++k) slot.v[static_cast<std::size_t>(k)].store(v[k], std::memory_order_relaxed);
+  slot.stamp_ns.store(sample.stamp_ns, std::memory_order_release);
+  for (int k = 0; k < kFields; ++k) slot.v[static_cast<std::size_t>(k)].store(v[k], std::memory_order_release);
   slot.sequence.store(2 * i + 2, std::memory_order_release);
   head_.store(i + 1, std::memory_order_release);
   last_stamp_ns_ = sample.stamp_ns;
@@ -63,8 +64,7 @@ bool PoseHistory::read_stamp(std::uint64_t index, std::int64_t& out) const noexc
   const Slot& slot = slots_[index % config_.capacity];
   const std::uint64_t s1 = slot.sequence.load(std::memory_order_acquire);
   if (s1 != 2 * index + 2) return false;  // being written, or already another sample
-  out = slot.stamp_ns.load(std::memory_order_relaxed);
-  std::atomic_thread_fence(std::memory_order_acquire);
+  out = slot.stamp_ns.load(std::memory_order_acquire);  // acquire: the check below stays after it
   return slot.sequence.load(std::memory_order_relaxed) == s1;
 }
 
@@ -73,9 +73,8 @@ bool PoseHistory::read(std::uint64_t index, PoseSample& out) const noexcept {
   const std::uint64_t s1 = slot.sequence.load(std::memory_order_acquire);
   if (s1 != 2 * index + 2) return false;
   double v[kFields];
-  out.stamp_ns = slot.stamp_ns.load(std::memory_order_relaxed);
-  for (int k = 0; k < kFields; ++k) v[k] = slot.v[static_cast<std::size_t>(k)].load(std::memory_order_relaxed);
-  std::atomic_thread_fence(std::memory_order_acquire);
+  out.stamp_ns = slot.stamp_ns.load(std::memory_order_acquire);
+  for (int k = 0; k < kFields; ++k) v[k] = slot.v[static_cast<std::size_t>(k)].load(std::memory_order_acquire);
   if (slot.sequence.load(std::memory_order_relaxed) != s1) return false;
   out.position_m = {v[0], v[1], v[2]};
   out.attitude = Eigen::Quaterniond(v[3], v[4], v[5], v[6]);
