@@ -1,6 +1,8 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <string>
 #include <map>
 #include <set>
 
@@ -154,6 +156,150 @@ TEST(SimRun, TruthBoxesHoldTheirObjectsPoints) {
       << inside << " of " << total;
   EXPECT_GT(per_class["car"], 1000u);
   EXPECT_GT(per_class["pedestrian"], 50u);
+}
+
+
+// A plan-view rectangle by its corners, for an overlap check written independently of the
+// scenario code (corner containment and edge crossings, not separating axes).
+struct Rect {
+  double px[4], py[4];
+};
+
+Rect rect(double x, double y, double yaw, double length, double width) {
+  const double c = std::cos(yaw), s = std::sin(yaw), l = length / 2, w = width / 2;
+  const double lx[4] = {l, -l, -l, l}, ly[4] = {w, w, -w, -w};
+  Rect r{};
+  for (int i = 0; i < 4; ++i) {
+    r.px[i] = x + c * lx[i] - s * ly[i];
+    r.py[i] = y + s * lx[i] + c * ly[i];
+  }
+  return r;
+}
+
+bool inside(const Rect& r, double x, double y) {  // strictly inside (convex, either winding)
+  int sign = 0;
+  for (int i = 0; i < 4; ++i) {
+    const int j = (i + 1) % 4;
+    const double cross = (r.px[j] - r.px[i]) * (y - r.py[i]) - (r.py[j] - r.py[i]) * (x - r.px[i]);
+    const int sg = cross > 1e-9 ? 1 : cross < -1e-9 ? -1 : 0;
+    if (sg == 0) return false;
+    if (sign == 0) sign = sg;
+    if (sg != sign) return false;
+  }
+  return true;
+}
+
+bool segments_cross(double ax, double ay, double bx, double by, double cx, double cy, double dx, double dy) {
+  auto orient = [](double ox, double oy, double px, double py, double qx, double qy) {
+    return (px - ox) * (qy - oy) - (py - oy) * (qx - ox);
+  };
+  const double o1 = orient(ax, ay, bx, by, cx, cy), o2 = orient(ax, ay, bx, by, dx, dy);
+  const double o3 = orient(cx, cy, dx, dy, ax, ay), o4 = orient(cx, cy, dx, dy, bx, by);
+  return ((o1 > 0) != (o2 > 0)) && ((o3 > 0) != (o4 > 0)) && o1 != 0 && o2 != 0 && o3 != 0 && o4 != 0;
+}
+
+bool rects_overlap(const Rect& a, const Rect& b) {
+  for (int i = 0; i < 4; ++i) {
+    if (inside(a, b.px[i], b.py[i]) || inside(b, a.px[i], a.py[i])) return true;
+    for (int j = 0; j < 4; ++j) {
+      if (segments_cross(a.px[i], a.py[i], a.px[(i + 1) % 4], a.py[(i + 1) % 4], b.px[j], b.py[j],
+                         b.px[(j + 1) % 4], b.py[(j + 1) % 4])) {
+        return true;
+      }
+    }
+  }
+  return false;
+}
+
+// Every 0.05 s of the drive: no car, pedestrian or bicyclist inside the ego's footprint, and
+// nobody inside a car (cars are kept apart from everyone, pedestrians and bicyclists from cars).
+// Returns the number of overlaps found (with a description of the first few).
+std::size_t overlaps_in(const std::string& name, std::uint64_t seed, double duration, std::string& first) {
+  auto s = make_scenario(name, seed, duration);
+  EXPECT_TRUE(s);
+  if (!s) return 1;
+  std::vector<std::size_t> fg;
+  for (std::size_t i = 0; i < s->actors.size(); ++i) {
+    if (is_foreground(s->actors[i].cls)) fg.push_back(i);
+  }
+  std::size_t found = 0;
+  std::vector<Rect> boxes(fg.size());
+  std::vector<Pose> poses(fg.size());
+  const int steps = static_cast<int>(std::floor(duration / 0.05));
+  for (int k = 0; k <= steps; ++k) {
+    const double t = k * 0.05;
+    const Pose e = s->ego_path.pose_at(t);
+    const Rect ego = rect(e.x, e.y, e.yaw, kEgoLength, kEgoWidth);
+    for (std::size_t n = 0; n < fg.size(); ++n) {
+      const Actor& a = s->actors[fg[n]];
+      poses[n] = a.path.pose_at(t);
+      boxes[n] = rect(poses[n].x, poses[n].y, poses[n].yaw, a.size.x, a.size.y);
+      if (std::hypot(poses[n].x - e.x, poses[n].y - e.y) < 20 && rects_overlap(boxes[n], ego)) {
+        if (found++ < 3) first += "t=" + std::to_string(t) + " actor " + std::to_string(a.id) + " in the ego; ";
+      }
+    }
+    for (std::size_t n = 0; n < fg.size(); ++n) {
+      const Actor& a = s->actors[fg[n]];
+      for (std::size_t m = n + 1; m < fg.size(); ++m) {
+        const Actor& b = s->actors[fg[m]];
+        if (a.cls != ObjectClass::kCar && b.cls != ObjectClass::kCar) continue;
+        if (std::hypot(poses[n].x - poses[m].x, poses[n].y - poses[m].y) > 0.5 * (a.size.x + b.size.x) + 2) continue;
+        if (rects_overlap(boxes[n], boxes[m])) {
+          if (found++ < 3) {
+            first += "t=" + std::to_string(t) + " actors " + std::to_string(a.id) + " and " + std::to_string(b.id) + "; ";
+          }
+        }
+      }
+    }
+  }
+  return found;
+}
+
+TEST(Scenarios, NoActorEverOverlapsTheEgoOrACar) {
+  struct Case {
+    std::string name;
+    std::uint64_t seed;
+    double duration;
+  };
+  std::vector<Case> cases;
+  for (std::uint64_t seed = 1; seed <= 5; ++seed) cases.push_back({"urban", seed, 20.0});
+  cases.push_back({"urban", 5, 0.35});
+  cases.push_back({"urban", 2, 3.0});
+  cases.push_back({"urban", 9, 60.0});
+  for (const std::string name : {"intersection", "highway", "parking-lot", "crowd"}) {
+    for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+      cases.push_back({name, seed, 20.0});
+      cases.push_back({name, seed + 10, 2.0});
+    }
+  }
+  for (const Case& c : cases) {
+    std::string first;
+    EXPECT_EQ(overlaps_in(c.name, c.seed, c.duration, first), 0u)
+        << c.name << " seed " << c.seed << " " << c.duration << " s: " << first;
+  }
+}
+
+// The sensor never ends up inside an object: over a 20 s urban drive (which stops at the
+// crossing and meets traffic) every scan has at least 60 % of the median points.
+TEST(SimRun, NoScanOfAnUrbanDriveIsSwallowed) {
+  STAC_REQUIRE_SHARED_DATA(kCalib);
+  const velodyne::Calibration cal = calibration();
+  auto run = SimRun::create(cal, config("urban", 1, 20.0));
+  ASSERT_TRUE(run) << run.error().message;
+  std::vector<std::uint32_t> points;
+  std::array<std::uint8_t, velodyne::kPacketSize> bytes{};
+  for (std::uint32_t k = 0; k < (*run)->packet_count(); ++k) {
+    std::int64_t first = 0;
+    (*run)->packet(k, bytes, first, [&](const TruthScan& s) { points.push_back(s.points); });
+  }
+  ASSERT_GE(points.size(), 190u);
+  std::vector<std::uint32_t> sorted = points;
+  std::sort(sorted.begin(), sorted.end());
+  const double median = sorted[sorted.size() / 2];
+  EXPECT_GT(median, 90'000.0);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    EXPECT_GE(points[i], 0.6 * median) << "scan " << i;
+  }
 }
 
 TEST(Scenarios, EachBuildsItsWorld) {
