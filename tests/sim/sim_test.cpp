@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <string>
 #include <map>
 #include <set>
@@ -74,6 +75,74 @@ TEST(SimLidar, DecoderReturnsEveryHitWithin3mm) {
   }
   EXPECT_GT(compared, 300'000u);
   EXPECT_LT(worst, 0.003);
+}
+
+
+// Dual return (S3): the last-return blocks carry a second echo where one physically occurs
+// (through foliage, at edges), and the same return as the strongest block where there is one
+// echo only (as Velodyne's manuals state for dual mode).
+TEST(SimLidar, DualReturnGivesADifferentLastEchoOnVegetation) {
+  STAC_REQUIRE_SHARED_DATA(kCalib);
+  const velodyne::Calibration cal = calibration();
+  RunConfig rc = config("urban", 4, 0.4);
+  rc.lidar.dual_return = true;
+  rc.lidar.model = velodyne::Model::kS3;
+  auto run = SimRun::create(cal, rc);
+  ASSERT_TRUE(run) << run.error().message;
+  velodyne::DecoderConfig dc;
+  dc.model = velodyne::Model::kS3;
+  dc.min_range_m = 0.0f;
+  dc.max_range_m = 200.0f;
+  velodyne::PacketDecoder decoder(cal, dc);
+  std::array<std::uint8_t, velodyne::kPacketSize> bytes{};
+  std::size_t veg = 0, veg_differ = 0, solid = 0, solid_differ = 0, last_points = 0;
+  for (std::uint32_t k = 0; k < (*run)->packet_count(); ++k) {
+    std::map<int, BeamRecord> beams;  // strongest block * 64 + laser -> record
+    std::int64_t first = 0;
+    (*run)->packet(k, bytes, first, {}, [&](const BeamRecord& b) {
+      if (b.returned) beams[b.block * 64 + b.laser] = b;
+    });
+    const velodyne::RawPacket* p = velodyne::as_packet(bytes);
+    ASSERT_NE(p, nullptr);
+    for (int block = 0; block < 12; ++block) {
+      if (block % 4 >= 2) continue;  // the strongest blocks; block + 2 is the last-return one
+      velodyne::Point strongest[32], last[32];
+      const int ns = decoder.decode_block(p->blocks[block], block, true, 0, strongest);
+      const int nl = decoder.decode_block(p->blocks[block + 2], block + 2, true, 0, last);
+      ASSERT_EQ(ns, nl) << "every strongest return has a last-block return";
+      last_points += static_cast<std::size_t>(nl);
+      for (int i = 0; i < ns; ++i) {
+        ASSERT_EQ(strongest[i].laser, last[i].laser);
+        const auto it = beams.find(block * 64 + strongest[i].laser);
+        ASSERT_NE(it, beams.end());
+        const bool differ = std::abs(strongest[i].distance_m - last[i].distance_m) > 0.3f;
+        const std::int64_t actor = it->second.actor;
+        const bool vegetation = actor >= 0 && ((*run)->world().actors()[static_cast<std::size_t>(actor)].cls == ObjectClass::kTree ||
+                                               (*run)->world().actors()[static_cast<std::size_t>(actor)].cls == ObjectClass::kBush);
+        if (vegetation) {
+          ++veg;
+          veg_differ += differ ? 1 : 0;
+        } else {
+          ++solid;
+          solid_differ += differ ? 1 : 0;
+          // Where the last block differs, it holds the weaker echo.
+          if (differ) {
+            const std::size_t j = strongest[i].laser % 32u;
+            EXPECT_LE(p->blocks[block + 2].returns[j].intensity, p->blocks[block].returns[j].intensity);
+          }
+        }
+      }
+    }
+  }
+  std::printf("dual return: %zu of %zu foliage beams and %zu of %zu others have a second echo\n", veg_differ,
+              veg, solid_differ, solid);
+  EXPECT_GT(last_points, 200'000u);
+  ASSERT_GT(veg, 500u);
+  // Most beams into foliage have a second echo (the foliage or what is behind it).
+  EXPECT_GT(static_cast<double>(veg_differ) / static_cast<double>(veg), 0.5) << veg_differ << " of " << veg;
+  // On solid surfaces only edges give a second echo: some, but few.
+  EXPECT_GT(solid_differ, 100u);
+  EXPECT_LT(static_cast<double>(solid_differ) / static_cast<double>(solid), 0.1) << solid_differ << " of " << solid;
 }
 
 TEST(SimRun, SameScenarioAndSeedGiveIdenticalBytes) {
