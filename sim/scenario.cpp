@@ -399,27 +399,30 @@ void traffic(Builder& b, double x0, double x1, double cross_x, double duration, 
     }
   }
   for (int i = 0; i < cars; ++i) {
-    const double u = r.uniform(0, 1);
-    const double v = r.uniform(6, 13);
-    Actor& car = b.vehicle(0, 0, 0);
-    if (u < 0.35) {  // same direction as the ego, stopping at the crossing now and then
-      const double start = r.uniform(x0, x1);
-      const double lane = r.chance(0.5) ? -kInner : -kOuter;
-      const bool stops = start < cross_x && r.chance(0.5);
-      const double stop_at = stops ? cross_x - g.cross_half_width - 3 - start : -1, stop_s = r.uniform(2, 6);
-      b.drive(car, start, lane, 0.0, v, duration, stop_at, stop_s);
-      if (lane == -kInner && !b.commit()) {  // in the ego's way: the outer lane instead
-        Actor& other = b.vehicle(0, 0, 0);
-        b.drive(other, start, -kOuter, 0.0, v, duration, stop_at, stop_s);
+    for (int attempt = 0; attempt < 3; ++attempt) {  // a car that cannot fit in is drawn again
+      const double u = r.uniform(0, 1);
+      const double v = r.uniform(6, 13);
+      Actor& car = b.vehicle(0, 0, 0);
+      if (u < 0.35) {  // same direction as the ego, stopping at the crossing now and then
+        const double start = r.uniform(x0, x1);
+        const double lane = r.chance(0.5) ? -kInner : -kOuter;
+        const bool stops = start < cross_x && r.chance(0.5);
+        const double stop_at = stops ? cross_x - g.cross_half_width - 3 - start : -1, stop_s = r.uniform(2, 6);
+        b.drive(car, start, lane, 0.0, v, duration, stop_at, stop_s);
+        if (lane == -kInner && !b.commit()) {  // in the ego's way: the outer lane instead
+          Actor& other = b.vehicle(0, 0, 0);
+          b.drive(other, start, -kOuter, 0.0, v, duration, stop_at, stop_s);
+        }
+      } else if (u < 0.7) {  // oncoming
+        b.drive(car, r.uniform(x0, x1 + 60), r.chance(0.5) ? kInner : kOuter, std::numbers::pi, v, duration);
+      } else if (u < 0.88) {  // on the crossing road
+        const int dir = r.chance(0.5) ? 1 : -1;
+        b.drive(car, cross_x + dir * -kInner, -dir * r.uniform(25, 90), dir * std::numbers::pi / 2, v, duration);
+      } else {  // turning from the main road into the crossing road
+        const double start = cross_x - r.uniform(20, 70);
+        b.turn(car, start, -kInner, 0.0, r.uniform(5, 8), cross_x - start - 6, 6.0 - kInner + 1.0, r.chance(0.5) ? 1 : -1, duration);
       }
-    } else if (u < 0.7) {  // oncoming
-      b.drive(car, r.uniform(x0, x1 + 60), r.chance(0.5) ? kInner : kOuter, std::numbers::pi, v, duration);
-    } else if (u < 0.88) {  // on the crossing road
-      const int dir = r.chance(0.5) ? 1 : -1;
-      b.drive(car, cross_x + dir * -kInner, -dir * r.uniform(25, 90), dir * std::numbers::pi / 2, v, duration);
-    } else {  // turning from the main road into the crossing road
-      const double start = cross_x - r.uniform(20, 70);
-      b.turn(car, start, -kInner, 0.0, r.uniform(5, 8), cross_x - start - 6, 6.0 - kInner + 1.0, r.chance(0.5) ? 1 : -1, duration);
+      if (b.commit()) break;
     }
   }
   for (int i = 0; i < walkers; ++i) {
@@ -499,9 +502,12 @@ rt::Result<Scenario> make_scenario(const std::string& name, std::uint64_t seed, 
     b.street_furniture(-120, 120, g);
     traffic(b, -120, 120, 0.0, duration, 40 + r.integer(0, 10), 30 + r.integer(0, 10), 8, g);
     for (int i = 0; i < 16; ++i) {  // extra crossing traffic
-      Actor& car = b.vehicle(0, 0, 0);
-      const int dir = r.chance(0.5) ? 1 : -1;
-      b.drive(car, dir * -kInner, -dir * r.uniform(30, 150), dir * std::numbers::pi / 2, r.uniform(6, 12), duration);
+      for (int attempt = 0; attempt < 3; ++attempt) {
+        Actor& car = b.vehicle(0, 0, 0);
+        const int dir = r.chance(0.5) ? 1 : -1;
+        b.drive(car, dir * -kInner, -dir * r.uniform(30, 150), dir * std::numbers::pi / 2, r.uniform(6, 12), duration);
+        if (b.commit()) break;
+      }
     }
   } else if (name == "highway") {
     g.road_half_width = 12.0;
@@ -516,15 +522,18 @@ rt::Result<Scenario> make_scenario(const std::string& name, std::uint64_t seed, 
       }
     }
     for (int i = 0; i < 40; ++i) {
-      const bool with = r.chance(0.6);
-      int lane = r.integer(0, 2);
-      const double start = r.uniform(-150, x1), speed = r.uniform(18, 36);
-      Actor& car = b.vehicle(0, 0, 0);
-      b.drive(car, start, (lane * 3.6 + 1.8) * (with ? -1 : 1), with ? 0.0 : std::numbers::pi, speed, duration);
-      if (with && lane == 1 && !b.commit()) {  // in the ego's way: another lane
-        lane = r.chance(0.5) ? 0 : 2;
-        Actor& other = b.vehicle(0, 0, 0);
-        b.drive(other, start, -(lane * 3.6 + 1.8), 0.0, speed, duration);
+      for (int attempt = 0; attempt < 3; ++attempt) {  // a car that cannot fit in is drawn again
+        const bool with = r.chance(0.6);
+        int lane = r.integer(0, 2);
+        const double start = r.uniform(-150, x1), speed = r.uniform(18, 36);
+        Actor& car = b.vehicle(0, 0, 0);
+        b.drive(car, start, (lane * 3.6 + 1.8) * (with ? -1 : 1), with ? 0.0 : std::numbers::pi, speed, duration);
+        if (with && lane == 1 && !b.commit()) {  // in the ego's way: another lane
+          lane = r.chance(0.5) ? 0 : 2;
+          Actor& other = b.vehicle(0, 0, 0);
+          b.drive(other, start, -(lane * 3.6 + 1.8), 0.0, speed, duration);
+        }
+        if (b.commit()) break;
       }
     }
   } else if (name == "parking-lot") {
