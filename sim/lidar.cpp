@@ -47,9 +47,10 @@ Frame sensor_frame(const EgoState& e, double mount_height) {
 }
 
 // Intensity of a return as the decoder reports it after its focal correction (0..255; see
-// docs/simulator.md "Intensity"): brighter with reflectivity (saturating: rho / (rho + 0.17), fitted
-// to KITTI's histogram), mildly with incidence, falling off slowly with range, with multiplicative noise; a part
-// of the returns off dark surfaces at a slant come back at 0 (-1 here: a raw byte of 0).
+// docs/simulator.md "Intensity"): brighter with reflectivity (saturating: rho / (rho + 0.17),
+// fitted to KITTI's histogram), mildly with incidence, falling off slowly with range, with
+// multiplicative noise; a part of the returns off dark surfaces at a slant come back at 0 (-1 here:
+// a raw byte of 0).
 double intensity_of(double reflectivity, double incidence, double range, std::uint64_t h) {
   const double rho = std::clamp(reflectivity, 0.0, 1.0);
   const double p_zero = 0.03 + 0.2 * (1.0 - incidence) * std::max(0.0, 0.45 - rho);
@@ -61,7 +62,8 @@ double intensity_of(double reflectivity, double incidence, double range, std::ui
 // The raw byte the sensor sends for a corrected intensity: the decoder adds
 // focal_slope * |256 (1 - focal_distance / 13100 cm)^2 - 256 (1 - raw_distance / 65535)^2|
 // (drivers/velodyne/decoder.cpp), so the sensor's raw value is the corrected one minus that.
-std::uint8_t raw_intensity(double corrected, const velodyne::LaserCalibration& l, double raw_distance) {
+std::uint8_t raw_intensity(double corrected, const velodyne::LaserCalibration& l,
+                           double raw_distance) {
   if (corrected < 0.0) return 0;
   const double f = 1.0 - l.focal_distance_m * 100.0 / 13100.0;
   const double r = 1.0 - raw_distance / 65535.0;
@@ -80,11 +82,13 @@ bool LidarSim::hits_body(const velodyne::BeamLine& line) const {
   const Ray r{o, d};
   const double ground = -config_.mount_height_m;  // ego frame z = 0, in the sensor frame
   if (hit_box(r, {-b.length_m / 2, -b.width_m / 2, ground + b.bottom_m},
-              {b.length_m / 2, b.width_m / 2, ground + b.bonnet_height_m}).t < kNoHit) {
+              {b.length_m / 2, b.width_m / 2, ground + b.bonnet_height_m})
+          .t < kNoHit) {
     return true;
   }
   return hit_box(r, {-b.roof_back_m, -b.roof_half_width_m, ground + b.bonnet_height_m - 0.01},
-                 {b.roof_front_m, b.roof_half_width_m, -b.roof_below_sensor_m}).t < kNoHit;
+                 {b.roof_front_m, b.roof_half_width_m, -b.roof_below_sensor_m})
+             .t < kNoHit;
 }
 
 LidarSim::LidarSim(const velodyne::Calibration& calibration, const LidarConfig& config,
@@ -172,8 +176,15 @@ void LidarSim::make_packet(std::uint32_t k, std::array<std::uint8_t, velodyne::k
                                                        static_cast<std::uint64_t>(strongest_block * 64 + laser)));
         Frame f = f0;
         f.t = f0.t + (f1.t - f0.t) * ((t - tf) / 50e-6);
-        BeamRecord rec{k, static_cast<std::uint8_t>(strongest_block), static_cast<std::uint8_t>(laser),
-                       rotation, -2, t, {0, 0, 0}, {0, 0, 0}, false};
+        BeamRecord rec{k,
+                       static_cast<std::uint8_t>(strongest_block),
+                       static_cast<std::uint8_t>(laser),
+                       rotation,
+                       -2,
+                       t,
+                       {0, 0, 0},
+                       {0, 0, 0},
+                       false};
         if (hits_body(beams_.line(laser, rotation, 1.0))) {  // the ego's own car: no return
           if (record) record(rec);
           continue;
@@ -206,7 +217,8 @@ void LidarSim::make_packet(std::uint32_t k, std::array<std::uint8_t, velodyne::k
             e.origin = ow;
             e.dir = uw;
             const double az = std::atan2(uw.y, uw.x) * 180.0 / std::numbers::pi;
-            const auto bin = static_cast<std::size_t>(((static_cast<int>(std::floor(az)) % 360) + 360) % 360);
+            const auto bin =
+                static_cast<std::size_t>(((static_cast<int>(std::floor(az)) % 360) + 360) % 360);
             e.hit = world_.cast(Ray{ow, uw}, tf, bins_[bin], poses_);
             if (e.hit.t == kNoHit) break;
             const bool pass = through == 1 || (through == 2 && uniform(mix(h ^ 0x77)) < 0.45);
@@ -236,7 +248,8 @@ void LidarSim::make_packet(std::uint32_t k, std::array<std::uint8_t, velodyne::k
         const WorldHit& hit = main.hit;
         if (hit.t < kNoHit) {
           rec.actor = hit.actor;
-          for (int i = 0; i < 3; ++i) rec.sensor_xyz[i] = main.sensor_hit[static_cast<std::size_t>(i)];
+          for (int i = 0; i < 3; ++i)
+            rec.sensor_xyz[i] = main.sensor_hit[static_cast<std::size_t>(i)];
           const V3 w = f.apply(V3{main.sensor_hit[0], main.sensor_hit[1], main.sensor_hit[2]});
           rec.world_xyz[0] = w.x;
           rec.world_xyz[1] = w.y;
@@ -251,7 +264,8 @@ void LidarSim::make_packet(std::uint32_t k, std::array<std::uint8_t, velodyne::k
             const double noisy = main.d + config_.range_noise_m * normal(mix(h ^ 0x55));
             const double raw = std::round((noisy - l.dist_correction_m) / calibration_.distance_resolution_m);
             if (raw >= 1.0 && raw <= 65535.0) {
-              const std::uint8_t intensity = raw_intensity(intensity_of(hit.reflectivity, incidence, range, h), l, raw);
+              const std::uint8_t intensity =
+                  raw_intensity(intensity_of(hit.reflectivity, incidence, range, h), l, raw);
               builder.set_return(strongest_block, j, static_cast<std::uint16_t>(raw), intensity);
               rec.returned = true;
               if (dual) {
@@ -271,13 +285,16 @@ void LidarSim::make_packet(std::uint32_t k, std::array<std::uint8_t, velodyne::k
                   if (std::abs(other.hit.t - hit.t) < 1.0) other.hit.t = kNoHit;
                 }
                 if (other.hit.t < kNoHit && other.hit.t > 0.5 &&
-                    other.hit.t < config_.max_range_m * std::sqrt(std::clamp(other.hit.reflectivity, 0.02, 1.0))) {
+                    other.hit.t < config_.max_range_m *
+                                      std::sqrt(std::clamp(other.hit.reflectivity, 0.02, 1.0))) {
                   const double noisy2 = other.d + config_.range_noise_m * normal(mix(h ^ 0x56));
-                  const double r2 = std::round((noisy2 - l.dist_correction_m) / calibration_.distance_resolution_m);
+                  const double r2 = std::round((noisy2 - l.dist_correction_m) /
+                                               calibration_.distance_resolution_m);
                   if (r2 >= 1.0 && r2 <= 65535.0) {
                     raw2 = static_cast<std::uint16_t>(r2);
                     const double inc2 = std::abs(dot(other.hit.normal, other.dir));
-                    const double full = intensity_of(other.hit.reflectivity, inc2, other.hit.t, h ^ 0x5A5A);
+                    const double full =
+                        intensity_of(other.hit.reflectivity, inc2, other.hit.t, h ^ 0x5A5A);
                     intensity2 = std::min(raw_intensity(0.5 * full, l, r2), intensity);
                   }
                 }

@@ -48,7 +48,8 @@ bool overlaps(const Footprint& a, const Footprint& b) {
     const double pb = b.hl * std::abs(b.c * ux + b.s * uy) + b.hw * std::abs(-b.s * ux + b.c * uy);
     return std::abs(dx * ux + dy * uy) > pa + pb;
   };
-  return !(separated(a.c, a.s) || separated(-a.s, a.c) || separated(b.c, b.s) || separated(-b.s, b.c));
+  return !(separated(a.c, a.s) || separated(-a.s, a.c) || separated(b.c, b.s) ||
+           separated(-b.s, b.c));
 }
 
 struct Aabb {
@@ -78,7 +79,8 @@ Trajectory with_pauses(const Trajectory& path, const std::vector<Pause>& pauses)
   for (const Trajectory::Waypoint& w : path.points) {
     while (k < pauses.size() && pauses[k].at < w.t) {
       const Pose p = path.pose_at(pauses[k].at);
-      if (pauses[k].at > path.points.front().t) out.points.push_back({p.x, p.y, pauses[k].at + shift});
+      if (pauses[k].at > path.points.front().t)
+        out.points.push_back({p.x, p.y, pauses[k].at + shift});
       shift += pauses[k].wait;
       out.points.push_back({p.x, p.y, pauses[k].at + shift});
       ++k;
@@ -120,7 +122,8 @@ class Builder {
       a.path = with_pauses(original, pauses);
       std::vector<Footprint> fp(samples());
       for (std::size_t k = 0; k < fp.size(); ++k) {
-        fp[k] = footprint_at(a.path, a.size.x + 2 * kClearLong, a.size.y + 2 * kClearSide, static_cast<double>(k) * kStep);
+        fp[k] = footprint_at(a.path, a.size.x + 2 * kClearLong, a.size.y + 2 * kClearSide,
+                             static_cast<double>(k) * kStep);
       }
       const double tc = first_conflict(a, fp);
       if (tc < 0) return accept(i, std::move(fp));
@@ -295,7 +298,7 @@ class Builder {
   static constexpr double kWindow = 1.0;     // s per window of the coarse check
   static constexpr double kClearLong = 0.3;  // clearance added to each box, m
   static constexpr double kClearSide = 0.05;
-  static constexpr double kCell = 10.0;      // m, grid of standing actors
+  static constexpr double kCell = 10.0;  // m, grid of standing actors
 
   std::size_t samples() const { return static_cast<std::size_t>(std::floor(horizon_ / kStep)) + 1; }
   static std::size_t per_window() { return static_cast<std::size_t>(std::lround(kWindow / kStep)); }
@@ -330,7 +333,8 @@ class Builder {
           const auto it = grid_.find(cell_key(cx, cy));
           if (it == grid_.end()) continue;
           for (std::size_t j : it->second) {
-            if (must_clear(a, s_.actors[j]) && std::find(near.begin(), near.end(), j) == near.end()) near.push_back(j);
+            if (must_clear(a, s_.actors[j]) && std::find(near.begin(), near.end(), j) == near.end())
+              near.push_back(j);
           }
         }
       }
@@ -364,8 +368,10 @@ class Builder {
     } else {
       Aabb box;
       box.add(footprint(i, 0));
-      for (auto cx = static_cast<std::int64_t>(std::floor(box.x0 / kCell)); cx <= static_cast<std::int64_t>(std::floor(box.x1 / kCell)); ++cx) {
-        for (auto cy = static_cast<std::int64_t>(std::floor(box.y0 / kCell)); cy <= static_cast<std::int64_t>(std::floor(box.y1 / kCell)); ++cy) {
+      for (auto cx = static_cast<std::int64_t>(std::floor(box.x0 / kCell));
+           cx <= static_cast<std::int64_t>(std::floor(box.x1 / kCell)); ++cx) {
+        for (auto cy = static_cast<std::int64_t>(std::floor(box.y0 / kCell));
+             cy <= static_cast<std::int64_t>(std::floor(box.y1 / kCell)); ++cy) {
           grid_[cell_key(cx, cy)].push_back(i);
         }
       }
@@ -407,20 +413,24 @@ void traffic(Builder& b, double x0, double x1, double cross_x, double duration, 
         const double start = r.uniform(x0, x1);
         const double lane = r.chance(0.5) ? -kInner : -kOuter;
         const bool stops = start < cross_x && r.chance(0.5);
-        const double stop_at = stops ? cross_x - g.cross_half_width - 3 - start : -1, stop_s = r.uniform(2, 6);
+        const double stop_at = stops ? cross_x - g.cross_half_width - 3 - start : -1,
+                     stop_s = r.uniform(2, 6);
         b.drive(car, start, lane, 0.0, v, duration, stop_at, stop_s);
         if (lane == -kInner && !b.commit()) {  // in the ego's way: the outer lane instead
           Actor& other = b.vehicle(0, 0, 0);
           b.drive(other, start, -kOuter, 0.0, v, duration, stop_at, stop_s);
         }
       } else if (u < 0.7) {  // oncoming
-        b.drive(car, r.uniform(x0, x1 + 60), r.chance(0.5) ? kInner : kOuter, std::numbers::pi, v, duration);
+        b.drive(car, r.uniform(x0, x1 + 60), r.chance(0.5) ? kInner : kOuter, std::numbers::pi, v,
+                duration);
       } else if (u < 0.88) {  // on the crossing road
         const int dir = r.chance(0.5) ? 1 : -1;
-        b.drive(car, cross_x + dir * -kInner, -dir * r.uniform(25, 90), dir * std::numbers::pi / 2, v, duration);
+        b.drive(car, cross_x + dir * -kInner, -dir * r.uniform(25, 90), dir * std::numbers::pi / 2,
+                v, duration);
       } else {  // turning from the main road into the crossing road
         const double start = cross_x - r.uniform(20, 70);
-        b.turn(car, start, -kInner, 0.0, r.uniform(5, 8), cross_x - start - 6, 6.0 - kInner + 1.0, r.chance(0.5) ? 1 : -1, duration);
+        b.turn(car, start, -kInner, 0.0, r.uniform(5, 8), cross_x - start - 6, 6.0 - kInner + 1.0,
+               r.chance(0.5) ? 1 : -1, duration);
       }
       if (b.commit()) break;
     }
@@ -495,7 +505,9 @@ rt::Result<Scenario> make_scenario(const std::string& name, std::uint64_t seed, 
     }
     b.set_ego(ego);
     b.street_furniture(-80, x1, g);
-    if (name == "urban") traffic(b, -60, x1, cross, duration, 14 + r.integer(0, 8), 24 + r.integer(0, 12), 4 + r.integer(0, 4), g);
+    if (name == "urban")
+      traffic(b, -60, x1, cross, duration, 14 + r.integer(0, 8), 24 + r.integer(0, 12),
+              4 + r.integer(0, 4), g);
   } else if (name == "intersection") {
     g.cross_road_x = 0.0;
     b.set_ego(straight(-g.cross_half_width - 6, -kInner, 0.0));  // parked at the corner
@@ -505,7 +517,8 @@ rt::Result<Scenario> make_scenario(const std::string& name, std::uint64_t seed, 
       for (int attempt = 0; attempt < 3; ++attempt) {
         Actor& car = b.vehicle(0, 0, 0);
         const int dir = r.chance(0.5) ? 1 : -1;
-        b.drive(car, dir * -kInner, -dir * r.uniform(30, 150), dir * std::numbers::pi / 2, r.uniform(6, 12), duration);
+        b.drive(car, dir * -kInner, -dir * r.uniform(30, 150), dir * std::numbers::pi / 2,
+                r.uniform(6, 12), duration);
         if (b.commit()) break;
       }
     }
@@ -527,7 +540,8 @@ rt::Result<Scenario> make_scenario(const std::string& name, std::uint64_t seed, 
         int lane = r.integer(0, 2);
         const double start = r.uniform(-150, x1), speed = r.uniform(18, 36);
         Actor& car = b.vehicle(0, 0, 0);
-        b.drive(car, start, (lane * 3.6 + 1.8) * (with ? -1 : 1), with ? 0.0 : std::numbers::pi, speed, duration);
+        b.drive(car, start, (lane * 3.6 + 1.8) * (with ? -1 : 1), with ? 0.0 : std::numbers::pi,
+                speed, duration);
         if (with && lane == 1 && !b.commit()) {  // in the ego's way: another lane
           lane = r.chance(0.5) ? 0 : 2;
           Actor& other = b.vehicle(0, 0, 0);
@@ -554,7 +568,12 @@ rt::Result<Scenario> make_scenario(const std::string& name, std::uint64_t seed, 
     for (int i = 0; i < 5; ++i) {
       Actor& car = b.vehicle(0, 0, 0, false);
       const double y = aisles[r.integer(0, 3)];
-      b.drive(car, r.uniform(-40, 40), y, y == -2.0 ? 0 : y == 2.0 ? std::numbers::pi : r.chance(0.5) ? 0 : std::numbers::pi, r.uniform(2, 4), duration);
+      b.drive(car, r.uniform(-40, 40), y,
+              y == -2.0       ? 0
+              : y == 2.0      ? std::numbers::pi
+              : r.chance(0.5) ? 0
+                              : std::numbers::pi,
+              r.uniform(2, 4), duration);
     }
     for (int i = 0, placed = 0; placed < 18 && i < 60; ++i) {
       Actor& p = b.pedestrian(r.uniform(-35, 35), r.uniform(-20, 20));
@@ -570,7 +589,8 @@ rt::Result<Scenario> make_scenario(const std::string& name, std::uint64_t seed, 
     g.cross_road_x = 1e9;
     b.set_ego(straight(-20, 0, 1.0));
     b.street_furniture(-60, 80, g);
-    for (int i = 0, placed = 0; placed < 150 && i < 600; ++i) {  // pedestrians everywhere, no traffic
+    for (int i = 0, placed = 0; placed < 150 && i < 600;
+         ++i) {  // pedestrians everywhere, no traffic
       Actor& p = b.pedestrian(r.uniform(-40, 60), r.uniform(-11, 11));
       if (r.chance(0.8)) {
         b.drive(p, p.path.points[0].x, p.path.points[0].y, r.uniform(0, 2 * std::numbers::pi), r.uniform(0.6, 1.6), duration);

@@ -3,13 +3,13 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <string>
 #include <map>
 #include <set>
+#include <string>
 
 #include "drivers/velodyne/decoder.hpp"
-#include "sim/run.hpp"
 #include "shared_data.hpp"
+#include "sim/run.hpp"
 
 namespace stac::sim {
 namespace {
@@ -77,7 +77,6 @@ TEST(SimLidar, DecoderReturnsEveryHitWithin3mm) {
   EXPECT_LT(worst, 0.003);
 }
 
-
 // Dual return (S3): the last-return blocks carry a second echo where one physically occurs
 // (through foliage, at edges), and the same return as the strongest block where there is one
 // echo only (as Velodyne's manuals state for dual mode).
@@ -117,8 +116,10 @@ TEST(SimLidar, DualReturnGivesADifferentLastEchoOnVegetation) {
         ASSERT_NE(it, beams.end());
         const bool differ = std::abs(strongest[i].distance_m - last[i].distance_m) > 0.3f;
         const std::int64_t actor = it->second.actor;
-        const bool vegetation = actor >= 0 && ((*run)->world().actors()[static_cast<std::size_t>(actor)].cls == ObjectClass::kTree ||
-                                               (*run)->world().actors()[static_cast<std::size_t>(actor)].cls == ObjectClass::kBush);
+        const bool vegetation =
+            actor >= 0 &&
+            ((*run)->world().actors()[static_cast<std::size_t>(actor)].cls == ObjectClass::kTree ||
+             (*run)->world().actors()[static_cast<std::size_t>(actor)].cls == ObjectClass::kBush);
         if (vegetation) {
           ++veg;
           veg_differ += differ ? 1 : 0;
@@ -128,21 +129,24 @@ TEST(SimLidar, DualReturnGivesADifferentLastEchoOnVegetation) {
           // Where the last block differs, it holds the weaker echo.
           if (differ) {
             const std::size_t j = strongest[i].laser % 32u;
-            EXPECT_LE(p->blocks[block + 2].returns[j].intensity, p->blocks[block].returns[j].intensity);
+            EXPECT_LE(p->blocks[block + 2].returns[j].intensity,
+                      p->blocks[block].returns[j].intensity);
           }
         }
       }
     }
   }
-  std::printf("dual return: %zu of %zu foliage beams and %zu of %zu others have a second echo\n", veg_differ,
-              veg, solid_differ, solid);
+  std::printf("dual return: %zu of %zu foliage beams and %zu of %zu others have a second echo\n",
+              veg_differ, veg, solid_differ, solid);
   EXPECT_GT(last_points, 200'000u);
   ASSERT_GT(veg, 500u);
   // Most beams into foliage have a second echo (the foliage or what is behind it).
-  EXPECT_GT(static_cast<double>(veg_differ) / static_cast<double>(veg), 0.5) << veg_differ << " of " << veg;
+  EXPECT_GT(static_cast<double>(veg_differ) / static_cast<double>(veg), 0.5)
+      << veg_differ << " of " << veg;
   // On solid surfaces only edges give a second echo: some, but few.
   EXPECT_GT(solid_differ, 100u);
-  EXPECT_LT(static_cast<double>(solid_differ) / static_cast<double>(solid), 0.1) << solid_differ << " of " << solid;
+  EXPECT_LT(static_cast<double>(solid_differ) / static_cast<double>(solid), 0.1)
+      << solid_differ << " of " << solid;
 }
 
 TEST(SimRun, SameScenarioAndSeedGiveIdenticalBytes) {
@@ -227,7 +231,6 @@ TEST(SimRun, TruthBoxesHoldTheirObjectsPoints) {
   EXPECT_GT(per_class["pedestrian"], 50u);
 }
 
-
 // A plan-view rectangle by its corners, for an overlap check written independently of the
 // scenario code (corner containment and edge crossings, not separating axes).
 struct Rect {
@@ -258,13 +261,15 @@ bool inside(const Rect& r, double x, double y) {  // strictly inside (convex, ei
   return true;
 }
 
-bool segments_cross(double ax, double ay, double bx, double by, double cx, double cy, double dx, double dy) {
+bool segments_cross(double ax, double ay, double bx, double by, double cx, double cy, double dx,
+                    double dy) {
   auto orient = [](double ox, double oy, double px, double py, double qx, double qy) {
     return (px - ox) * (qy - oy) - (py - oy) * (qx - ox);
   };
   const double o1 = orient(ax, ay, bx, by, cx, cy), o2 = orient(ax, ay, bx, by, dx, dy);
   const double o3 = orient(cx, cy, dx, dy, ax, ay), o4 = orient(cx, cy, dx, dy, bx, by);
-  return ((o1 > 0) != (o2 > 0)) && ((o3 > 0) != (o4 > 0)) && o1 != 0 && o2 != 0 && o3 != 0 && o4 != 0;
+  return ((o1 > 0) != (o2 > 0)) && ((o3 > 0) != (o4 > 0)) && o1 != 0 && o2 != 0 && o3 != 0 &&
+         o4 != 0;
 }
 
 bool rects_overlap(const Rect& a, const Rect& b) {
@@ -283,7 +288,8 @@ bool rects_overlap(const Rect& a, const Rect& b) {
 // Every 0.05 s of the drive: no car, pedestrian or bicyclist inside the ego's footprint, and
 // nobody inside a car (cars are kept apart from everyone, pedestrians and bicyclists from cars).
 // Returns the number of overlaps found (with a description of the first few).
-std::size_t overlaps_in(const std::string& name, std::uint64_t seed, double duration, std::string& first) {
+std::size_t overlaps_in(const std::string& name, std::uint64_t seed, double duration,
+                        std::string& first) {
   auto s = make_scenario(name, seed, duration);
   EXPECT_TRUE(s);
   if (!s) return 1;
@@ -304,7 +310,8 @@ std::size_t overlaps_in(const std::string& name, std::uint64_t seed, double dura
       poses[n] = a.path.pose_at(t);
       boxes[n] = rect(poses[n].x, poses[n].y, poses[n].yaw, a.size.x, a.size.y);
       if (std::hypot(poses[n].x - e.x, poses[n].y - e.y) < 20 && rects_overlap(boxes[n], ego)) {
-        if (found++ < 3) first += "t=" + std::to_string(t) + " actor " + std::to_string(a.id) + " in the ego; ";
+        if (found++ < 3)
+          first += "t=" + std::to_string(t) + " actor " + std::to_string(a.id) + " in the ego; ";
       }
     }
     for (std::size_t n = 0; n < fg.size(); ++n) {
@@ -312,10 +319,13 @@ std::size_t overlaps_in(const std::string& name, std::uint64_t seed, double dura
       for (std::size_t m = n + 1; m < fg.size(); ++m) {
         const Actor& b = s->actors[fg[m]];
         if (a.cls != ObjectClass::kCar && b.cls != ObjectClass::kCar) continue;
-        if (std::hypot(poses[n].x - poses[m].x, poses[n].y - poses[m].y) > 0.5 * (a.size.x + b.size.x) + 2) continue;
+        if (std::hypot(poses[n].x - poses[m].x, poses[n].y - poses[m].y) >
+            0.5 * (a.size.x + b.size.x) + 2)
+          continue;
         if (rects_overlap(boxes[n], boxes[m])) {
           if (found++ < 3) {
-            first += "t=" + std::to_string(t) + " actors " + std::to_string(a.id) + " and " + std::to_string(b.id) + "; ";
+            first += "t=" + std::to_string(t) + " actors " + std::to_string(a.id) + " and " +
+                     std::to_string(b.id) + "; ";
           }
         }
       }
