@@ -46,7 +46,50 @@ Frame sensor_frame(const EgoState& e, double mount_height) {
   return f;
 }
 
+// Intensity of a return as the decoder reports it after its focal correction (0..255; see
+// docs/simulator.md "Intensity"): brighter with reflectivity (saturating: rho / (rho + 0.17),
+// fitted to KITTI's histogram), mildly with incidence, falling off slowly with range, with
+// multiplicative noise; a part of the returns off dark surfaces at a slant come back at 0 (-1 here:
+// a raw byte of 0).
+double intensity_of(double reflectivity, double incidence, double range, std::uint64_t h) {
+  const double rho = std::clamp(reflectivity, 0.0, 1.0);
+  const double p_zero = 0.03 + 0.2 * (1.0 - incidence) * std::max(0.0, 0.45 - rho);
+  if (uniform(mix(h ^ 0x31)) < p_zero) return -1.0;
+  return 255.0 * 0.78 * rho / (rho + 0.17) * (0.7 + 0.3 * incidence) / (1.0 + range / 90.0) *
+         std::exp(0.18 * normal(mix(h ^ 0x33)));
+}
+
+// The raw byte the sensor sends for a corrected intensity: the decoder adds
+// focal_slope * |256 (1 - focal_distance / 13100 cm)^2 - 256 (1 - raw_distance / 65535)^2|
+// (drivers/velodyne/decoder.cpp), so the sensor's raw value is the corrected one minus that.
+std::uint8_t raw_intensity(double corrected, const velodyne::LaserCalibration& l,
+                           double raw_distance) {
+  if (corrected < 0.0) return 0;
+  const double f = 1.0 - l.focal_distance_m * 100.0 / 13100.0;
+  const double r = 1.0 - raw_distance / 65535.0;
+  const double correction = l.focal_slope * std::abs(256.0 * f * f - 256.0 * r * r);
+  return static_cast<std::uint8_t>(std::clamp(std::lround(corrected - correction), 0L, 255L));
+}
+
 }  // namespace
+
+bool LidarSim::hits_body(const velodyne::BeamLine& line) const {
+  const EgoBody& b = config_.body;
+  if (!b.enabled || line.direction[2] >= 0.0) return false;
+  const V3 o{line.origin[0], line.origin[1], line.origin[2]};
+  V3 d{line.direction[0], line.direction[1], line.direction[2]};
+  d = d * (1.0 / norm(d));
+  const Ray r{o, d};
+  const double ground = -config_.mount_height_m;  // ego frame z = 0, in the sensor frame
+  if (hit_box(r, {-b.length_m / 2, -b.width_m / 2, ground + b.bottom_m},
+              {b.length_m / 2, b.width_m / 2, ground + b.bonnet_height_m})
+          .t < kNoHit) {
+    return true;
+  }
+  return hit_box(r, {-b.roof_back_m, -b.roof_half_width_m, ground + b.bonnet_height_m - 0.01},
+                 {b.roof_front_m, b.roof_half_width_m, -b.roof_below_sensor_m})
+             .t < kNoHit;
+}
 
 LidarSim::LidarSim(const velodyne::Calibration& calibration, const LidarConfig& config,
                    const World& world, EgoFn ego)
@@ -133,65 +176,130 @@ void LidarSim::make_packet(std::uint32_t k, std::array<std::uint8_t, velodyne::k
                                                        static_cast<std::uint64_t>(strongest_block * 64 + laser)));
         Frame f = f0;
         f.t = f0.t + (f1.t - f0.t) * ((t - tf) / 50e-6);
-        // Cast along the decoder's beam line; re-linearise at the solution until exact.
-        double d = 20.0;
-        WorldHit hit;
-        double line_scale = 1.0;
-        Vec3 sensor_hit{};
-        for (int it = 0; it < 4; ++it) {
-          const BeamLine line = beams_.line(laser, rotation, d);
-          const V3 o{line.origin[0], line.origin[1], line.origin[2]};
-          const V3 dir{line.direction[0], line.direction[1], line.direction[2]};
-          line_scale = norm(dir);
-          const V3 ow = f.apply(o);
-          const V3 uw = f.rotate(dir * (1.0 / line_scale));
-          const double az = std::atan2(uw.y, uw.x) * 180.0 / std::numbers::pi;
-          const auto bin = static_cast<std::size_t>(((static_cast<int>(std::floor(az)) % 360) + 360) % 360);
-          hit = world_.cast(Ray{ow, uw}, tf, bins_[bin], poses_);
-          if (hit.t == kNoHit) break;
-          if (hit.translucent && uniform(mix(h ^ 0x77)) < 0.45) {
-            // Foliage: a part of the beam goes through to what lies behind.
-            const double step = hit.t + 0.6 + 0.6 * uniform(mix(h ^ 0x78));
-            const WorldHit behind = world_.cast(Ray{ow + uw * step, uw}, tf, bins_[bin], poses_);
-            if (behind.t < kNoHit) {
-              hit = behind;
-              hit.t += step;
-            }
-          }
-          const double d_new = hit.t / line_scale;
-          const Vec3 exact = beams_.point(laser, rotation, d_new);
-          const V3 on_line = o + dir * d_new;
-          sensor_hit = exact;
-          const double err = norm(V3{exact[0], exact[1], exact[2]} - on_line);
-          d = d_new;
-          if (err < 1e-5) break;
+        BeamRecord rec{k,
+                       static_cast<std::uint8_t>(strongest_block),
+                       static_cast<std::uint8_t>(laser),
+                       rotation,
+                       -2,
+                       t,
+                       {0, 0, 0},
+                       {0, 0, 0},
+                       false};
+        if (hits_body(beams_.line(laser, rotation, 1.0))) {  // the ego's own car: no return
+          if (record) record(rec);
+          continue;
         }
-        BeamRecord rec{k, static_cast<std::uint8_t>(strongest_block), static_cast<std::uint8_t>(laser),
-                       rotation, -2, t, {0, 0, 0}, {0, 0, 0}, false};
+        // Cast along the decoder's beam line; re-linearise at the solution until exact.
+        // `through`: 0 stop at foliage, 1 go through it, 2 go through at random (45 %).
+        // `yaw_offset`: a ray beside the beam's axis (rad about the world vertical), for the edge
+        // of the beam's footprint.
+        struct Echo {
+          WorldHit hit;
+          double d = 0.0;
+          Vec3 sensor_hit{};
+          V3 origin, dir;
+          bool through = false;  // went through foliage
+        };
+        auto trace = [&](int through, double yaw_offset) {
+          Echo e;
+          double d = 20.0;
+          for (int it = 0; it < 4; ++it) {
+            const BeamLine line = beams_.line(laser, rotation, d);
+            const V3 o{line.origin[0], line.origin[1], line.origin[2]};
+            const V3 dir{line.direction[0], line.direction[1], line.direction[2]};
+            const double line_scale = norm(dir);
+            const V3 ow = f.apply(o);
+            V3 uw = f.rotate(dir * (1.0 / line_scale));
+            if (yaw_offset != 0.0) {
+              const double c = std::cos(yaw_offset), sn = std::sin(yaw_offset);
+              uw = V3{c * uw.x - sn * uw.y, sn * uw.x + c * uw.y, uw.z};
+            }
+            e.origin = ow;
+            e.dir = uw;
+            const double az = std::atan2(uw.y, uw.x) * 180.0 / std::numbers::pi;
+            const auto bin =
+                static_cast<std::size_t>(((static_cast<int>(std::floor(az)) % 360) + 360) % 360);
+            e.hit = world_.cast(Ray{ow, uw}, tf, bins_[bin], poses_);
+            if (e.hit.t == kNoHit) break;
+            const bool pass = through == 1 || (through == 2 && uniform(mix(h ^ 0x77)) < 0.45);
+            e.through = false;
+            if (e.hit.translucent && pass) {
+              // Foliage: a part of the beam goes through to what lies behind.
+              const double step = e.hit.t + 0.6 + 0.6 * uniform(mix(h ^ 0x78));
+              const WorldHit behind = world_.cast(Ray{ow + uw * step, uw}, tf, bins_[bin], poses_);
+              if (behind.t < kNoHit) {
+                e.hit = behind;
+                e.hit.t += step;
+                e.through = true;
+              }
+            }
+            const double d_new = e.hit.t / line_scale;
+            const Vec3 exact = beams_.point(laser, rotation, d_new);
+            const V3 on_line = o + dir * d_new;
+            e.sensor_hit = exact;
+            const double err = norm(V3{exact[0], exact[1], exact[2]} - on_line);
+            d = d_new;
+            e.d = d;
+            if (err < 1e-5 || yaw_offset != 0.0) break;
+          }
+          return e;
+        };
+        const Echo main = trace(2, 0.0);
+        const WorldHit& hit = main.hit;
         if (hit.t < kNoHit) {
           rec.actor = hit.actor;
-          for (int i = 0; i < 3; ++i) rec.sensor_xyz[i] = sensor_hit[static_cast<std::size_t>(i)];
-          const V3 w = f.apply(V3{sensor_hit[0], sensor_hit[1], sensor_hit[2]});
+          for (int i = 0; i < 3; ++i)
+            rec.sensor_xyz[i] = main.sensor_hit[static_cast<std::size_t>(i)];
+          const V3 w = f.apply(V3{main.sensor_hit[0], main.sensor_hit[1], main.sensor_hit[2]});
           rec.world_xyz[0] = w.x;
           rec.world_xyz[1] = w.y;
           rec.world_xyz[2] = w.z;
           // Returns: lost when too far for the target's brightness, grazing, or at random.
           const double range = hit.t;
-          const double incidence = std::abs(dot(hit.normal, (w - f.t) * (1.0 / std::max(range, 1e-6))));
+          const double incidence = std::abs(dot(hit.normal, main.dir));
           const double reach = config_.max_range_m * std::sqrt(std::clamp(hit.reflectivity, 0.02, 1.0));
           const bool lost = range > reach || range < 0.5 || incidence < 0.06 ||
                             uniform(mix(h ^ 0x99)) < config_.dropout;
           if (!lost) {
-            const double noisy = d + config_.range_noise_m * normal(mix(h ^ 0x55));
+            const double noisy = main.d + config_.range_noise_m * normal(mix(h ^ 0x55));
             const double raw = std::round((noisy - l.dist_correction_m) / calibration_.distance_resolution_m);
             if (raw >= 1.0 && raw <= 65535.0) {
-              const double falloff = 1.0 / (1.0 + range / 60.0);
-              const double value = 255.0 * hit.reflectivity * (0.35 + 0.65 * incidence) * falloff +
-                                   4.0 * normal(mix(h ^ 0x33));
-              const auto intensity = static_cast<std::uint8_t>(std::clamp(std::lround(value), 1L, 255L));
+              const std::uint8_t intensity =
+                  raw_intensity(intensity_of(hit.reflectivity, incidence, range, h), l, raw);
               builder.set_return(strongest_block, j, static_cast<std::uint16_t>(raw), intensity);
-              if (dual) builder.set_return(strongest_block + 2, j, static_cast<std::uint16_t>(raw), intensity);
               rec.returned = true;
+              if (dual) {
+                // The last-return block: the other echo where there is one (the foliage and what
+                // lies behind it, or the far side of an edge the beam's footprint straddles),
+                // weaker than the strongest; else the same return again (one echo only).
+                std::uint16_t raw2 = static_cast<std::uint16_t>(raw);
+                std::uint8_t intensity2 = intensity;
+                Echo other;
+                if (main.through) {
+                  other = trace(0, 0.0);
+                } else if (hit.translucent) {
+                  other = trace(1, 0.0);
+                  if (!other.through) other.hit.t = kNoHit;
+                } else {
+                  other = trace(0, uniform(mix(h ^ 0x44)) < 0.5 ? 1.0e-3 : -1.0e-3);
+                  if (std::abs(other.hit.t - hit.t) < 1.0) other.hit.t = kNoHit;
+                }
+                if (other.hit.t < kNoHit && other.hit.t > 0.5 &&
+                    other.hit.t < config_.max_range_m *
+                                      std::sqrt(std::clamp(other.hit.reflectivity, 0.02, 1.0))) {
+                  const double noisy2 = other.d + config_.range_noise_m * normal(mix(h ^ 0x56));
+                  const double r2 = std::round((noisy2 - l.dist_correction_m) /
+                                               calibration_.distance_resolution_m);
+                  if (r2 >= 1.0 && r2 <= 65535.0) {
+                    raw2 = static_cast<std::uint16_t>(r2);
+                    const double inc2 = std::abs(dot(other.hit.normal, other.dir));
+                    const double full =
+                        intensity_of(other.hit.reflectivity, inc2, other.hit.t, h ^ 0x5A5A);
+                    intensity2 = std::min(raw_intensity(0.5 * full, l, r2), intensity);
+                  }
+                }
+                builder.set_return(strongest_block + 2, j, raw2, intensity2);
+              }
             }
           }
         }

@@ -18,6 +18,22 @@
 
 namespace stac::sim {
 
+// The ego's own body as the sensor sees it, in the ego frame (x forward, y left, z up from the
+// ground under the ego origin): the bonnet, boot and sides as one box over the whole footprint
+// up to `bonnet_height_m`, and the roof (cabin) under the sensor. Beams that meet it give no
+// return (a real HDL-64E's returns off its own car are dropped by the driver's body filter).
+// Default: a 4.6 x 1.9 m car; bonnet height and the roof's size fitted to the points per ring of
+// the lowest ten rings of the KITTI scans
+// (docs/simulator.md).
+struct EgoBody {
+  bool enabled = true;
+  double length_m = 4.6, width_m = 1.9;  // footprint centred on the ego origin
+  double bottom_m = 0.25;                // underside above the ground
+  double bonnet_height_m = 0.90;         // top of bonnet and boot above the ground
+  double roof_below_sensor_m = 0.20;     // roof top, below the sensor origin
+  double roof_front_m = 0.5, roof_back_m = 0.9, roof_half_width_m = 0.5;  // from the ego origin
+};
+
 struct LidarConfig {
   velodyne::Model model = velodyne::Model::kS2_1;
   double rpm = 600.0;
@@ -27,6 +43,7 @@ struct LidarConfig {
   double range_noise_m = 0.012;   // 1 sigma (HDL-64E: < 2 cm)
   double max_range_m = 120.0;     // for a white target; dark ones are lost sooner
   double dropout = 0.004;         // returns lost at random
+  EgoBody body;
   std::uint64_t seed = 1;
 };
 
@@ -65,6 +82,7 @@ class LidarSim {
 
  private:
   void refresh_candidates(double t);
+  bool hits_body(const velodyne::BeamLine& line) const;  // line in the sensor frame
 
   velodyne::Calibration calibration_;
   velodyne::BeamModel beams_;

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <numbers>
+#include <unordered_map>
 
 namespace stac::sim {
 namespace {
@@ -26,12 +28,143 @@ class Rng {
   std::uint64_t state_;
 };
 
+// A box in plan: centre, heading (cos, sin) and half extents, m.
+struct Footprint {
+  double x, y, c, s, hl, hw;
+  double radius() const { return std::hypot(hl, hw); }
+};
+
+Footprint footprint_at(const Trajectory& path, double length, double width, double t) {
+  const Pose p = path.pose_at(t);
+  return {p.x, p.y, std::cos(p.yaw), std::sin(p.yaw), length / 2, width / 2};
+}
+
+// Separating axes of two rectangles.
+bool overlaps(const Footprint& a, const Footprint& b) {
+  const double dx = b.x - a.x, dy = b.y - a.y, reach = a.radius() + b.radius();
+  if (dx * dx + dy * dy > reach * reach) return false;
+  auto separated = [&](double ux, double uy) {
+    const double pa = a.hl * std::abs(a.c * ux + a.s * uy) + a.hw * std::abs(-a.s * ux + a.c * uy);
+    const double pb = b.hl * std::abs(b.c * ux + b.s * uy) + b.hw * std::abs(-b.s * ux + b.c * uy);
+    return std::abs(dx * ux + dy * uy) > pa + pb;
+  };
+  return !(separated(a.c, a.s) || separated(-a.s, a.c) || separated(b.c, b.s) ||
+           separated(-b.s, b.c));
+}
+
+struct Aabb {
+  double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
+  void add(const Footprint& f) {
+    const double r = f.radius();
+    x0 = std::min(x0, f.x - r);
+    y0 = std::min(y0, f.y - r);
+    x1 = std::max(x1, f.x + r);
+    y1 = std::max(y1, f.y + r);
+  }
+  bool meets(const Aabb& o) const { return x0 <= o.x1 && o.x0 <= x1 && y0 <= o.y1 && o.y0 <= y1; }
+};
+
+// A pause on a path: at the path's own time `at` (s, before any pause) it stands `wait` s.
+struct Pause {
+  double at, wait;
+};
+
+// `path` with the pauses (sorted, disjoint) inserted.
+Trajectory with_pauses(const Trajectory& path, const std::vector<Pause>& pauses) {
+  if (pauses.empty() || path.points.size() < 2) return path;
+  Trajectory out;
+  out.fixed_yaw = path.fixed_yaw;
+  double shift = 0.0;
+  std::size_t k = 0;
+  for (const Trajectory::Waypoint& w : path.points) {
+    while (k < pauses.size() && pauses[k].at < w.t) {
+      const Pose p = path.pose_at(pauses[k].at);
+      if (pauses[k].at > path.points.front().t)
+        out.points.push_back({p.x, p.y, pauses[k].at + shift});
+      shift += pauses[k].wait;
+      out.points.push_back({p.x, p.y, pauses[k].at + shift});
+      ++k;
+    }
+    out.points.push_back({w.x, w.y, w.t + shift});
+  }
+  return out;
+}
+
 class Builder {
  public:
-  Builder(Scenario& s, std::uint64_t seed) : s_(s), rng_(seed) {}
+  Builder(Scenario& s, std::uint64_t seed, double duration)
+      : s_(s), rng_(seed), horizon_(std::max(duration, 0.0) + 0.1) {}
   Rng& rng() { return rng_; }
 
+  // The ego's path: set before any actor is added (actors are checked against it).
+  void set_ego(Trajectory path) {
+    s_.ego_path = std::move(path);
+    const std::size_t n = samples();
+    ego_.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      ego_[i] = footprint_at(s_.ego_path, kEgoLength, kEgoWidth, static_cast<double>(i) * kStep);
+    }
+    ego_windows_ = windows_of(ego_);
+  }
+
+  // Checks the last added actor against the ego and the road users accepted so far and makes it
+  // wait where it is in the way; leaves it out (returns false) when waiting does not clear it.
+  bool commit() {
+    if (!pending_) return true;
+    pending_ = false;
+    const std::size_t i = s_.actors.size() - 1;
+    Actor& a = s_.actors[i];
+    if (!is_foreground(a.cls)) return accept(i, {});
+    const Trajectory original = a.path;
+    const bool moving = original.points.size() > 1;
+    std::vector<Pause> pauses;
+    for (int attempt = 0; attempt < 200; ++attempt) {
+      a.path = with_pauses(original, pauses);
+      std::vector<Footprint> fp(samples());
+      for (std::size_t k = 0; k < fp.size(); ++k) {
+        fp[k] = footprint_at(a.path, a.size.x + 2 * kClearLong, a.size.y + 2 * kClearSide,
+                             static_cast<double>(k) * kStep);
+      }
+      const double tc = first_conflict(a, fp);
+      if (tc < 0) return accept(i, std::move(fp));
+      if (!moving || tc <= 0.0) break;
+      // Back to the path's own time, and is the conflict during a pause?
+      double shift = 0.0;
+      int during = -1, before = -1;
+      for (std::size_t p = 0; p < pauses.size(); ++p) {
+        const double start = pauses[p].at + shift;
+        if (tc < start) break;
+        if (tc <= start + pauses[p].wait) {
+          during = static_cast<int>(p);
+          break;
+        }
+        before = static_cast<int>(p);
+        shift += pauses[p].wait;
+      }
+      if (during >= 0) {  // hit while standing: stand further back
+        Pause& p = pauses[static_cast<std::size_t>(during)];
+        p.at -= 1.0;
+        if (p.at < original.points.front().t - 1e-9 ||
+            (during > 0 && p.at <= pauses[static_cast<std::size_t>(during) - 1].at)) {
+          break;
+        }
+        continue;
+      }
+      const double own = tc - shift;
+      if (before >= 0 && own - pauses[static_cast<std::size_t>(before)].at < 2.0) {
+        Pause& p = pauses[static_cast<std::size_t>(before)];  // resumed too early: wait longer
+        p.wait = std::max(1.0, 2.0 * p.wait);
+      } else {
+        pauses.push_back({std::max(original.points.front().t, own - 0.3), 1.0});
+      }
+    }
+    s_.actors.pop_back();
+    return false;
+  }
+
   Actor& add(ObjectClass cls, Shape shape, V3 size, double reflectivity) {
+    commit();
+    pending_ = true;
     Actor a;
     a.id = static_cast<std::uint32_t>(s_.actors.size() + 1);
     a.cls = cls;
@@ -49,8 +182,8 @@ class Builder {
     return a;
   }
   // A vehicle of a random kind: sedan, van, truck (with a trailer now and then).
-  Actor& vehicle(double x, double y, double yaw) {
-    const double u = rng_.uniform(0, 1);
+  Actor& vehicle(double x, double y, double yaw, bool trucks = true) {
+    const double u = rng_.uniform(0, trucks ? 1.0 : 0.88);
     const double refl = rng_.uniform(0.15, 0.8);
     if (u < 0.65) return place(ObjectClass::kCar, Shape::kSedan, {rng_.uniform(4.1, 4.9), rng_.uniform(1.72, 1.9), rng_.uniform(1.38, 1.55)}, refl, x, y, yaw);
     if (u < 0.88) return place(ObjectClass::kCar, Shape::kVan, {rng_.uniform(4.9, 5.6), rng_.uniform(1.9, 2.05), rng_.uniform(1.9, 2.4)}, refl, x, y, yaw);
@@ -161,12 +294,106 @@ class Builder {
   }
 
  private:
+  static constexpr double kStep = 0.05;      // s between checks
+  static constexpr double kWindow = 1.0;     // s per window of the coarse check
+  static constexpr double kClearLong = 0.3;  // clearance added to each box, m
+  static constexpr double kClearSide = 0.05;
+  static constexpr double kCell = 10.0;  // m, grid of standing actors
+
+  std::size_t samples() const { return static_cast<std::size_t>(std::floor(horizon_ / kStep)) + 1; }
+  static std::size_t per_window() { return static_cast<std::size_t>(std::lround(kWindow / kStep)); }
+  static std::vector<Aabb> windows_of(const std::vector<Footprint>& fp) {
+    std::vector<Aabb> w((fp.size() + per_window() - 1) / per_window());
+    for (std::size_t k = 0; k < fp.size(); ++k) w[k / per_window()].add(fp[k]);
+    return w;
+  }
+  static std::int64_t cell_key(std::int64_t cx, std::int64_t cy) { return cx * 1'000'003 + cy; }
+
+  // Whether actor j must be kept clear of actor a: cars of everyone, everyone of cars.
+  static bool must_clear(const Actor& a, const Actor& b) {
+    return a.cls == ObjectClass::kCar || b.cls == ObjectClass::kCar;
+  }
+
+  // First time (s) actor a, with footprints fp (clearance included), meets the ego or an
+  // accepted road user; -1 when never.
+  double first_conflict(const Actor& a, const std::vector<Footprint>& fp) const {
+    const std::vector<Aabb> win = windows_of(fp);
+    std::vector<std::size_t> near;
+    for (std::size_t w = 0; w < win.size(); ++w) {
+      near.clear();
+      for (std::size_t j : moving_) {
+        if (must_clear(a, s_.actors[j]) && win_[j][w].meets(win[w])) near.push_back(j);
+      }
+      const auto cx0 = static_cast<std::int64_t>(std::floor(win[w].x0 / kCell));
+      const auto cx1 = static_cast<std::int64_t>(std::floor(win[w].x1 / kCell));
+      const auto cy0 = static_cast<std::int64_t>(std::floor(win[w].y0 / kCell));
+      const auto cy1 = static_cast<std::int64_t>(std::floor(win[w].y1 / kCell));
+      for (std::int64_t cx = cx0; cx <= cx1; ++cx) {
+        for (std::int64_t cy = cy0; cy <= cy1; ++cy) {
+          const auto it = grid_.find(cell_key(cx, cy));
+          if (it == grid_.end()) continue;
+          for (std::size_t j : it->second) {
+            if (must_clear(a, s_.actors[j]) && std::find(near.begin(), near.end(), j) == near.end())
+              near.push_back(j);
+          }
+        }
+      }
+      const bool ego_near = ego_windows_[w].meets(win[w]);
+      if (!ego_near && near.empty()) continue;
+      const std::size_t k1 = std::min(fp.size(), (w + 1) * per_window());
+      for (std::size_t k = w * per_window(); k < k1; ++k) {
+        if (ego_near && overlaps(fp[k], ego_[k])) return static_cast<double>(k) * kStep;
+        for (std::size_t j : near) {
+          if (overlaps(fp[k], footprint(j, k))) return static_cast<double>(k) * kStep;
+        }
+      }
+    }
+    return -1.0;
+  }
+
+  Footprint footprint(std::size_t j, std::size_t k) const {
+    const Actor& b = s_.actors[j];
+    return footprint_at(b.path, b.size.x, b.size.y, static_cast<double>(k) * kStep);
+  }
+
+  bool accept(std::size_t i, std::vector<Footprint> fp) {
+    const Actor& a = s_.actors[i];
+    if (!is_foreground(a.cls)) return true;
+    if (win_.size() < s_.actors.size()) win_.resize(s_.actors.size());
+    if (a.path.points.size() > 1) {
+      // Stored without the clearance (the one being checked carries it).
+      for (std::size_t k = 0; k < fp.size(); ++k) fp[k] = footprint(i, k);
+      win_[i] = windows_of(fp);
+      moving_.push_back(i);
+    } else {
+      Aabb box;
+      box.add(footprint(i, 0));
+      for (auto cx = static_cast<std::int64_t>(std::floor(box.x0 / kCell));
+           cx <= static_cast<std::int64_t>(std::floor(box.x1 / kCell)); ++cx) {
+        for (auto cy = static_cast<std::int64_t>(std::floor(box.y0 / kCell));
+             cy <= static_cast<std::int64_t>(std::floor(box.y1 / kCell)); ++cy) {
+          grid_[cell_key(cx, cy)].push_back(i);
+        }
+      }
+    }
+    return true;
+  }
+
   Scenario& s_;
   Rng rng_;
+  double horizon_;
+  bool pending_ = false;
+  std::vector<Footprint> ego_;
+  std::vector<Aabb> ego_windows_;
+  std::vector<std::vector<Aabb>> win_;  // per accepted moving actor, per window
+  std::vector<std::size_t> moving_;
+  std::unordered_map<std::int64_t, std::vector<std::size_t>> grid_;
 };
 
-// Lanes of the default street (road_half_width 8): parking at |y| = 6.8, driving at 1.8 and 4.8.
-constexpr double kParking = 6.8, kInner = 1.8, kOuter = 4.8;
+// Lanes of the default street (road_half_width 9.5): parking at |y| = 8.2 (cars and vans only),
+// a bicycle lane at 6.6, driving lanes at 1.8 and 4.6: a truck in the outer lane, a bicyclist and
+// a parked van fit side by side.
+constexpr double kRoadHalfWidth = 9.5, kParking = 8.2, kBikeLane = 6.6, kInner = 1.8, kOuter = 4.6;
 
 void traffic(Builder& b, double x0, double x1, double cross_x, double duration, int cars, int walkers,
              int cyclists, const GroundConfig& g) {
@@ -174,26 +401,38 @@ void traffic(Builder& b, double x0, double x1, double cross_x, double duration, 
   for (double x = x0 + r.uniform(0, 6); x < x1; x += r.uniform(5.5, 14)) {  // parked cars
     for (int side : {-1, 1}) {
       if (std::abs(x - cross_x) < g.cross_half_width + 6 || !r.chance(0.55)) continue;
-      b.vehicle(x, side * kParking, side > 0 ? std::numbers::pi : 0.0);
+      b.vehicle(x, side * kParking, side > 0 ? std::numbers::pi : 0.0, false);
     }
   }
   for (int i = 0; i < cars; ++i) {
-    const double u = r.uniform(0, 1);
-    const double v = r.uniform(6, 13);
-    Actor& car = b.vehicle(0, 0, 0);
-    if (u < 0.35) {  // same direction as the ego, stopping at the crossing now and then
-      const double start = r.uniform(x0, x1);
-      const double lane = r.chance(0.5) ? -kInner : -kOuter;
-      const bool stops = start < cross_x && r.chance(0.5);
-      b.drive(car, start, lane, 0.0, v, duration, stops ? cross_x - g.cross_half_width - 3 - start : -1, r.uniform(2, 6));
-    } else if (u < 0.7) {  // oncoming
-      b.drive(car, r.uniform(x0, x1 + 60), r.chance(0.5) ? kInner : kOuter, std::numbers::pi, v, duration);
-    } else if (u < 0.88) {  // on the crossing road
-      const int dir = r.chance(0.5) ? 1 : -1;
-      b.drive(car, cross_x + dir * -kInner, -dir * r.uniform(25, 90), dir * std::numbers::pi / 2, v, duration);
-    } else {  // turning from the main road into the crossing road
-      const double start = cross_x - r.uniform(20, 70);
-      b.turn(car, start, -kInner, 0.0, r.uniform(5, 8), cross_x - start - 6, 6.0 - kInner + 1.0, r.chance(0.5) ? 1 : -1, duration);
+    for (int attempt = 0; attempt < 3; ++attempt) {  // a car that cannot fit in is drawn again
+      const double u = r.uniform(0, 1);
+      const double v = r.uniform(6, 13);
+      Actor& car = b.vehicle(0, 0, 0);
+      if (u < 0.35) {  // same direction as the ego, stopping at the crossing now and then
+        const double start = r.uniform(x0, x1);
+        const double lane = r.chance(0.5) ? -kInner : -kOuter;
+        const bool stops = start < cross_x && r.chance(0.5);
+        const double stop_at = stops ? cross_x - g.cross_half_width - 3 - start : -1,
+                     stop_s = r.uniform(2, 6);
+        b.drive(car, start, lane, 0.0, v, duration, stop_at, stop_s);
+        if (lane == -kInner && !b.commit()) {  // in the ego's way: the outer lane instead
+          Actor& other = b.vehicle(0, 0, 0);
+          b.drive(other, start, -kOuter, 0.0, v, duration, stop_at, stop_s);
+        }
+      } else if (u < 0.7) {  // oncoming
+        b.drive(car, r.uniform(x0, x1 + 60), r.chance(0.5) ? kInner : kOuter, std::numbers::pi, v,
+                duration);
+      } else if (u < 0.88) {  // on the crossing road
+        const int dir = r.chance(0.5) ? 1 : -1;
+        b.drive(car, cross_x + dir * -kInner, -dir * r.uniform(25, 90), dir * std::numbers::pi / 2,
+                v, duration);
+      } else {  // turning from the main road into the crossing road
+        const double start = cross_x - r.uniform(20, 70);
+        b.turn(car, start, -kInner, 0.0, r.uniform(5, 8), cross_x - start - 6, 6.0 - kInner + 1.0,
+               r.chance(0.5) ? 1 : -1, duration);
+      }
+      if (b.commit()) break;
     }
   }
   for (int i = 0; i < walkers; ++i) {
@@ -217,7 +456,7 @@ void traffic(Builder& b, double x0, double x1, double cross_x, double duration, 
   for (int i = 0; i < cyclists; ++i) {
     Actor& c = b.cyclist(0, 0);
     const bool with = r.chance(0.6);
-    b.drive(c, r.uniform(x0, x1), with ? -(kOuter + 1.3) : (kOuter + 1.3), with ? 0.0 : std::numbers::pi,
+    b.drive(c, r.uniform(x0, x1), with ? -kBikeLane : kBikeLane, with ? 0.0 : std::numbers::pi,
             r.uniform(3.5, 7.5), duration);
   }
 }
@@ -232,47 +471,63 @@ const std::vector<std::string>& scenario_names() {
 rt::Result<Scenario> make_scenario(const std::string& name, std::uint64_t seed, double duration) {
   Scenario s;
   s.name = name;
-  Builder b(s, seed);
+  Builder b(s, seed, duration);
   Rng& r = b.rng();
   GroundConfig& g = s.ground;
-  g.road_half_width = 8.0;
+  g.road_half_width = kRoadHalfWidth;
   g.slope_x = r.uniform(-0.015, 0.015);
   g.slope_y = r.uniform(-0.01, 0.01);
   g.wave_amplitude = r.uniform(0.1, 0.4);
   g.wave_length = r.uniform(80, 200);
+  auto straight = [&](double x, double y, double v) {  // the ego along +x at v
+    Trajectory t;
+    t.points = {{x, y, 0}};
+    if (v > 0) t.points.push_back({x + v * (duration + 5), y, duration + 5});
+    return t;
+  };
   if (name == "urban" || name == "empty") {
     const double v = r.uniform(7, 11);
     const double cross = r.uniform(40, 90);
     g.cross_road_x = cross;
     const double x1 = v * duration + 120;
-    b.street_furniture(-80, x1, g);
-    if (name == "urban") traffic(b, -60, x1, cross, duration, 14 + r.integer(0, 8), 24 + r.integer(0, 12), 4 + r.integer(0, 4), g);
-    // Ego: right inner lane, stopping at the crossing for a few seconds.
-    s.ego_path.points = {{-20, -kInner, 0}};
-    const double stop_x = cross - g.cross_half_width - 4;
+    // Ego: right inner lane, stopping a few seconds at the crossing, its front 1.5 m before the
+    // crosswalk (centred 1.5 m outside the crossing road).
+    Trajectory ego;
+    ego.points = {{-20, -kInner, 0}};
+    const double stop_x = cross - g.cross_half_width - 3.0 - 1.5 - kEgoLength / 2;
     const double t_stop = (stop_x + 20) / v;
     if (t_stop < duration) {
-      s.ego_path.points.push_back({stop_x, -kInner, t_stop});
-      s.ego_path.points.push_back({stop_x, -kInner, t_stop + 3.0});
-      s.ego_path.points.push_back({stop_x + v * (duration + 5), -kInner, t_stop + 3.0 + duration + 5});
+      ego.points.push_back({stop_x, -kInner, t_stop});
+      ego.points.push_back({stop_x, -kInner, t_stop + 3.0});
+      ego.points.push_back({stop_x + v * (duration + 5), -kInner, t_stop + 3.0 + duration + 5});
     } else {
-      s.ego_path.points.push_back({-20 + v * (duration + 5), -kInner, duration + 5});
+      ego.points.push_back({-20 + v * (duration + 5), -kInner, duration + 5});
     }
+    b.set_ego(ego);
+    b.street_furniture(-80, x1, g);
+    if (name == "urban")
+      traffic(b, -60, x1, cross, duration, 14 + r.integer(0, 8), 24 + r.integer(0, 12),
+              4 + r.integer(0, 4), g);
   } else if (name == "intersection") {
     g.cross_road_x = 0.0;
+    b.set_ego(straight(-g.cross_half_width - 6, -kInner, 0.0));  // parked at the corner
     b.street_furniture(-120, 120, g);
     traffic(b, -120, 120, 0.0, duration, 40 + r.integer(0, 10), 30 + r.integer(0, 10), 8, g);
     for (int i = 0; i < 16; ++i) {  // extra crossing traffic
-      Actor& car = b.vehicle(0, 0, 0);
-      const int dir = r.chance(0.5) ? 1 : -1;
-      b.drive(car, dir * -kInner, -dir * r.uniform(30, 150), dir * std::numbers::pi / 2, r.uniform(6, 12), duration);
+      for (int attempt = 0; attempt < 3; ++attempt) {
+        Actor& car = b.vehicle(0, 0, 0);
+        const int dir = r.chance(0.5) ? 1 : -1;
+        b.drive(car, dir * -kInner, -dir * r.uniform(30, 150), dir * std::numbers::pi / 2,
+                r.uniform(6, 12), duration);
+        if (b.commit()) break;
+      }
     }
-    s.ego_path.points = {{-g.cross_half_width - 6, -kInner, 0}};  // parked at the corner
   } else if (name == "highway") {
     g.road_half_width = 12.0;
     g.sidewalk_width = 2.0;
     const double v = r.uniform(22, 30);
     const double x1 = v * duration + 400;
+    b.set_ego(straight(0, -5.4, v));
     for (int side : {-1, 1}) {  // concrete barriers and the occasional sign
       for (double x = -150; x < x1; x += 30) {
         b.place(ObjectClass::kWall, Shape::kBox, {30, 0.5, 0.9}, 0.4, x + 15, side * 12.6, 0);
@@ -280,55 +535,78 @@ rt::Result<Scenario> make_scenario(const std::string& name, std::uint64_t seed, 
       }
     }
     for (int i = 0; i < 40; ++i) {
-      const bool with = r.chance(0.6);
-      const double lane = (r.integer(0, 2) * 3.6 + 1.8) * (with ? -1 : 1);
-      Actor& car = b.vehicle(0, 0, 0);
-      b.drive(car, r.uniform(-150, x1), lane, with ? 0.0 : std::numbers::pi, r.uniform(18, 36), duration);
-    }
-    s.ego_path.points = {{0, -5.4, 0}, {v * (duration + 5), -5.4, duration + 5}};
-  } else if (name == "parking-lot") {
-    g.has_road = false;
-    for (int row = -3; row <= 3; ++row) {
-      for (int k = -12; k <= 12; ++k) {
-        if (row == 0 || !r.chance(0.7)) continue;
-        b.vehicle(k * 2.9, row * 7.0 + (row > 0 ? -1.5 : 1.5), row > 0 ? -std::numbers::pi / 2 : std::numbers::pi / 2);
+      for (int attempt = 0; attempt < 3; ++attempt) {  // a car that cannot fit in is drawn again
+        const bool with = r.chance(0.6);
+        int lane = r.integer(0, 2);
+        const double start = r.uniform(-150, x1), speed = r.uniform(18, 36);
+        Actor& car = b.vehicle(0, 0, 0);
+        b.drive(car, start, (lane * 3.6 + 1.8) * (with ? -1 : 1), with ? 0.0 : std::numbers::pi,
+                speed, duration);
+        if (with && lane == 1 && !b.commit()) {  // in the ego's way: another lane
+          lane = r.chance(0.5) ? 0 : 2;
+          Actor& other = b.vehicle(0, 0, 0);
+          b.drive(other, start, -(lane * 3.6 + 1.8), 0.0, speed, duration);
+        }
+        if (b.commit()) break;
       }
-      b.place(ObjectClass::kPole, Shape::kPole, {0.3, 0.3, 8}, 0.5, -40, row * 7.0, 0);
-      b.place(ObjectClass::kPole, Shape::kPole, {0.3, 0.3, 8}, 0.5, 40, row * 7.0, 0);
+    }
+  } else if (name == "parking-lot") {
+    // Rows of cars parked nose-in at |y| = 7.5 and 16.5 (cars and vans), aisles at |y| < 4.7
+    // (two lanes, y = -2 and +2) and at |y| = 12.
+    g.has_road = false;
+    b.set_ego(straight(-45, -2.0, 3.0));
+    for (double row : {-16.5, -7.5, 7.5, 16.5}) {
+      for (int k = -12; k <= 12; ++k) {
+        if (!r.chance(0.7)) continue;
+        b.vehicle(k * 2.9, row, row > 0 ? -std::numbers::pi / 2 : std::numbers::pi / 2, false);
+      }
+      b.place(ObjectClass::kPole, Shape::kPole, {0.3, 0.3, 8}, 0.5, -40, row, 0);
+      b.place(ObjectClass::kPole, Shape::kPole, {0.3, 0.3, 8}, 0.5, 40, row, 0);
     }
     b.place(ObjectClass::kBuilding, Shape::kBox, {90, 15, 8}, 0.5, 0, 35, 0);
+    const double aisles[] = {-12.0, -2.0, 2.0, 12.0};
     for (int i = 0; i < 5; ++i) {
-      Actor& car = b.vehicle(0, 0, 0);
-      b.drive(car, r.uniform(-40, 40), (r.integer(-1, 1) * 2 + 1) * 3.5, r.chance(0.5) ? 0 : std::numbers::pi, r.uniform(2, 4), duration);
+      Actor& car = b.vehicle(0, 0, 0, false);
+      const double y = aisles[r.integer(0, 3)];
+      b.drive(car, r.uniform(-40, 40), y,
+              y == -2.0       ? 0
+              : y == 2.0      ? std::numbers::pi
+              : r.chance(0.5) ? 0
+                              : std::numbers::pi,
+              r.uniform(2, 4), duration);
     }
-    for (int i = 0; i < 18; ++i) {
+    for (int i = 0, placed = 0; placed < 18 && i < 60; ++i) {
       Actor& p = b.pedestrian(r.uniform(-35, 35), r.uniform(-20, 20));
       if (r.chance(0.7)) b.drive(p, p.path.points[0].x, p.path.points[0].y, r.uniform(0, 2 * std::numbers::pi), r.uniform(0.8, 1.5), duration);
+      if (b.commit()) ++placed;
     }
-    for (int i = 0; i < 2; ++i) {
+    for (int i = 0, placed = 0; placed < 2 && i < 10; ++i) {
       Actor& c = b.cyclist(0, 0);
-      b.drive(c, r.uniform(-40, 0), 3.5, 0, r.uniform(3, 5), duration);
+      b.drive(c, r.uniform(-40, 0), r.chance(0.5) ? 12.0 : -12.0, 0, r.uniform(3, 5), duration);
+      if (b.commit()) ++placed;
     }
-    s.ego_path.points = {{-45, -3.5, 0}, {-45 + 3.0 * (duration + 5), -3.5, duration + 5}};
   } else if (name == "crowd") {
     g.cross_road_x = 1e9;
+    b.set_ego(straight(-20, 0, 1.0));
     b.street_furniture(-60, 80, g);
-    for (int i = 0; i < 150; ++i) {  // pedestrians everywhere, the street closed to traffic
+    for (int i = 0, placed = 0; placed < 150 && i < 600;
+         ++i) {  // pedestrians everywhere, no traffic
       Actor& p = b.pedestrian(r.uniform(-40, 60), r.uniform(-11, 11));
       if (r.chance(0.8)) {
         b.drive(p, p.path.points[0].x, p.path.points[0].y, r.uniform(0, 2 * std::numbers::pi), r.uniform(0.6, 1.6), duration);
       }
+      if (b.commit()) ++placed;
     }
     for (int i = 0; i < 6; ++i) {
       Actor& c = b.cyclist(0, 0);
       b.drive(c, r.uniform(-40, 40), r.uniform(-5, 5), r.chance(0.5) ? 0 : std::numbers::pi, r.uniform(3, 5), duration);
     }
-    s.ego_path.points = {{-20, 0, 0}, {-20 + 1.0 * (duration + 5), 0, duration + 5}};
   } else {
     std::string list;
     for (const auto& n : scenario_names()) list += (list.empty() ? "" : ", ") + n;
     return rt::make_error("unknown scenario '" + name + "'; use one of: " + list);
   }
+  b.commit();
   return s;
 }
 

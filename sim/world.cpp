@@ -297,7 +297,8 @@ WorldHit World::cast(const Ray& ray, double t, const std::vector<std::uint32_t>&
   if (g.t < kNoHit) {
     best.t = g.t;
     best.normal = g.normal;
-    best.reflectivity = 0.12;  // asphalt and concrete, darkish
+    best.reflectivity =
+        0.2;  // asphalt and concrete (0.12 before the intensity fit; docs/simulator.md)
     best.actor = -1;
   }
   for (std::uint32_t i : candidates) {

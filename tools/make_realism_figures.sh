@@ -9,7 +9,7 @@ mkdir -p "$WORK" docs/img
 # A 2 s drive (20 scans): the clean comparison.
 "$STAC" sim --scenario urban --seed 1 --duration 2 --out "$WORK/urban2.pcap" --truth "$WORK/urban2.truth.jsonl"
 "$STAC" sim-compare --sim "$WORK/urban2.pcap" --report "$WORK/urban2"
-# A 20 s drive (200 scans): shows the cars that drive through the ego (see docs/simulator.md).
+# A 20 s drive (200 scans): a longer stretch, with the stop at the crossing and traffic around the ego.
 "$STAC" sim --scenario urban --seed 1 --duration 20 --out "$WORK/urban20.pcap" --truth "$WORK/urban20.truth.jsonl"
 "$STAC" sim-compare --sim "$WORK/urban20.pcap" --report "$WORK/urban20"
 for f in birds_eye_side_by_side points_per_ring ring_elevation range_histogram intensity_histogram; do

@@ -1,12 +1,15 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <set>
+#include <string>
 
 #include "drivers/velodyne/decoder.hpp"
-#include "sim/run.hpp"
 #include "shared_data.hpp"
+#include "sim/run.hpp"
 
 namespace stac::sim {
 namespace {
@@ -72,6 +75,78 @@ TEST(SimLidar, DecoderReturnsEveryHitWithin3mm) {
   }
   EXPECT_GT(compared, 300'000u);
   EXPECT_LT(worst, 0.003);
+}
+
+// Dual return (S3): the last-return blocks carry a second echo where one physically occurs
+// (through foliage, at edges), and the same return as the strongest block where there is one
+// echo only (as Velodyne's manuals state for dual mode).
+TEST(SimLidar, DualReturnGivesADifferentLastEchoOnVegetation) {
+  STAC_REQUIRE_SHARED_DATA(kCalib);
+  const velodyne::Calibration cal = calibration();
+  RunConfig rc = config("urban", 4, 0.4);
+  rc.lidar.dual_return = true;
+  rc.lidar.model = velodyne::Model::kS3;
+  auto run = SimRun::create(cal, rc);
+  ASSERT_TRUE(run) << run.error().message;
+  velodyne::DecoderConfig dc;
+  dc.model = velodyne::Model::kS3;
+  dc.min_range_m = 0.0f;
+  dc.max_range_m = 200.0f;
+  velodyne::PacketDecoder decoder(cal, dc);
+  std::array<std::uint8_t, velodyne::kPacketSize> bytes{};
+  std::size_t veg = 0, veg_differ = 0, solid = 0, solid_differ = 0, last_points = 0;
+  for (std::uint32_t k = 0; k < (*run)->packet_count(); ++k) {
+    std::map<int, BeamRecord> beams;  // strongest block * 64 + laser -> record
+    std::int64_t first = 0;
+    (*run)->packet(k, bytes, first, {}, [&](const BeamRecord& b) {
+      if (b.returned) beams[b.block * 64 + b.laser] = b;
+    });
+    const velodyne::RawPacket* p = velodyne::as_packet(bytes);
+    ASSERT_NE(p, nullptr);
+    for (int block = 0; block < 12; ++block) {
+      if (block % 4 >= 2) continue;  // the strongest blocks; block + 2 is the last-return one
+      velodyne::Point strongest[32], last[32];
+      const int ns = decoder.decode_block(p->blocks[block], block, true, 0, strongest);
+      const int nl = decoder.decode_block(p->blocks[block + 2], block + 2, true, 0, last);
+      ASSERT_EQ(ns, nl) << "every strongest return has a last-block return";
+      last_points += static_cast<std::size_t>(nl);
+      for (int i = 0; i < ns; ++i) {
+        ASSERT_EQ(strongest[i].laser, last[i].laser);
+        const auto it = beams.find(block * 64 + strongest[i].laser);
+        ASSERT_NE(it, beams.end());
+        const bool differ = std::abs(strongest[i].distance_m - last[i].distance_m) > 0.3f;
+        const std::int64_t actor = it->second.actor;
+        const bool vegetation =
+            actor >= 0 &&
+            ((*run)->world().actors()[static_cast<std::size_t>(actor)].cls == ObjectClass::kTree ||
+             (*run)->world().actors()[static_cast<std::size_t>(actor)].cls == ObjectClass::kBush);
+        if (vegetation) {
+          ++veg;
+          veg_differ += differ ? 1 : 0;
+        } else {
+          ++solid;
+          solid_differ += differ ? 1 : 0;
+          // Where the last block differs, it holds the weaker echo.
+          if (differ) {
+            const std::size_t j = strongest[i].laser % 32u;
+            EXPECT_LE(p->blocks[block + 2].returns[j].intensity,
+                      p->blocks[block].returns[j].intensity);
+          }
+        }
+      }
+    }
+  }
+  std::printf("dual return: %zu of %zu foliage beams and %zu of %zu others have a second echo\n",
+              veg_differ, veg, solid_differ, solid);
+  EXPECT_GT(last_points, 200'000u);
+  ASSERT_GT(veg, 500u);
+  // Most beams into foliage have a second echo (the foliage or what is behind it).
+  EXPECT_GT(static_cast<double>(veg_differ) / static_cast<double>(veg), 0.5)
+      << veg_differ << " of " << veg;
+  // On solid surfaces only edges give a second echo: some, but few.
+  EXPECT_GT(solid_differ, 100u);
+  EXPECT_LT(static_cast<double>(solid_differ) / static_cast<double>(solid), 0.1)
+      << solid_differ << " of " << solid;
 }
 
 TEST(SimRun, SameScenarioAndSeedGiveIdenticalBytes) {
@@ -154,6 +229,156 @@ TEST(SimRun, TruthBoxesHoldTheirObjectsPoints) {
       << inside << " of " << total;
   EXPECT_GT(per_class["car"], 1000u);
   EXPECT_GT(per_class["pedestrian"], 50u);
+}
+
+// A plan-view rectangle by its corners, for an overlap check written independently of the
+// scenario code (corner containment and edge crossings, not separating axes).
+struct Rect {
+  double px[4], py[4];
+};
+
+Rect rect(double x, double y, double yaw, double length, double width) {
+  const double c = std::cos(yaw), s = std::sin(yaw), l = length / 2, w = width / 2;
+  const double lx[4] = {l, -l, -l, l}, ly[4] = {w, w, -w, -w};
+  Rect r{};
+  for (int i = 0; i < 4; ++i) {
+    r.px[i] = x + c * lx[i] - s * ly[i];
+    r.py[i] = y + s * lx[i] + c * ly[i];
+  }
+  return r;
+}
+
+bool inside(const Rect& r, double x, double y) {  // strictly inside (convex, either winding)
+  int sign = 0;
+  for (int i = 0; i < 4; ++i) {
+    const int j = (i + 1) % 4;
+    const double cross = (r.px[j] - r.px[i]) * (y - r.py[i]) - (r.py[j] - r.py[i]) * (x - r.px[i]);
+    const int sg = cross > 1e-9 ? 1 : cross < -1e-9 ? -1 : 0;
+    if (sg == 0) return false;
+    if (sign == 0) sign = sg;
+    if (sg != sign) return false;
+  }
+  return true;
+}
+
+bool segments_cross(double ax, double ay, double bx, double by, double cx, double cy, double dx,
+                    double dy) {
+  auto orient = [](double ox, double oy, double px, double py, double qx, double qy) {
+    return (px - ox) * (qy - oy) - (py - oy) * (qx - ox);
+  };
+  const double o1 = orient(ax, ay, bx, by, cx, cy), o2 = orient(ax, ay, bx, by, dx, dy);
+  const double o3 = orient(cx, cy, dx, dy, ax, ay), o4 = orient(cx, cy, dx, dy, bx, by);
+  return ((o1 > 0) != (o2 > 0)) && ((o3 > 0) != (o4 > 0)) && o1 != 0 && o2 != 0 && o3 != 0 &&
+         o4 != 0;
+}
+
+bool rects_overlap(const Rect& a, const Rect& b) {
+  for (int i = 0; i < 4; ++i) {
+    if (inside(a, b.px[i], b.py[i]) || inside(b, a.px[i], a.py[i])) return true;
+    for (int j = 0; j < 4; ++j) {
+      if (segments_cross(a.px[i], a.py[i], a.px[(i + 1) % 4], a.py[(i + 1) % 4], b.px[j], b.py[j],
+                         b.px[(j + 1) % 4], b.py[(j + 1) % 4])) {
+        return true;
+      }
+    }
+  }
+  return false;
+}
+
+// Every 0.05 s of the drive: no car, pedestrian or bicyclist inside the ego's footprint, and
+// nobody inside a car (cars are kept apart from everyone, pedestrians and bicyclists from cars).
+// Returns the number of overlaps found (with a description of the first few).
+std::size_t overlaps_in(const std::string& name, std::uint64_t seed, double duration,
+                        std::string& first) {
+  auto s = make_scenario(name, seed, duration);
+  EXPECT_TRUE(s);
+  if (!s) return 1;
+  std::vector<std::size_t> fg;
+  for (std::size_t i = 0; i < s->actors.size(); ++i) {
+    if (is_foreground(s->actors[i].cls)) fg.push_back(i);
+  }
+  std::size_t found = 0;
+  std::vector<Rect> boxes(fg.size());
+  std::vector<Pose> poses(fg.size());
+  const int steps = static_cast<int>(std::floor(duration / 0.05));
+  for (int k = 0; k <= steps; ++k) {
+    const double t = k * 0.05;
+    const Pose e = s->ego_path.pose_at(t);
+    const Rect ego = rect(e.x, e.y, e.yaw, kEgoLength, kEgoWidth);
+    for (std::size_t n = 0; n < fg.size(); ++n) {
+      const Actor& a = s->actors[fg[n]];
+      poses[n] = a.path.pose_at(t);
+      boxes[n] = rect(poses[n].x, poses[n].y, poses[n].yaw, a.size.x, a.size.y);
+      if (std::hypot(poses[n].x - e.x, poses[n].y - e.y) < 20 && rects_overlap(boxes[n], ego)) {
+        if (found++ < 3)
+          first += "t=" + std::to_string(t) + " actor " + std::to_string(a.id) + " in the ego; ";
+      }
+    }
+    for (std::size_t n = 0; n < fg.size(); ++n) {
+      const Actor& a = s->actors[fg[n]];
+      for (std::size_t m = n + 1; m < fg.size(); ++m) {
+        const Actor& b = s->actors[fg[m]];
+        if (a.cls != ObjectClass::kCar && b.cls != ObjectClass::kCar) continue;
+        if (std::hypot(poses[n].x - poses[m].x, poses[n].y - poses[m].y) >
+            0.5 * (a.size.x + b.size.x) + 2)
+          continue;
+        if (rects_overlap(boxes[n], boxes[m])) {
+          if (found++ < 3) {
+            first += "t=" + std::to_string(t) + " actors " + std::to_string(a.id) + " and " +
+                     std::to_string(b.id) + "; ";
+          }
+        }
+      }
+    }
+  }
+  return found;
+}
+
+TEST(Scenarios, NoActorEverOverlapsTheEgoOrACar) {
+  struct Case {
+    std::string name;
+    std::uint64_t seed;
+    double duration;
+  };
+  std::vector<Case> cases;
+  for (std::uint64_t seed = 1; seed <= 5; ++seed) cases.push_back({"urban", seed, 20.0});
+  cases.push_back({"urban", 5, 0.35});
+  cases.push_back({"urban", 2, 3.0});
+  cases.push_back({"urban", 9, 60.0});
+  for (const std::string name : {"intersection", "highway", "parking-lot", "crowd"}) {
+    for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+      cases.push_back({name, seed, 20.0});
+      cases.push_back({name, seed + 10, 2.0});
+    }
+  }
+  for (const Case& c : cases) {
+    std::string first;
+    EXPECT_EQ(overlaps_in(c.name, c.seed, c.duration, first), 0u)
+        << c.name << " seed " << c.seed << " " << c.duration << " s: " << first;
+  }
+}
+
+// The sensor never ends up inside an object: over a 20 s urban drive (which stops at the
+// crossing and meets traffic) every scan has at least 60 % of the median points.
+TEST(SimRun, NoScanOfAnUrbanDriveIsSwallowed) {
+  STAC_REQUIRE_SHARED_DATA(kCalib);
+  const velodyne::Calibration cal = calibration();
+  auto run = SimRun::create(cal, config("urban", 1, 20.0));
+  ASSERT_TRUE(run) << run.error().message;
+  std::vector<std::uint32_t> points;
+  std::array<std::uint8_t, velodyne::kPacketSize> bytes{};
+  for (std::uint32_t k = 0; k < (*run)->packet_count(); ++k) {
+    std::int64_t first = 0;
+    (*run)->packet(k, bytes, first, [&](const TruthScan& s) { points.push_back(s.points); });
+  }
+  ASSERT_GE(points.size(), 190u);
+  std::vector<std::uint32_t> sorted = points;
+  std::sort(sorted.begin(), sorted.end());
+  const double median = sorted[sorted.size() / 2];
+  EXPECT_GT(median, 90'000.0);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    EXPECT_GE(points[i], 0.6 * median) << "scan " << i;
+  }
 }
 
 TEST(Scenarios, EachBuildsItsWorld) {
