@@ -1,10 +1,17 @@
-// stac replay: a capture's UDP payloads sent again over a socket at the recorded pace (for
-// hardware-in-the-loop runs and tests), with the achieved rate and pacing error reported.
+// stac replay: a capture's UDP payloads sent again over a socket and its TCP streams served
+// as a TCP server, at the recorded pace on one clock (for hardware-in-the-loop runs and tests),
+// with the achieved rate and pacing error reported.
+#include <algorithm>
 #include <csignal>
 #include <cstdio>
 #include <memory>
+#include <optional>
+#include <thread>
+#include <vector>
 
+#include "drivers/io/tcp_replay.hpp"
 #include "drivers/io/udp_replay.hpp"
+#include "rt/clock.hpp"
 #include "tools/commands.hpp"
 
 namespace stac::tools {
@@ -19,6 +26,16 @@ struct ReplayOptions {
   bool fast = false;
   std::uint64_t loops = 1;
   bool forever = false;
+  std::vector<std::string> tcp_ports;  // "P" or "P:LISTEN_PORT"
+  std::string tcp_listen = "127.0.0.1";
+  bool no_tcp = false;
+  bool wait_tcp = false;
+};
+
+struct TcpServe {
+  std::uint16_t port = 0;                    // captured server port
+  std::optional<std::uint16_t> listen_port;  // default: the captured one
+  bool asked = false;                        // named by --tcp-port: failures are fatal
 };
 
 std::atomic<bool> g_stop{false};
@@ -34,7 +51,12 @@ std::string rate_text(double rate) {
   return b;
 }
 
-void print_report(const ReplayOptions& o, const io::ReplayPlan& plan, const io::ReplayReport& r) {
+// first_due_ns: when the first datagram was due on the shared clock; the schedule is printed
+// from there (as for a UDP replay alone).
+void print_report(const ReplayOptions& o, const io::ReplayPlan& plan, io::ReplayReport r,
+                  std::int64_t first_due_ns) {
+  r.elapsed_ns -= first_due_ns;
+  if (!o.fast) r.scheduled_ns -= first_due_ns;
   const double elapsed_s = static_cast<double>(r.elapsed_ns) * 1e-9;
   const double span_s = static_cast<double>(plan.span_ns) * 1e-9;
   const double recorded_pps =
@@ -77,7 +99,108 @@ void print_report(const ReplayOptions& o, const io::ReplayPlan& plan, const io::
   }
 }
 
+void print_tcp_report(const ReplayOptions& o, const io::TcpReplay& t, io::TcpReplayReport r,
+                      std::uint16_t port, std::int64_t first_due_ns) {
+  const io::TcpReplayPlan& plan = t.plan();
+  r.elapsed_ns = std::max<std::int64_t>(0, r.elapsed_ns - first_due_ns);  // 0: nothing written
+  if (!o.fast) r.scheduled_ns -= first_due_ns;
+  const double elapsed_s = static_cast<double>(r.elapsed_ns) * 1e-9;
+  const double span_s = static_cast<double>(plan.span_ns) * 1e-9;
+  const double recorded_mbps = span_s > 0 ? 8e-6 * static_cast<double>(plan.bytes) / span_s : 0.0;
+  const double mbps = elapsed_s > 0 ? 8e-6 * static_cast<double>(r.bytes) / elapsed_s : 0.0;
+  const double sps =
+      elapsed_s > 0 && r.segments > 1 ? static_cast<double>(r.segments - 1) / elapsed_s : 0.0;
+  std::fprintf(
+      stderr,
+      "stac replay: TCP stream of port %u served on %s:%u\n"
+      "  sent       %llu bytes in %llu segments in %.3f s (%llu full passes%s), %llu bytes "
+      "unserved (no client)\n"
+      "  clients    %llu connected, %llu gone (%llu stalled)\n"
+      "  rate       %.1f segments/s, %.4f Mbit/s (recorded %.4f Mbit/s; %s)\n",
+      port, o.tcp_listen.c_str(), t.listen_port(), static_cast<unsigned long long>(r.bytes),
+      static_cast<unsigned long long>(r.segments), elapsed_s,
+      static_cast<unsigned long long>(r.passes), r.stopped ? ", stopped" : "",
+      static_cast<unsigned long long>(r.unserved_bytes),
+      static_cast<unsigned long long>(r.clients), static_cast<unsigned long long>(r.disconnects),
+      static_cast<unsigned long long>(r.stalls), sps, mbps, recorded_mbps,
+      o.fast ? "--fast" : rate_text(o.rate).c_str());
+  if (o.fast) {
+    std::fprintf(stderr, "  pacing     none (--fast)\n");
+  } else if (r.error_max_ns >= 0) {
+    std::fprintf(stderr,
+                 "  schedule   %.6f s scheduled for the last segment, %.6f s taken\n"
+                 "  pacing error |sent - scheduled|: median %.1f us, p99 %.1f us, max %.1f us\n",
+                 static_cast<double>(r.scheduled_ns) * 1e-9, elapsed_s,
+                 static_cast<double>(r.error_median_ns) * 1e-3,
+                 static_cast<double>(r.error_p99_ns) * 1e-3,
+                 static_cast<double>(r.error_max_ns) * 1e-3);
+  }
+}
+
+// --tcp-port values: "P" or "P:L" (serve captured port P on listen port L, 0: any free one).
+rt::Result<std::vector<TcpServe>> parse_tcp_ports(const std::vector<std::string>& values) {
+  std::vector<TcpServe> out;
+  auto number = [](const std::string& t, long lo) -> std::optional<std::uint16_t> {
+    if (t.empty() || t.find_first_not_of("0123456789") != std::string::npos || t.size() > 5) {
+      return std::nullopt;
+    }
+    const long v = std::stol(t);
+    if (v < lo || v > 65535) return std::nullopt;
+    return static_cast<std::uint16_t>(v);
+  };
+  for (const std::string& v : values) {
+    const std::size_t colon = v.find(':');
+    TcpServe s;
+    s.asked = true;
+    const auto port = number(v.substr(0, colon), 1);
+    if (!port) return rt::make_error("--tcp-port " + v + ": expected PORT or PORT:LISTEN_PORT");
+    s.port = *port;
+    if (colon != std::string::npos) {
+      s.listen_port = number(v.substr(colon + 1), 0);
+      if (!s.listen_port) return rt::make_error("--tcp-port " + v + ": bad LISTEN_PORT");
+    }
+    out.push_back(s);
+  }
+  return out;
+}
+
 int run_replay(const ReplayOptions& o) {
+  // The TCP streams to serve.
+  std::vector<TcpServe> serve;
+  if (!o.no_tcp) {
+    if (!o.tcp_ports.empty()) {
+      auto asked = parse_tcp_ports(o.tcp_ports);
+      if (!asked) return fail(asked.error().message);
+      serve = *asked;
+    } else {
+      auto found = io::TcpReplay::server_ports(o.in);
+      if (!found) return fail(found.error().message);
+      for (std::uint16_t p : *found) serve.push_back(TcpServe{p, std::nullopt, false});
+    }
+  }
+  std::vector<io::TcpReplay> tcp;
+  std::vector<std::uint16_t> tcp_port_of;
+  for (const TcpServe& s : serve) {
+    io::TcpReplayConfig tc;
+    tc.server_port = s.port;
+    tc.listen_address = o.tcp_listen;
+    tc.listen_port = s.listen_port;
+    tc.rate = o.rate;
+    tc.fast = o.fast;
+    tc.loops = o.forever ? 0 : o.loops;
+    auto t = io::TcpReplay::open(o.in, tc);
+    if (!t && s.asked) return fail(t.error().message);
+    if (!t) {
+      std::fprintf(stderr,
+                   "stac replay: warning: TCP stream of port %u not served: %s (choose with "
+                   "--tcp-port %u:LISTEN_PORT, or --no-tcp)\n",
+                   s.port, t.error().message.c_str(), s.port);
+      continue;
+    }
+    tcp.push_back(std::move(*t));
+    tcp_port_of.push_back(s.port);
+  }
+
   io::ReplayConfig c;
   c.address = o.to;
   if (o.port > 0) c.port = static_cast<std::uint16_t>(o.port);
@@ -85,15 +208,30 @@ int run_replay(const ReplayOptions& o) {
   c.rate = o.rate;
   c.fast = o.fast;
   c.loops = o.forever ? 0 : o.loops;
+  c.allow_empty = !tcp.empty() && o.filter_port <= 0;  // a TCP-only capture
   auto replay = io::UdpReplay::open(o.in, c);
   if (!replay) return fail(replay.error().message);
   const io::ReplayPlan& plan = replay->plan();
-  std::string ports;
-  for (auto p : plan.dst_ports) ports += (ports.empty() ? "" : ",") + std::to_string(p);
-  std::fprintf(stderr,
-               "stac replay: %llu packets per pass over %.3f s recorded (captured ports %s)\n",
-               static_cast<unsigned long long>(plan.packets),
-               static_cast<double>(plan.span_ns) * 1e-9, ports.c_str());
+  if (plan.packets > 0) {
+    std::string ports;
+    for (auto p : plan.dst_ports) ports += (ports.empty() ? "" : ",") + std::to_string(p);
+    std::fprintf(stderr,
+                 "stac replay: %llu packets per pass over %.3f s recorded (captured ports %s)\n",
+                 static_cast<unsigned long long>(plan.packets),
+                 static_cast<double>(plan.span_ns) * 1e-9, ports.c_str());
+  }
+  for (std::size_t i = 0; i < tcp.size(); ++i) {
+    const io::TcpReplayPlan& tp = tcp[i].plan();
+    std::fprintf(stderr,
+                 "stac replay: TCP stream of port %u: %llu bytes in %llu segments over %.3f s "
+                 "recorded (%llu retransmitted, %llu gaps); listening on %s:%u\n",
+                 tcp_port_of[i], static_cast<unsigned long long>(tp.bytes),
+                 static_cast<unsigned long long>(tp.segments),
+                 static_cast<double>(tp.span_ns) * 1e-9,
+                 static_cast<unsigned long long>(tp.retransmitted),
+                 static_cast<unsigned long long>(tp.gaps), o.tcp_listen.c_str(),
+                 tcp[i].listen_port());
+  }
 
   g_stop = false;
   struct sigaction sa {};
@@ -103,12 +241,49 @@ int run_replay(const ReplayOptions& o) {
   }, old_term{};
   sigaction(SIGINT, &sa, &old_int);
   sigaction(SIGTERM, &sa, &old_term);
-  auto report = replay->run(g_stop);
+  if (o.wait_tcp) {
+    for (std::size_t i = 0; i < tcp.size(); ++i) {
+      std::fprintf(stderr, "stac replay: waiting for a client on %s:%u\n", o.tcp_listen.c_str(),
+                   tcp[i].listen_port());
+      (void)tcp[i].wait_for_client(g_stop);
+    }
+  }
+  // One clock for all: the capture's earliest stream byte or datagram is due 2 ms from now.
+  io::ReplayClock clock;
+  clock.rate = o.fast ? 1.0 : o.rate;
+  std::vector<std::pair<std::int64_t, std::int64_t>> firsts;  // (first stamp, pass period)
+  if (plan.packets > 0) firsts.emplace_back(plan.first_stamp_ns, plan.pass_period_ns);
+  for (const auto& t : tcp) firsts.emplace_back(t.plan().first_stamp_ns, t.plan().pass_period_ns);
+  clock.first_stamp_ns = std::min_element(firsts.begin(), firsts.end())->first;
+  for (const auto& [first, period] : firsts) {
+    clock.pass_period_ns = std::max(clock.pass_period_ns, first - clock.first_stamp_ns + period);
+  }
+  clock.start_ns = rt::monotonic_ns() + 2'000'000;
+
+  std::vector<rt::Result<io::TcpReplayReport>> tcp_reports(tcp.size(),
+                                                           rt::make_error("not run"));
+  std::vector<std::thread> threads;
+  for (std::size_t i = 0; i < tcp.size(); ++i) {
+    threads.emplace_back([&, i] { tcp_reports[i] = tcp[i].run(g_stop, &clock); });
+  }
+  rt::Result<io::ReplayReport> report = io::ReplayReport{};
+  if (plan.packets > 0) report = replay->run(g_stop, &clock);
+  for (auto& t : threads) t.join();
   sigaction(SIGINT, &old_int, nullptr);
   sigaction(SIGTERM, &old_term, nullptr);
   if (!report) return fail(report.error().message);
-  print_report(o, plan, *report);
-  if (report->packets == 0 && !report->stopped) return fail("no packet could be sent");
+  for (auto& r : tcp_reports) {
+    if (!r) return fail(r.error().message);
+  }
+  const std::int64_t udp_first_due = clock.offset_ns(0, plan.first_stamp_ns);
+  if (plan.packets > 0) print_report(o, plan, *report, o.fast ? 0 : udp_first_due);
+  for (std::size_t i = 0; i < tcp.size(); ++i) {
+    print_tcp_report(o, tcp[i], *tcp_reports[i], tcp_port_of[i],
+                     o.fast ? 0 : clock.offset_ns(0, tcp[i].plan().first_stamp_ns));
+  }
+  if (plan.packets > 0 && report->packets == 0 && !report->stopped) {
+    return fail("no packet could be sent");
+  }
   return 0;
 }
 
@@ -117,13 +292,19 @@ int run_replay(const ReplayOptions& o) {
 void add_replay_command(CLI::App& app) {
   auto o = std::make_shared<ReplayOptions>();
   CLI::App* cmd =
-      app.add_subcommand("replay", "Send a capture's UDP packets again at the recorded pace");
+      app.add_subcommand("replay",
+                         "Send a capture's UDP packets and serve its TCP streams at the recorded pace");
   cmd->description(
       "Send the UDP payloads of a pcap capture to an address (default 127.0.0.1), each at its\n"
       "recorded time divided by --rate (or as fast as possible with --fast), optionally looping.\n"
       "Destination port: --port, else each packet's captured destination port. Reports packets,\n"
       "bytes, achieved vs recorded rate and the pacing error |sent - scheduled| (median, p99,\n"
-      "max). Ctrl-C stops and reports. TCP streams in the capture are not served (yet).");
+      "max). Ctrl-C stops and reports.\n"
+      "TCP streams (e.g. the Applanix Real-Time Data port 5602) are served at the same time, on\n"
+      "one clock with the UDP packets, by a TCP server on --tcp-listen at the captured server\n"
+      "port: one client at a time; the stream runs on whether a client is connected or not (a\n"
+      "client that connects gets it from then on); --wait-tcp holds the start until a client\n"
+      "is connected to every served port.");
   cmd->add_option("--in", o->in, "pcap capture to replay")->required();
   cmd->add_option("--to", o->to, "destination IPv4 address")->capture_default_str();
   cmd->add_option("--port", o->port, "destination UDP port (default: the captured one)")
@@ -138,6 +319,14 @@ void add_replay_command(CLI::App& app) {
                    ->check(CLI::Range(1, 1'000'000))
                    ->capture_default_str();
   cmd->add_flag("--forever", o->forever, "loop until Ctrl-C")->excludes(loop);
+  auto* tcp_port = cmd->add_option("--tcp-port", o->tcp_ports,
+                                   "captured TCP server port to serve, PORT or PORT:LISTEN_PORT "
+                                   "(0: any free one); repeatable (default: every captured one)");
+  cmd->add_option("--tcp-listen", o->tcp_listen, "IPv4 address the TCP servers listen on")
+      ->capture_default_str();
+  cmd->add_flag("--no-tcp", o->no_tcp, "do not serve the capture's TCP streams")->excludes(tcp_port);
+  cmd->add_flag("--wait-tcp", o->wait_tcp,
+                "start the replay once a client is connected to every served TCP port");
   cmd->callback([o] {
     if (const int code = run_replay(*o); code != 0) throw CLI::RuntimeError(code);
   });

@@ -1,10 +1,6 @@
 #include "drivers/io/udp_replay.hpp"
 
-#include <sys/prctl.h>
-#include <time.h>
-
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
 
 #include "rt/clock.hpp"
@@ -12,42 +8,12 @@
 namespace stac::io {
 namespace {
 
-constexpr std::int64_t kSpinNs = 50'000;       // busy-wait the last 50 us before a send
-constexpr std::size_t kHistogramUs = 100'000;  // 1 us bins up to 100 ms, then one overflow bin
 constexpr std::size_t kMaxPorts = 64;
 
 PcapFilter filter_of(const ReplayConfig& c) {
   PcapFilter f;
   f.udp_dst_port = c.filter_port;
   return f;
-}
-
-// Sleeps until CLOCK_MONOTONIC reaches due_ns (or stop is set): an absolute sleep to shortly
-// before, then a spin.
-void wait_until(std::int64_t due_ns, const std::atomic<bool>& stop) noexcept {
-  if (due_ns - rt::monotonic_ns() > kSpinNs) {
-    const std::int64_t wake = due_ns - kSpinNs;
-    timespec ts{};
-    ts.tv_sec = static_cast<time_t>(wake / 1'000'000'000);
-    ts.tv_nsec = static_cast<long>(wake % 1'000'000'000);
-    while (::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
-      if (stop.load(std::memory_order_relaxed)) return;
-    }
-  }
-  while (rt::monotonic_ns() < due_ns) {
-    if (stop.load(std::memory_order_relaxed)) return;
-  }
-}
-
-std::int64_t percentile_ns(const std::vector<std::uint64_t>& histogram, std::uint64_t total,
-                           double q) {
-  const auto rank = static_cast<std::uint64_t>(std::ceil(q * static_cast<double>(total)));
-  std::uint64_t seen = 0;
-  for (std::size_t i = 0; i < histogram.size(); ++i) {
-    seen += histogram[i];
-    if (seen >= std::max<std::uint64_t>(rank, 1)) return static_cast<std::int64_t>(i) * 1000;
-  }
-  return static_cast<std::int64_t>(histogram.size() - 1) * 1000;
 }
 
 }  // namespace
@@ -65,7 +31,7 @@ rt::Result<UdpReplay> UdpReplay::open(const std::filesystem::path& capture,
   Datagram d;
   std::int64_t last = 0;
   while (reader->next(d)) {
-    if (r.plan_.packets == 0) r.first_stamp_ns_ = d.stamp_ns;
+    if (r.plan_.packets == 0) r.plan_.first_stamp_ns = d.stamp_ns;
     last = std::max(last, d.stamp_ns);
     ++r.plan_.packets;
     r.plan_.bytes += d.payload.size();
@@ -80,6 +46,7 @@ rt::Result<UdpReplay> UdpReplay::open(const std::filesystem::path& capture,
     }
   }
   if (!reader->error().empty()) return rt::make_error(reader->error());
+  if (r.plan_.packets == 0 && config.allow_empty) return r;
   if (r.plan_.packets == 0) {
     const PcapCounters& c = reader->counters();
     std::string why = capture.string() + ": no UDP datagram to replay";
@@ -90,7 +57,7 @@ rt::Result<UdpReplay> UdpReplay::open(const std::filesystem::path& capture,
            " fragments)";
     return rt::make_error(why);
   }
-  r.plan_.span_ns = std::max<std::int64_t>(0, last - r.first_stamp_ns_);
+  r.plan_.span_ns = std::max<std::int64_t>(0, last - r.plan_.first_stamp_ns);
   const std::int64_t mean_gap =
       r.plan_.packets > 1 ? r.plan_.span_ns / static_cast<std::int64_t>(r.plan_.packets - 1) : 0;
   r.plan_.pass_period_ns = r.plan_.span_ns + mean_gap;
@@ -111,9 +78,8 @@ rt::Result<UdpReplay> UdpReplay::open(const std::filesystem::path& capture,
 }
 
 std::int64_t UdpReplay::scheduled_ns(std::uint64_t pass, std::int64_t stamp_ns) const noexcept {
-  const double recorded = static_cast<double>(pass) * static_cast<double>(plan_.pass_period_ns) +
-                          static_cast<double>(stamp_ns - first_stamp_ns_);
-  return std::llround(recorded / config_.rate);
+  return ReplayClock{0, plan_.first_stamp_ns, plan_.pass_period_ns, config_.rate}.offset_ns(
+      pass, stamp_ns);
 }
 
 UdpSender* UdpReplay::sender_for(std::uint16_t port) noexcept {
@@ -124,17 +90,20 @@ UdpSender* UdpReplay::sender_for(std::uint16_t port) noexcept {
   return nullptr;
 }
 
-rt::Result<ReplayReport> UdpReplay::run(const std::atomic<bool>& stop) {
+rt::Result<ReplayReport> UdpReplay::run(const std::atomic<bool>& stop,
+                                        const ReplayClock* shared) {
   ReplayReport report;
-  // The default timer slack (50 us) would let every sleep overshoot into the spin margin.
-  (void)::prctl(PR_SET_TIMERSLACK, 1000UL, 0UL, 0UL, 0UL);
-  std::vector<std::uint64_t> histogram(kHistogramUs + 1, 0);
-  std::int64_t start = 0, last_send = 0, last_scheduled = 0;
+  if (plan_.packets == 0) return report;
+  PacingStats pacing;
+  ReplayClock clock =
+      shared ? *shared
+             : ReplayClock{0, plan_.first_stamp_ns, plan_.pass_period_ns, config_.rate};
+  std::int64_t last_send = clock.start_ns, last_scheduled = 0;
   for (std::uint64_t pass = 0; config_.loops == 0 || pass < config_.loops; ++pass) {
     auto reader = PcapReader::open(capture_, filter_of(config_));
     if (!reader) return rt::Unexpected<rt::Error>{reader.error()};
     Datagram d;
-    std::int64_t prev_stamp = first_stamp_ns_;
+    std::int64_t prev_stamp = plan_.first_stamp_ns;
     bool interrupted = false;
     while (reader->next(d)) {
       if (stop.load(std::memory_order_relaxed)) {
@@ -146,19 +115,17 @@ rt::Result<ReplayReport> UdpReplay::run(const std::atomic<bool>& stop) {
       if (d.stamp_ns < prev_stamp) ++report.stamps_backwards;
       prev_stamp = std::max(prev_stamp, d.stamp_ns);
       std::int64_t now = rt::monotonic_ns();
-      if (report.packets + report.send_failures == 0) start = now;
+      if (!shared && report.packets + report.send_failures == 0) clock.start_ns = now;
       if (!config_.fast) {
         // Never earlier than the datagram before: stamps that go backwards are sent at once.
-        last_scheduled = std::max(last_scheduled, scheduled_ns(pass, d.stamp_ns));
-        wait_until(start + last_scheduled, stop);
+        last_scheduled = std::max(last_scheduled, clock.offset_ns(pass, d.stamp_ns));
+        wait_until(clock.start_ns + last_scheduled, stop);
         if (stop.load(std::memory_order_relaxed)) {
           interrupted = true;
           break;
         }
         now = rt::monotonic_ns();
-        const std::int64_t error = std::abs(now - (start + last_scheduled));
-        ++histogram[std::min<std::size_t>(static_cast<std::size_t>(error / 1000), kHistogramUs)];
-        report.error_max_ns = std::max(report.error_max_ns, error);
+        pacing.add(std::abs(now - (clock.start_ns + last_scheduled)));
       }
       if (sender->send(d.payload)) {
         ++report.packets;
@@ -176,12 +143,10 @@ rt::Result<ReplayReport> UdpReplay::run(const std::atomic<bool>& stop) {
     }
   }
   report.scheduled_ns = config_.fast ? 0 : last_scheduled;
-  report.elapsed_ns = last_send - start;
-  const std::uint64_t sent = report.packets + report.send_failures;
-  if (!config_.fast && sent > 0) {
-    report.error_median_ns = percentile_ns(histogram, sent, 0.5);
-    report.error_p99_ns = percentile_ns(histogram, sent, 0.99);
-  }
+  report.elapsed_ns = last_send - clock.start_ns;
+  report.error_median_ns = pacing.median_ns();
+  report.error_p99_ns = pacing.p99_ns();
+  report.error_max_ns = pacing.max_ns();
   return report;
 }
 
