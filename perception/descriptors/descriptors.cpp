@@ -375,13 +375,28 @@ void DescriptorPipeline::compute(const SegmentView& segment, Descriptors& out) n
       const HogShape& shape = win.shape();
       const std::size_t raw_n = shape.size();
       const float* m = st.projection[v][a].data();
-      for (const auto& o : kOffsets) {
+      int placed[4][2];
+      for (int k = 0; k < 4; ++k) {
+        const auto& o = kOffsets[k];
         int x0 = static_cast<int>(o[0] * static_cast<float>(w)) - shape.width / 2;
         int y0 = static_cast<int>(o[1] * static_cast<float>(h)) - shape.height / 2;
         x0 = std::clamp(x0, 0, w - shape.width);
         y0 = std::clamp(y0, 0, h - shape.height);
-        win.compute(st.gradients, x0, y0, st.raw);
+        placed[k][0] = x0;
+        placed[k][1] = y0;
         float* dst = out.values.data() + sp[space].offset;
+        int same = -1;  // an earlier offset of this array landed on the same window: reuse it
+        for (int e = 0; e < k && same < 0; ++e) {
+          if (placed[e][0] == x0 && placed[e][1] == y0) same = e;
+        }
+        if (same >= 0) {
+          const std::size_t earlier = space - static_cast<std::size_t>(k - same);
+          const float* src = out.values.data() + sp[earlier].offset;
+          std::copy(src, src + kHogProjectedDim, dst);
+          ++space;
+          continue;
+        }
+        win.compute(st.gradients, x0, y0, st.raw);
         for (std::size_t r = 0; r < kHogProjectedDim; ++r) {
           const float* row = m + r * raw_n;
           float acc = 0.0f;
