@@ -1,0 +1,412 @@
+#include "perception/descriptors/descriptors.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "perception/descriptors/hog.hpp"
+
+namespace stac::descriptors {
+namespace {
+
+// Spin images about the vertical axis: (pixels per metre, rows, cols), as the original code.
+struct SpinShape {
+  float px_per_m;
+  int rows, cols;
+};
+constexpr SpinShape kSpins[4] = {{3, 10, 10}, {7, 14, 7}, {10, 20, 10}, {5, 10, 5}};
+
+// HOG arrays: per view a small and a large window (= block), each at 4 (u, v) offsets.
+constexpr int kViews = 3;
+constexpr const char* kViewNames[kViews] = {"front", "side", "top"};
+constexpr HogShape kHogShapes[kViews][2] = {
+    {{15, 30, 5, 6, 0.2f}, {30, 30, 5, 6, 0.2f}},
+    {{15, 30, 5, 6, 0.2f}, {30, 30, 5, 6, 0.2f}},
+    {{15, 15, 5, 6, 0.2f}, {30, 30, 5, 6, 0.2f}}};
+constexpr float kOffsets[4][2] = {{0.0f, 1.0f}, {0.5f, 0.0f}, {0.5f, 0.5f}, {1.0f, 1.0f}};
+constexpr const char* kOffsetNames[4] = {"u0_v1", "u0.5_v0", "u0.5_v0.5", "u1_v1"};
+constexpr std::size_t kMaxHogRaw = 216;  // 30x30 window, 5 px cells, 6 bins
+
+// Names live as long as the program: built once into static strings.
+struct Layout {
+  std::array<std::string, kSpaceCount> names;
+  std::array<Space, kSpaceCount> spaces;
+  Layout() {
+    std::size_t k = 0, offset = 0;
+    auto add = [&](std::string name, std::size_t size) {
+      names[k] = std::move(name);
+      spaces[k] = Space{names[k], offset, size};
+      offset += size;
+      ++k;
+    };
+    add("bbox_size", 3);
+    for (const SpinShape& s : kSpins) {
+      add("spin_" + std::to_string(static_cast<int>(s.px_per_m)) + "ppm_" +
+              std::to_string(s.rows) + "x" + std::to_string(s.cols),
+          static_cast<std::size_t>(s.rows * s.cols));
+    }
+    for (int v = 0; v < kViews; ++v) {
+      for (const HogShape& h : kHogShapes[v]) {
+        for (const char* o : kOffsetNames) {
+          add(std::string("hog_") + kViewNames[v] + "_" + std::to_string(h.width) + "x" +
+                  std::to_string(h.height) + "_" + o,
+              kHogProjectedDim);
+        }
+      }
+    }
+    if (k != kSpaceCount || offset != kDimensions) throw std::logic_error("descriptor layout");
+  }
+};
+
+const Layout& layout() {
+  static const Layout l;
+  return l;
+}
+
+// Deterministic standard normals (splitmix64 + Box-Muller): the same on every platform.
+class Normal {
+ public:
+  explicit Normal(std::uint64_t seed) : state_(seed) {}
+  double next() {
+    if (has_spare_) {
+      has_spare_ = false;
+      return spare_;
+    }
+    const double u1 = (static_cast<double>(bits() >> 11) + 1.0) * 0x1.0p-53;  // (0, 1]
+    const double u2 = static_cast<double>(bits() >> 11) * 0x1.0p-53;          // [0, 1)
+    const double r = std::sqrt(-2.0 * std::log(u1));
+    spare_ = r * std::sin(2.0 * M_PI * u2);
+    has_spare_ = true;
+    return r * std::cos(2.0 * M_PI * u2);
+  }
+
+ private:
+  std::uint64_t bits() {
+    std::uint64_t z = (state_ += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+  }
+  std::uint64_t state_;
+  double spare_ = 0.0;
+  bool has_spare_ = false;
+};
+
+// Zero mean, unit mean square; an all-equal vector becomes all zeros.
+void whiten(float* v, std::size_t n) noexcept {
+  double mean = 0.0;
+  for (std::size_t i = 0; i < n; ++i) mean += v[i];
+  mean /= static_cast<double>(n);
+  double var = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double d = v[i] - mean;
+    var += d * d;
+  }
+  var /= static_cast<double>(n);
+  const double scale = var > 0.0 ? 1.0 / std::sqrt(var) : 0.0;
+  for (std::size_t i = 0; i < n; ++i) v[i] = static_cast<float>((v[i] - mean) * scale);
+}
+
+}  // namespace
+
+const char* validate(const DescriptorConfig& c) noexcept {
+  if (c.max_points < 1 || c.max_points > 10'000'000) return "max_points must be in [1, 1e7]";
+  if (c.min_image_px < 30) return "min_image_px must be >= 30 (the largest HOG window)";
+  if (c.max_image_px < c.min_image_px || c.max_image_px > 4096)
+    return "max_image_px must be in [min_image_px, 4096]";
+  if (!(c.image_px_per_m > 0.0 && c.image_px_per_m <= 1000.0))
+    return "image_px_per_m must be in (0, 1000]";
+  if (!(c.intensity_full_scale > 0.0) || !std::isfinite(c.intensity_full_scale))
+    return "intensity_full_scale must be > 0";
+  return "";
+}
+
+const std::array<Space, kSpaceCount>& spaces() noexcept { return layout().spaces; }
+
+struct DescriptorPipeline::State {
+  explicit State(const DescriptorConfig& c)
+      : x(c.max_points), y(c.max_points), z(c.max_points), value(c.max_points),
+        gradients(c.max_image_px * c.max_image_px, 6),
+        windows{HogWindow(kHogShapes[0][0]), HogWindow(kHogShapes[0][1]),
+                HogWindow(kHogShapes[2][0])} {
+    const std::size_t pixels = c.max_image_px * c.max_image_px;
+    for (int v = 0; v < kViews; ++v) images[v].assign(pixels, 0.0f);
+    sum.assign(pixels, 0.0f);
+    count.assign(pixels, 0.0f);
+    smooth_tmp.assign(pixels, 0.0f);
+    Normal normal(c.projection_seed);
+    const double scale = 1.0 / std::sqrt(static_cast<double>(kHogProjectedDim));
+    for (int v = 0; v < kViews; ++v) {
+      for (int a = 0; a < 2; ++a) {
+        auto& m = projection[v][a];
+        m.resize(kHogProjectedDim * kHogShapes[v][a].size());
+        for (float& e : m) e = static_cast<float>(normal.next() * scale);
+      }
+    }
+  }
+
+  const HogWindow& window(int view, int array) const noexcept {
+    if (array == 1) return windows[1];
+    return view == 2 ? windows[2] : windows[0];
+  }
+
+  // Canonical cloud (structure of arrays) and normalised intensity in [0.25, 1].
+  std::vector<float> x, y, z, value;
+  std::size_t n = 0;
+  float yaw = 0.0f;
+  // Views (0..255 scale, smoothed) and their sizes; accumulators shared between views.
+  std::vector<float> images[kViews];
+  int width[kViews] = {0, 0, 0}, height[kViews] = {0, 0, 0};
+  std::vector<float> sum, count, smooth_tmp;
+  GradientCache gradients;
+  HogWindow windows[3];  // 15x30, 30x30, 15x15
+  std::vector<float> projection[kViews][2];  // row-major kHogProjectedDim x raw size
+  float raw[kMaxHogRaw];
+};
+
+DescriptorPipeline::DescriptorPipeline(const DescriptorConfig& config) : config_(config) {
+  if (const char* error = validate(config); error[0] != '\0') {
+    throw std::invalid_argument(std::string("DescriptorConfig: ") + error);
+  }
+  (void)layout();
+  state_ = std::make_unique<State>(config);
+}
+
+DescriptorPipeline::DescriptorPipeline(DescriptorPipeline&&) noexcept = default;
+DescriptorPipeline& DescriptorPipeline::operator=(DescriptorPipeline&&) noexcept = default;
+DescriptorPipeline::~DescriptorPipeline() = default;
+
+DescriptorPipeline::Image DescriptorPipeline::image(View view) const noexcept {
+  const int v = static_cast<int>(view);
+  return {state_->images[v].data(), static_cast<std::size_t>(state_->width[v]),
+          static_cast<std::size_t>(state_->height[v])};
+}
+
+float DescriptorPipeline::yaw() const noexcept { return state_->yaw; }
+
+namespace {
+
+// Stage 1: read, drop invalid points, centre, rotate into the canonical frame.
+void canonicalize(const SegmentView& segment, const DescriptorConfig& config,
+                  std::vector<float>& x, std::vector<float>& y, std::vector<float>& z,
+                  std::vector<float>& value, std::size_t& n, float& yaw, Descriptors& out) {
+  n = 0;
+  const std::size_t total = segment.size();
+  const double full = config.intensity_full_scale;
+  double mx = 0, my = 0, mz = 0;
+  for (std::size_t k = 0; k < total; ++k) {
+    float p[4];
+    segment.read(k, p);
+    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]) ||
+        !std::isfinite(p[3])) {
+      ++out.points_invalid;
+      continue;
+    }
+    if (n == x.size()) {
+      ++out.points_over_capacity;
+      continue;
+    }
+    x[n] = p[0];
+    y[n] = p[1];
+    z[n] = p[2];
+    const double i = std::clamp(static_cast<double>(p[3]) / full, 0.0, 1.0);
+    value[n] = static_cast<float>(i * 0.75 + 0.25);
+    mx += p[0];
+    my += p[1];
+    mz += p[2];
+    ++n;
+  }
+  if (n == 0) return;
+  const double inv = 1.0 / static_cast<double>(n);
+  mx *= inv;
+  my *= inv;
+  mz *= inv;
+  double sxx = 0, sxy = 0, syy = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double dx = x[i] - mx, dy = y[i] - my;
+    sxx += dx * dx;
+    sxy += dx * dy;
+    syy += dy * dy;
+  }
+  // Major axis of the XY covariance; its sign makes the third moment along it non-negative.
+  double theta = 0.5 * std::atan2(2.0 * sxy, sxx - syy);
+  double c = std::cos(theta), s = std::sin(theta), skew = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double u = c * (x[i] - mx) + s * (y[i] - my);
+    skew += u * u * u;
+  }
+  if (skew < 0) {
+    theta += theta > 0 ? -M_PI : M_PI;
+    c = -c;
+    s = -s;
+  }
+  yaw = static_cast<float>(theta);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double dx = x[i] - mx, dy = y[i] - my;
+    x[i] = static_cast<float>(c * dx + s * dy);
+    y[i] = static_cast<float>(-s * dx + c * dy);
+    z[i] = static_cast<float>(z[i] - mz);
+  }
+}
+
+// 3x3 Gaussian of OpenCV's cvSmooth(CV_GAUSSIAN, 3, 3): [1 2 1] / 4 separably, reflect-101.
+void smooth3(float* img, float* tmp, int w, int h) noexcept {
+  for (int r = 0; r < h; ++r) {
+    const float* in = img + static_cast<std::ptrdiff_t>(r) * w;
+    float* o = tmp + static_cast<std::ptrdiff_t>(r) * w;
+    for (int c = 0; c < w; ++c) {
+      const float l = in[c > 0 ? c - 1 : (w > 1 ? 1 : 0)];
+      const float rr = in[c + 1 < w ? c + 1 : (w > 1 ? w - 2 : 0)];
+      o[c] = 0.25f * l + 0.5f * in[c] + 0.25f * rr;
+    }
+  }
+  for (int r = 0; r < h; ++r) {
+    const int up = r > 0 ? r - 1 : (h > 1 ? 1 : 0);
+    const int down = r + 1 < h ? r + 1 : (h > 1 ? h - 2 : 0);
+    const float* a = tmp + static_cast<std::ptrdiff_t>(up) * w;
+    const float* m = tmp + static_cast<std::ptrdiff_t>(r) * w;
+    const float* b = tmp + static_cast<std::ptrdiff_t>(down) * w;
+    float* o = img + static_cast<std::ptrdiff_t>(r) * w;
+    for (int c = 0; c < w; ++c) o[c] = 0.25f * a[c] + 0.5f * m[c] + 0.25f * b[c];
+  }
+}
+
+}  // namespace
+
+void DescriptorPipeline::compute(const SegmentView& segment, Descriptors& out) noexcept {
+  State& st = *state_;
+  out.values.fill(0.0f);
+  out.status = Status::kEmpty;
+  out.points_used = out.points_invalid = out.points_over_capacity = out.pixels_cropped = 0;
+  st.yaw = 0.0f;
+  for (int v = 0; v < kViews; ++v) st.width[v] = st.height[v] = 0;
+  canonicalize(segment, config_, st.x, st.y, st.z, st.value, st.n, st.yaw, out);
+  const std::size_t n = st.n;
+  out.points_used = static_cast<std::uint32_t>(n);
+  if (n == 0) return;
+  out.status = Status::kOk;
+  const auto& sp = spaces();
+
+  // (a) Oriented bounding box size (m): extents along canonical x, y, z.
+  float lo[3], hi[3];
+  const float* axis[3] = {st.x.data(), st.y.data(), st.z.data()};
+  for (int a = 0; a < 3; ++a) {
+    const auto [mn, mx] = std::minmax_element(axis[a], axis[a] + n);
+    lo[a] = *mn;
+    hi[a] = *mx;
+    out.values[sp[0].offset + static_cast<std::size_t>(a)] = hi[a] - lo[a];
+  }
+
+  // (b) Spin images about the vertical axis through the centroid: column = floor(r * ppm),
+  // row = floor((rows / (2 ppm) - z) * ppm) (row 0 on top); counts, then whitened.
+  for (std::size_t k = 0; k < 4; ++k) {
+    const SpinShape& s = kSpins[k];
+    float* img = out.values.data() + sp[1 + k].offset;
+    const float half = static_cast<float>(s.rows) / (2.0f * s.px_per_m);
+    for (std::size_t i = 0; i < n; ++i) {
+      const float col = std::floor(std::sqrt(st.x[i] * st.x[i] + st.y[i] * st.y[i]) * s.px_per_m);
+      const float row = std::floor((half - st.z[i]) * s.px_per_m);
+      if (col < 0 || col >= static_cast<float>(s.cols) || row < 0 ||
+          row >= static_cast<float>(s.rows))
+        continue;
+      img[static_cast<int>(row) * s.cols + static_cast<int>(col)] += 1.0f;
+    }
+    whiten(img, sp[1 + k].size);
+  }
+
+  // (c) Orthographic intensity images. View v drops canonical axis v; columns follow the first
+  // remaining axis, rows the second, top row = its maximum.
+  const float ppm = static_cast<float>(config_.image_px_per_m);
+  const int cap = static_cast<int>(config_.max_image_px);
+  const int min_px = static_cast<int>(config_.min_image_px);
+  constexpr int kAxes[kViews][2] = {{1, 2}, {0, 2}, {0, 1}};
+  std::size_t space = 5;
+  for (int v = 0; v < kViews; ++v) {
+    const float* us = axis[kAxes[v][0]];
+    const float* vs = axis[kAxes[v][1]];
+    const float min_u = lo[kAxes[v][0]] * ppm, max_u = hi[kAxes[v][0]] * ppm;
+    const float min_v = lo[kAxes[v][1]] * ppm, max_v = hi[kAxes[v][1]] * ppm;
+    auto fit = [&](float extent, int& size, float& pad) {
+      size = static_cast<int>(std::ceil(extent)) + 1;
+      pad = 0.0f;
+      if (size < min_px) {
+        pad = static_cast<float>(min_px - size) / 2.0f;
+        size = min_px;
+      } else if (size > cap) {
+        pad = -static_cast<float>(size - cap) / 2.0f;  // crop about the centre
+        size = cap;
+      }
+    };
+    int w, h;
+    float pad_w, pad_h;
+    fit(max_u - min_u, w, pad_w);
+    fit(max_v - min_v, h, pad_h);
+    const std::size_t pixels = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
+    std::fill(st.sum.begin(), st.sum.begin() + static_cast<std::ptrdiff_t>(pixels), 0.0f);
+    std::fill(st.count.begin(), st.count.begin() + static_cast<std::ptrdiff_t>(pixels), 0.0f);
+    for (std::size_t i = 0; i < n; ++i) {
+      const float col = std::floor(us[i] * ppm - min_u + pad_w);
+      const float row = std::floor(max_v - vs[i] * ppm + pad_h);
+      if (!(col >= 0 && col < static_cast<float>(w) && row >= 0 && row < static_cast<float>(h))) {
+        ++out.pixels_cropped;
+        continue;
+      }
+      const std::size_t p = static_cast<std::size_t>(row) * static_cast<std::size_t>(w) +
+                            static_cast<std::size_t>(col);
+      st.sum[p] += st.value[i];
+      st.count[p] += 1.0f;
+    }
+    float* img = st.images[v].data();
+    for (std::size_t p = 0; p < pixels; ++p) {
+      img[p] = st.count[p] > 0 ? 255.0f * st.sum[p] / st.count[p] : 0.0f;
+    }
+    smooth3(img, st.smooth_tmp.data(), w, h);
+    st.width[v] = w;
+    st.height[v] = h;
+
+    // (d) HOG windows at the 4 offsets: centre (int(u W), int(v H)), shifted into the image;
+    // each projected by its array's fixed random matrix.
+    st.gradients.reset(img, w, h);
+    for (int a = 0; a < 2; ++a) {
+      const HogWindow& win = st.window(v, a);
+      const HogShape& shape = win.shape();
+      const std::size_t raw_n = shape.size();
+      const float* m = st.projection[v][a].data();
+      int placed[4][2];
+      for (int k = 0; k < 4; ++k) {
+        const auto& o = kOffsets[k];
+        int x0 = static_cast<int>(o[0] * static_cast<float>(w)) - shape.width / 2;
+        int y0 = static_cast<int>(o[1] * static_cast<float>(h)) - shape.height / 2;
+        x0 = std::clamp(x0, 0, w - shape.width);
+        y0 = std::clamp(y0, 0, h - shape.height);
+        placed[k][0] = x0;
+        placed[k][1] = y0;
+        float* dst = out.values.data() + sp[space].offset;
+        int same = -1;  // an earlier offset of this array landed on the same window: reuse it
+        for (int e = 0; e < k && same < 0; ++e) {
+          if (placed[e][0] == x0 && placed[e][1] == y0) same = e;
+        }
+        if (same >= 0) {
+          const std::size_t earlier = space - static_cast<std::size_t>(k - same);
+          const float* src = out.values.data() + sp[earlier].offset;
+          std::copy(src, src + kHogProjectedDim, dst);
+          ++space;
+          continue;
+        }
+        win.compute(st.gradients, x0, y0, st.raw);
+        for (std::size_t r = 0; r < kHogProjectedDim; ++r) {
+          const float* row = m + r * raw_n;
+          float acc = 0.0f;
+          for (std::size_t j = 0; j < raw_n; ++j) acc += row[j] * st.raw[j];
+          dst[r] = acc;
+        }
+        ++space;
+      }
+    }
+  }
+}
+
+}  // namespace stac::descriptors

@@ -1,0 +1,129 @@
+#include "perception/descriptors/hog.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace stac::descriptors {
+namespace {
+
+constexpr float kPi = 3.14159265358979323846f;
+
+// Reflect-101 index (OpenCV BORDER_REFLECT_101) for one step outside [0, n).
+int reflect(int i, int n) noexcept {
+  if (n == 1) return 0;
+  if (i < 0) return -i;
+  if (i >= n) return 2 * n - 2 - i;
+  return i;
+}
+
+}  // namespace
+
+GradientCache::GradientCache(std::size_t max_pixels, int bins)
+    : bins_(bins), stamp_(max_pixels, 0), gradient_(max_pixels) {}
+
+void GradientCache::reset(const float* pixels, int width, int height) noexcept {
+  pixels_ = pixels;
+  width_ = width;
+  height_ = height;
+  if (++epoch_ == 0) {  // wrapped: forget every stamp
+    std::fill(stamp_.begin(), stamp_.end(), 0u);
+    epoch_ = 1;
+  }
+}
+
+const GradientCache::Gradient& GradientCache::at(int x, int y) noexcept {
+  const std::size_t i = static_cast<std::size_t>(y) * static_cast<std::size_t>(width_) +
+                        static_cast<std::size_t>(x);
+  Gradient& g = gradient_[i];
+  if (stamp_[i] == epoch_) return g;
+  stamp_[i] = epoch_;
+  const float* row = pixels_ + static_cast<std::ptrdiff_t>(y) * width_;
+  const float dx = row[reflect(x + 1, width_)] - row[reflect(x - 1, width_)];
+  const float dy = pixels_[static_cast<std::ptrdiff_t>(reflect(y + 1, height_)) * width_ + x] -
+                   pixels_[static_cast<std::ptrdiff_t>(reflect(y - 1, height_)) * width_ + x];
+  const float magnitude = std::sqrt(dx * dx + dy * dy);
+  if (magnitude == 0.0f) {
+    g = Gradient{{0.0f, 0.0f}, {0, 0}};
+    return g;
+  }
+  float angle = std::atan2(dy, dx);  // (-pi, pi]
+  if (angle < 0) angle += 2 * kPi;   // [0, 2 pi) as cv::cartToPolar
+  const float position = angle * (static_cast<float>(bins_) / kPi) - 0.5f;
+  int bin = static_cast<int>(std::floor(position));
+  const float fraction = position - static_cast<float>(bin);
+  bin = ((bin % bins_) + bins_) % bins_;
+  const int next = bin + 1 == bins_ ? 0 : bin + 1;
+  g.weight[0] = magnitude * (1.0f - fraction);
+  g.weight[1] = magnitude * fraction;
+  g.bin[0] = static_cast<std::uint8_t>(bin);
+  g.bin[1] = static_cast<std::uint8_t>(next);
+  return g;
+}
+
+HogWindow::HogWindow(const HogShape& shape) : shape_(shape) {
+  if (shape.cell <= 0 || shape.width % shape.cell != 0 || shape.height % shape.cell != 0 ||
+      shape.bins <= 0 || shape.bins > 255 || shape.size() > 65535) {
+    throw std::invalid_argument("HogShape: width and height must be multiples of cell, bins 1-255");
+  }
+  const int cells_x = shape.width / shape.cell, cells_y = shape.height / shape.cell;
+  const float sigma = static_cast<float>(shape.width + shape.height) / 8.0f;
+  const float scale = 1.0f / (2.0f * sigma * sigma);
+  shares_.resize(static_cast<std::size_t>(shape.width * shape.height));
+  for (int y = 0; y < shape.height; ++y) {
+    for (int x = 0; x < shape.width; ++x) {
+      const float dy = static_cast<float>(y) - static_cast<float>(shape.height) * 0.5f;
+      const float dx = static_cast<float>(x) - static_cast<float>(shape.width) * 0.5f;
+      const float gauss = std::exp(-(dx * dx + dy * dy) * scale);
+      // Bilinear between cell centres; shares of cells outside the block are dropped.
+      const float cx = (static_cast<float>(x) + 0.5f) / static_cast<float>(shape.cell) - 0.5f;
+      const float cy = (static_cast<float>(y) + 0.5f) / static_cast<float>(shape.cell) - 0.5f;
+      const int x0 = static_cast<int>(std::floor(cx)), y0 = static_cast<int>(std::floor(cy));
+      const float fx = cx - static_cast<float>(x0), fy = cy - static_cast<float>(y0);
+      Share& s = shares_[static_cast<std::size_t>(y * shape.width + x)];
+      int n = 0;
+      for (int k = 0; k < 4; ++k) {
+        const int ix = x0 + (k & 1), iy = y0 + (k >> 1);
+        const float w = ((k & 1) ? fx : 1.0f - fx) * ((k >> 1) ? fy : 1.0f - fy);
+        if (ix < 0 || ix >= cells_x || iy < 0 || iy >= cells_y) continue;
+        s.offset[n] = static_cast<std::uint16_t>((ix * cells_y + iy) * shape.bins);
+        s.weight[n] = w * gauss;
+        ++n;
+      }
+      for (; n < 4; ++n) {
+        s.offset[n] = 0;
+        s.weight[n] = 0.0f;
+      }
+    }
+  }
+}
+
+void HogWindow::compute(GradientCache& gradients, int x0, int y0, float* out) const noexcept {
+  const std::size_t n = shape_.size();
+  std::fill(out, out + n, 0.0f);
+  for (int y = 0; y < shape_.height; ++y) {
+    for (int x = 0; x < shape_.width; ++x) {
+      const GradientCache::Gradient& g = gradients.at(x0 + x, y0 + y);
+      if (g.weight[0] == 0.0f && g.weight[1] == 0.0f) continue;
+      const Share& s = shares_[static_cast<std::size_t>(y * shape_.width + x)];
+      for (int k = 0; k < 4; ++k) {
+        float* h = out + s.offset[k];
+        h[g.bin[0]] += s.weight[k] * g.weight[0];
+        h[g.bin[1]] += s.weight[k] * g.weight[1];
+      }
+    }
+  }
+  // L2-Hys as OpenCV: scale by 1 / (|h| + 0.1 n), clip, scale by 1 / (|h| + 1e-3).
+  float sum = 0.0f;
+  for (std::size_t i = 0; i < n; ++i) sum += out[i] * out[i];
+  float scale = 1.0f / (std::sqrt(sum) + 0.1f * static_cast<float>(n));
+  sum = 0.0f;
+  for (std::size_t i = 0; i < n; ++i) {
+    out[i] = std::min(out[i] * scale, shape_.l2hys_clip);
+    sum += out[i] * out[i];
+  }
+  scale = 1.0f / (std::sqrt(sum) + 1e-3f);
+  for (std::size_t i = 0; i < n; ++i) out[i] *= scale;
+}
+
+}  // namespace stac::descriptors

@@ -1,0 +1,66 @@
+// Histogram of oriented gradients of one window that is one block (the thesis's HOG arrays:
+// window = block, so the 10x10 block stride never moves a block), computed as OpenCV's
+// cv::HOGDescriptor does with derivAperture 1, unsigned gradients, gammaCorrection off, the
+// default Gaussian block weighting (sigma = (block w + block h) / 8), trilinear interpolation
+// into cells and bins, and L2-Hys block normalisation. Allocation-free after construction.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+namespace stac::descriptors {
+
+struct HogShape {
+  int width = 30, height = 30;  // window = block (px)
+  int cell = 5;                 // square cells (px); width and height are multiples of it
+  int bins = 6;                 // unsigned orientation bins over [0, pi)
+  float l2hys_clip = 0.2f;
+  [[nodiscard]] std::size_t size() const noexcept {
+    return static_cast<std::size_t>((width / cell) * (height / cell) * bins);
+  }
+};
+
+// Per-pixel gradients of one image, computed on demand and cached until the next reset():
+// central differences [-1 0 1] with reflect-101 borders (OpenCV's convention), magnitude split
+// between the two nearest orientation bins.
+class GradientCache {
+ public:
+  explicit GradientCache(std::size_t max_pixels, int bins);
+  // `pixels` row-major, `width` floats a row, stays valid until the next reset().
+  void reset(const float* pixels, int width, int height) noexcept;
+
+  struct Gradient {
+    float weight[2];  // magnitude shares of bin[0] and bin[1]
+    std::uint8_t bin[2];
+  };
+  const Gradient& at(int x, int y) noexcept;
+
+ private:
+  const float* pixels_ = nullptr;
+  int width_ = 0, height_ = 0, bins_ = 6;
+  std::uint32_t epoch_ = 0;
+  std::vector<std::uint32_t> stamp_;
+  std::vector<Gradient> gradient_;
+};
+
+class HogWindow {
+ public:
+  explicit HogWindow(const HogShape& shape);
+  // The descriptor (shape.size() floats, OpenCV's order: cells column-major - cell (cx, cy) at
+  // (cx * cells_high + cy) * bins) of the window with top-left (x0, y0); the window must lie in
+  // the image of `gradients`.
+  void compute(GradientCache& gradients, int x0, int y0, float* out) const noexcept;
+  [[nodiscard]] const HogShape& shape() const noexcept { return shape_; }
+
+ private:
+  struct Share {
+    std::uint16_t offset[4];  // histogram offsets of up to 4 cells
+    float weight[4];          // Gaussian x bilinear weights (0 for unused)
+  };
+  HogShape shape_;
+  std::vector<Share> shares_;  // per window pixel, row-major
+};
+
+}  // namespace stac::descriptors
