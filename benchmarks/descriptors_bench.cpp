@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "benchmarks/kitti_scans.hpp"
 #include "perception/descriptors/descriptors.hpp"
 #include "perception/segmentation/segmenter.hpp"
 
@@ -29,19 +30,7 @@ const Corpus& corpus() {
     Corpus out;
     segmentation::Segmenter segmenter{segmentation::SegmenterConfig{}};
     auto segs = segmenter.make_segments();
-    for (int i = 0; i < 6; ++i) {
-      const auto path = std::filesystem::path(STAC_SHARED_DATA_DIR) /
-                        ("kitti/00000" + std::to_string(i) + ".bin");
-      std::ifstream f(path, std::ios::binary | std::ios::ate);
-      if (!f) {
-        std::fprintf(stderr, "descriptors_bench: %s is absent (shared/data beside the checkout)\n",
-                     path.c_str());
-        std::exit(1);
-      }
-      std::vector<float> v(static_cast<std::size_t>(f.tellg()) / sizeof(float));
-      f.seekg(0);
-      f.read(reinterpret_cast<char*>(v.data()),
-             static_cast<std::streamsize>(v.size() * sizeof(float)));
+    for (const std::vector<float>& v : stac::benchmarks::kitti_scans()) {
       segmenter.segment({v.data(), v.size() / 4, 16}, segs);
       for (const auto& s : segs.segments) {
         const auto idx = segs.indices(s);

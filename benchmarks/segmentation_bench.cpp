@@ -20,34 +20,14 @@
 #include <string>
 #include <vector>
 
+#include "benchmarks/kitti_scans.hpp"
 #include "perception/segmentation/segmenter.hpp"
 
 namespace {
 
 using namespace stac::segmentation;
 
-const std::vector<std::vector<float>>& scans() {
-  static const std::vector<std::vector<float>> all = [] {
-    std::vector<std::vector<float>> out;
-    for (int i = 0; i < 6; ++i) {
-      const auto path = std::filesystem::path(STAC_SHARED_DATA_DIR) /
-                        ("kitti/00000" + std::to_string(i) + ".bin");
-      std::ifstream f(path, std::ios::binary | std::ios::ate);
-      if (!f) {
-        std::fprintf(stderr, "segmentation_bench: %s is absent (shared/data beside the checkout)\n",
-                     path.c_str());
-        std::exit(1);
-      }
-      std::vector<float> v(static_cast<std::size_t>(f.tellg()) / sizeof(float));
-      f.seekg(0);
-      f.read(reinterpret_cast<char*>(v.data()),
-             static_cast<std::streamsize>(v.size() * sizeof(float)));
-      out.push_back(std::move(v));
-    }
-    return out;
-  }();
-  return all;
-}
+const std::vector<std::vector<float>>& scans() { return stac::benchmarks::kitti_scans(); }
 
 PointView view(const std::vector<float>& xyzi) {
   return {xyzi.data(), xyzi.size() / 4, 16};

@@ -4,12 +4,24 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
+#include <vector>
 #include <string>
 
 namespace stac::testing {
 
 inline std::filesystem::path shared_data(const std::string& relative) {
   return std::filesystem::path(STAC_SHARED_DATA_DIR) / relative;
+}
+
+// A KITTI velodyne .bin of shared/data (float32 x, y, z, reflectance per point); empty when absent.
+inline std::vector<float> read_kitti_bin(const std::string& relative) {
+  std::ifstream f(shared_data(relative), std::ios::binary | std::ios::ate);
+  if (!f) return {};
+  std::vector<float> v(static_cast<std::size_t>(f.tellg()) / sizeof(float));
+  f.seekg(0);
+  f.read(reinterpret_cast<char*>(v.data()), static_cast<std::streamsize>(v.size() * sizeof(float)));
+  return v;
 }
 
 }  // namespace stac::testing

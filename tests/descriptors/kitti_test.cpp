@@ -17,17 +17,9 @@
 namespace stac::descriptors {
 namespace {
 
-std::vector<float> load_bin(const std::string& relative) {
-  std::ifstream f(testing::shared_data(relative), std::ios::binary | std::ios::ate);
-  std::vector<float> v(static_cast<std::size_t>(f.tellg()) / sizeof(float));
-  f.seekg(0);
-  f.read(reinterpret_cast<char*>(v.data()), static_cast<std::streamsize>(v.size() * sizeof(float)));
-  return v;
-}
-
 void check_scan(const std::string& relative) {
   SCOPED_TRACE(relative);
-  const auto cloud = load_bin(relative);
+  const auto cloud = testing::read_kitti_bin(relative);
   segmentation::Segmenter segmenter(segmentation::SegmenterConfig{});
   auto segments = segmenter.make_segments();
   segmenter.segment({cloud.data(), cloud.size() / 4, 16}, segments);

@@ -20,6 +20,12 @@ struct InsStream {
   applanix::StreamParser parser;
   std::vector<std::uint8_t> bytes = std::vector<std::uint8_t>(4096);
 
+  // Parses the first n bytes of `bytes` into the estimator.
+  void feed(std::size_t n, EgoEstimator& ego) {
+    applanix::Parsed m;
+    parser.feed(std::span<const std::uint8_t>(bytes.data(), n));
+    while (parser.next(m)) ego.add_ins(m, parser);
+  }
   std::size_t group3() {
     applanix::Group3 g;
     g.gps_week = kWeek;
@@ -50,11 +56,7 @@ TEST(EgoEstimator, InsFixesBecomeUtcPosesInTheLocalFrame) {
   PoseHistory history(PoseHistoryConfig{.capacity = 100});
   EgoEstimator ego(EgoEstimatorConfig{}, frame, history);
   InsStream s;
-  applanix::Parsed m;
-  auto push = [&](std::size_t n) {
-    s.parser.feed(std::span<const std::uint8_t>(s.bytes.data(), n));
-    while (s.parser.next(m)) ego.add_ins(m, s.parser);
-  };
+  auto push = [&](std::size_t n) { s.feed(n, ego); };
   push(s.group1(100.0, 0.0));  // before any Group 3: no absolute time yet
   EXPECT_EQ(ego.counters().no_absolute_time, 1u);
   push(s.group3());
@@ -78,11 +80,7 @@ TEST(EgoEstimator, CanOdometryCarriesThePoseWhenTheInsGoesSilent) {
   PoseHistory history(PoseHistoryConfig{.capacity = 1000});
   EgoEstimator ego(EgoEstimatorConfig{}, frame, history);
   InsStream s;
-  applanix::Parsed m;
-  auto push = [&](std::size_t n) {
-    s.parser.feed(std::span<const std::uint8_t>(s.bytes.data(), n));
-    while (s.parser.next(m)) ego.add_ins(m, s.parser);
-  };
+  auto push = [&](std::size_t n) { s.feed(n, ego); };
   push(s.group3());
   const std::int64_t t0 = gps_to_utc_ns(static_cast<std::int64_t>(kWeek) * 604800 * 1'000'000'000 +
                                             200'000'000'000, kOffset);

@@ -17,14 +17,6 @@
 namespace stac::segmentation {
 namespace {
 
-std::vector<float> load_bin(const std::string& relative) {
-  std::ifstream f(testing::shared_data(relative), std::ios::binary | std::ios::ate);
-  std::vector<float> v(static_cast<std::size_t>(f.tellg()) / sizeof(float));
-  f.seekg(0);
-  f.read(reinterpret_cast<char*>(v.data()), static_cast<std::streamsize>(v.size() * sizeof(float)));
-  return v;
-}
-
 PointView view(const std::vector<float>& xyzi) {
   return {xyzi.data(), xyzi.size() / 4, 16};
 }
@@ -32,7 +24,9 @@ PointView view(const std::vector<float>& xyzi) {
 TEST(SegmenterKitti, OdometryScansSegmentPlausiblyWithoutOverflowOrAllocation) {
   STAC_REQUIRE_SHARED_DATA("kitti/000005.bin");
   std::vector<std::vector<float>> scans;
-  for (int i = 0; i < 6; ++i) scans.push_back(load_bin("kitti/00000" + std::to_string(i) + ".bin"));
+  for (int i = 0; i < 6; ++i) {
+    scans.push_back(testing::read_kitti_bin("kitti/00000" + std::to_string(i) + ".bin"));
+  }
   Segmenter segmenter(SegmenterConfig{});
   Segments out = segmenter.make_segments();
   segmenter.segment(view(scans[0]), out);  // warm-up (first touch of the grids)
@@ -122,7 +116,7 @@ bool in_box(const LabelBox& b, float x, float y, float z, double margin_m = 0.0)
 // of the visible side: the 12 m truck shows only its rear at 70 m) and most of its points inside.
 TEST(SegmenterKitti, LabeledTruckCarAndCyclistOfObjectFrame000001AreSegments) {
   STAC_REQUIRE_SHARED_DATA("kitti-object/velodyne/000001.bin");
-  const auto cloud = load_bin("kitti-object/velodyne/000001.bin");
+  const auto cloud = testing::read_kitti_bin("kitti-object/velodyne/000001.bin");
   const auto labels = read_labels("000001");
   ASSERT_EQ(labels.size(), 3u);  // Truck, Car, Cyclist
   const SegmenterConfig config;
