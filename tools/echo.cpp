@@ -110,7 +110,10 @@ int run_echo(const EchoOptions& o) {
   const dds_topic_descriptor_t* type = c.ros2_names ? descriptor<true>(*topic) : descriptor<false>(*topic);
   const dds_entity_t t = dds_create_topic(participant, type, name.c_str(), nullptr, nullptr);
   if (t < 0) return fail("creating DDS topic " + name + ": " + dds_strretcode(t));
-  const dds_entity_t reader = dds_create_reader(participant, t, dds::reader_qos(*topic).get(), nullptr);
+  // The topic's QoS with a deeper history: a diagnostic shows every sample, not only the latest.
+  dds::QosPtr qos = dds::reader_qos(*topic);
+  dds_qset_history(qos.get(), DDS_HISTORY_KEEP_LAST, 64);
+  const dds_entity_t reader = dds_create_reader(participant, t, qos.get(), nullptr);
   if (reader < 0) return fail("creating a DDS reader of " + name + ": " + dds_strretcode(reader));
   std::fprintf(stderr, "stac echo: listening on %s (domain %u)\n", name.c_str(), c.domain_id);
 
