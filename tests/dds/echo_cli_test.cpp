@@ -54,6 +54,35 @@ TEST(StacEcho, ReceivesTrackedObjectsFromAnotherProcess) {
   EXPECT_NE(out.find("5 samples on stac/tracked_objects"), std::string::npos) << out;
 }
 
+// examples/c_subscriber, built from idl/stac.idl alone, reads what the publisher writes.
+TEST(CSubscriberExample, PrintsIdsAndPositionsFromAnotherProcess) {
+  const std::string uri = testing::loopback_uri();
+  const std::string cmd = "CYCLONEDDS_URI=" + uri + " " + STAC_C_SUBSCRIBER + " 3 123 2>&1";
+  FILE* child = popen(cmd.c_str(), "r");
+  ASSERT_NE(child, nullptr);
+  PublisherConfig c;
+  c.domain_id = 123;
+  c.config_uri = uri;
+  auto pub = Publisher::create(c);
+  ASSERT_TRUE(pub) << pub.error().message;
+  ASSERT_TRUE(testing::TestReader::wait_matched((*pub)->writer(Topic::kTrackedObjects)));
+  TrackedObjectIn a, b;
+  a.object_id = 5;
+  a.position = {1.25, 2.5, 0};
+  b.object_id = 6;
+  b.position = {-30, 40.75, 0};
+  std::vector<TrackedObjectIn> objects{a, b};
+  for (std::uint64_t scan = 0; scan < 3; ++scan) {
+    ASSERT_TRUE((*pub)->publish_tracked_objects({0, scan}, objects));
+    ASSERT_EQ(dds_wait_for_acks((*pub)->writer(Topic::kTrackedObjects), DDS_SECS(10)), 0);
+  }
+  int code = -1;
+  const std::string out = run_to_end(child, &code);
+  EXPECT_EQ(code, 0) << out;
+  EXPECT_NE(out.find("scan 2: 2 objects\n  id 5 at x=1.25 y=2.50\n  id 6 at x=-30.00 y=40.75"),
+            std::string::npos) << out;
+}
+
 TEST(StacEcho, TimesOutWithAClearMessageWithoutAPublisher) {
   testing::loopback_uri();
   FILE* child = popen((std::string(STAC_CLI) + " echo health --count 3 --timeout 0.5 --domain 122 2>&1").c_str(), "r");
