@@ -11,6 +11,7 @@ packages=(
   nlohmann-json3-dev  # tracks and truth JSON lines (stac eval)
   libopencv-dev  # pictures (bird's-eye views, plots) in tools/, never in the per-scan loop
   libpcl-dev  # benchmarks only: PCL Euclidean clustering as the baseline of perception/segmentation
+  cyclonedds-dev cyclonedds-tools  # DDS publishing edge (dds/, idl/): C API and idlc
 )
 
 missing=()

@@ -1,0 +1,66 @@
+#include "dds/topics.hpp"
+
+namespace stac::dds {
+
+const char* topic_suffix(Topic t) noexcept {
+  switch (t) {
+    case Topic::kTrackedObjects: return "tracked_objects";
+    case Topic::kSegments: return "segments";
+    case Topic::kEgoPose: return "ego_pose";
+    case Topic::kHealth: return "health";
+  }
+  return "?";
+}
+
+rt::Result<Topic> topic_from_suffix(std::string_view suffix) {
+  std::string valid;
+  for (Topic t : kAllTopics) {
+    if (suffix == topic_suffix(t)) return t;
+    valid += valid.empty() ? "" : ", ";
+    valid += topic_suffix(t);
+  }
+  return rt::make_error("unknown topic '" + std::string(suffix) + "' (topics: " + valid + ")");
+}
+
+std::string topic_name(Topic t, const std::string& prefix, bool ros2_names) {
+  return (ros2_names ? "rt/" : "") + prefix + "/" + topic_suffix(t);
+}
+
+namespace {
+
+QosPtr base_qos(Topic t) {
+  QosPtr q(dds_create_qos());
+  switch (t) {
+    case Topic::kTrackedObjects:
+    case Topic::kEgoPose:
+      dds_qset_reliability(q.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
+      dds_qset_history(q.get(), DDS_HISTORY_KEEP_LAST, 1);
+      break;
+    case Topic::kSegments:
+      dds_qset_reliability(q.get(), DDS_RELIABILITY_BEST_EFFORT, 0);
+      dds_qset_history(q.get(), DDS_HISTORY_KEEP_LAST, 1);
+      break;
+    case Topic::kHealth:
+      dds_qset_reliability(q.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
+      dds_qset_history(q.get(), DDS_HISTORY_KEEP_LAST, 10);
+      break;
+  }
+  dds_qset_durability(q.get(), DDS_DURABILITY_VOLATILE);
+  return q;
+}
+
+}  // namespace
+
+QosPtr writer_qos(Topic t) {
+  QosPtr q = base_qos(t);
+  if (t == Topic::kTrackedObjects || t == Topic::kEgoPose) dds_qset_deadline(q.get(), kTrackDeadline);
+  return q;
+}
+
+QosPtr reader_qos(Topic t) { return base_qos(t); }
+
+rt::Unexpected<rt::Error> dds_error(const std::string& what, dds_return_t rc) {
+  return rt::make_error(what + ": " + dds_strretcode(rc));
+}
+
+}  // namespace stac::dds

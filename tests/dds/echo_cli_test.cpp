@@ -1,0 +1,107 @@
+// `stac echo` as a user runs it: a second process receives what this test process publishes
+// over loopback (config/dds/loopback.xml, a tag unique to this process), and with no publisher
+// it times out with a message saying so.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "dds/publisher.hpp"
+#include "dds_test_support.hpp"
+
+namespace stac::dds {
+namespace {
+
+std::string run_to_end(FILE* p, int* code) {
+  std::string out;
+  char buf[4096];
+  while (std::size_t n = std::fread(buf, 1, sizeof(buf), p)) out.append(buf, n);
+  const int status = pclose(p);
+  *code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return out;
+}
+
+TEST(StacEcho, ReceivesTrackedObjectsFromAnotherProcess) {
+  const std::string uri = testing::loopback_uri();  // sets DDS_TEST_TAG, inherited by the child
+  const std::string cmd = std::string(STAC_CLI) + " echo tracked_objects --count 5 --timeout 20 --domain 121 2>&1";
+  FILE* child = popen(cmd.c_str(), "r");
+  ASSERT_NE(child, nullptr);
+
+  PublisherConfig c;
+  c.domain_id = 121;
+  c.config_uri = uri;
+  auto pub = Publisher::create(c);
+  ASSERT_TRUE(pub) << pub.error().message;
+  ASSERT_TRUE(testing::TestReader::wait_matched((*pub)->writer(Topic::kTrackedObjects)));
+  TrackedObjectIn o;
+  o.object_id = 77;
+  o.position = {12.5, -4.0, 0.5};
+  o.class_log_odds = {3, -3, -3, -3};
+  std::vector<TrackedObjectIn> objects{o};
+  for (std::uint64_t scan = 0; scan < 5; ++scan) {
+    ASSERT_TRUE((*pub)->publish_tracked_objects({static_cast<std::int64_t>(scan) * 100'000'000, scan}, objects));
+    // Keep-last 1 replaces an unacknowledged sample (latest wins, by design): wait for the ack so
+    // a loaded machine cannot turn this into a lost-sample race.
+    ASSERT_EQ(dds_wait_for_acks((*pub)->writer(Topic::kTrackedObjects), DDS_SECS(10)), 0);
+  }
+  int code = -1;
+  const std::string out = run_to_end(child, &code);
+  EXPECT_EQ(code, 0) << out;
+  EXPECT_NE(out.find("tracked_objects scan 0 "), std::string::npos) << out;
+  EXPECT_NE(out.find("tracked_objects scan 4 "), std::string::npos) << out;
+  EXPECT_NE(out.find("#77 car x=12.50 y=-4.00"), std::string::npos) << out;
+  EXPECT_NE(out.find("5 samples on stac/tracked_objects"), std::string::npos) << out;
+}
+
+// examples/c_subscriber, built from idl/stac.idl alone, reads what the publisher writes.
+TEST(CSubscriberExample, PrintsIdsAndPositionsFromAnotherProcess) {
+  const std::string uri = testing::loopback_uri();
+  const std::string cmd = "CYCLONEDDS_URI=" + uri + " " + STAC_C_SUBSCRIBER + " 3 123 2>&1";
+  FILE* child = popen(cmd.c_str(), "r");
+  ASSERT_NE(child, nullptr);
+  PublisherConfig c;
+  c.domain_id = 123;
+  c.config_uri = uri;
+  auto pub = Publisher::create(c);
+  ASSERT_TRUE(pub) << pub.error().message;
+  ASSERT_TRUE(testing::TestReader::wait_matched((*pub)->writer(Topic::kTrackedObjects)));
+  TrackedObjectIn a, b;
+  a.object_id = 5;
+  a.position = {1.25, 2.5, 0};
+  b.object_id = 6;
+  b.position = {-30, 40.75, 0};
+  std::vector<TrackedObjectIn> objects{a, b};
+  for (std::uint64_t scan = 0; scan < 3; ++scan) {
+    ASSERT_TRUE((*pub)->publish_tracked_objects({0, scan}, objects));
+    ASSERT_EQ(dds_wait_for_acks((*pub)->writer(Topic::kTrackedObjects), DDS_SECS(10)), 0);
+  }
+  int code = -1;
+  const std::string out = run_to_end(child, &code);
+  EXPECT_EQ(code, 0) << out;
+  EXPECT_NE(out.find("scan 2: 2 objects\n  id 5 at x=1.25 y=2.50\n  id 6 at x=-30.00 y=40.75"),
+            std::string::npos) << out;
+}
+
+TEST(StacEcho, TimesOutWithAClearMessageWithoutAPublisher) {
+  testing::loopback_uri();
+  FILE* child = popen((std::string(STAC_CLI) + " echo health --count 3 --timeout 0.5 --domain 122 2>&1").c_str(), "r");
+  ASSERT_NE(child, nullptr);
+  int code = -1;
+  const std::string out = run_to_end(child, &code);
+  EXPECT_EQ(code, 1) << out;
+  EXPECT_NE(out.find("timed out after 0.5 s with 0 of 3 samples on stac/health"), std::string::npos) << out;
+}
+
+TEST(StacEcho, UnknownTopicListsTheTopics) {
+  FILE* child = popen((std::string(STAC_CLI) + " echo tracks --timeout 0.1 2>&1").c_str(), "r");
+  ASSERT_NE(child, nullptr);
+  int code = -1;
+  const std::string out = run_to_end(child, &code);
+  EXPECT_EQ(code, 1);
+  EXPECT_NE(out.find("unknown topic 'tracks' (topics: tracked_objects, segments, ego_pose, health)"),
+            std::string::npos) << out;
+}
+
+}  // namespace
+}  // namespace stac::dds

@@ -1,0 +1,53 @@
+// The `dds:` section of config/stac.yaml: the shipped file loads, a missing or bad key names it.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include <unistd.h>
+
+#include "tools/dds_settings.hpp"
+
+namespace stac::tools {
+namespace {
+
+const std::filesystem::path kConfig = std::filesystem::path(STAC_SOURCE_DIR) / "config/stac.yaml";
+
+std::filesystem::path write_yaml(const std::string& name, const std::string& text) {
+  const auto p = std::filesystem::temp_directory_path() / (name + std::to_string(getpid()) + ".yaml");
+  std::ofstream(p) << text;
+  return p;
+}
+
+TEST(DdsSettings, ShippedConfigUsesTheLoopbackXml) {
+  auto s = load_dds_settings(kConfig);
+  ASSERT_TRUE(s) << s.error().message;
+  EXPECT_EQ(s->domain_id, 0u);
+  EXPECT_EQ(s->topic_prefix, "stac");
+  EXPECT_FALSE(s->ros2_names);
+  EXPECT_EQ(s->frame_id, "map");
+  EXPECT_EQ(s->config_uri.rfind("file:///", 0), 0u);
+  EXPECT_NE(s->config_uri.find("config/dds/loopback.xml"), std::string::npos);
+}
+
+TEST(DdsSettings, MissingAndInvalidKeysAreNamed) {
+  auto p = write_yaml("dds_missing", "dds:\n  domain_id: 3\n  topic_prefix: stac\n  ros2_names: true\n"
+                                     "  config_file: \"\"\n");
+  auto s = load_dds_settings(p);
+  ASSERT_FALSE(s);
+  EXPECT_NE(s.error().message.find("missing required key 'dds.frame_id'"), std::string::npos) << s.error().message;
+  p = write_yaml("dds_domain", "dds:\n  domain_id: 300\n  topic_prefix: stac\n  ros2_names: true\n"
+                               "  config_file: \"\"\n  frame_id: map\n");
+  s = load_dds_settings(p);
+  ASSERT_FALSE(s);
+  EXPECT_NE(s.error().message.find("'dds.domain_id' must be 0..230"), std::string::npos) << s.error().message;
+  p = write_yaml("dds_file", "dds:\n  domain_id: 1\n  topic_prefix: stac\n  ros2_names: true\n"
+                             "  config_file: nowhere.xml\n  frame_id: map\n");
+  s = load_dds_settings(p);
+  ASSERT_FALSE(s);
+  EXPECT_NE(s.error().message.find("'dds.config_file'"), std::string::npos) << s.error().message;
+  EXPECT_NE(s.error().message.find("is not a file"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace stac::tools
