@@ -46,6 +46,10 @@ const char* validate(const SegmenterConfig& c) noexcept {
   if (c.weak_join_cells > 10) return "weak_join_cells must be in 0..10";
   if (!(c.bridge_m >= 0 && c.bridge_m <= 10)) return "bridge_m must be in [0, 10] m";
   if (!(c.bridge_height_m >= 0)) return "bridge_height_m must be >= 0 m";
+  if (!(c.overhang_m >= 0 && c.overhang_m <= c.max_height_m))
+    return "overhang_m must be in [0, max_height_m] m";
+  if (!(c.overhang_max_m >= c.overhang_m)) return "overhang_max_m must be >= overhang_m";
+  if (!(c.overhang_height_m >= 0)) return "overhang_height_m must be >= 0 m";
   if (c.min_segment_points < 1) return "min_segment_points must be >= 1";
   if (c.max_segment_points < c.min_segment_points)
     return "max_segment_points must be >= min_segment_points";
@@ -78,6 +82,7 @@ struct Segmenter::State {
         coarse_id(c.max_occupied_cells),
         z_min(c.max_occupied_cells),
         band_max(c.max_occupied_cells),
+        band_min(c.max_occupied_cells),
         obstacle_count(c.max_occupied_cells),
         label(c.max_occupied_cells),
         offset(c.max_occupied_cells),
@@ -105,7 +110,7 @@ struct Segmenter::State {
   // Per slot (occupied fine cell).
   rt::FixedVector<std::uint32_t> cell_id;  // iy << 16 | ix
   rt::FixedVector<std::uint32_t> coarse_id;
-  rt::FixedVector<float> z_min, band_max;
+  rt::FixedVector<float> z_min, band_max, band_min;
   rt::FixedVector<std::uint32_t> obstacle_count, label, offset;
   // Flood fill.
   rt::FixedVector<std::uint8_t> depth;
@@ -208,6 +213,7 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
   const float inf = std::numeric_limits<float>::infinity();
   for (std::size_t slot = 0; slot < slots; ++slot) {
     s.band_max[slot] = -inf;
+    s.band_min[slot] = inf;
     s.obstacle_count[slot] = 0;
     const std::uint32_t g = s.coarse_id[slot];
     const float z = s.z_min[slot];
@@ -251,6 +257,7 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
     } else {
       ++s.obstacle_count[slot];
       s.band_max[slot] = std::max(s.band_max[slot], z);
+      s.band_min[slot] = std::min(s.band_min[slot], z);
     }
   }
 
@@ -283,6 +290,9 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
   const int bridge_steps = static_cast<int>(c.bridge_m / c.cell_m);  // steps of one cell
   const float bridge_height = static_cast<float>(c.bridge_height_m);
   const float cell = static_cast<float>(c.cell_m);
+  const float overhang = static_cast<float>(c.overhang_m);
+  const float overhang_height = static_cast<float>(c.overhang_height_m);
+  const float overhang_top = static_cast<float>(c.overhang_max_m);
   auto bridge = [&](std::uint32_t slot, std::uint32_t cx, std::uint32_t cy, std::uint32_t comp) {
     const float px = (static_cast<float>(cx) + 0.5f) * cell - range;
     const float py = (static_cast<float>(cy) + 0.5f) * cell - range;
@@ -291,6 +301,7 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
     const float ux = cell * px / r, uy = cell * py / r;
     for (const float sign : {1.0f, -1.0f}) {
       std::uint32_t last = cy << 16 | cx;
+      bool crossed_ground = false;
       for (int step = 1; step <= bridge_steps; ++step) {
         const float qx = px + sign * static_cast<float>(step) * ux + range;
         const float qy = py + sign * static_cast<float>(step) * uy + range;
@@ -302,8 +313,22 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
         last = iy << 16 | ix;
         const std::uint32_t other = s.slot_of[s.dense(ix, iy)];
         if (other == kNone) continue;  // nothing seen here: keep walking
-        if (s.label[other] == kUnvisited &&
-            std::fabs(s.band_max[other] - s.band_max[slot]) <= bridge_height) {
+        if (s.label[other] == kNone && s.obstacle_count[other] == 0) {
+          // Only ground seen here: with overhangs on, walk on (checked at the far end).
+          if (overhang > 0) {
+            crossed_ground = true;
+            continue;
+          }
+          break;
+        }
+        // Ground crossed: the nearer of the two cells must be an overhang (its lowest
+        // obstacle point at least overhang above the ground), so the ground was seen under it.
+        const std::uint32_t nearer = sign > 0 ? slot : other;
+        const float gap = s.band_min[nearer] - s.ground[s.coarse_id[nearer]];
+        const bool under = !crossed_ground || (gap >= overhang && gap <= overhang_top);
+        if (under && s.label[other] == kUnvisited &&
+            std::fabs(s.band_max[other] - s.band_max[slot]) <=
+                (crossed_ground ? overhang_height : bridge_height)) {
           s.label[other] = comp;
           s.depth[other] = 0;
           (void)s.component_cells.push_back(other);

@@ -61,6 +61,14 @@ struct SegmenterConfig {
   // bridge_m, when their tops differ by at most bridge_height_m (car roofs hit by distant rings).
   double bridge_m = 1.5;
   double bridge_height_m = 0.3;
+  // The walk also crosses cells where only ground was seen when the nearer of the two strong
+  // cells is a low overhang: its lowest obstacle point is overhang_m..overhang_max_m above the
+  // ground (a car body from 0.3 m up, with the road seen under it between the wheels; higher
+  // overhangs are torsos and canopies; overhang_m 0: off); their tops may then differ by up
+  // to overhang_height_m (a car's boot or bonnet and its cabin).
+  double overhang_m = 0.0;
+  double overhang_max_m = 0.6;
+  double overhang_height_m = 0.6;
   double max_height_m = 2.5;  // points higher above the local ground are ignored (canopies)
   // Segments.
   std::uint32_t min_segment_points = 8;      // fewer obstacle points: dropped (too small)

@@ -164,6 +164,59 @@ TEST(Segmenter, SeenGroundKeepsObjectsOnOneRayApart) {
   EXPECT_EQ(run(scene).segments.size(), 2u);
 }
 
+// A car 30 m ahead as the sensor sees it: the rear face of its body (0.35..0.8 m above the
+// road), the road under the body between the wheels, and 1.3 m further the rear of its cabin
+// (0.95..1.35 m); the road beyond is in the car's shadow.
+Scene far_car_with_road_under_its_body() {
+  Scene scene;
+  scene.ground(40.0f, 0.1f, [](float, float) { return 0.0f; });
+  Scene kept;
+  const float g = -testing::kSensorHeight;
+  for (std::size_t i = 0; i < scene.size(); ++i) {
+    const float x = scene.xyzi[4 * i], y = scene.xyzi[4 * i + 1];
+    const bool under_body = x > 30.1f && x < 31.2f;
+    if (x > 30.0f && std::fabs(y) < 0.9f && !under_body) continue;  // hidden by the car
+    if (x < 24.0f || std::fabs(y) > 6.0f) continue;                     // keep the scene small
+    kept.add(x, y, scene.xyzi[4 * i + 2]);
+  }
+  for (float y = -0.9f; y <= 0.9f; y += 0.05f) {
+    for (float z = 0.35f; z <= 0.8f; z += 0.15f) kept.add(30.0f, y, g + z);
+    for (float z = 0.95f; z <= 1.35f; z += 0.2f) kept.add(31.3f, y, g + z);
+  }
+  return kept;
+}
+
+SegmenterConfig overhang_config() {
+  SegmenterConfig c = test_config();
+  c.range_m = 40.0;
+  c.overhang_m = 0.25;
+  return c;
+}
+
+TEST(Segmenter, RoadSeenUnderACarBodyDoesNotSplitTheCar) {
+  const Scene scene = far_car_with_road_under_its_body();
+  const Segments out = run(scene, overhang_config());
+  ASSERT_EQ(out.segments.size(), 1u);
+  EXPECT_NEAR(out.segments[0].box.width, 1.3f, 0.1f);  // rear face to cabin, along x
+  EXPECT_NEAR(out.segments[0].box.length, 1.8f, 0.1f);
+  SegmenterConfig off = overhang_config();
+  off.overhang_m = 0.0;  // the seen road ends the walk: body face and cabin apart
+  EXPECT_EQ(run(scene, off).segments.size(), 2u);
+  SegmenterConfig flat = overhang_config();
+  flat.overhang_height_m = 0.3;  // the cabin's top is 0.55 m above the body's: not linked
+  EXPECT_EQ(run(scene, flat).segments.size(), 2u);
+}
+
+TEST(Segmenter, RoadSeenBetweenStandingObjectsStillKeepsThemApartWithOverhangs) {
+  Scene scene;
+  scene.flat_ground();
+  scene.cylinder(0.0f, 8.0f, 0.25f, 1.8f);  // reach the ground: no overhang
+  scene.cylinder(0.0f, 9.2f, 0.25f, 1.8f);
+  SegmenterConfig c = test_config();
+  c.overhang_m = 0.25;
+  EXPECT_EQ(run(scene, c).segments.size(), 2u);
+}
+
 TEST(Segmenter, PedestrianUnderATreeCanopyIsNotJoinedToTheTree) {
   Scene scene;
   scene.flat_ground();
@@ -348,6 +401,9 @@ TEST(Segmenter, RejectsInvalidConfiguration) {
   c = SegmenterConfig{};
   c.obstacle_height_m = 0.1;  // below the ground clearance
   EXPECT_STRNE(validate(c), "");
+  c = SegmenterConfig{};
+  c.overhang_m = 0.7;  // above overhang_max_m
+  EXPECT_STREQ(validate(c), "overhang_max_m must be >= overhang_m");
   EXPECT_STREQ(validate(SegmenterConfig{}), "");
 }
 
