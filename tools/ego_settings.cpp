@@ -1,5 +1,7 @@
 // The `ego:` section of config/stac.yaml (see tools/settings.hpp).
 #include <cmath>
+#include <cstdio>
+#include <string>
 #include <numbers>
 #include <vector>
 
@@ -20,6 +22,16 @@ rt::Result<Eigen::Vector3d> triple(const ConfigSection& s, const char* key) {
 }
 
 }  // namespace
+
+rt::Result<ego::Geodetic> parse_origin(const std::string& text) {
+  ego::Geodetic g;
+  char tail = 0;
+  if (std::sscanf(text.c_str(), "%lf,%lf,%lf%c", &g.lat_deg, &g.lon_deg, &g.alt_m, &tail) != 3 ||
+      !(std::abs(g.lat_deg) < 90.0) || !(std::abs(g.lon_deg) <= 180.0) || !std::isfinite(g.alt_m)) {
+    return rt::make_error("--origin '" + text + "': expected LAT,LON,ALT (deg, deg, m), e.g. 44.2449408681,-76.5096210157,77");
+  }
+  return g;
+}
 
 rt::Result<EgoSettings> load_ego_settings(const std::filesystem::path& config_file) {
   auto section = ConfigSection::open(config_file, "ego");

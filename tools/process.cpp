@@ -101,15 +101,6 @@ void truth_composition(const TruthScanRecord& truth, const velodyne::Scan& scan,
   }
 }
 
-rt::Result<ego::Geodetic> parse_origin(const std::string& text) {
-  ego::Geodetic g;
-  if (std::sscanf(text.c_str(), "%lf,%lf,%lf", &g.lat_deg, &g.lon_deg, &g.alt_m) != 3 ||
-      std::abs(g.lat_deg) > 90 || std::abs(g.lon_deg) > 180) {
-    return rt::make_error("--origin '" + text + "': expected LAT,LON,ALT (deg, deg, m)");
-  }
-  return g;
-}
-
 int run_process(const ProcessOptions& o) {
   const std::filesystem::path config = config_path(o.config);
   auto velodyne_settings = load_velodyne_settings(config);

@@ -38,6 +38,8 @@ struct EgoSettings {
   std::uint16_t ins_port = 5602;
 };
 rt::Result<EgoSettings> load_ego_settings(const std::filesystem::path& config_file);
+// A geodetic origin written LAT,LON,ALT (deg, deg, m) on a command line (--origin).
+rt::Result<ego::Geodetic> parse_origin(const std::string& text);
 
 // The `segmentation:` section, checked by the segmenter's own validation too.
 rt::Result<segmentation::SegmenterConfig> load_segmentation_settings(const std::filesystem::path& config_file);

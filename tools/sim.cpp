@@ -93,16 +93,6 @@ class InsPcapStream {
   std::uint32_t seq_ = kPosIsn + 1;  // the SYN takes one sequence number
 };
 
-rt::Result<ego::Geodetic> parse_origin(const std::string& text) {
-  ego::Geodetic g;
-  char tail = 0;
-  if (std::sscanf(text.c_str(), "%lf,%lf,%lf%c", &g.lat_deg, &g.lon_deg, &g.alt_m, &tail) != 3 ||
-      !(std::abs(g.lat_deg) < 90.0) || !(std::abs(g.lon_deg) <= 180.0) || !std::isfinite(g.alt_m)) {
-    return rt::make_error("--origin '" + text + "': expected LAT,LON,ALT (deg, deg, m), e.g. 44.2449408681,-76.5096210157,77");
-  }
-  return g;
-}
-
 // The vehicle CAN bus of the run and its candump log, opened before the simulation so that a
 // bad can: configuration or an unwritable path stops it at once.
 struct CanLog {
