@@ -190,8 +190,11 @@ int run_process(const ProcessOptions& o) {
     for (std::size_t i = 0; i < segments.segments.size(); ++i) {
       const segmentation::Segment& s = segments.segments[i];
       const Eigen::Vector3d c = world_T_sensor * Eigen::Vector3d(s.centroid[0], s.centroid[1], s.centroid[2]);
-      detections.push_back({c.cast<float>(), s.box.length, s.box.width, s.box.height,
+      const Eigen::Vector3d b = world_T_sensor * Eigen::Vector3d(s.box.cx, s.box.cy, s.box.cz);
+      detections.push_back({c.cast<float>(), b.head<2>().cast<float>(), s.box.length, s.box.width, s.box.height,
                             static_cast<float>(s.box.yaw + sensor_yaw), s.count, static_cast<std::uint32_t>(i)});
+      (void)tracking::complete_end_on(*tracker_config, world_T_sensor.translation().head<2>().cast<float>(),
+                                      detections.back());
     }
     const std::int64_t stamp = scan.header.stamp_ns + clock.scan_to_pose_ns;
     tracker.update(stamp, detections, tracked);

@@ -29,6 +29,19 @@ rt::Result<tracking::TrackerConfig> load_tracking_config(const std::filesystem::
   STAC_GET(std::uint32_t, "tentative_max_misses", c.tentative_max_misses);
   STAC_GET(std::uint32_t, "max_coast_scans", c.max_coast_scans);
   STAC_GET(double, "max_position_std_m", c.max_position_std_m);
+  STAC_GET(bool, "position_from_box", c.position_from_box);
+  STAC_GET(double, "absorb_gap_m", c.absorb_gap_m);
+  STAC_GET(double, "absorb_max_length_m", c.absorb_max_length_m);
+  STAC_GET(double, "absorb_max_width_m", c.absorb_max_width_m);
+  STAC_GET(double, "absorb_velocity_mps", c.absorb_velocity_mps);
+  STAC_GET(double, "absorb_keep_length_m", c.absorb_keep_length_m);
+  STAC_GET(double, "absorb_keep_height_m", c.absorb_keep_height_m);
+  STAC_GET(double, "end_on_length_m", c.end_on_length_m);
+  STAC_GET(double, "end_on_min_range_m", c.end_on_min_range_m);
+  STAC_GET(double, "end_on_min_width_m", c.end_on_min_width_m);
+  STAC_GET(double, "end_on_max_width_m", c.end_on_max_width_m);
+  STAC_GET(double, "end_on_max_depth_m", c.end_on_max_depth_m);
+  STAC_GET(double, "end_on_min_height_m", c.end_on_min_height_m);
   STAC_GET(double, "box_smoothing", c.box_smoothing);
   STAC_GET(double, "min_heading_speed_mps", c.min_heading_speed_mps);
 #undef STAC_GET

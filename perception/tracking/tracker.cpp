@@ -10,13 +10,15 @@
 namespace stac::tracking {
 namespace {
 
-using State = Eigen::Matrix<double, 5, 1>;      // px, py, pz, vx, vy
+using State = Eigen::Matrix<double, 5, 1>;  // px, py, pz, vx, vy
 using Cov = Eigen::Matrix<double, 5, 5>;
-using Meas = Eigen::Matrix<double, 3, 1>;       // px, py, pz
+using Meas = Eigen::Matrix<double, 3, 1>;  // px, py, pz
 using MeasCov = Eigen::Matrix<double, 3, 3>;
 using Gain = Eigen::Matrix<double, 5, 3>;
 
-constexpr double kForbidden = 1e9;  // cost of a pair outside the gate (dropped after solving)
+constexpr double kForbidden = 1e9;       // cost of a pair outside the gate (dropped after solving)
+constexpr std::int32_t kUnmatched = -1;  // det_match_: no track (spawns one)
+constexpr std::int32_t kAbsorbed = -2;   // det_match_: joined a matched track's measurement
 
 // Angle difference wrapped to [-pi/2, pi/2): box headings are defined modulo pi.
 double box_angle_diff(double a, double b) {
@@ -40,6 +42,23 @@ double position_std(const Cov& p) {
   return std::sqrt(std::max(0.0, mean + spread));
 }
 
+// A box's extent along the axes u = (cos h, sin h), v = (-sin h, cos h) of heading h.
+struct Extent {
+  float u0, u1, v0, v1;
+};
+
+Extent extent_in(const Detection& d, const Eigen::Vector2f& centre, float h) {
+  const float ch = std::cos(h), sh = std::sin(h);
+  const float cy = std::cos(d.yaw), sy = std::sin(d.yaw);
+  const Eigen::Vector2f c = d.position(true) - centre;
+  const float uc = ch * c.x() + sh * c.y(), vc = -sh * c.x() + ch * c.y();
+  // Half-extents of the rotated box along u and v.
+  const float a = 0.5f * d.length, b = 0.5f * d.width;
+  const float du = std::abs(a * (ch * cy + sh * sy)) + std::abs(b * (-ch * sy + sh * cy));
+  const float dv = std::abs(a * (-sh * cy + ch * sy)) + std::abs(b * (sh * sy + ch * cy));
+  return {uc - du, uc + du, vc - dv, vc + dv};
+}
+
 void check(bool ok, const char* what) {
   if (!ok) throw std::invalid_argument(std::string("tracking config: ") + what);
 }
@@ -48,11 +67,36 @@ void check(bool ok, const char* what) {
 
 const char* state_name(TrackState s) noexcept {
   switch (s) {
-    case TrackState::kTentative: return "tentative";
-    case TrackState::kConfirmed: return "confirmed";
-    case TrackState::kCoasting: return "coasting";
+    case TrackState::kTentative:
+      return "tentative";
+    case TrackState::kConfirmed:
+      return "confirmed";
+    case TrackState::kCoasting:
+      return "coasting";
   }
   return "unknown";
+}
+
+bool complete_end_on(const TrackerConfig& c, const Eigen::Vector2f& sensor_xy,
+                     Detection& d) noexcept {
+  if (c.end_on_length_m <= 0 || !d.box_center.allFinite()) return false;
+  const Eigen::Vector2f ray = d.box_center - sensor_xy;
+  const float range = ray.norm();
+  if (!(range > 1e-3f) || range < c.end_on_min_range_m) return false;
+  const Eigen::Vector2f r = ray / range;
+  // The long side must lie across the ray (within 30 degrees of perpendicular).
+  const float along = std::abs(r.x() * std::cos(d.yaw) + r.y() * std::sin(d.yaw));
+  if (along > 0.5f || d.length < c.end_on_min_width_m || d.length > c.end_on_max_width_m ||
+      d.width > c.end_on_max_depth_m || d.height < c.end_on_min_height_m) {
+    return false;
+  }
+  const auto length = static_cast<float>(c.end_on_length_m);
+  if (length <= d.width) return false;
+  d.box_center += r * (0.5f * (length - d.width));
+  d.width = d.length;
+  d.length = length;
+  d.yaw = std::atan2(r.y(), r.x());
+  return true;
 }
 
 void HolisticFeatures::add_segment(const Eigen::Vector3f& centroid, std::int64_t stamp_ns,
@@ -81,7 +125,8 @@ void HolisticFeatures::add_segment(const Eigen::Vector3f& centroid, std::int64_t
       accel_sum_ += accel;
       ++accel_count_;
       if (speed >= min_heading_speed_mps && velocity_.norm() >= min_heading_speed_mps) {
-        const double turn = wrap_pi(std::atan2(v.y(), v.x()) - std::atan2(velocity_.y(), velocity_.x()));
+        const double turn =
+            wrap_pi(std::atan2(v.y(), v.x()) - std::atan2(velocity_.y(), velocity_.x()));
         max_angular_ = std::max(max_angular_, static_cast<float>(std::abs(turn) / dt));
       }
     }
@@ -117,14 +162,29 @@ Tracker::Tracker(const TrackerConfig& c)
   check(c.initial_velocity_std_mps > 0, "initial_velocity_std_mps must be > 0");
   check(c.gate_mahalanobis_sq > 0 && c.gate_distance_m > 0, "gates must be > 0");
   check(c.confirm_hits >= 1, "confirm_hits must be >= 1");
-  check(c.max_position_std_m > c.measurement_std_m, "max_position_std_m must exceed measurement_std_m");
+  check(c.max_position_std_m > c.measurement_std_m,
+        "max_position_std_m must exceed measurement_std_m");
   check(c.box_smoothing > 0 && c.box_smoothing <= 1, "box_smoothing must be in (0, 1]");
+  check(c.absorb_gap_m >= 0 && c.absorb_gap_m <= 10, "absorb_gap_m must be in [0, 10]");
+  check(c.absorb_max_length_m > 0 && c.absorb_max_width_m > 0 &&
+            c.absorb_max_width_m <= c.absorb_max_length_m,
+        "absorb_max_length_m >= absorb_max_width_m > 0 required");
+  check(c.end_on_min_range_m >= 0, "end_on_min_range_m must be >= 0");
+  check(c.end_on_length_m >= 0 && c.end_on_min_width_m <= c.end_on_max_width_m &&
+            c.end_on_max_depth_m >= 0 && c.end_on_min_height_m >= 0,
+        "end_on_length_m >= 0, end_on_min_width_m <= end_on_max_width_m, depth and height >= 0 "
+        "required");
+  check(c.absorb_velocity_mps >= 0 && c.absorb_keep_length_m >= 0 && c.absorb_keep_height_m >= 0,
+        "absorb_velocity_mps, absorb_keep_length_m and absorb_keep_height_m must be >= 0");
   slots_.resize(c.max_tracks);
   for (std::size_t i = c.max_tracks; i-- > 0;) (void)free_.push_back(static_cast<std::uint32_t>(i));
   cost_.assign(c.max_tracks * c.max_detections, 0.0);
   pair_cost_.assign(c.max_tracks * c.max_detections, -1.0f);
   row_to_col_.assign(std::max(c.max_tracks, c.max_detections), -1);
   det_match_.assign(c.max_detections, -1);
+  merged_.assign(c.max_detections, Detection{});
+  host_.assign(c.max_detections, 0);
+  merged_track_.assign(c.max_tracks, 0);
   rows_.assign(c.max_tracks, 0);
   cols_.assign(c.max_detections, 0);
   col_of_det_.assign(c.max_detections, -1);
@@ -155,7 +215,8 @@ void Tracker::correct(Slot& s, const Detection& d, std::int64_t stamp_ns) noexce
   MeasCov sm = s.p.topLeftCorner<3, 3>();
   sm.diagonal() += Meas(r, r, rz);
   const Gain k = s.p.leftCols<3>() * sm.inverse();
-  const Meas innovation = d.centroid.cast<double>() - s.x.head<3>();
+  const Eigen::Vector2f xy = d.position(config_.position_from_box);
+  const Meas innovation = Meas(xy.x(), xy.y(), d.centroid.z()) - s.x.head<3>();
   s.x += k * innovation;
   Cov ikh = Cov::Identity();
   ikh.leftCols<3>() -= k;
@@ -173,12 +234,16 @@ void Tracker::correct(Slot& s, const Detection& d, std::int64_t stamp_ns) noexce
   t.segment = static_cast<std::int32_t>(d.segment);
   ++t.hits;
   t.misses = 0;
-  if (t.state == TrackState::kCoasting || t.hits >= config_.confirm_hits) t.state = TrackState::kConfirmed;
-  t.features.add_segment(d.centroid, stamp_ns, config_.min_heading_speed_mps);
+  if (t.state == TrackState::kCoasting || t.hits >= config_.confirm_hits)
+    t.state = TrackState::kConfirmed;
+  t.features.add_segment(Eigen::Vector3f(xy.x(), xy.y(), d.centroid.z()), stamp_ns,
+                         config_.min_heading_speed_mps);
 }
 
 void Tracker::spawn(const Detection& d, std::int64_t stamp_ns) noexcept {
-  if (!d.centroid.allFinite()) {  // never gated either: NaN fails every comparison
+  const Eigen::Vector2f xy = d.position(config_.position_from_box);
+  if (!d.centroid.allFinite() ||
+      !xy.allFinite()) {  // never gated either: NaN fails every comparison
     ++counters_.invalid_detections;
     return;
   }
@@ -191,7 +256,7 @@ void Tracker::spawn(const Detection& d, std::int64_t stamp_ns) noexcept {
   (void)live_.push_back(index);
   Slot& s = slots_[index];
   s.x = State::Zero();
-  s.x.head<3>() = d.centroid.cast<double>();
+  s.x.head<3>() = Eigen::Vector3d(xy.x(), xy.y(), d.centroid.z());
   s.p = Cov::Zero();
   const double r = config_.measurement_std_m * config_.measurement_std_m;
   const double v = config_.initial_velocity_std_mps * config_.initial_velocity_std_mps;
@@ -207,8 +272,91 @@ void Tracker::spawn(const Detection& d, std::int64_t stamp_ns) noexcept {
   t.points = d.points;
   t.segment = static_cast<std::int32_t>(d.segment);
   t.hits = 1;
-  t.features.add_segment(d.centroid, stamp_ns, config_.min_heading_speed_mps);
+  t.features.add_segment(Eigen::Vector3f(xy.x(), xy.y(), d.centroid.z()), stamp_ns,
+                         config_.min_heading_speed_mps);
   ++counters_.spawned;
+}
+
+void Tracker::absorb_fragments(std::span<const Detection> detections) noexcept {
+  const std::size_t nd = detections.size();
+  for (std::size_t di = 0; di < nd; ++di) {
+    merged_[di] = detections[di];
+    host_[di] = 0;
+  }
+  std::fill_n(merged_track_.begin(), live_.size(), std::uint8_t{0});
+  if (config_.absorb_gap_m <= 0) return;
+  const auto max_len = static_cast<float>(config_.absorb_max_length_m);
+  const auto max_wid = static_cast<float>(config_.absorb_max_width_m);
+  const auto max_gap = static_cast<float>(config_.absorb_gap_m);
+  const auto person = [&](const Detection& d) {
+    return std::max(d.length, d.width) <= config_.absorb_keep_length_m &&
+           d.height >= config_.absorb_keep_height_m;
+  };
+  for (std::size_t fi = 0; fi < nd; ++fi) {
+    const Detection& f = detections[fi];
+    if (det_match_[fi] == kAbsorbed || host_[fi] != 0 || person(f) || !f.centroid.allFinite() ||
+        !f.position(true).allFinite()) {
+      continue;
+    }
+    const Slot* own =
+        det_match_[fi] >= 0 ? &slots_[live_[static_cast<std::size_t>(det_match_[fi])]] : nullptr;
+    // The matched measurement nearest to the fragment (box gap) whose union with it still fits;
+    // a matched fragment only joins an older track moving with it.
+    std::size_t best = nd;
+    float best_gap = max_gap;
+    Extent best_union{};
+    for (std::size_t hi = 0; hi < nd; ++hi) {
+      if (hi == fi || det_match_[hi] < 0 || person(merged_[hi])) continue;
+      if (own != nullptr) {
+        const Slot& host = slots_[live_[static_cast<std::size_t>(det_match_[hi])]];
+        if (host.track.hits < own->track.hits ||
+            (host.track.hits == own->track.hits && host.track.id > own->track.id))
+          continue;
+        if (own->track.state != TrackState::kTentative &&
+            (host.x.tail<2>() - own->x.tail<2>()).norm() > config_.absorb_velocity_mps) {
+          continue;
+        }
+      }
+      const Detection& h = merged_[hi];
+      const Eigen::Vector2f centre = h.position(true);
+      const Extent a = extent_in(h, centre, h.yaw), b = extent_in(f, centre, h.yaw);
+      const float gu = std::max(0.0f, std::max(a.u0, b.u0) - std::min(a.u1, b.u1));
+      const float gv = std::max(0.0f, std::max(a.v0, b.v0) - std::min(a.v1, b.v1));
+      const float gap = std::hypot(gu, gv);
+      if (!(gap <= best_gap)) continue;
+      const Extent u{std::min(a.u0, b.u0), std::max(a.u1, b.u1), std::min(a.v0, b.v0),
+                     std::max(a.v1, b.v1)};
+      const float lu = u.u1 - u.u0, lv = u.v1 - u.v0;
+      if (std::max(lu, lv) > max_len || std::min(lu, lv) > max_wid) continue;
+      best = hi, best_gap = gap, best_union = u;
+    }
+    if (best == nd) continue;
+    Detection& h = merged_[best];
+    const Eigen::Vector2f centre = h.position(true);
+    const float ch = std::cos(h.yaw), sh = std::sin(h.yaw);
+    const float uc = 0.5f * (best_union.u0 + best_union.u1),
+                vc = 0.5f * (best_union.v0 + best_union.v1);
+    const float total = static_cast<float>(h.points + f.points);
+    h.centroid =
+        (h.centroid * static_cast<float>(h.points) + f.centroid * static_cast<float>(f.points)) /
+        total;
+    h.box_center = centre + Eigen::Vector2f(ch * uc - sh * vc, sh * uc + ch * vc);
+    h.length = best_union.u1 - best_union.u0;
+    h.width = best_union.v1 - best_union.v0;
+    if (h.width > h.length) {
+      std::swap(h.length, h.width);
+      h.yaw = static_cast<float>(wrap_pi(h.yaw + std::numbers::pi / 2));
+    }
+    h.height = std::max(h.height, f.height);
+    h.points += f.points;
+    host_[best] = 1;
+    if (own != nullptr) {
+      merged_track_[static_cast<std::size_t>(det_match_[fi])] = 1;
+      ++counters_.deleted_merged;
+    }
+    det_match_[fi] = kAbsorbed;
+    ++counters_.absorbed_detections;
+  }
 }
 
 void Tracker::update(std::int64_t stamp_ns, std::span<const Detection> detections,
@@ -246,7 +394,8 @@ void Tracker::update(std::int64_t stamp_ns, std::span<const Detection> detection
     const Eigen::Matrix2d sinv = sxy.inverse();
     bool any = false;
     for (std::size_t di = 0; di < nd; ++di) {
-      const Eigen::Vector2d e = detections[di].centroid.head<2>().cast<double>() - s.x.head<2>();
+      const Eigen::Vector2d e =
+          detections[di].position(config_.position_from_box).cast<double>() - s.x.head<2>();
       const double m2 = e.dot(sinv * e);
       const bool ok = m2 <= config_.gate_mahalanobis_sq && e.norm() <= config_.gate_distance_m;
       pair_cost_[ti * nd + di] = ok ? static_cast<float>(m2) : -1.0f;
@@ -280,10 +429,12 @@ void Tracker::update(std::int64_t stamp_ns, std::span<const Detection> detection
     }
   }
 
-  // 4. Update matched tracks; mark the others missed.
+  // 4. Fragments join the measurement of a matched track beside them; update matched tracks
+  //    (the others are marked missed below).
+  absorb_fragments(detections);
   for (std::size_t di = 0; di < nd; ++di) {
     if (det_match_[di] >= 0) {
-      correct(slots_[live_[static_cast<std::size_t>(det_match_[di])]], detections[di], stamp_ns);
+      correct(slots_[live_[static_cast<std::size_t>(det_match_[di])]], merged_[di], stamp_ns);
     }
   }
   // 5. Prune: misses and uncertainty (compacting the live list in place, order kept).
@@ -292,8 +443,8 @@ void Tracker::update(std::int64_t stamp_ns, std::span<const Detection> detection
     const std::uint32_t index = live_[ti];
     Slot& s = slots_[index];
     Track& t = s.track;
-    bool remove = false;
-    if (t.segment < 0) {
+    bool remove = merged_track_[ti] != 0;  // its fragment joined an older track's measurement
+    if (!remove && t.segment < 0) {
       ++t.misses;
       if (t.state == TrackState::kTentative) {
         if (t.misses > config_.tentative_max_misses) {
@@ -318,9 +469,9 @@ void Tracker::update(std::int64_t stamp_ns, std::span<const Detection> detection
     }
   }
   (void)live_.resize(kept);
-  // 6. Unmatched detections spawn tentative tracks.
+  // 6. Unmatched detections (not absorbed) spawn tentative tracks.
   for (std::size_t di = 0; di < nd; ++di) {
-    if (det_match_[di] < 0) spawn(detections[di], stamp_ns);
+    if (det_match_[di] == kUnmatched) spawn(detections[di], stamp_ns);
   }
 
   // 7. Report.

@@ -7,6 +7,7 @@
 #include <Eigen/Core>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <span>
 #include <vector>
 
@@ -19,29 +20,63 @@ namespace stac::tracking {
 // One segment of a scan, in the world frame (the caller applies the ego pose).
 struct Detection {
   Eigen::Vector3f centroid = Eigen::Vector3f::Zero();  // m
-  float length = 0, width = 0, height = 0;             // oriented box, m
-  float yaw = 0;                                       // box heading, rad (mod pi)
+  // x,y centre of the oriented box (m); NaN when the caller has none (the centroid stands in).
+  Eigen::Vector2f box_center = Eigen::Vector2f::Constant(std::numeric_limits<float>::quiet_NaN());
+  float length = 0, width = 0, height = 0;  // oriented box, m
+  float yaw = 0;                            // box heading, rad (mod pi)
   std::uint32_t points = 0;
   std::uint32_t segment = 0;  // index of the segment it came from
+
+  // The x,y position the tracker measures: the box centre (position_from_box) or the centroid.
+  [[nodiscard]] Eigen::Vector2f position(bool from_box) const noexcept {
+    return from_box && box_center.allFinite() ? box_center : centroid.head<2>();
+  }
 };
 
 struct TrackerConfig {
   std::size_t max_tracks = 512;       // track pool; spawns beyond it are counted, not made
   std::size_t max_detections = 1024;  // per scan; detections beyond it are dropped and counted
   // Kalman filter.
-  double accel_std_mps2 = 2.0;           // white-noise acceleration in x,y (m/s^2)
-  double z_velocity_std_mps = 0.5;       // z random walk (m/s)
-  double measurement_std_m = 0.25;       // centroid noise in x,y (m)
-  double measurement_z_std_m = 0.3;      // centroid noise in z (m)
+  double accel_std_mps2 = 2.0;            // white-noise acceleration in x,y (m/s^2)
+  double z_velocity_std_mps = 0.5;        // z random walk (m/s)
+  double measurement_std_m = 0.25;        // centroid noise in x,y (m)
+  double measurement_z_std_m = 0.3;       // centroid noise in z (m)
   double initial_velocity_std_mps = 6.0;  // velocity std of a new track (m/s)
   // Association: a pair is allowed when both gates pass.
   double gate_mahalanobis_sq = 9.21;  // squared Mahalanobis distance in x,y (chi^2, 2 dof, 99%)
   double gate_distance_m = 3.0;       // Euclidean x,y distance to the prediction (m)
   // Life cycle.
-  std::uint32_t confirm_hits = 3;         // hits that make a tentative track confirmed
+  std::uint32_t confirm_hits = 3;          // hits that make a tentative track confirmed
   std::uint32_t tentative_max_misses = 1;  // consecutive misses that delete a tentative track
-  std::uint32_t max_coast_scans = 20;     // consecutive misses that delete a coasting track
-  double max_position_std_m = 1.5;        // sqrt(max eigenvalue of the x,y covariance) (m)
+  std::uint32_t max_coast_scans = 20;      // consecutive misses that delete a coasting track
+  double max_position_std_m = 1.5;         // sqrt(max eigenvalue of the x,y covariance) (m)
+  // Position measured: the oriented box's centre (true) or the points' centroid (false, the
+  // thesis). The centroid of a car seen from behind sits on its rear, metres from its centre.
+  bool position_from_box = true;
+  // Fragments: a detection left unmatched joins the measurement of a track matched in this scan
+  // when their boxes are at most absorb_gap_m apart (x,y) and their union fits in
+  // absorb_max_length_m x absorb_max_width_m (one car split by the road seen under its body).
+  // A younger track matched to such a fragment is merged into the older one (deleted) when
+  // their velocities differ by at most absorb_velocity_mps or it is still tentative. People
+  // (at most absorb_keep_length_m long, at least absorb_keep_height_m tall) are never joined.
+  // absorb_gap_m 0: off.
+  double absorb_gap_m = 1.0;
+  double absorb_max_length_m = 6.0;
+  double absorb_max_width_m = 2.6;
+  double absorb_velocity_mps = 1.5;
+  double absorb_keep_length_m = 1.0;
+  double absorb_keep_height_m = 1.0;
+  // End-on vehicles (complete_end_on): a face across the ray end_on_min_width_m..max_width_m
+  // wide, at most end_on_max_depth_m deep along it and end_on_min_height_m tall is the rear or
+  // front of a vehicle whose body, unseen, extends away from the sensor: its box becomes
+  // end_on_length_m long along the ray, when it is at least end_on_min_range_m away (nearer,
+  // vehicles show their sides; bicycles seen side-on would pass). end_on_length_m 0: off.
+  double end_on_length_m = 4.5;
+  double end_on_min_range_m = 15.0;
+  double end_on_min_width_m = 1.4;
+  double end_on_max_width_m = 2.7;
+  double end_on_max_depth_m = 1.2;
+  double end_on_min_height_m = 1.0;
   // Box smoothing: weight of the new measurement in the exponential average (0..1].
   double box_smoothing = 0.3;
   // Holistic features: headings of slower smoothed velocities are not differentiated (m/s).
@@ -52,14 +87,16 @@ struct TrackerConfig {
 struct TrackerCounters {
   std::uint64_t scans = 0;
   std::uint64_t spawned = 0;
-  std::uint64_t deleted_uncertain = 0;   // position uncertainty passed max_position_std_m
-  std::uint64_t deleted_coasting = 0;    // missed more than max_coast_scans
-  std::uint64_t deleted_tentative = 0;   // tentative track missed
-  std::uint64_t pool_overflow = 0;       // detections that could not spawn: pool full
-  std::uint64_t dropped_detections = 0;  // beyond max_detections
-  std::uint64_t invalid_detections = 0;  // non-finite centroid: neither matched nor spawned
-  std::uint64_t stamp_regressions = 0;   // scan stamp not after the previous one (no predict)
-  std::uint64_t solver_failures = 0;     // assignment refused (non-finite costs): no matches
+  std::uint64_t deleted_uncertain = 0;    // position uncertainty passed max_position_std_m
+  std::uint64_t deleted_coasting = 0;     // missed more than max_coast_scans
+  std::uint64_t deleted_tentative = 0;    // tentative track missed
+  std::uint64_t pool_overflow = 0;        // detections that could not spawn: pool full
+  std::uint64_t dropped_detections = 0;   // beyond max_detections
+  std::uint64_t invalid_detections = 0;   // non-finite centroid: neither matched nor spawned
+  std::uint64_t stamp_regressions = 0;    // scan stamp not after the previous one (no predict)
+  std::uint64_t solver_failures = 0;      // assignment refused (non-finite costs): no matches
+  std::uint64_t absorbed_detections = 0;  // fragments joined to a matched track's measurement
+  std::uint64_t deleted_merged = 0;       // younger tracks of fragments merged into an older one
 };
 
 // Caller-owned result of one update: every live track (deleted ones are gone).
@@ -69,6 +106,12 @@ struct TrackerOutput {
   rt::FixedVector<Track> tracks;
   TrackerCounters counters;  // copy of the tracker's counters after this update
 };
+
+// Applies the end-on completion (TrackerConfig::end_on_*) to a detection seen from `sensor_xy`
+// (world x,y of the sensor, m): moves its box centre away from the sensor and sets its length.
+// Returns whether it did. Detections without a box centre are left alone.
+bool complete_end_on(const TrackerConfig& config, const Eigen::Vector2f& sensor_xy,
+                     Detection& d) noexcept;
 
 class Tracker {
  public:
@@ -91,20 +134,24 @@ class Tracker {
   void predict(Slot& s, double dt) const noexcept;
   void correct(Slot& s, const Detection& d, std::int64_t stamp_ns) noexcept;
   void spawn(const Detection& d, std::int64_t stamp_ns) noexcept;
+  void absorb_fragments(std::span<const Detection> detections) noexcept;
 
   TrackerConfig config_;
   TrackerCounters counters_;
-  std::vector<Slot> slots_;             // the pool
+  std::vector<Slot> slots_;              // the pool
   rt::FixedVector<std::uint32_t> live_;  // slots in use
   rt::FixedVector<std::uint32_t> free_;  // slots free
   // Association workspace, rows = gated tracks, cols = gated detections.
   AssignmentSolver solver_;
   std::vector<double> cost_;
   std::vector<int> row_to_col_;
-  std::vector<std::int32_t> det_match_;    // per detection: slot or -1
+  std::vector<std::int32_t> det_match_;     // per detection: slot or -1
   std::vector<std::uint32_t> rows_, cols_;  // compact index -> live index / detection index
   std::vector<std::int32_t> col_of_det_;
-  std::vector<float> pair_cost_;         // live x detections: squared Mahalanobis, < 0 gated out
+  std::vector<float> pair_cost_;            // live x detections: squared Mahalanobis, < 0 gated out
+  std::vector<Detection> merged_;           // per detection: its measurement, fragments joined
+  std::vector<std::uint8_t> host_;          // per detection: 1 when it absorbed a fragment
+  std::vector<std::uint8_t> merged_track_;  // per live index: merged into another, delete
   std::uint64_t next_id_ = 1;
   std::int64_t last_stamp_ns_ = 0;
   bool have_stamp_ = false;

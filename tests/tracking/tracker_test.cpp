@@ -1,3 +1,5 @@
+#include "perception/tracking/tracker.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -8,7 +10,6 @@
 #include <stdexcept>
 #include <vector>
 
-#include "perception/tracking/tracker.hpp"
 #include "rt/testing/alloc_counter.hpp"
 
 namespace stac::tracking {
@@ -48,8 +49,11 @@ TEST(Tracker, ConstantVelocityTargetsKeepStableIdsAndVelocities) {
   TrackerOutput out(tracker.config().max_tracks);
   std::mt19937 rng(7);
   std::normal_distribution<double> noise(0.0, 0.08);
-  struct Target { double x, y, vx, vy; };
-  const std::vector<Target> targets = {{0, 5, 10, 0}, {10, -8, 0, 1.5}, {-15, -15, 0, 0}, {20, 20, -6, -6}};
+  struct Target {
+    double x, y, vx, vy;
+  };
+  const std::vector<Target> targets = {
+      {0, 5, 10, 0}, {10, -8, 0, 1.5}, {-15, -15, 0, 0}, {20, 20, -6, -6}};
   std::vector<std::uint64_t> ids(targets.size(), 0);
   std::vector<Detection> dets;
   for (int k = 0; k < 60; ++k) {
@@ -57,7 +61,8 @@ TEST(Tracker, ConstantVelocityTargetsKeepStableIdsAndVelocities) {
     dets.clear();
     for (std::size_t i = 0; i < targets.size(); ++i) {
       const Target& g = targets[i];
-      dets.push_back(det(g.x + g.vx * t + noise(rng), g.y + g.vy * t + noise(rng), static_cast<std::uint32_t>(i)));
+      dets.push_back(det(g.x + g.vx * t + noise(rng), g.y + g.vy * t + noise(rng),
+                         static_cast<std::uint32_t>(i)));
     }
     tracker.update(k * kScanNs, dets, out);
     for (std::size_t i = 0; i < targets.size(); ++i) {
@@ -65,8 +70,10 @@ TEST(Tracker, ConstantVelocityTargetsKeepStableIdsAndVelocities) {
       ASSERT_NE(tr, nullptr) << "target " << i << " scan " << k;
       if (ids[i] == 0) ids[i] = tr->id;
       EXPECT_EQ(tr->id, ids[i]) << "target " << i << " changed id at scan " << k;
-      if (k >= 2) EXPECT_EQ(tr->state, TrackState::kConfirmed);
-      else EXPECT_EQ(tr->state, TrackState::kTentative);
+      if (k >= 2)
+        EXPECT_EQ(tr->state, TrackState::kConfirmed);
+      else
+        EXPECT_EQ(tr->state, TrackState::kTentative);
     }
   }
   EXPECT_EQ(out.tracks.size(), targets.size());
@@ -178,7 +185,8 @@ TEST(Tracker, TargetThatLeavesIsDeletedWhenUncertaintyPassesTheThreshold) {
   c.max_coast_scans = 1000;  // only the uncertainty can end it
   Tracker tracker(c);
   TrackerOutput out(c.max_tracks);
-  for (int k = 0; k < 20; ++k) tracker.update(k * kScanNs, std::vector<Detection>{det(k * 0.3, 0, 0)}, out);
+  for (int k = 0; k < 20; ++k)
+    tracker.update(k * kScanNs, std::vector<Detection>{det(k * 0.3, 0, 0)}, out);
   ASSERT_EQ(out.tracks.size(), 1u);
   float previous_std = out.tracks[0].position_std_m;
   int k = 20;
@@ -203,7 +211,8 @@ TEST(Tracker, CoastingTooLongDeletesTheTrack) {
   c.max_position_std_m = 100.0;
   Tracker tracker(c);
   TrackerOutput out(c.max_tracks);
-  for (int k = 0; k < 10; ++k) tracker.update(k * kScanNs, std::vector<Detection>{det(0, 0, 0)}, out);
+  for (int k = 0; k < 10; ++k)
+    tracker.update(k * kScanNs, std::vector<Detection>{det(0, 0, 0)}, out);
   for (int k = 10; k < 13; ++k) {
     tracker.update(k * kScanNs, {}, out);
     EXPECT_EQ(out.tracks.size(), 1u) << k;
@@ -234,7 +243,8 @@ TEST(Tracker, ClutterSpawnsTentativeTracksThatNeverConfirm) {
     EXPECT_LE(out.tracks.size(), 20u);
   }
   EXPECT_GE(tracker.counters().spawned, 1900u);
-  EXPECT_EQ(tracker.counters().deleted_tentative + tracker.live_tracks(), tracker.counters().spawned);
+  EXPECT_EQ(tracker.counters().deleted_tentative + tracker.live_tracks(),
+            tracker.counters().spawned);
 }
 
 TEST(Tracker, PoolOverflowIsCounted) {
@@ -288,7 +298,8 @@ TEST(Tracker, HolisticFeaturesOfATargetOnACircle) {
   TrackerOutput out(tracker.config().max_tracks);
   for (int k = 0; k < 100; ++k) {
     const double a = 0.5 * k * 0.1;
-    tracker.update(k * kScanNs, std::vector<Detection>{det(10 * std::cos(a), 10 * std::sin(a), 0)}, out);
+    tracker.update(k * kScanNs, std::vector<Detection>{det(10 * std::cos(a), 10 * std::sin(a), 0)},
+                   out);
   }
   ASSERT_EQ(out.tracks.size(), 1u);
   const HolisticFeatures& f = out.tracks[0].features;
@@ -317,6 +328,161 @@ TEST(Tracker, BoxIsSmoothedAndYawWrapsModuloPi) {
   EXPECT_NEAR(std::abs(std::remainder(yaw - 1.5 - 0.0708, 3.14159265)), 0.0, 1e-3) << yaw;
 }
 
+// A box detection: centre (x, y), size, heading; the centroid at the box centre.
+Detection box(double x, double y, double length, double width, double height, double yaw,
+              std::uint32_t segment) {
+  Detection d = det(x, y, segment);
+  d.box_center = Eigen::Vector2f(static_cast<float>(x), static_cast<float>(y));
+  d.length = static_cast<float>(length);
+  d.width = static_cast<float>(width);
+  d.height = static_cast<float>(height);
+  d.yaw = static_cast<float>(yaw);
+  return d;
+}
+
+TEST(Tracker, MeasuresTheBoxCentreOrTheCentroidAsConfigured) {
+  for (const bool from_box : {true, false}) {
+    TrackerConfig c;
+    c.position_from_box = from_box;
+    Tracker tracker(c);
+    TrackerOutput out(c.max_tracks);
+    Detection d = box(20, 5, 4.5, 1.8, 1.5, 0, 0);
+    d.centroid = Eigen::Vector3f(18.5f, 5.0f, 0.8f);  // the points sit on the near side
+    for (int k = 0; k < 5; ++k) tracker.update(k * kScanNs, std::vector<Detection>{d}, out);
+    ASSERT_EQ(out.tracks.size(), 1u);
+    EXPECT_NEAR(out.tracks[0].position.x(), from_box ? 20.0 : 18.5, 1e-3);
+    EXPECT_NEAR(out.tracks[0].position.z(), 0.8, 1e-3);
+  }
+}
+
+TEST(Tracker, FragmentBesideAMatchedTrackJoinsItsMeasurement) {
+  // One car, 4.4 m long along x, seen as a rear part and a cabin part with road between them.
+  TrackerConfig c;
+  Tracker tracker(c);
+  TrackerOutput out(c.max_tracks);
+  for (int k = 0; k < 5; ++k)
+    tracker.update(k * kScanNs, std::vector<Detection>{box(30.5, 0, 1.0, 1.8, 0.6, 0, 0)}, out);
+  ASSERT_EQ(out.tracks.size(), 1u);
+  const std::uint64_t id = out.tracks[0].id;
+  for (int k = 5; k < 10; ++k) {
+    tracker.update(k * kScanNs,
+                   std::vector<Detection>{box(30.5, 0, 1.0, 1.8, 0.6, 0, 0),
+                                          box(32.6, 0, 1.6, 1.8, 1.2, 0, 1)},
+                   out);
+  }
+  ASSERT_EQ(out.tracks.size(), 1u);  // the cabin never spawned a track
+  EXPECT_EQ(out.tracks[0].id, id);
+  EXPECT_EQ(tracker.counters().absorbed_detections, 5u);
+  EXPECT_EQ(tracker.counters().spawned, 1u);
+  // The measurement is the union 30.0..33.4 m: the filter moves towards its centre 31.7 m.
+  EXPECT_GT(out.tracks[0].position.x(), 31.2f);
+  EXPECT_GT(out.tracks[0].length, 2.0f);
+}
+
+TEST(Tracker, YoungerTrackOfAFragmentMergesIntoTheOlderOne) {
+  // Two pieces moving together at 5 m/s, 1.5 m apart (beyond the gap): two tracks. When the gap
+  // closes to 0.4 m, the younger track is merged into the older one.
+  TrackerConfig c;
+  Tracker tracker(c);
+  TrackerOutput out(c.max_tracks);
+  for (int k = 0; k < 3; ++k) {
+    tracker.update(k * kScanNs, std::vector<Detection>{box(20 + 0.5 * k, 0, 1.0, 1.8, 0.6, 0, 0)},
+                   out);
+  }
+  for (int k = 3; k < 10; ++k) {
+    const double x = 20 + 0.5 * k;
+    tracker.update(k * kScanNs,
+                   std::vector<Detection>{box(x, 0, 1.0, 1.8, 0.6, 0, 0),
+                                          box(x + 2.5, 0, 1.0, 1.8, 1.2, 0, 1)},
+                   out);
+  }
+  ASSERT_EQ(out.tracks.size(), 2u);
+  const std::uint64_t older = by_segment(out, 0)->id;
+  for (int k = 10; k < 14; ++k) {
+    const double x = 20 + 0.5 * k;
+    tracker.update(k * kScanNs,
+                   std::vector<Detection>{box(x, 0, 1.0, 1.8, 0.6, 0, 0),
+                                          box(x + 1.4, 0, 1.0, 1.8, 1.2, 0, 1)},
+                   out);
+  }
+  ASSERT_EQ(out.tracks.size(), 1u);
+  EXPECT_EQ(out.tracks[0].id, older);
+  EXPECT_EQ(tracker.counters().deleted_merged, 1u);
+}
+
+TEST(Tracker, PeopleAndWholeCarsAreNeverJoined) {
+  TrackerConfig c;
+  Tracker tracker(c);
+  TrackerOutput out(c.max_tracks);
+  for (int k = 0; k < 6; ++k) {
+    tracker.update(k * kScanNs,
+                   std::vector<Detection>{box(10, 5, 0.6, 0.5, 1.7, 0, 0),
+                                          box(10.9, 5, 0.6, 0.5, 1.75, 0, 1),  // two walkers
+                                          box(20, -5, 4.5, 1.8, 1.5, 0, 2),
+                                          box(25, -5, 4.5, 1.8, 1.5, 0, 3)},  // parked cars
+                   out);
+  }
+  EXPECT_EQ(out.tracks.size(), 4u);
+  EXPECT_EQ(tracker.counters().absorbed_detections, 0u);
+}
+
+TEST(Tracker, AbsorbingIsOffWithAZeroGap) {
+  TrackerConfig c;
+  c.absorb_gap_m = 0;
+  Tracker tracker(c);
+  TrackerOutput out(c.max_tracks);
+  for (int k = 0; k < 5; ++k)
+    tracker.update(k * kScanNs, std::vector<Detection>{box(30.5, 0, 1.0, 1.8, 0.6, 0, 0)}, out);
+  for (int k = 5; k < 10; ++k) {
+    tracker.update(k * kScanNs,
+                   std::vector<Detection>{box(30.5, 0, 1.0, 1.8, 0.6, 0, 0),
+                                          box(32.6, 0, 1.6, 1.8, 1.2, 0, 1)},
+                   out);
+  }
+  EXPECT_EQ(out.tracks.size(), 2u);
+  EXPECT_EQ(tracker.counters().absorbed_detections, 0u);
+}
+
+TEST(CompleteEndOn, AVehicleFaceAcrossTheRayBecomesAVehicleLongBoxBeyondIt) {
+  const TrackerConfig c;
+  const Eigen::Vector2f sensor(10, 10);
+  // The rear of a car 30 m ahead along +x: 1.8 m across the ray, 0.3 m deep, 1.4 m tall.
+  Detection d = box(40, 10, 1.8, 0.3, 1.4, M_PI / 2, 0);
+  ASSERT_TRUE(complete_end_on(c, sensor, d));
+  EXPECT_NEAR(d.box_center.x(), 40 + (4.5 - 0.3) / 2, 1e-4);
+  EXPECT_NEAR(d.box_center.y(), 10, 1e-4);
+  EXPECT_FLOAT_EQ(d.length, 4.5f);
+  EXPECT_FLOAT_EQ(d.width, 1.8f);
+  EXPECT_NEAR(d.yaw, 0, 1e-6);
+  // Behind the sensor (-y): the box extends further away, towards -y.
+  Detection behind = box(10, -20, 2.0, 0.5, 1.5, 0.1, 0);
+  ASSERT_TRUE(complete_end_on(c, sensor, behind));
+  EXPECT_NEAR(behind.box_center.y(), -20 - 2.0, 1e-4);
+}
+
+TEST(CompleteEndOn, LeavesSidesPeopleLowWallsNearAndUnboxedDetectionsAlone) {
+  const TrackerConfig c;
+  const Eigen::Vector2f sensor(0, 0);
+  const std::vector<Detection> untouched{
+      box(30, 0, 1.8, 0.3, 1.4, 0, 0),         // long side along the ray: a side, not a face
+      box(30, 0, 0.6, 0.4, 1.7, M_PI / 2, 0),  // a person
+      box(30, 0, 1.8, 0.3, 0.6, M_PI / 2, 0),  // too low
+      box(30, 0, 3.5, 0.3, 1.4, M_PI / 2, 0),  // too wide: a wall or a truck's side
+      box(30, 0, 1.8, 1.5, 1.4, M_PI / 2, 0),  // too deep: its length is seen
+      box(10, 0, 1.8, 0.3, 1.4, M_PI / 2, 0),  // nearer than end_on_min_range_m
+      det(30, 0, 0),                           // no box centre
+  };
+  for (Detection d : untouched) {
+    const Detection before = d;
+    EXPECT_FALSE(complete_end_on(c, sensor, d)) << before.length << " x " << before.width;
+    EXPECT_EQ(d.length, before.length);
+  }
+  TrackerConfig off;
+  off.end_on_length_m = 0;
+  Detection d = box(40, 0, 1.8, 0.3, 1.4, M_PI / 2, 0);
+  EXPECT_FALSE(complete_end_on(off, sensor, d));
+}
+
 TEST(Tracker, NoHeapAllocationPerScanAfterWarmUp) {
   Tracker tracker(TrackerConfig{});
   TrackerOutput out(tracker.config().max_tracks);
@@ -326,7 +492,8 @@ TEST(Tracker, NoHeapAllocationPerScanAfterWarmUp) {
   dets.reserve(200);
   auto scan = [&](int k) {
     dets.clear();
-    for (std::uint32_t i = 0; i < 60; ++i) dets.push_back(det(-50.0 + 2.0 * i + 0.5 * k * 0.1, 3.0 * (i % 7), i));
+    for (std::uint32_t i = 0; i < 60; ++i)
+      dets.push_back(det(-50.0 + 2.0 * i + 0.5 * k * 0.1, 3.0 * (i % 7), i));
     for (std::uint32_t i = 0; i < 40; ++i) dets.push_back(det(where(rng), where(rng), 60 + i));
     tracker.update(k * kScanNs, dets, out);
   };
@@ -344,6 +511,12 @@ TEST(Tracker, RejectsInvalidConfig) {
   EXPECT_THROW(Tracker{c}, std::invalid_argument);
   c = TrackerConfig{};
   c.box_smoothing = 0;
+  EXPECT_THROW(Tracker{c}, std::invalid_argument);
+  c = TrackerConfig{};
+  c.absorb_max_width_m = 7;  // wider than absorb_max_length_m
+  EXPECT_THROW(Tracker{c}, std::invalid_argument);
+  c = TrackerConfig{};
+  c.end_on_min_width_m = 3;  // above end_on_max_width_m
   EXPECT_THROW(Tracker{c}, std::invalid_argument);
 }
 
