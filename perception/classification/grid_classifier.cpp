@@ -46,13 +46,19 @@ std::size_t layout_dimensions(const Layout& layout) noexcept {
   return n;
 }
 
+std::uint64_t fnv1a64(std::span<const std::uint8_t> bytes, std::uint64_t state) noexcept {
+  for (const std::uint8_t b : bytes) state = (state ^ b) * 1099511628211ull;
+  return state;
+}
+
 std::uint64_t layout_hash(const Layout& layout) noexcept {
-  std::uint64_t h = 14695981039346656037ull;
-  auto mix = [&h](unsigned char b) { h = (h ^ b) * 1099511628211ull; };
+  std::uint64_t h = kFnv1a64Offset;
   for (const auto& s : layout) {
-    for (const char c : s.name) mix(static_cast<unsigned char>(c));
-    mix(0);
-    for (int i = 0; i < 4; ++i) mix(static_cast<unsigned char>(s.size >> (8 * i)));
+    h = fnv1a64({reinterpret_cast<const std::uint8_t*>(s.name.data()), s.name.size()}, h);
+    const std::uint8_t tail[5] = {
+        0, static_cast<std::uint8_t>(s.size), static_cast<std::uint8_t>(s.size >> 8),
+        static_cast<std::uint8_t>(s.size >> 16), static_cast<std::uint8_t>(s.size >> 24)};
+    h = fnv1a64(tail, h);
   }
   return h;
 }

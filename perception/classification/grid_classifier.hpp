@@ -39,6 +39,11 @@ struct LayoutSpace {
 using Layout = std::vector<LayoutSpace>;
 std::size_t layout_dimensions(const Layout& layout) noexcept;
 std::uint64_t layout_hash(const Layout& layout) noexcept;  // FNV-1a 64 of names and sizes
+
+// FNV-1a 64 of the bytes, continuing from `state` (the model format's checksum too).
+inline constexpr std::uint64_t kFnv1a64Offset = 14695981039346656037ull;
+std::uint64_t fnv1a64(std::span<const std::uint8_t> bytes,
+                      std::uint64_t state = kFnv1a64Offset) noexcept;
 Layout segment_layout();  // the 29 spaces of descriptors::spaces() (931 elements)
 
 inline constexpr std::array<std::uint32_t, 2> kDefaultResolutions = {10, 100};  // bins per grid

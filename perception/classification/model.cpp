@@ -139,12 +139,6 @@ rt::Result<GridClassifier> read_grid(Reader& r, const Layout& expected, const ch
 
 }  // namespace
 
-std::uint64_t fnv1a64(std::span<const std::uint8_t> bytes) noexcept {
-  std::uint64_t h = 14695981039346656037ull;
-  for (const std::uint8_t b : bytes) h = (h ^ b) * 1099511628211ull;
-  return h;
-}
-
 ExpectedLayouts build_layouts() {
   return {segment_layout(), holistic_layout()};
 }

@@ -38,7 +38,4 @@ inline rt::Result<TrackClassifierModel> deserialize(std::span<const std::uint8_t
   return deserialize(bytes, build_layouts());
 }
 
-// FNV-1a 64 of the bytes (the format's checksum).
-std::uint64_t fnv1a64(std::span<const std::uint8_t> bytes) noexcept;
-
 }  // namespace stac::classification

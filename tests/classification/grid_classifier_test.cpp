@@ -136,9 +136,7 @@ TEST(Layouts, SegmentLayoutIsThe29DescriptorSpacesAndHashesDiffer) {
 
 TEST(GridClassifier, ClassifyOfASegmentAllocatesNothing) {
   auto data = testing::separable(200, descriptors::kDimensions, 5);
-  auto trained = learning::train_boosting(data, segment_layout(), {.rounds = 50});
-  ASSERT_TRUE(trained.has_value()) << trained.error().message;
-  const GridClassifier& c = *trained;
+  const GridClassifier c = testing::trained(data, segment_layout(), {.rounds = 50});
   LogOdds out{};
   float sink = 0;
   ASSERT_TRUE(c.classify(data.row(0), out));  // warm-up

@@ -26,9 +26,7 @@ ExpectedLayouts small_layouts() {
 
 GridClassifier trained(const Layout& layout, std::size_t n, std::size_t rounds, unsigned seed) {
   const auto set = testing::noisy(n, layout_dimensions(layout), 0.1, seed);
-  auto c = learning::train_boosting(set, layout, {.rounds = rounds, .seed = seed});
-  EXPECT_TRUE(c.has_value()) << c.error().message;
-  return std::move(c).value();
+  return testing::trained(set, layout, {.rounds = rounds, .seed = seed});
 }
 
 TrackClassifierModel small_model() {

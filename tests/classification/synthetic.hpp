@@ -1,6 +1,8 @@
 // Synthetic labelled examples for the classification tests (deterministic for a seed).
 #pragma once
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <random>
 #include <string>
@@ -52,6 +54,17 @@ inline learning::TrainingSet noisy(std::size_t n, std::size_t dimensions, double
     set.add(x, flip(rng) ? random_class(rng) : c);
   }
   return set;
+}
+
+// train_boosting; a failure is a test failure (and an empty classifier that classifies nothing).
+inline GridClassifier trained(const learning::TrainingSet& set, const Layout& layout,
+                              const learning::BoostingConfig& config) {
+  auto c = learning::train_boosting(set, layout, config);
+  if (!c.has_value()) {
+    ADD_FAILURE() << c.error().message;
+    return {};
+  }
+  return std::move(c).value();
 }
 
 inline double accuracy(const GridClassifier& c, const learning::TrainingSet& set) {
