@@ -1,5 +1,6 @@
 #include "perception/classification/grid_classifier.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <utility>
@@ -80,6 +81,7 @@ rt::Result<GridClassifier> GridClassifier::create(GridModel model) {
       return rt::make_error("grid resolution " + std::to_string(r) + " is not in 1.." +
                             std::to_string(kMaxBins));
     c.bin_offset_.push_back(static_cast<std::uint32_t>(c.cells_per_element_));
+    c.last_bin_.push_back(static_cast<float>(r - 1));
     c.cells_per_element_ += r;
   }
   const std::size_t grids = c.dimensions_ * model.resolutions.size();
@@ -123,15 +125,24 @@ bool GridClassifier::classify(std::span<const float> x, LogOdds& out) const noex
   if (x.size() != dimensions_) return false;
   const std::size_t resolutions = model_.resolutions.size();
   const float* table = model_.table.data();
-  for (std::size_t e = 0, g = 0; e < dimensions_; ++e) {
+  const float* lower = model_.lower.data();
+  const float* scale = model_.scale.data();
+  // Same bins as bin(), without its branches; two accumulators (even and odd elements) halve
+  // the chain of dependent adds.
+  float sum[2][kClassCount] = {};
+  for (std::size_t e = 0; e < dimensions_; ++e) {
+    const float v = x[e];
+    if (std::isnan(v)) continue;  // then no t below is NaN: lower, scale are finite, scale > 0
     const float* element = table + e * cells_per_element_ * kClassCount;
-    for (std::size_t r = 0; r < resolutions; ++r, ++g) {
-      const std::uint32_t b = bin(g, x[e]);
-      if (b == model_.resolutions[r]) continue;  // NaN
-      const float* cell = element + (bin_offset_[r] + b) * kClassCount;
-      for (std::size_t k = 0; k < kClassCount; ++k) out[k] += cell[k];
+    float* acc = sum[e & 1];
+    for (std::size_t r = 0; r < resolutions; ++r) {
+      const std::size_t g = e * resolutions + r;
+      const float t = std::min(std::max((v - lower[g]) * scale[g], 0.0f), last_bin_[r]);
+      const float* cell = element + (bin_offset_[r] + static_cast<std::uint32_t>(t)) * kClassCount;
+      for (std::size_t k = 0; k < kClassCount; ++k) acc[k] += cell[k];
     }
   }
+  for (std::size_t k = 0; k < kClassCount; ++k) out[k] += sum[0][k] + sum[1][k];
   return true;
 }
 

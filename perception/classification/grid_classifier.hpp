@@ -88,6 +88,7 @@ class GridClassifier {
   std::size_t dimensions_ = 0;
   std::size_t cells_per_element_ = 0;
   std::vector<std::uint32_t> bin_offset_;  // per resolution: first cell within an element
+  std::vector<float> last_bin_;            // per resolution: bins - 1
 };
 
 }  // namespace stac::classification

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <random>
 #include <type_traits>
 
 #include "perception/classification/holistic.hpp"
@@ -79,6 +80,33 @@ TEST(GridClassifier, ClassifyAddsOneColumnPerGridToThePrior) {
   const float with_nan[2] = {std::nanf(""), 0.3f};  // element 0 adds nothing
   ASSERT_TRUE(c.classify(with_nan, out));
   EXPECT_FLOAT_EQ(out[0], 0.5f + 20 + 26);
+}
+
+TEST(GridClassifier, ClassifyEqualsTheSumOverBinOfEveryGrid) {
+  // The branch-free look-up of classify() against bin(), on a trained model and inputs that are
+  // often out of range, infinite or NaN.
+  const auto data = testing::noisy(300, 8, 0.1, 3);
+  const GridClassifier c = testing::trained(data, testing::flat_layout(8), {.rounds = 300});
+  std::mt19937 rng(4);
+  std::normal_distribution<float> g(0.0f, 4.0f);
+  std::uniform_int_distribution<int> odd(0, 9);
+  const float inf = std::numeric_limits<float>::infinity();
+  std::vector<float> x(8);
+  for (int t = 0; t < 500; ++t) {
+    for (auto& v : x) {
+      const int o = odd(rng);
+      v = o == 0 ? std::nanf("") : o == 1 ? inf : o == 2 ? -inf : g(rng);
+    }
+    LogOdds expected = c.model().prior, out{};
+    for (std::size_t grid = 0; grid < c.grid_count(); ++grid) {
+      const std::uint32_t b = c.bin(grid, x[grid / 2]);
+      if (b == c.bins(grid)) continue;
+      for (std::size_t k = 0; k < kClassCount; ++k)
+        expected[k] += c.model().table[(c.cell_offset(grid) + b) * kClassCount + k];
+    }
+    ASSERT_TRUE(c.classify(x, out));
+    for (std::size_t k = 0; k < kClassCount; ++k) EXPECT_NEAR(out[k], expected[k], 1e-4f);
+  }
 }
 
 TEST(GridClassifier, WrongInputSizeIsRefusedWithThePrior) {
