@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <string>
 #include <utility>
 
@@ -10,17 +9,6 @@ namespace stac::learning {
 namespace {
 
 using classification::GridModel;
-
-// splitmix64: portable, so a seed gives the same model with any standard library.
-std::uint64_t next(std::uint64_t& state) noexcept {
-  std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  return z ^ (z >> 31);
-}
-double uniform(std::uint64_t& state) noexcept {
-  return static_cast<double>(next(state) >> 11) * 0x1.0p-53;
-}
 
 double sign(ObjectClass label, std::size_t k) noexcept {
   return static_cast<std::size_t>(label) == k ? 1.0 : -1.0;
@@ -138,11 +126,11 @@ void BoostingTrainer::round() {
   bool have = false;
   for (std::size_t j = 0; j < config_.candidates_per_round; ++j) {
     // An example drawn in proportion to its weight, a grid drawn uniformly: the example's cell.
-    const double u = uniform(rng_) * total;
+    const double u = rng_.uniform() * total;
     const auto it = std::upper_bound(cumulative_.begin(), cumulative_.end(), u);
     const std::size_t i = std::min<std::size_t>(it - cumulative_.begin(), n - 1);
     Candidate c;
-    c.grid = static_cast<std::size_t>(next(rng_) % grids);
+    c.grid = static_cast<std::size_t>(rng_.next() % grids);
     c.bin = bins_[c.grid * n + i];
     if (c.bin >= classifier_.bins(c.grid)) continue;  // NaN element: no cell
     std::array<CellStats, kClassCount> stats{};

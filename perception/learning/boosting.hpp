@@ -10,6 +10,7 @@
 
 #include "perception/classification/grid_classifier.hpp"
 #include "rt/expected.hpp"
+#include "rt/splitmix64.hpp"
 
 namespace stac::learning {
 
@@ -74,7 +75,7 @@ class BoostingTrainer {
   std::vector<std::uint16_t> bins_;  // [grid][example]
   std::vector<double> weights_;      // [example][class]
   std::vector<double> cumulative_;   // per example, for sampling
-  std::uint64_t rng_;
+  rt::SplitMix64 rng_;
   std::size_t rounds_ = 0;
 };
 

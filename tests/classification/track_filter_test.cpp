@@ -1,6 +1,6 @@
 // Discrete Bayes filters on hand-computed numbers, logistic regression recovering known
 // coefficients, the fitted ADBF against the naive and normalized filters on tracks whose segment
-// evidence is noisy and correlated, the holistic descriptor, and allocation-free updates.
+// evidence is noisy and correlated, and allocation-free updates.
 #include "perception/classification/track_filter.hpp"
 
 #include <gtest/gtest.h>
@@ -8,7 +8,6 @@
 #include <cmath>
 #include <random>
 
-#include "perception/classification/holistic.hpp"
 #include "perception/learning/logistic.hpp"
 #include "rt/testing/alloc_counter.hpp"
 
@@ -164,27 +163,6 @@ TEST(TrackEvidence, UpdatesAndFiltersAllocateNothing) {
   counter.stop();
   EXPECT_EQ(counter.allocations(), 0u);
   EXPECT_TRUE(std::isfinite(sink));
-}
-
-TEST(HolisticDescriptor, MotionStatisticsAndBoxOfATrack) {
-  tracking::Track track;
-  track.length = 4.5f;
-  track.width = 1.8f;
-  track.height = 1.5f;
-  for (int i = 0; i < 20; ++i)  // 2 m/s along x at 10 Hz
-    track.features.add_segment(Eigen::Vector3f(0.2f * float(i), 0.0f, 0.0f),
-                               std::int64_t{i} * 100'000'000, 0.5);
-  HolisticDescriptor d{};
-  holistic_descriptor(track, d);
-  EXPECT_NEAR(d[0], 2.0f, 1e-3f);  // max speed
-  EXPECT_NEAR(d[1], 2.0f, 1e-3f);  // mean speed
-  EXPECT_NEAR(d[2], 0.0f, 1e-2f);  // max accel
-  EXPECT_NEAR(d[3], 0.0f, 1e-2f);  // mean accel
-  EXPECT_NEAR(d[4], 0.0f, 1e-3f);  // max angular velocity
-  EXPECT_EQ(d[5], 20.0f);
-  EXPECT_EQ(d[6], 4.5f);
-  EXPECT_EQ(d[7], 1.8f);
-  EXPECT_EQ(d[8], 1.5f);
 }
 
 }  // namespace
