@@ -28,6 +28,20 @@ void TrainingSet::add(std::span<const float> x, ObjectClass label) {
   labels.push_back(label);
 }
 
+const char* validate(const BoostingConfig& config) noexcept {
+  if (config.candidates_per_round == 0) return "candidates_per_round must be at least 1";
+  if (config.resolutions.empty()) return "resolutions must name at least one grid";
+  for (const auto bins : config.resolutions)
+    if (bins == 0 || bins > 65535) return "every resolution must be 1..65535 bins";
+  if (!(config.range_percentile >= 0.0 && config.range_percentile < 0.5))
+    return "range_percentile must be in [0, 0.5)";
+  if (!(config.range_widen >= 0.0 && config.range_widen <= 1.0))
+    return "range_widen must be in [0, 1]";
+  if (!(config.max_response > 0.0f && config.max_response < 1e6f))
+    return "max_response must be positive";
+  return "";
+}
+
 float newton_response(const CellStats& s, float max_response) noexcept {
   const double denominator = s.positive + s.negative;
   if (!(denominator > 0.0)) return 0.0f;
@@ -47,8 +61,8 @@ rt::Result<GridClassifier> initial_classifier(const TrainingSet& data,
   if (classification::layout_dimensions(layout) != d || data.features.size() != n * d)
     return rt::make_error("training set has " + std::to_string(d) + " dimensions, the layout " +
                           std::to_string(classification::layout_dimensions(layout)));
-  if (!(config.range_percentile >= 0.0 && config.range_percentile < 0.5))
-    return rt::make_error("range_percentile must be in [0, 0.5)");
+  if (const char* bad = validate(config); *bad != '\0')
+    return rt::make_error(std::string("boosting configuration: ") + bad);
   GridModel m;
   m.layout = layout;
   m.resolutions = config.resolutions;

@@ -42,6 +42,9 @@ struct BoostingConfig {
   std::uint64_t seed = 1;          // same seed, same data, same model
 };
 
+// Empty when the configuration is usable, else what is wrong.
+const char* validate(const BoostingConfig& config) noexcept;
+
 // Statistics of one cell for one class: boosting weight of positives and of negatives in it.
 struct CellStats {
   double positive = 0, negative = 0;
@@ -53,7 +56,8 @@ float newton_response(const CellStats& s, float max_response) noexcept;
 double loss_after(const CellStats& s, float c) noexcept;
 
 // A classifier with data-derived grids, prior log odds L0 = log((n_pos+1)/(n_neg+1)) per class
-// and an all-zero table. Fails on an empty set or a layout whose size is not `dimensions`.
+// and an all-zero table. Fails on an empty set, a layout whose size is not `dimensions` or a
+// configuration validate() refuses.
 rt::Result<GridClassifier> initial_classifier(const TrainingSet& data,
                                               const classification::Layout& layout,
                                               const BoostingConfig& config);

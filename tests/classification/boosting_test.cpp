@@ -172,13 +172,22 @@ TEST(Boosting, OneWeakClassifierCarriesAResponseForEveryClass) {
   }
 }
 
-TEST(Boosting, RefusesEmptyOrMismatchedTrainingSets) {
+TEST(Boosting, RefusesEmptyOrMismatchedTrainingSetsAndBadConfigurations) {
   TrainingSet empty{3, {}, {}};
   EXPECT_FALSE(train_boosting(empty, flat_layout(3), {}).has_value());
   const auto set = classification::testing::separable(10, 3, 1);
   auto c = train_boosting(set, flat_layout(4), {});
   ASSERT_FALSE(c.has_value());
   EXPECT_NE(c.error().message.find("dimensions"), std::string::npos);
+  BoostingConfig bad;
+  bad.resolutions = {10, 0};
+  c = train_boosting(set, flat_layout(3), bad);
+  ASSERT_FALSE(c.has_value());
+  EXPECT_NE(c.error().message.find("resolution"), std::string::npos) << c.error().message;
+  bad = BoostingConfig{};
+  bad.candidates_per_round = 0;
+  EXPECT_FALSE(train_boosting(set, flat_layout(3), bad).has_value());
+  EXPECT_STREQ(validate(BoostingConfig{}), "");
 }
 
 }  // namespace
