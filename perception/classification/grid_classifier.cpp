@@ -10,7 +10,10 @@
 namespace stac::classification {
 namespace {
 
+// Limits that keep every size product far from overflow (a model from a corrupt file).
 constexpr std::uint32_t kMaxBins = 65535;
+constexpr std::size_t kMaxDimensions = std::size_t{1} << 24;
+constexpr std::size_t kMaxResolutions = 16;
 
 bool all_finite(std::span<const float> v) noexcept {
   for (const float x : v)
@@ -75,7 +78,12 @@ rt::Result<GridClassifier> GridClassifier::create(GridModel model) {
   GridClassifier c;
   c.dimensions_ = layout_dimensions(model.layout);
   if (c.dimensions_ == 0) return rt::make_error("classifier layout has no element");
-  if (model.resolutions.empty()) return rt::make_error("classifier has no grid resolution");
+  if (c.dimensions_ > kMaxDimensions)
+    return rt::make_error("classifier layout has " + std::to_string(c.dimensions_) +
+                          " elements, more than " + std::to_string(kMaxDimensions));
+  if (model.resolutions.empty() || model.resolutions.size() > kMaxResolutions)
+    return rt::make_error("classifier has " + std::to_string(model.resolutions.size()) +
+                          " grid resolutions, not 1.." + std::to_string(kMaxResolutions));
   for (const auto r : model.resolutions) {
     if (r == 0 || r > kMaxBins)
       return rt::make_error("grid resolution " + std::to_string(r) + " is not in 1.." +

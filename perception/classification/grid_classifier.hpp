@@ -62,7 +62,8 @@ class GridClassifier {
  public:
   GridClassifier() = default;
   // Fails (message says what) when sizes disagree, a scale is not finite and positive, a
-  // resolution is 0 or over 65535, or a number is not finite.
+  // resolution is 0 or over 65535, there are more than 16 resolutions or 2^24 elements, or a
+  // number is not finite.
   static rt::Result<GridClassifier> create(GridModel model);
 
   // out = prior + sum over grids of the table column of the bin x[e] falls in. Values below the

@@ -65,6 +65,7 @@ rt::Result<GridClassifier> initial_classifier(const TrainingSet& data,
 class BoostingTrainer {
  public:
   // Precomputes every example's bin in every grid; weights w = exp(-y*H/2) per (example, class).
+  // `data` must outlive the trainer (it is read, not copied).
   BoostingTrainer(const TrainingSet& data, GridClassifier initial, const BoostingConfig& config);
   void run(std::size_t rounds);
   [[nodiscard]] double loss() const noexcept;  // sum of w over examples and classes

@@ -139,6 +139,12 @@ TEST(GridClassifier, CreateRefusesInconsistentModels) {
   m = good;
   m.layout.clear();
   expect_refused(m, "empty layout");
+  m = good;
+  m.layout = {{"huge", 0xFFFFFFFFu}, {"huge2", 0xFFFFFFFFu}};
+  expect_refused(m, "layout too large for its products to be safe");
+  m = good;
+  m.resolutions.assign(17, 1);
+  expect_refused(m, "too many resolutions");
   EXPECT_TRUE(GridClassifier::create(good).has_value());
 }
 
