@@ -139,6 +139,21 @@ rt::Result<GridClassifier> read_grid(Reader& r, const Layout& expected, const ch
 
 }  // namespace
 
+bool add_segment(const TrackClassifierModel& model, std::span<const float> segment,
+                 TrackEvidence& evidence, LogOdds& out) noexcept {
+  if (!model.segment.classify(segment, out)) return false;
+  evidence.add_segment(out, model.segment.model().prior);
+  return true;
+}
+
+bool track_log_odds(const TrackClassifierModel& model, const TrackEvidence& evidence,
+                    std::span<const float> holistic, LogOdds& out) noexcept {
+  LogOdds hh{};
+  const bool ok = model.holistic.classify(holistic, hh);  // hh = L0_H when not ok
+  out = augmented_dbf(evidence, model.holistic.model().prior, hh, model.adbf);
+  return ok;
+}
+
 ExpectedLayouts build_layouts() {
   return {segment_layout(), holistic_layout()};
 }

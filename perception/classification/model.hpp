@@ -21,6 +21,15 @@ struct TrackClassifierModel {
   AdbfParams adbf;
 };
 
+// The per-scan use of a model (noexcept, no allocation). One segment of a track: its log odds
+// H_S into `out`, and the track's evidence updated; false (evidence unchanged) on a wrong size.
+[[nodiscard]] bool add_segment(const TrackClassifierModel& model, std::span<const float> segment,
+                               TrackEvidence& evidence, LogOdds& out) noexcept;
+// A track's log odds by the augmented filter from its evidence and holistic descriptor; false
+// (out = the filter without holistic evidence) on a wrong size.
+[[nodiscard]] bool track_log_odds(const TrackClassifierModel& model, const TrackEvidence& evidence,
+                                  std::span<const float> holistic, LogOdds& out) noexcept;
+
 inline constexpr std::uint32_t kModelFormatVersion = 1;
 inline constexpr char kModelMagic[8] = {'S', 'T', 'A', 'C', 'C', 'L', 'S', '\0'};
 
