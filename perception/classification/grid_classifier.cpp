@@ -1,0 +1,157 @@
+#include "perception/classification/grid_classifier.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <utility>
+
+#include "perception/descriptors/descriptors.hpp"
+
+namespace stac::classification {
+namespace {
+
+// Limits that keep every size product far from overflow (a model from a corrupt file).
+constexpr std::uint32_t kMaxBins = 65535;
+constexpr std::size_t kMaxDimensions = std::size_t{1} << 24;
+constexpr std::size_t kMaxResolutions = 16;
+
+bool all_finite(std::span<const float> v) noexcept {
+  for (const float x : v)
+    if (!std::isfinite(x)) return false;
+  return true;
+}
+
+}  // namespace
+
+const char* class_name(ObjectClass c) noexcept {
+  switch (c) {
+    case ObjectClass::kCar:
+      return "car";
+    case ObjectClass::kPedestrian:
+      return "pedestrian";
+    case ObjectClass::kBicyclist:
+      return "bicyclist";
+    case ObjectClass::kBackground:
+      return "background";
+  }
+  return "unknown";
+}
+
+ObjectClass predict(const LogOdds& log_odds) noexcept {
+  std::size_t best = 0;
+  for (std::size_t k = 1; k < kClassCount; ++k)
+    if (log_odds[k] > log_odds[best]) best = k;
+  return log_odds[best] < 0.0f ? ObjectClass::kBackground : static_cast<ObjectClass>(best);
+}
+
+std::size_t layout_dimensions(const Layout& layout) noexcept {
+  std::size_t n = 0;
+  for (const auto& s : layout) n += s.size;
+  return n;
+}
+
+std::uint64_t fnv1a64(std::span<const std::uint8_t> bytes, std::uint64_t state) noexcept {
+  for (const std::uint8_t b : bytes) state = (state ^ b) * 1099511628211ull;
+  return state;
+}
+
+std::uint64_t layout_hash(const Layout& layout) noexcept {
+  std::uint64_t h = kFnv1a64Offset;
+  for (const auto& s : layout) {
+    h = fnv1a64({reinterpret_cast<const std::uint8_t*>(s.name.data()), s.name.size()}, h);
+    const std::uint8_t tail[5] = {
+        0, static_cast<std::uint8_t>(s.size), static_cast<std::uint8_t>(s.size >> 8),
+        static_cast<std::uint8_t>(s.size >> 16), static_cast<std::uint8_t>(s.size >> 24)};
+    h = fnv1a64(tail, h);
+  }
+  return h;
+}
+
+Layout segment_layout() {
+  Layout layout;
+  for (const auto& s : descriptors::spaces())
+    layout.push_back({std::string(s.name), static_cast<std::uint32_t>(s.size)});
+  return layout;
+}
+
+rt::Result<GridClassifier> GridClassifier::create(GridModel model) {
+  GridClassifier c;
+  c.dimensions_ = layout_dimensions(model.layout);
+  if (c.dimensions_ == 0) return rt::make_error("classifier layout has no element");
+  if (c.dimensions_ > kMaxDimensions)
+    return rt::make_error("classifier layout has " + std::to_string(c.dimensions_) +
+                          " elements, more than " + std::to_string(kMaxDimensions));
+  if (model.resolutions.empty() || model.resolutions.size() > kMaxResolutions)
+    return rt::make_error("classifier has " + std::to_string(model.resolutions.size()) +
+                          " grid resolutions, not 1.." + std::to_string(kMaxResolutions));
+  for (const auto r : model.resolutions) {
+    if (r == 0 || r > kMaxBins)
+      return rt::make_error("grid resolution " + std::to_string(r) + " is not in 1.." +
+                            std::to_string(kMaxBins));
+    c.bin_offset_.push_back(static_cast<std::uint32_t>(c.cells_per_element_));
+    c.last_bin_.push_back(static_cast<float>(r - 1));
+    c.cells_per_element_ += r;
+  }
+  const std::size_t grids = c.dimensions_ * model.resolutions.size();
+  if (model.lower.size() != grids || model.scale.size() != grids)
+    return rt::make_error("classifier has " + std::to_string(model.lower.size()) + " lower and " +
+                          std::to_string(model.scale.size()) + " scale values for " +
+                          std::to_string(grids) + " grids");
+  const std::size_t table = c.dimensions_ * c.cells_per_element_ * kClassCount;
+  if (model.table.size() != table)
+    return rt::make_error("classifier table has " + std::to_string(model.table.size()) +
+                          " responses, its grids need " + std::to_string(table));
+  if (!all_finite(model.prior) || !all_finite(model.lower) || !all_finite(model.table))
+    return rt::make_error("classifier holds a value that is not finite");
+  for (const float s : model.scale)
+    if (!(std::isfinite(s) && s > 0.0f))
+      return rt::make_error("classifier grid scale " + std::to_string(s) + " is not positive");
+  c.model_ = std::move(model);
+  return c;
+}
+
+std::size_t GridClassifier::cell_offset(std::size_t grid) const noexcept {
+  const std::size_t r = model_.resolutions.size();
+  return (grid / r) * cells_per_element_ + bin_offset_[grid % r];
+}
+
+std::uint32_t GridClassifier::bins(std::size_t grid) const noexcept {
+  return model_.resolutions[grid % model_.resolutions.size()];
+}
+
+std::uint32_t GridClassifier::bin(std::size_t grid, float value) const noexcept {
+  const std::uint32_t n = bins(grid);
+  const float t = (value - model_.lower[grid]) * model_.scale[grid];
+  if (std::isnan(t)) return n;
+  if (!(t > 0.0f)) return 0;
+  if (t >= static_cast<float>(n)) return n - 1;
+  return static_cast<std::uint32_t>(t);
+}
+
+bool GridClassifier::classify(std::span<const float> x, LogOdds& out) const noexcept {
+  out = model_.prior;
+  if (x.size() != dimensions_) return false;
+  const std::size_t resolutions = model_.resolutions.size();
+  const float* table = model_.table.data();
+  const float* lower = model_.lower.data();
+  const float* scale = model_.scale.data();
+  // Same bins as bin(), without its branches; two accumulators (even and odd elements) halve
+  // the chain of dependent adds.
+  float sum[2][kClassCount] = {};
+  for (std::size_t e = 0; e < dimensions_; ++e) {
+    const float v = x[e];
+    if (std::isnan(v)) continue;  // then no t below is NaN: lower, scale are finite, scale > 0
+    const float* element = table + e * cells_per_element_ * kClassCount;
+    float* acc = sum[e & 1];
+    for (std::size_t r = 0; r < resolutions; ++r) {
+      const std::size_t g = e * resolutions + r;
+      const float t = std::min(std::max((v - lower[g]) * scale[g], 0.0f), last_bin_[r]);
+      const float* cell = element + (bin_offset_[r] + static_cast<std::uint32_t>(t)) * kClassCount;
+      for (std::size_t k = 0; k < kClassCount; ++k) acc[k] += cell[k];
+    }
+  }
+  for (std::size_t k = 0; k < kClassCount; ++k) out[k] += sum[0][k] + sum[1][k];
+  return true;
+}
+
+}  // namespace stac::classification

@@ -1,0 +1,95 @@
+// Parametric (binned) boosting classifier of thesis ch. 2 (docs/classification.md): every
+// descriptor element has one 1-D grid per resolution (10 and 100 bins); a weak classifier is one
+// bin with a response per class, responses of the same bin add, so the model is a dense table and
+// classify() costs one bin look-up and one K-float column add per grid, however long training ran.
+// Outputs are log odds per foreground class (1-vs-all against background).
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "rt/expected.hpp"
+
+namespace stac::classification {
+
+enum class ObjectClass : std::uint8_t {
+  kCar = 0,
+  kPedestrian = 1,
+  kBicyclist = 2,
+  kBackground = 3
+};
+inline constexpr std::size_t kClassCount = 3;    // foreground classes; background = all negative
+const char* class_name(ObjectClass c) noexcept;  // "car", "pedestrian", "bicyclist", "background"
+
+using LogOdds = std::array<float, kClassCount>;  // log P(class | x) / P(not class | x)
+
+// The class with the largest log odds, background when every log odds is negative (thesis ch. 1).
+ObjectClass predict(const LogOdds& log_odds) noexcept;
+
+// A named run of descriptor elements; a model records the layout it was trained for.
+struct LayoutSpace {
+  std::string name;
+  std::uint32_t size = 0;
+  bool operator==(const LayoutSpace&) const = default;
+};
+using Layout = std::vector<LayoutSpace>;
+std::size_t layout_dimensions(const Layout& layout) noexcept;
+std::uint64_t layout_hash(const Layout& layout) noexcept;  // FNV-1a 64 of names and sizes
+
+// FNV-1a 64 of the bytes, continuing from `state` (the model format's checksum too).
+inline constexpr std::uint64_t kFnv1a64Offset = 14695981039346656037ull;
+std::uint64_t fnv1a64(std::span<const std::uint8_t> bytes,
+                      std::uint64_t state = kFnv1a64Offset) noexcept;
+Layout segment_layout();  // the 29 spaces of descriptors::spaces() (931 elements)
+
+inline constexpr std::array<std::uint32_t, 2> kDefaultResolutions = {10, 100};  // bins per grid
+
+// Everything a classifier is made of; create() checks it (start-up, model loading).
+struct GridModel {
+  Layout layout;
+  std::vector<std::uint32_t> resolutions;  // bins of each grid of an element, e.g. {10, 100}
+  LogOdds prior{};                         // L0: log prior odds per class, the table's offset
+  std::vector<float> lower;                // per grid: value at the lower edge of bin 0
+  std::vector<float> scale;                // per grid: bins per unit of value (> 0)
+  std::vector<float> table;                // cell_count() * kClassCount responses
+};
+
+class GridClassifier {
+ public:
+  GridClassifier() = default;
+  // Fails (message says what) when sizes disagree, a scale is not finite and positive, a
+  // resolution is 0 or over 65535, there are more than 16 resolutions or 2^24 elements, or a
+  // number is not finite.
+  static rt::Result<GridClassifier> create(GridModel model);
+
+  // out = prior + sum over grids of the table column of the bin x[e] falls in. Values below the
+  // range fall in bin 0, above it in the last bin; NaN elements add nothing. False (and out =
+  // prior) when x.size() != dimensions(). No allocation, exception or I/O.
+  [[nodiscard]] bool classify(std::span<const float> x, LogOdds& out) const noexcept;
+
+  // Grid g = element * resolutions.size() + r; its cells are [cell_offset(g), + resolutions[r]),
+  // cell c's responses are table[c * kClassCount + k].
+  [[nodiscard]] std::size_t dimensions() const noexcept { return dimensions_; }
+  [[nodiscard]] std::size_t grid_count() const noexcept { return model_.lower.size(); }
+  [[nodiscard]] std::size_t cell_count() const noexcept { return cells_per_element_ * dimensions_; }
+  [[nodiscard]] std::size_t cell_offset(std::size_t grid) const noexcept;
+  [[nodiscard]] std::uint32_t bins(std::size_t grid) const noexcept;
+  // The bin of `value` in grid g, clamped to the edge bins; bins(g) (no bin) for NaN.
+  [[nodiscard]] std::uint32_t bin(std::size_t grid, float value) const noexcept;
+  [[nodiscard]] const GridModel& model() const noexcept { return model_; }
+  [[nodiscard]] std::span<float> table() noexcept { return model_.table; }  // training only
+  void set_prior(const LogOdds& prior) noexcept { model_.prior = prior; }
+
+ private:
+  GridModel model_;
+  std::size_t dimensions_ = 0;
+  std::size_t cells_per_element_ = 0;
+  std::vector<std::uint32_t> bin_offset_;  // per resolution: first cell within an element
+  std::vector<float> last_bin_;            // per resolution: bins - 1
+};
+
+}  // namespace stac::classification

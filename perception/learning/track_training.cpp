@@ -1,0 +1,68 @@
+#include "perception/learning/track_training.hpp"
+
+#include <string>
+#include <utility>
+
+#include "rt/splitmix64.hpp"
+
+namespace stac::learning {
+
+rt::Result<classification::TrackClassifierModel> train_track_classifier(
+    std::span<const TrackExample> tracks, const classification::ExpectedLayouts& layouts,
+    const TrackTrainingConfig& config) {
+  const std::size_t seg_dims = classification::layout_dimensions(layouts.segment);
+  const std::size_t hol_dims = classification::layout_dimensions(layouts.holistic);
+  if (!(config.held_out_fraction > 0.0 && config.held_out_fraction < 1.0))
+    return rt::make_error("held_out_fraction must be in (0, 1)");
+
+  // Split by track (a track's segments are never on both sides).
+  rt::SplitMix64 rng(config.split_seed);
+  std::vector<const TrackExample*> held_out;
+  TrainingSet segments{seg_dims, {}, {}}, holistic{hol_dims, {}, {}};
+  for (std::size_t m = 0; m < tracks.size(); ++m) {
+    const TrackExample& t = tracks[m];
+    if (t.segments.empty() || t.segments.size() % seg_dims != 0 || t.holistic.size() != hol_dims)
+      return rt::make_error("track " + std::to_string(m) + " has " +
+                            std::to_string(t.segments.size()) + " segment values and " +
+                            std::to_string(t.holistic.size()) +
+                            " holistic values; the layouts need a positive multiple of " +
+                            std::to_string(seg_dims) + " and " + std::to_string(hol_dims));
+    if (rng.uniform() < config.held_out_fraction) {
+      held_out.push_back(&t);
+      continue;
+    }
+    for (std::size_t i = 0; i < t.segments.size(); i += seg_dims)
+      segments.add(std::span(t.segments).subspan(i, seg_dims), t.label);
+    holistic.add(t.holistic, t.label);
+  }
+  if (held_out.empty() || holistic.size() == 0)
+    return rt::make_error("the split left no training or no held-out track (" +
+                          std::to_string(tracks.size()) + " tracks)");
+
+  classification::TrackClassifierModel model;
+  auto seg = train_boosting(segments, layouts.segment, config.segment);
+  if (!seg) return rt::make_error("segment classifier: " + seg.error().message);
+  auto hol = train_boosting(holistic, layouts.holistic, config.holistic);
+  if (!hol) return rt::make_error("holistic classifier: " + hol.error().message);
+  model.segment = std::move(seg).value();
+  model.holistic = std::move(hol).value();
+
+  std::vector<TrackSample> samples;
+  for (const TrackExample* t : held_out) {
+    TrackSample s;
+    s.label = t->label;
+    classification::TrackEvidence evidence;
+    classification::LogOdds h{};
+    for (std::size_t i = 0; i < t->segments.size(); i += seg_dims)
+      (void)add_segment(model, std::span(t->segments).subspan(i, seg_dims), evidence, h);
+    s.segment_mean = evidence.segment_mean();
+    (void)model.holistic.classify(t->holistic, s.holistic);
+    samples.push_back(s);
+  }
+  auto adbf = fit_adbf(samples, model.holistic.model().prior, config.filter);
+  if (!adbf) return rt::make_error("filter: " + adbf.error().message);
+  model.adbf = *adbf;
+  return model;
+}
+
+}  // namespace stac::learning

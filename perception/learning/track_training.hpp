@@ -1,0 +1,37 @@
+// Training a whole track classifier (what `stac train` runs, without the files): the segment and
+// holistic boosting classifiers on one part of the labelled tracks, then the augmented discrete
+// Bayes filter's parameters on the held-out rest (thesis ch. 1).
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "perception/classification/model.hpp"
+#include "perception/learning/boosting.hpp"
+#include "perception/learning/logistic.hpp"
+
+namespace stac::learning {
+
+// One labelled track: its segments' descriptors (row-major, segment layout) and its holistic
+// descriptor (holistic layout; NaN where absent).
+struct TrackExample {
+  ObjectClass label = ObjectClass::kBackground;
+  std::vector<float> segments;
+  std::vector<float> holistic;
+};
+
+struct TrackTrainingConfig {
+  BoostingConfig segment;
+  BoostingConfig holistic;
+  LogisticConfig filter;
+  double held_out_fraction = 0.3;  // tracks kept for the filter fit, drawn with split_seed
+  std::uint64_t split_seed = 1;
+};
+
+// Fails with a message on an empty split, descriptors of the wrong size, or a failed fit.
+rt::Result<classification::TrackClassifierModel> train_track_classifier(
+    std::span<const TrackExample> tracks, const classification::ExpectedLayouts& layouts,
+    const TrackTrainingConfig& config);
+
+}  // namespace stac::learning

@@ -1,0 +1,188 @@
+// The binned classifier's table arithmetic: bin edges, out-of-range and NaN values, the column
+// sums, model validation, and no allocation in classify().
+#include "perception/classification/grid_classifier.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <random>
+#include <type_traits>
+
+#include "perception/classification/holistic.hpp"
+#include "perception/descriptors/descriptors.hpp"
+#include "rt/testing/alloc_counter.hpp"
+#include "synthetic.hpp"
+
+namespace stac::classification {
+namespace {
+
+static_assert(noexcept(std::declval<const GridClassifier&>().classify(
+    std::declval<std::span<const float>>(), std::declval<LogOdds&>())));
+static_assert(noexcept(predict(std::declval<const LogOdds&>())));
+
+// Two elements, grids of 10 and 4 bins over [0, 10) (element 0) and [-1, 1) (element 1); cell c
+// of the table holds responses (c, 10c, 100c).
+GridClassifier two_element_classifier() {
+  GridModel m;
+  m.layout = {{"a", 1}, {"b", 1}};
+  m.resolutions = {10, 4};
+  m.prior = {0.5f, -1.0f, -2.0f};
+  m.lower = {0.0f, 0.0f, -1.0f, -1.0f};
+  m.scale = {1.0f, 0.4f, 5.0f, 2.0f};
+  for (int c = 0; c < 28; ++c)
+    m.table.insert(m.table.end(), {float(c), 10.0f * float(c), 100.0f * float(c)});
+  auto c = GridClassifier::create(std::move(m));
+  EXPECT_TRUE(c.has_value()) << c.error().message;
+  return std::move(c).value();
+}
+
+TEST(GridClassifier, BinEdgesAndOutOfRangeValuesFallInEdgeBins) {
+  const GridClassifier c = two_element_classifier();
+  const float inf = std::numeric_limits<float>::infinity();
+  EXPECT_EQ(c.bin(0, 0.0f), 0u);
+  EXPECT_EQ(c.bin(0, 0.999f), 0u);
+  EXPECT_EQ(c.bin(0, 1.0f), 1u);
+  EXPECT_EQ(c.bin(0, 9.999f), 9u);
+  EXPECT_EQ(c.bin(0, 10.0f), 9u);  // upper edge of the range: last bin
+  EXPECT_EQ(c.bin(0, 1e9f), 9u);
+  EXPECT_EQ(c.bin(0, -5.0f), 0u);
+  EXPECT_EQ(c.bin(0, -inf), 0u);
+  EXPECT_EQ(c.bin(0, inf), 9u);
+  EXPECT_EQ(c.bin(0, std::nanf("")), 10u);  // no bin
+  EXPECT_EQ(c.bin(1, 2.4f), 0u);            // 4 bins of 2.5 over [0, 10)
+  EXPECT_EQ(c.bin(1, 2.6f), 1u);
+  EXPECT_EQ(c.bin(3, -0.51f), 0u);  // 4 bins of 0.5 over [-1, 1)
+  EXPECT_EQ(c.bin(3, 0.49f), 2u);
+}
+
+TEST(GridClassifier, TableLayoutIsElementMajorThenResolutionThenBin) {
+  const GridClassifier c = two_element_classifier();
+  EXPECT_EQ(c.grid_count(), 4u);
+  EXPECT_EQ(c.cell_count(), 28u);
+  EXPECT_EQ(c.cell_offset(0), 0u);
+  EXPECT_EQ(c.cell_offset(1), 10u);
+  EXPECT_EQ(c.cell_offset(2), 14u);
+  EXPECT_EQ(c.cell_offset(3), 24u);
+}
+
+TEST(GridClassifier, ClassifyAddsOneColumnPerGridToThePrior) {
+  const GridClassifier c = two_element_classifier();
+  const float x[2] = {3.5f, 0.3f};  // cells 3, 10 + 1, 14 + 6, 24 + 2
+  LogOdds out{};
+  ASSERT_TRUE(c.classify(x, out));
+  const float cells = 3 + 11 + 20 + 26;
+  EXPECT_FLOAT_EQ(out[0], 0.5f + cells);
+  EXPECT_FLOAT_EQ(out[1], -1.0f + 10 * cells);
+  EXPECT_FLOAT_EQ(out[2], -2.0f + 100 * cells);
+
+  const float with_nan[2] = {std::nanf(""), 0.3f};  // element 0 adds nothing
+  ASSERT_TRUE(c.classify(with_nan, out));
+  EXPECT_FLOAT_EQ(out[0], 0.5f + 20 + 26);
+}
+
+TEST(GridClassifier, ClassifyEqualsTheSumOverBinOfEveryGrid) {
+  // The branch-free look-up of classify() against bin(), on a trained model and inputs that are
+  // often out of range, infinite or NaN.
+  const auto data = testing::noisy(300, 8, 0.1, 3);
+  const GridClassifier c = testing::trained(data, testing::flat_layout(8), {.rounds = 300});
+  std::mt19937 rng(4);
+  std::normal_distribution<float> g(0.0f, 4.0f);
+  std::uniform_int_distribution<int> odd(0, 9);
+  const float inf = std::numeric_limits<float>::infinity();
+  std::vector<float> x(8);
+  for (int t = 0; t < 500; ++t) {
+    for (auto& v : x) {
+      const int o = odd(rng);
+      v = o == 0 ? std::nanf("") : o == 1 ? inf : o == 2 ? -inf : g(rng);
+    }
+    LogOdds expected = c.model().prior, out{};
+    for (std::size_t grid = 0; grid < c.grid_count(); ++grid) {
+      const std::uint32_t b = c.bin(grid, x[grid / 2]);
+      if (b == c.bins(grid)) continue;
+      for (std::size_t k = 0; k < kClassCount; ++k)
+        expected[k] += c.model().table[(c.cell_offset(grid) + b) * kClassCount + k];
+    }
+    ASSERT_TRUE(c.classify(x, out));
+    for (std::size_t k = 0; k < kClassCount; ++k) EXPECT_NEAR(out[k], expected[k], 1e-4f);
+  }
+}
+
+TEST(GridClassifier, WrongInputSizeIsRefusedWithThePrior) {
+  const GridClassifier c = two_element_classifier();
+  const float x[3] = {1, 2, 3};
+  LogOdds out{};
+  EXPECT_FALSE(c.classify(x, out));
+  EXPECT_EQ(out, c.model().prior);
+}
+
+TEST(GridClassifier, CreateRefusesInconsistentModels) {
+  GridModel good = two_element_classifier().model();
+  auto expect_refused = [](GridModel m, const char* what) {
+    auto c = GridClassifier::create(std::move(m));
+    ASSERT_FALSE(c.has_value()) << what;
+    EXPECT_FALSE(c.error().message.empty());
+  };
+  GridModel m = good;
+  m.table.pop_back();
+  expect_refused(m, "short table");
+  m = good;
+  m.scale[2] = 0.0f;
+  expect_refused(m, "zero scale");
+  m = good;
+  m.lower[0] = std::nanf("");
+  expect_refused(m, "NaN lower");
+  m = good;
+  m.resolutions = {10, 0};
+  expect_refused(m, "zero bins");
+  m = good;
+  m.layout.clear();
+  expect_refused(m, "empty layout");
+  m = good;
+  m.layout = {{"huge", 0xFFFFFFFFu}, {"huge2", 0xFFFFFFFFu}};
+  expect_refused(m, "layout too large for its products to be safe");
+  m = good;
+  m.resolutions.assign(17, 1);
+  expect_refused(m, "too many resolutions");
+  EXPECT_TRUE(GridClassifier::create(good).has_value());
+}
+
+TEST(Predict, LargestLogOddsOrBackgroundWhenAllNegative) {
+  EXPECT_EQ(predict({-0.1f, 2.0f, 1.0f}), ObjectClass::kPedestrian);
+  EXPECT_EQ(predict({3.0f, 2.0f, 1.0f}), ObjectClass::kCar);
+  EXPECT_EQ(predict({-3.0f, -0.5f, 0.25f}), ObjectClass::kBicyclist);
+  EXPECT_EQ(predict({-3.0f, -0.5f, -0.25f}), ObjectClass::kBackground);
+}
+
+TEST(Layouts, SegmentLayoutIsThe29DescriptorSpacesAndHashesDiffer) {
+  const Layout seg = segment_layout();
+  ASSERT_EQ(seg.size(), descriptors::kSpaceCount);
+  EXPECT_EQ(layout_dimensions(seg), descriptors::kDimensions);
+  EXPECT_EQ(layout_dimensions(holistic_layout()), kHolisticDimensions);
+  Layout renamed = seg;
+  renamed[5].name += "_v2";
+  EXPECT_NE(layout_hash(seg), layout_hash(renamed));
+  Layout resized = seg;
+  resized[0].size += 1;
+  EXPECT_NE(layout_hash(seg), layout_hash(resized));
+}
+
+TEST(GridClassifier, ClassifyOfASegmentAllocatesNothing) {
+  auto data = testing::separable(200, descriptors::kDimensions, 5);
+  const GridClassifier c = testing::trained(data, segment_layout(), {.rounds = 50});
+  LogOdds out{};
+  float sink = 0;
+  ASSERT_TRUE(c.classify(data.row(0), out));  // warm-up
+  rt::testing::AllocationCounter counter;
+  for (std::size_t i = 0; i < data.size(); ++i) {
+    (void)c.classify(data.row(i), out);
+    sink += out[0];
+  }
+  counter.stop();
+  EXPECT_EQ(counter.allocations(), 0u);
+  EXPECT_TRUE(std::isfinite(sink));
+}
+
+}  // namespace
+}  // namespace stac::classification
