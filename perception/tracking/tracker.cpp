@@ -47,16 +47,30 @@ struct Extent {
   float u0, u1, v0, v1;
 };
 
-Extent extent_in(const Detection& d, const Eigen::Vector2f& centre, float h) {
+// The extent of the box (box_centre, length x width at yaw) about `centre` along heading h.
+Extent extent_in(const Eigen::Vector2f& box_centre, float length, float width, float yaw,
+                 const Eigen::Vector2f& centre, float h) {
   const float ch = std::cos(h), sh = std::sin(h);
-  const float cy = std::cos(d.yaw), sy = std::sin(d.yaw);
-  const Eigen::Vector2f c = d.position(true) - centre;
+  const float cy = std::cos(yaw), sy = std::sin(yaw);
+  const Eigen::Vector2f c = box_centre - centre;
   const float uc = ch * c.x() + sh * c.y(), vc = -sh * c.x() + ch * c.y();
   // Half-extents of the rotated box along u and v.
-  const float a = 0.5f * d.length, b = 0.5f * d.width;
+  const float a = 0.5f * length, b = 0.5f * width;
   const float du = std::abs(a * (ch * cy + sh * sy)) + std::abs(b * (-ch * sy + sh * cy));
   const float dv = std::abs(a * (-sh * cy + ch * sy)) + std::abs(b * (sh * sy + ch * cy));
   return {uc - du, uc + du, vc - dv, vc + dv};
+}
+
+Extent extent_in(const Detection& d, const Eigen::Vector2f& centre, float h) {
+  return extent_in(d.position(true), d.length, d.width, d.yaw, centre, h);
+}
+
+// People and bicyclists: never joined to other objects (TrackerConfig::absorb_keep_*).
+bool narrow_and_tall(const TrackerConfig& c, float length, float width, float height) {
+  const float wide = std::min(length, width);
+  return std::max(length, width) <= c.absorb_keep_length_m &&
+         ((wide <= c.absorb_keep_width_m && height >= c.absorb_keep_height_m) ||
+          (wide <= c.absorb_keep_wide_m && height >= c.absorb_keep_wide_height_m));
 }
 
 void check(bool ok, const char* what) {
@@ -148,6 +162,7 @@ struct Tracker::Slot {
   Track track;
   State x = State::Zero();
   Cov p = Cov::Identity();
+  std::int32_t measured = -1;  // index in merged_ of the measurement of this scan, -1: none
 };
 
 Tracker::Tracker(const TrackerConfig& c)
@@ -174,8 +189,13 @@ Tracker::Tracker(const TrackerConfig& c)
             c.end_on_max_depth_m >= 0 && c.end_on_min_height_m >= 0,
         "end_on_length_m >= 0, end_on_min_width_m <= end_on_max_width_m, depth and height >= 0 "
         "required");
-  check(c.absorb_velocity_mps >= 0 && c.absorb_keep_length_m >= 0 && c.absorb_keep_height_m >= 0,
-        "absorb_velocity_mps, absorb_keep_length_m and absorb_keep_height_m must be >= 0");
+  check(c.absorb_narrow_gap_m >= 0, "absorb_narrow_gap_m must be >= 0");
+  check(c.absorb_keep_wide_m >= 0 && c.absorb_keep_wide_height_m >= 0,
+        "absorb_keep_wide_m and absorb_keep_wide_height_m must be >= 0");
+  check(c.overlap_margin_m <= 5, "overlap_margin_m must be at most 5 (< 0: off)");
+  check(c.absorb_velocity_mps >= 0 && c.absorb_keep_length_m >= 0 && c.absorb_keep_width_m >= 0 &&
+            c.absorb_keep_height_m >= 0,
+        "absorb_velocity_mps and absorb_keep_length_m, _width_m, _height_m must be >= 0");
   slots_.resize(c.max_tracks);
   for (std::size_t i = c.max_tracks; i-- > 0;) (void)free_.push_back(static_cast<std::uint32_t>(i));
   cost_.assign(c.max_tracks * c.max_detections, 0.0);
@@ -240,16 +260,16 @@ void Tracker::correct(Slot& s, const Detection& d, std::int64_t stamp_ns) noexce
                          config_.min_heading_speed_mps);
 }
 
-void Tracker::spawn(const Detection& d, std::int64_t stamp_ns) noexcept {
+bool Tracker::spawn(const Detection& d, std::int64_t stamp_ns) noexcept {
   const Eigen::Vector2f xy = d.position(config_.position_from_box);
   if (!d.centroid.allFinite() ||
       !xy.allFinite()) {  // never gated either: NaN fails every comparison
     ++counters_.invalid_detections;
-    return;
+    return false;
   }
   if (free_.empty()) {
     ++counters_.pool_overflow;
-    return;
+    return false;
   }
   const std::uint32_t index = free_.back();
   free_.pop_back();
@@ -275,6 +295,7 @@ void Tracker::spawn(const Detection& d, std::int64_t stamp_ns) noexcept {
   t.features.add_segment(Eigen::Vector3f(xy.x(), xy.y(), d.centroid.z()), stamp_ns,
                          config_.min_heading_speed_mps);
   ++counters_.spawned;
+  return true;
 }
 
 void Tracker::absorb_fragments(std::span<const Detection> detections) noexcept {
@@ -289,8 +310,7 @@ void Tracker::absorb_fragments(std::span<const Detection> detections) noexcept {
   const auto max_wid = static_cast<float>(config_.absorb_max_width_m);
   const auto max_gap = static_cast<float>(config_.absorb_gap_m);
   const auto person = [&](const Detection& d) {
-    return std::max(d.length, d.width) <= config_.absorb_keep_length_m &&
-           d.height >= config_.absorb_keep_height_m;
+    return narrow_and_tall(config_, d.length, d.width, d.height);
   };
   for (std::size_t fi = 0; fi < nd; ++fi) {
     const Detection& f = detections[fi];
@@ -305,9 +325,14 @@ void Tracker::absorb_fragments(std::span<const Detection> detections) noexcept {
     std::size_t best = nd;
     float best_gap = max_gap;
     Extent best_union{};
+    float best_heading = 0, best_area = 0;
     for (std::size_t hi = 0; hi < nd; ++hi) {
-      if (hi == fi || det_match_[hi] < 0 || person(merged_[hi])) continue;
-      if (own != nullptr) {
+      if (hi == fi || det_match_[hi] < 0) continue;
+      // A person or bicyclist takes only low pieces (legs, a wheel), whatever their tracks' ages,
+      // and stays narrow.
+      const bool narrow_host = person(merged_[hi]);
+      if (narrow_host && f.height >= config_.absorb_keep_height_m) continue;
+      if (own != nullptr && !narrow_host) {
         const Slot& host = slots_[live_[static_cast<std::size_t>(det_match_[hi])]];
         if (host.track.hits < own->track.hits ||
             (host.track.hits == own->track.hits && host.track.id > own->track.id))
@@ -317,23 +342,30 @@ void Tracker::absorb_fragments(std::span<const Detection> detections) noexcept {
           continue;
         }
       }
+      // The union in the host's heading or the fragment's, whichever fits tighter (a piece's
+      // principal axis may be diagonal to the car).
       const Detection& h = merged_[hi];
       const Eigen::Vector2f centre = h.position(true);
-      const Extent a = extent_in(h, centre, h.yaw), b = extent_in(f, centre, h.yaw);
-      const float gu = std::max(0.0f, std::max(a.u0, b.u0) - std::min(a.u1, b.u1));
-      const float gv = std::max(0.0f, std::max(a.v0, b.v0) - std::min(a.v1, b.v1));
-      const float gap = std::hypot(gu, gv);
-      if (!(gap <= best_gap)) continue;
-      const Extent u{std::min(a.u0, b.u0), std::max(a.u1, b.u1), std::min(a.v0, b.v0),
-                     std::max(a.v1, b.v1)};
-      const float lu = u.u1 - u.u0, lv = u.v1 - u.v0;
-      if (std::max(lu, lv) > max_len || std::min(lu, lv) > max_wid) continue;
-      best = hi, best_gap = gap, best_union = u;
+      for (const float heading : {h.yaw, f.yaw}) {
+        const Extent a = extent_in(h, centre, heading), b = extent_in(f, centre, heading);
+        const float gu = std::max(0.0f, std::max(a.u0, b.u0) - std::min(a.u1, b.u1));
+        const float gv = std::max(0.0f, std::max(a.v0, b.v0) - std::min(a.v1, b.v1));
+        const float gap = std::hypot(gu, gv);
+        if (!(gap <= best_gap) || (narrow_host && gap > config_.absorb_narrow_gap_m)) continue;
+        const Extent u{std::min(a.u0, b.u0), std::max(a.u1, b.u1), std::min(a.v0, b.v0),
+                       std::max(a.v1, b.v1)};
+        const float lu = u.u1 - u.u0, lv = u.v1 - u.v0;
+        if (std::max(lu, lv) > max_len || std::min(lu, lv) > max_wid) continue;
+        if (narrow_host && !narrow_and_tall(config_, lu, lv, merged_[hi].height)) continue;
+        if (best == hi && lu * lv >= best_area) continue;
+        best = hi, best_gap = gap, best_union = u, best_heading = heading, best_area = lu * lv;
+      }
     }
     if (best == nd) continue;
     Detection& h = merged_[best];
     const Eigen::Vector2f centre = h.position(true);
-    const float ch = std::cos(h.yaw), sh = std::sin(h.yaw);
+    const float ch = std::cos(best_heading), sh = std::sin(best_heading);
+    h.yaw = best_heading;
     const float uc = 0.5f * (best_union.u0 + best_union.u1),
                 vc = 0.5f * (best_union.v0 + best_union.v1);
     const float total = static_cast<float>(h.points + f.points);
@@ -359,6 +391,64 @@ void Tracker::absorb_fragments(std::span<const Detection> detections) noexcept {
   }
 }
 
+void Tracker::merge_overlapping(std::int64_t stamp_ns) noexcept {
+  if (config_.overlap_margin_m < 0) return;
+  const auto margin = static_cast<float>(config_.overlap_margin_m);
+  const auto person = [&](const Track& t) {
+    return narrow_and_tall(config_, t.length, t.width, t.height);
+  };
+  const auto older = [](const Track& a, const Track& b) {
+    return a.hits > b.hits || (a.hits == b.hits && a.id < b.id);
+  };
+  const auto fits = [&](const Track& t) {
+    return std::max(t.length, t.width) <= config_.absorb_max_length_m &&
+           std::min(t.length, t.width) <= config_.absorb_max_width_m;
+  };
+  const std::size_t n = live_.size();
+  std::fill_n(merged_track_.begin(), n, std::uint8_t{0});
+  for (std::size_t i = 0; i < n; ++i) {
+    if (merged_track_[i] != 0) continue;
+    Slot& a = slots_[live_[i]];
+    const bool narrow = person(a.track);  // takes only low tracks (legs) into its box
+    for (std::size_t j = 0; j < n; ++j) {
+      if (j == i || merged_track_[j] != 0) continue;
+      const Slot& b = slots_[live_[j]];
+      if (person(b.track) ||
+          (narrow ? b.track.height >= config_.absorb_keep_height_m : !older(a.track, b.track))) {
+        continue;
+      }
+      const float ca = std::cos(a.track.yaw), sa = std::sin(a.track.yaw);
+      const float dx = static_cast<float>(b.x(0) - a.x(0)),
+                  dy = static_cast<float>(b.x(1) - a.x(1));
+      const float grow = narrow ? static_cast<float>(config_.absorb_narrow_gap_m) : margin;
+      if (std::abs(ca * dx + sa * dy) > 0.5f * a.track.length + grow ||
+          std::abs(-sa * dx + ca * dy) > 0.5f * a.track.width + grow) {
+        continue;
+      }
+      // Both fit what one fragmented object's box may (a hedge, a wall or a canopy beside a parked
+      // car does not).
+      if (!narrow && (!fits(a.track) || !fits(b.track))) continue;
+      // b is the same object as the older a: a keeps its id (and its velocity); if only b was
+      // measured in this scan, b's measurement corrects a.
+      if (a.track.segment < 0 && b.measured >= 0) {
+        correct(a, merged_[static_cast<std::size_t>(b.measured)], stamp_ns);
+        a.measured = b.measured;
+      }
+      merged_track_[j] = 1;
+      ++counters_.deleted_overlap;
+    }
+  }
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (merged_track_[i] != 0) {
+      (void)free_.push_back(live_[i]);
+    } else {
+      live_[kept++] = live_[i];
+    }
+  }
+  (void)live_.resize(kept);
+}
+
 void Tracker::update(std::int64_t stamp_ns, std::span<const Detection> detections,
                      TrackerOutput& out) noexcept {
   ++counters_.scans;
@@ -376,6 +466,7 @@ void Tracker::update(std::int64_t stamp_ns, std::span<const Detection> detection
   have_stamp_ = true;
   for (const std::uint32_t i : live_) {
     predict(slots_[i], dt);
+    slots_[i].measured = -1;
     Track& t = slots_[i].track;
     t.segment = -1;
     if (dt > 0) ++t.age;
@@ -434,7 +525,9 @@ void Tracker::update(std::int64_t stamp_ns, std::span<const Detection> detection
   absorb_fragments(detections);
   for (std::size_t di = 0; di < nd; ++di) {
     if (det_match_[di] >= 0) {
-      correct(slots_[live_[static_cast<std::size_t>(det_match_[di])]], merged_[di], stamp_ns);
+      Slot& slot = slots_[live_[static_cast<std::size_t>(det_match_[di])]];
+      correct(slot, merged_[di], stamp_ns);
+      slot.measured = static_cast<std::int32_t>(di);
     }
   }
   // 5. Prune: misses and uncertainty (compacting the live list in place, order kept).
@@ -471,10 +564,15 @@ void Tracker::update(std::int64_t stamp_ns, std::span<const Detection> detection
   (void)live_.resize(kept);
   // 6. Unmatched detections (not absorbed) spawn tentative tracks.
   for (std::size_t di = 0; di < nd; ++di) {
-    if (det_match_[di] == kUnmatched) spawn(detections[di], stamp_ns);
+    if (det_match_[di] == kUnmatched && spawn(detections[di], stamp_ns)) {
+      slots_[live_.back()].measured = static_cast<std::int32_t>(di);
+    }
   }
 
-  // 7. Report.
+  // 7. Tracks inside an older track's box are merged into it.
+  merge_overlapping(stamp_ns);
+
+  // 8. Report.
   out.stamp_ns = stamp_ns;
   out.tracks.clear();
   for (const std::uint32_t i : live_) {

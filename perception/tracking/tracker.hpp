@@ -57,15 +57,29 @@ struct TrackerConfig {
   // when their boxes are at most absorb_gap_m apart (x,y) and their union fits in
   // absorb_max_length_m x absorb_max_width_m (one car split by the road seen under its body).
   // A younger track matched to such a fragment is merged into the older one (deleted) when
-  // their velocities differ by at most absorb_velocity_mps or it is still tentative. People
-  // (at most absorb_keep_length_m long, at least absorb_keep_height_m tall) are never joined.
-  // absorb_gap_m 0: off.
-  double absorb_gap_m = 1.0;
+  // their velocities differ by at most absorb_velocity_mps or it is still tentative. People and
+  // bicyclists (at most absorb_keep_length_m long, and absorb_keep_width_m wide and at least
+  // absorb_keep_height_m tall, or absorb_keep_wide_m wide and at least absorb_keep_wide_height_m
+  // tall: people pushing a bike, taller than a sedan's pieces) are never joined to another object;
+  // they take only low pieces (under absorb_keep_height_m: legs, a wheel) at most
+  // absorb_narrow_gap_m away and stay within those bounds. absorb_gap_m 0: off.
+  double absorb_gap_m = 2.0;
   double absorb_max_length_m = 6.0;
   double absorb_max_width_m = 2.6;
   double absorb_velocity_mps = 1.5;
-  double absorb_keep_length_m = 1.0;
+  double absorb_keep_length_m = 2.2;
+  double absorb_keep_width_m = 1.0;
   double absorb_keep_height_m = 1.0;
+  double absorb_narrow_gap_m = 0.3;
+  double absorb_keep_wide_m = 1.4;
+  double absorb_keep_wide_height_m = 1.6;
+  // Overlapping tracks: a track whose position lies inside an older track's box grown by
+  // overlap_margin_m (neither a person nor a bicyclist, as above, who take only low tracks
+  // within absorb_narrow_gap_m) is the same object when both boxes fit in
+  // absorb_max_length_m x absorb_max_width_m: it is merged into the older one,
+  // which keeps its id and, when only the younger was updated in this
+  // scan, is corrected with the younger's measurement. overlap_margin_m < 0: off.
+  double overlap_margin_m = 1.0;
   // End-on vehicles (complete_end_on): a face across the ray end_on_min_width_m..max_width_m
   // wide, at most end_on_max_depth_m deep along it and end_on_min_height_m tall is the rear or
   // front of a vehicle whose body, unseen, extends away from the sensor: its box becomes
@@ -73,10 +87,10 @@ struct TrackerConfig {
   // vehicles show their sides; bicycles seen side-on would pass). end_on_length_m 0: off.
   double end_on_length_m = 4.5;
   double end_on_min_range_m = 15.0;
-  double end_on_min_width_m = 1.4;
+  double end_on_min_width_m = 1.2;
   double end_on_max_width_m = 2.7;
-  double end_on_max_depth_m = 1.2;
-  double end_on_min_height_m = 1.0;
+  double end_on_max_depth_m = 1.6;
+  double end_on_min_height_m = 0.0;
   // Box smoothing: weight of the new measurement in the exponential average (0..1].
   double box_smoothing = 0.3;
   // Holistic features: headings of slower smoothed velocities are not differentiated (m/s).
@@ -97,6 +111,7 @@ struct TrackerCounters {
   std::uint64_t solver_failures = 0;      // assignment refused (non-finite costs): no matches
   std::uint64_t absorbed_detections = 0;  // fragments joined to a matched track's measurement
   std::uint64_t deleted_merged = 0;       // younger tracks of fragments merged into an older one
+  std::uint64_t deleted_overlap = 0;      // younger tracks inside an older track's box
 };
 
 // Caller-owned result of one update: every live track (deleted ones are gone).
@@ -133,8 +148,9 @@ class Tracker {
   struct Slot;
   void predict(Slot& s, double dt) const noexcept;
   void correct(Slot& s, const Detection& d, std::int64_t stamp_ns) noexcept;
-  void spawn(const Detection& d, std::int64_t stamp_ns) noexcept;
+  bool spawn(const Detection& d, std::int64_t stamp_ns) noexcept;  // false: not spawned (counted)
   void absorb_fragments(std::span<const Detection> detections) noexcept;
+  void merge_overlapping(std::int64_t stamp_ns) noexcept;
 
   TrackerConfig config_;
   TrackerCounters counters_;

@@ -19,12 +19,14 @@ static_assert(noexcept(std::declval<Tracker&>().update(0, {}, std::declval<Track
 
 constexpr std::int64_t kScanNs = 100'000'000;  // 10 Hz
 
+// A walker-sized detection (point targets of the filter and assignment tests: people may walk
+// 1 m apart, cars may not).
 Detection det(double x, double y, std::uint32_t segment, double z = 0.8) {
   Detection d;
   d.centroid = Eigen::Vector3f(static_cast<float>(x), static_cast<float>(y), static_cast<float>(z));
-  d.length = 4.0f;
-  d.width = 1.8f;
-  d.height = 1.5f;
+  d.length = 0.6f;
+  d.width = 0.5f;
+  d.height = 1.7f;
   d.points = 100;
   d.segment = segment;
   return d;
@@ -317,6 +319,7 @@ TEST(Tracker, BoxIsSmoothedAndYawWrapsModuloPi) {
   Tracker tracker(c);
   TrackerOutput out(c.max_tracks);
   Detection d = det(0, 0, 0);
+  d.length = 4.0f;
   d.yaw = 1.5f;
   tracker.update(0, std::vector<Detection>{d}, out);
   d.yaw = -1.5f;  // the same box heading flipped by pi, about 0.14 rad away
@@ -380,8 +383,8 @@ TEST(Tracker, FragmentBesideAMatchedTrackJoinsItsMeasurement) {
 }
 
 TEST(Tracker, YoungerTrackOfAFragmentMergesIntoTheOlderOne) {
-  // Two pieces moving together at 5 m/s, 1.5 m apart (beyond the gap): two tracks. When the gap
-  // closes to 0.4 m, the younger track is merged into the older one.
+  // Two pieces moving together at 5 m/s, 2.5 m apart (gap beyond 2 m): two tracks. As the gap
+  // closes below absorb_gap_m, the younger track is merged into the older one.
   TrackerConfig c;
   Tracker tracker(c);
   TrackerOutput out(c.max_tracks);
@@ -393,21 +396,21 @@ TEST(Tracker, YoungerTrackOfAFragmentMergesIntoTheOlderOne) {
     const double x = 20 + 0.5 * k;
     tracker.update(k * kScanNs,
                    std::vector<Detection>{box(x, 0, 1.0, 1.8, 0.6, 0, 0),
-                                          box(x + 2.5, 0, 1.0, 1.8, 1.2, 0, 1)},
+                                          box(x + 3.6, 0, 1.2, 1.8, 1.2, 0, 1)},
                    out);
   }
   ASSERT_EQ(out.tracks.size(), 2u);
   const std::uint64_t older = by_segment(out, 0)->id;
-  for (int k = 10; k < 14; ++k) {
+  for (int k = 10; k < 30; ++k) {  // the gap closes by 0.05 m a scan (0.5 m/s), to 1.5 m
     const double x = 20 + 0.5 * k;
     tracker.update(k * kScanNs,
                    std::vector<Detection>{box(x, 0, 1.0, 1.8, 0.6, 0, 0),
-                                          box(x + 1.4, 0, 1.0, 1.8, 1.2, 0, 1)},
+                                          box(x + 3.6 - 0.05 * (k - 9), 0, 1.2, 1.8, 1.2, 0, 1)},
                    out);
   }
   ASSERT_EQ(out.tracks.size(), 1u);
   EXPECT_EQ(out.tracks[0].id, older);
-  EXPECT_EQ(tracker.counters().deleted_merged, 1u);
+  EXPECT_GE(tracker.counters().deleted_merged, 1u);  // the first; a tentative may follow it
 }
 
 TEST(Tracker, PeopleAndWholeCarsAreNeverJoined) {
@@ -466,9 +469,9 @@ TEST(CompleteEndOn, LeavesSidesPeopleLowWallsNearAndUnboxedDetectionsAlone) {
   const std::vector<Detection> untouched{
       box(30, 0, 1.8, 0.3, 1.4, 0, 0),         // long side along the ray: a side, not a face
       box(30, 0, 0.6, 0.4, 1.7, M_PI / 2, 0),  // a person
-      box(30, 0, 1.8, 0.3, 0.6, M_PI / 2, 0),  // too low
+      box(30, 0, 1.1, 0.3, 0.6, M_PI / 2, 0),  // too narrow: a person or a post
       box(30, 0, 3.5, 0.3, 1.4, M_PI / 2, 0),  // too wide: a wall or a truck's side
-      box(30, 0, 1.8, 1.5, 1.4, M_PI / 2, 0),  // too deep: its length is seen
+      box(30, 0, 1.8, 1.7, 1.4, M_PI / 2, 0),  // too deep: its length is seen
       box(10, 0, 1.8, 0.3, 1.4, M_PI / 2, 0),  // nearer than end_on_min_range_m
       det(30, 0, 0),                           // no box centre
   };
@@ -481,6 +484,82 @@ TEST(CompleteEndOn, LeavesSidesPeopleLowWallsNearAndUnboxedDetectionsAlone) {
   off.end_on_length_m = 0;
   Detection d = box(40, 0, 1.8, 0.3, 1.4, M_PI / 2, 0);
   EXPECT_FALSE(complete_end_on(off, sensor, d));
+}
+
+TEST(CompleteEndOn, ALowBumperFarAwayIsCompletedToo) {
+  // Beyond 40 m a car may show only its bumper (0.3 m tall) or one ring on its roof (0 m).
+  const TrackerConfig c;
+  for (const double height : {0.3, 0.0}) {
+    Detection d = box(45, 0, 1.7, 0.1, height, M_PI / 2, 0);
+    ASSERT_TRUE(complete_end_on(c, Eigen::Vector2f(0, 0), d)) << height;
+    EXPECT_NEAR(d.box_center.x(), 45 + (4.5 - 0.1) / 2, 1e-4);
+  }
+}
+
+TEST(Tracker, NewTrackInsideAnOlderTracksBoxMergesIntoItAndTheOldIdLivesOn) {
+  // A car tracked for 10 scans is lost for 3; it comes back 1.2 m off its prediction, beyond the
+  // Mahalanobis gate of a coasting track with little velocity uncertainty left? No: a detection
+  // outside the gate spawns a track; inside the old box it is merged into the old id at once.
+  TrackerConfig c;
+  c.gate_distance_m = 1.0;  // make the return fall outside the gate
+  Tracker tracker(c);
+  TrackerOutput out(c.max_tracks);
+  for (int k = 0; k < 10; ++k)
+    tracker.update(k * kScanNs, std::vector<Detection>{box(30, 5, 4.5, 1.8, 1.5, 0, 0)}, out);
+  ASSERT_EQ(out.tracks.size(), 1u);
+  const std::uint64_t id = out.tracks[0].id;
+  for (int k = 10; k < 13; ++k) tracker.update(k * kScanNs, std::vector<Detection>{}, out);
+  tracker.update(13 * kScanNs, std::vector<Detection>{box(31.2, 5, 4.5, 1.8, 1.5, 0, 7)}, out);
+  ASSERT_EQ(out.tracks.size(), 1u);
+  EXPECT_EQ(out.tracks[0].id, id);
+  EXPECT_EQ(out.tracks[0].state, TrackState::kConfirmed);
+  EXPECT_EQ(out.tracks[0].segment, 7);
+  EXPECT_GT(out.tracks[0].position.x(), 30.6f);  // corrected towards the new measurement
+  EXPECT_EQ(tracker.counters().deleted_overlap, 1u);
+  // Off: the return keeps a track of its own.
+  c.overlap_margin_m = -1;
+  Tracker off(c);
+  for (int k = 0; k < 10; ++k)
+    off.update(k * kScanNs, std::vector<Detection>{box(30, 5, 4.5, 1.8, 1.5, 0, 0)}, out);
+  for (int k = 10; k < 13; ++k) off.update(k * kScanNs, std::vector<Detection>{}, out);
+  off.update(13 * kScanNs, std::vector<Detection>{box(31.2, 5, 4.5, 1.8, 1.5, 0, 7)}, out);
+  EXPECT_EQ(out.tracks.size(), 2u);
+}
+
+TEST(Tracker, ABicyclistPassingAParkedCarKeepsItsOwnTrack) {
+  // Bicycle lane 1.6 m from parked cars (the simulator's street): the bicyclist is narrow and
+  // tall, so it is neither absorbed into the car nor merged with the car's track.
+  TrackerConfig c;
+  Tracker tracker(c);
+  TrackerOutput out(c.max_tracks);
+  for (int k = 0; k < 30; ++k) {
+    const double x = 10 + 0.5 * k;  // 5 m/s past a car at x = 20
+    tracker.update(
+        k * kScanNs,
+        std::vector<Detection>{box(20, 8.2, 4.6, 2.0, 1.5, 0, 0), box(x, 6.6, 1.7, 0.5, 1.6, 0, 1)},
+        out);
+    ASSERT_TRUE(by_segment(out, 1) != nullptr) << "scan " << k;
+  }
+  EXPECT_EQ(out.tracks.size(), 2u);
+  EXPECT_EQ(tracker.counters().spawned, 2u);
+}
+
+TEST(Tracker, APersonTakesItsLegsButNotItsNeighbour) {
+  TrackerConfig c;
+  Tracker tracker(c);
+  TrackerOutput out(c.max_tracks);
+  for (int k = 0; k < 6; ++k) {
+    tracker.update(
+        k * kScanNs,
+        std::vector<Detection>{box(20, 5, 0.5, 0.35, 1.5, 0, 0),     // upper body
+                               box(20.1, 5, 0.6, 0.05, 0.6, 0, 1),   // its legs, 0.1 m off
+                               box(21.0, 5, 0.5, 0.35, 1.6, 0, 2),   // the next walker
+                               box(22.0, 5, 0.6, 0.05, 0.6, 0, 3)},  // legs 0.45 m from them
+        out);
+  }
+  EXPECT_EQ(out.tracks.size(), 3u);  // walker 1 (with legs), walker 2, the far legs
+  EXPECT_TRUE(by_segment(out, 0) != nullptr && by_segment(out, 2) != nullptr);
+  EXPECT_TRUE(by_segment(out, 1) == nullptr);
 }
 
 TEST(Tracker, NoHeapAllocationPerScanAfterWarmUp) {
