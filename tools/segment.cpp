@@ -131,7 +131,8 @@ int report(const SegmentOptions& o, const segmentation::SegmenterConfig& config,
                "  points     %llu in: ground %llu, obstacle %llu (in segments %zu), above %llu,\n"
                "             below ground %llu, out of range %llu, invalid %llu\n"
                "  cells      %llu occupied, %llu obstacle\n"
-               "  segments   %zu of %llu clusters; dropped: too small %llu, too large %llu\n"
+               "  segments   %zu of %llu clusters (%llu more parts split off),\n"
+               "             dropped: too small %llu, too large %llu\n"
                "  overflow   points %llu, cells %llu, segments %llu\n"
                "  time       %.2f ms wall, %.2f ms CPU (one thread, after a warm-up scan)\n",
                what.c_str(), static_cast<unsigned long long>(k.points_in),
@@ -144,6 +145,7 @@ int report(const SegmentOptions& o, const segmentation::SegmenterConfig& config,
                static_cast<unsigned long long>(k.occupied_cells),
                static_cast<unsigned long long>(k.obstacle_cells), out.segments.size(),
                static_cast<unsigned long long>(k.clusters),
+               static_cast<unsigned long long>(k.split_segments),
                static_cast<unsigned long long>(k.dropped_too_small),
                static_cast<unsigned long long>(k.dropped_too_large),
                static_cast<unsigned long long>(k.ignored_over_capacity),

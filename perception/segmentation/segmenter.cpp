@@ -13,6 +13,23 @@ constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 constexpr std::uint32_t kUnvisited = kNone - 1;  // an obstacle cell not yet in a component
 constexpr std::uint32_t kWeak = kNone - 2;       // points above the clearance, but low: joins a
                                                  // component it touches, never starts one
+constexpr std::uint32_t kQueued = kNone - 2;     // split: a high cell in the group being grown
+
+// A part of a component (the whole of it, or its cells nearest one seed when it is split).
+struct Part {
+  std::uint64_t points = 0;
+  std::uint32_t cells = 0;
+  std::uint32_t x0 = kNone, x1 = 0, y0 = kNone, y1 = 0;  // cell bounds
+  double seed_x = 0, seed_y = 0;                         // sums of its seed cells' ix, iy
+  std::uint32_t seed_cells = 0;
+  std::uint32_t first = kNone;  // next point offset when kept, else kNone
+
+  void add(std::uint32_t ix, std::uint32_t iy, std::uint32_t count) noexcept {
+    points += count;
+    ++cells;
+    x0 = std::min(x0, ix), x1 = std::max(x1, ix), y0 = std::min(y0, iy), y1 = std::max(y1, iy);
+  }
+};
 
 std::uint32_t cells_across(double range_m, double cell_m) {
   return static_cast<std::uint32_t>(std::ceil(2.0 * range_m / cell_m));
@@ -50,6 +67,12 @@ const char* validate(const SegmenterConfig& c) noexcept {
     return "overhang_m must be in [0, max_height_m] m";
   if (!(c.overhang_max_m >= c.overhang_m)) return "overhang_max_m must be >= overhang_m";
   if (!(c.overhang_height_m >= 0)) return "overhang_height_m must be >= 0 m";
+  if (!(c.split_height_m == 0 ||
+        (c.split_height_m > c.obstacle_height_m && c.split_height_m <= c.max_height_m)))
+    return "split_height_m must be 0 (off) or in (obstacle_height_m, max_height_m] m";
+  if (!(c.split_person_m >= c.cell_m && c.split_person_m <= c.max_segment_extent_m))
+    return "split_person_m must be in [cell_m, max_segment_extent_m] m";
+  if (c.split_min_points < 1) return "split_min_points must be >= 1";
   if (c.min_segment_points < 1) return "min_segment_points must be >= 1";
   if (c.max_segment_points < c.min_segment_points)
     return "max_segment_points must be >= min_segment_points";
@@ -87,7 +110,10 @@ struct Segmenter::State {
         label(c.max_occupied_cells),
         offset(c.max_occupied_cells),
         depth(c.max_occupied_cells),
-        component_cells(c.max_occupied_cells) {}
+        component_cells(c.max_occupied_cells),
+        part(c.max_occupied_cells),
+        split_queue(c.max_occupied_cells),
+        parts(c.max_segments + 1) {}
 
   std::uint32_t n, m;   // fine and coarse cells across
   std::uint32_t tiles;  // 8 x 8 tiles across the fine grid
@@ -115,6 +141,11 @@ struct Segmenter::State {
   // Flood fill.
   rt::FixedVector<std::uint8_t> depth;
   rt::FixedVector<std::uint32_t> component_cells;
+  // Split: per slot of the component its part (or kNone), the queue of the high groups and then
+  // of the nearest-seed fill, and the parts (seeds beyond max_segments join the shared one).
+  rt::FixedVector<std::uint32_t> part;
+  rt::FixedVector<std::uint32_t> split_queue;
+  rt::FixedVector<Part> parts;
 };
 
 Segmenter::Segmenter(const SegmenterConfig& config) : config_(config) {
@@ -337,6 +368,109 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
       }
     }
   };
+  // Split of one component (its cells in component_cells, labelled comp) into s.parts, each
+  // cell's part in s.part; false when it has fewer than two seeds. High cells (top split_height_m
+  // above the ground) are grouped, linked up to two cells apart so that a missing cell does not
+  // split a person; each person-sized group is a seed, all other groups one seed together (a car
+  // cabin, a wall). A breadth-first fill from all seeds at once gives every cell its nearest
+  // seed over 8-connected cells of the component; cells it does not reach (joined by a ray
+  // bridge) go to the seed whose cells' centre is nearest.
+  const float split_height = static_cast<float>(c.split_height_m);
+  const auto person_cells = static_cast<std::uint32_t>(c.split_person_m / c.cell_m + 1e-9);
+  auto split = [&](std::uint32_t comp) {
+    s.parts.clear();
+    s.split_queue.clear();
+    for (const std::uint32_t slot : s.component_cells) {
+      const bool high = s.band_max[slot] - s.ground[s.coarse_id[slot]] >= split_height;
+      s.part[slot] = high ? kUnvisited : kNone;
+    }
+    std::uint32_t shared = kNone;  // the seed of all groups that are not one person
+    for (const std::uint32_t start : s.component_cells) {
+      if (s.part[start] != kUnvisited) continue;
+      const std::size_t begin = s.split_queue.size();
+      s.part[start] = kQueued;
+      (void)s.split_queue.push_back(start);  // each cell once: never full
+      Part group;
+      for (std::size_t head = begin; head < s.split_queue.size(); ++head) {
+        const std::uint32_t id = s.cell_id[s.split_queue[head]];
+        const std::uint32_t cx = id & 0xFFFFu, cy = id >> 16;
+        group.add(cx, cy, s.obstacle_count[s.split_queue[head]]);
+        for (std::uint32_t yy = cy < 2 ? 0 : cy - 2; yy <= std::min(cy + 2, n - 1); ++yy) {
+          for (std::uint32_t xx = cx < 2 ? 0 : cx - 2; xx <= std::min(cx + 2, n - 1); ++xx) {
+            const std::uint32_t other = s.slot_of[s.dense(xx, yy)];
+            if (other == kNone || s.label[other] != comp || s.part[other] != kUnvisited) continue;
+            s.part[other] = kQueued;
+            (void)s.split_queue.push_back(other);
+          }
+        }
+      }
+      const bool person = group.points >= c.split_min_points &&
+                          group.x1 - group.x0 < person_cells &&
+                          group.y1 - group.y0 < person_cells &&
+                          s.parts.size() + 1 < s.parts.capacity();  // room left for `shared`
+      if (!person && shared == kNone) shared = static_cast<std::uint32_t>(s.parts.size());
+      const std::uint32_t seed = person ? static_cast<std::uint32_t>(s.parts.size()) : shared;
+      if (seed == s.parts.size()) *s.parts.append() = Part{};  // capacity kept above
+      Part& p = s.parts[seed];
+      for (std::size_t i = begin; i < s.split_queue.size(); ++i) {
+        const std::uint32_t id = s.cell_id[s.split_queue[i]];
+        s.part[s.split_queue[i]] = seed;
+        p.seed_x += id & 0xFFFFu, p.seed_y += id >> 16, ++p.seed_cells;
+      }
+    }
+    if (s.parts.size() < 2) return false;
+    for (std::size_t head = 0; head < s.split_queue.size(); ++head) {
+      const std::uint32_t slot = s.split_queue[head];
+      const std::uint32_t id = s.cell_id[slot];
+      const std::uint32_t cx = id & 0xFFFFu, cy = id >> 16;
+      for (std::uint32_t yy = cy == 0 ? 0 : cy - 1; yy <= std::min(cy + 1, n - 1); ++yy) {
+        for (std::uint32_t xx = cx == 0 ? 0 : cx - 1; xx <= std::min(cx + 1, n - 1); ++xx) {
+          const std::uint32_t other = s.slot_of[s.dense(xx, yy)];
+          if (other == kNone || s.label[other] != comp || s.part[other] != kNone) continue;
+          s.part[other] = s.part[slot];
+          (void)s.split_queue.push_back(other);
+        }
+      }
+    }
+    for (const std::uint32_t slot : s.component_cells) {
+      const std::uint32_t id = s.cell_id[slot];
+      const std::uint32_t cx = id & 0xFFFFu, cy = id >> 16;
+      if (s.part[slot] == kNone) {  // not 8-connected to any seed
+        double best = std::numeric_limits<double>::infinity();
+        for (std::uint32_t i = 0; i < s.parts.size(); ++i) {
+          const Part& p = s.parts[i];
+          const double dx = p.seed_x / p.seed_cells - cx, dy = p.seed_y / p.seed_cells - cy;
+          if (dx * dx + dy * dy < best) best = dx * dx + dy * dy, s.part[slot] = i;
+        }
+      }
+      s.parts[s.part[slot]].add(cx, cy, s.obstacle_count[slot]);
+    }
+    return true;
+  };
+  // Keeps a part as a segment or counts why not; its points go to [first, first + points).
+  auto keep = [&](Part& p) {
+    if (p.points < c.min_segment_points) {
+      ++k.dropped_too_small;
+      return;
+    }
+    if (p.points > c.max_segment_points || (p.x1 - p.x0 + 1) > max_extent_cells ||
+        (p.y1 - p.y0 + 1) > max_extent_cells) {
+      ++k.dropped_too_large;
+      return;
+    }
+    Segment* seg = out.segments.append();
+    if (seg == nullptr || cursor + p.points > out.point_indices.capacity()) {
+      if (seg != nullptr) out.segments.pop_back();
+      ++k.dropped_segment_overflow;
+      return;
+    }
+    *seg = Segment{};
+    seg->first = cursor;
+    seg->count = static_cast<std::uint32_t>(p.points);
+    seg->cells = p.cells;
+    p.first = cursor;
+    cursor += seg->count;
+  };
   for (std::size_t seed = 0; seed < slots; ++seed) {
     if (s.label[seed] != kUnvisited) continue;  // components start at strong cells only
     // Breadth first: component_cells is the queue. depth: 0 for strong cells, else the weak
@@ -371,30 +505,24 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
       }
       if (s.depth[slot] == 0 && bridge_steps > 0) bridge(slot, cx, cy, component);
     }
-    ++component;
     ++k.clusters;
-    if (pts < c.min_segment_points) {
-      ++k.dropped_too_small;
-      continue;
+    // Too large as a whole (a building, a long wall): dropped whole, not split.
+    const bool too_large = pts > c.max_segment_points || (x1 - x0 + 1) > max_extent_cells ||
+                           (y1 - y0 + 1) > max_extent_cells;
+    if (!(split_height > 0 && !too_large && split(component))) {  // one part: the whole
+      s.parts.clear();
+      Part* whole = s.parts.append();  // capacity max_segments + 1 >= 2
+      *whole = Part{pts, static_cast<std::uint32_t>(s.component_cells.size()), x0, x1, y0, y1};
+      for (const std::uint32_t slot : s.component_cells) s.part[slot] = 0;
     }
-    if (pts > c.max_segment_points || (x1 - x0 + 1) > max_extent_cells ||
-        (y1 - y0 + 1) > max_extent_cells) {
-      ++k.dropped_too_large;
-      continue;
-    }
-    Segment* seg = out.segments.append();
-    if (seg == nullptr || cursor + pts > out.point_indices.capacity()) {
-      if (seg != nullptr) out.segments.pop_back();
-      ++k.dropped_segment_overflow;
-      continue;
-    }
-    *seg = Segment{};
-    seg->first = cursor;
-    seg->count = static_cast<std::uint32_t>(pts);
-    seg->cells = static_cast<std::uint32_t>(s.component_cells.size());
+    ++component;
+    k.split_segments += s.parts.size() - 1;
+    for (Part& p : s.parts) keep(p);
     for (const std::uint32_t slot : s.component_cells) {
-      s.offset[slot] = cursor;
-      cursor += s.obstacle_count[slot];
+      Part& p = s.parts[s.part[slot]];
+      if (p.first == kNone) continue;
+      s.offset[slot] = p.first;
+      p.first += s.obstacle_count[slot];
     }
   }
 

@@ -70,6 +70,15 @@ struct SegmenterConfig {
   double overhang_max_m = 0.6;
   double overhang_height_m = 0.6;
   double max_height_m = 2.5;  // points higher above the local ground are ignored (canopies)
+  // Split a component at its tops: its cells whose top is split_height_m above the ground
+  // (shoulders and heads, a car's cabin) form high groups, linking cells up to 2 cells apart. A
+  // group with footprint sides of at most split_person_m and at least split_min_points points
+  // is one person; with two or more seeds (each person, plus one for all other high groups
+  // together) every cell of the component goes to its nearest seed, each part a segment
+  // (people walking in a file, a person beside a car or a pole). split_height_m 0: off.
+  double split_height_m = 1.2;
+  double split_person_m = 1.2;
+  std::uint32_t split_min_points = 10;
   // Segments.
   std::uint32_t min_segment_points = 8;      // fewer obstacle points: dropped (too small)
   std::uint32_t max_segment_points = 30000;  // more: dropped (too large)

@@ -111,6 +111,15 @@ TEST(Segmenter, PedestrianOnSidewalkOfSlopedRoadIsFound) {
   EXPECT_NEAR(out.segments[0].centroid[1], 5.0f, 0.1f);
 }
 
+// Of two segments, the smaller one; the larger is the 4.5 x 1.8 m car beside it.
+const Segment& beside_the_car(const Segments& out) {
+  const Segment& car =
+      out.segments[0].count > out.segments[1].count ? out.segments[0] : out.segments[1];
+  EXPECT_NEAR(car.box.length, 4.5f, 0.2f);
+  EXPECT_NEAR(car.box.width, 1.8f, 0.2f);
+  return &car == &out.segments[0] ? out.segments[1] : out.segments[0];
+}
+
 TEST(Segmenter, PedestrianHalfAMetreFromCarIsSeparate) {
   Scene scene;
   scene.flat_ground();
@@ -118,11 +127,7 @@ TEST(Segmenter, PedestrianHalfAMetreFromCarIsSeparate) {
   scene.cylinder(10.0f, 0.9f + 0.5f + 0.25f, 0.25f, 1.7f);  // pedestrian 0.5 m from its side
   const Segments out = run(scene);
   ASSERT_EQ(out.segments.size(), 2u);
-  const Segment& car =
-      out.segments[0].count > out.segments[1].count ? out.segments[0] : out.segments[1];
-  const Segment& ped = &car == &out.segments[0] ? out.segments[1] : out.segments[0];
-  EXPECT_NEAR(car.box.length, 4.5f, 0.2f);
-  EXPECT_NEAR(car.box.width, 1.8f, 0.2f);
+  const Segment& ped = beside_the_car(out);
   EXPECT_NEAR(ped.centroid[1], 1.65f, 0.1f);
   EXPECT_NEAR(ped.box.length, 0.5f, 0.15f);
 }
@@ -232,6 +237,76 @@ TEST(Segmenter, PedestrianUnderATreeCanopyIsNotJoinedToTheTree) {
   ASSERT_EQ(out.segments.size(), 2u);  // the trunk and the pedestrian
   EXPECT_GT(out.counters.ignored_above, 0u);
   for (const Segment& seg : out.segments) EXPECT_LT(seg.box.length, 0.7f);
+}
+
+SegmenterConfig no_split() {
+  SegmenterConfig c = test_config();
+  c.split_height_m = 0.0;
+  return c;
+}
+
+// Three people walking in single file 0.9 m apart (as the simulator's groups): their strides
+// touch (0.1 m between the legs), their shoulders and heads are 0.5 m apart.
+TEST(Segmenter, PeopleWalkingInSingleFileAreOneSegmentEach) {
+  Scene scene;
+  scene.flat_ground();
+  for (const float x : {9.0f, 9.9f, 10.8f}) scene.walker(x, 4.0f);
+  ASSERT_EQ(run(scene, no_split()).segments.size(), 1u);  // the legs join them
+  const Segments out = run(scene);
+  ASSERT_EQ(out.segments.size(), 3u);
+  EXPECT_EQ(out.counters.split_segments, 2u);
+  EXPECT_EQ(out.counters.clusters, 1u);
+  EXPECT_EQ(accounted(out.counters), scene.size());
+  std::uint32_t points = 0;
+  for (const Segment& seg : out.segments) {
+    EXPECT_NEAR(seg.centroid[1], 4.0f, 0.05f);
+    EXPECT_LT(seg.box.length, 0.9f);
+    EXPECT_NEAR(std::fmod(seg.centroid[0] - 9.0f + 0.05f, 0.9f), 0.05f, 0.1f);  // one walker
+    points += seg.count;
+  }
+  EXPECT_EQ(points, out.counters.obstacle_points);  // every point in one of the three
+}
+
+TEST(Segmenter, PersonBesideACarIsSplitFromIt) {
+  Scene scene;
+  scene.flat_ground();
+  scene.sedan(10.0f, 0.0f);                               // side at y = 0.9, cabin side at 0.75
+  scene.walker(10.0f, 0.9f + 0.3f + 0.2f);                // torso 0.3 m from the car's side
+  ASSERT_EQ(run(scene, no_split()).segments.size(), 1u);  // the hands touch the side
+  const Segments out = run(scene);
+  ASSERT_EQ(out.segments.size(), 2u);
+  const Segment& person = beside_the_car(out);
+  EXPECT_NEAR(person.centroid[0], 10.0f, 0.1f);
+  EXPECT_NEAR(person.centroid[1], 1.4f, 0.1f);
+}
+
+// One high group each (a person's shoulders and head, a rider, a cabin): never split.
+TEST(Segmenter, SplitLeavesALonePersonABicyclistAndCarsWhole) {
+  Scene person;
+  person.flat_ground();
+  person.walker(8.0f, -3.0f, 1.9f);
+  EXPECT_EQ(run(person).segments.size(), 1u);
+  Scene bicyclist;
+  bicyclist.flat_ground();
+  bicyclist.box(8.0f, 3.0f, 1.8f, 0.1f, 0.7f);               // wheels and frame
+  bicyclist.box(8.3f, 3.0f, 0.1f, 0.5f, 1.0f, 0.05f, 0.9f);  // handlebar
+  bicyclist.cylinder(7.9f, 3.0f, 0.2f, 1.5f, 0.05f, 0.8f);   // rider's legs and torso
+  bicyclist.cylinder(8.0f, 3.0f, 0.1f, 1.75f, 0.05f, 1.5f);  // head
+  EXPECT_EQ(run(bicyclist).segments.size(), 1u);
+  Scene cars;
+  cars.flat_ground();
+  cars.sedan(10.0f, 0.0f);
+  cars.box(-10.0f, 5.0f, 5.2f, 2.0f, 2.2f);  // a van: all of it high
+  const Segments out = run(cars);
+  EXPECT_EQ(out.segments.size(), 2u);
+  EXPECT_EQ(out.counters.split_segments, 0u);
+}
+
+TEST(Segmenter, SplitLeavesACarSeenFromBehindAt30mWhole) {
+  const Scene scene = far_car_with_road_under_its_body();  // its cabin's rear is high
+  const Segments out = run(scene, overhang_config());
+  ASSERT_EQ(out.segments.size(), 1u);
+  EXPECT_EQ(out.counters.split_segments, 0u);
 }
 
 TEST(Segmenter, OrientedBoxFollowsARotatedCar) {
@@ -365,9 +440,11 @@ TEST(Segmenter, RepeatedScansGiveIdenticalResultsWithoutAllocating) {
   scene.flat_ground();
   scene.box(8.0f, 0.0f, 2.0f, 1.0f, 1.2f);
   scene.cylinder(-5.0f, 3.0f, 0.25f, 1.7f);
+  for (const float x : {-9.0f, -9.9f}) scene.walker(x, -4.0f);  // split in two
   Segmenter segmenter(test_config());
   Segments out = segmenter.make_segments();
   segmenter.segment(scene.view(), out);
+  ASSERT_EQ(out.counters.split_segments, 1u);
   const std::size_t n = out.segments.size();
   const std::uint32_t first_count = out.segments[0].count;
   rt::testing::AllocationCounter counter;
@@ -404,6 +481,14 @@ TEST(Segmenter, RejectsInvalidConfiguration) {
   c = SegmenterConfig{};
   c.overhang_m = 0.7;  // above overhang_max_m
   EXPECT_STREQ(validate(c), "overhang_max_m must be >= overhang_m");
+  c = SegmenterConfig{};
+  c.split_height_m = 0.2;  // below obstacle_height_m (0 is off)
+  EXPECT_STREQ(validate(c),
+               "split_height_m must be 0 (off) or in (obstacle_height_m, max_height_m] m");
+  c.split_height_m = 0.0;
+  EXPECT_STREQ(validate(c), "");
+  c.split_person_m = 0.1;  // below cell_m
+  EXPECT_STRNE(validate(c), "");
   EXPECT_STREQ(validate(SegmenterConfig{}), "");
 }
 
