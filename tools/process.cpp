@@ -13,10 +13,7 @@
 
 #include "drivers/io/pcap_reader.hpp"
 #include "drivers/velodyne/scan_stream.hpp"
-#include "ego/deskew.hpp"
-#include "ego/time_sync.hpp"
-#include "perception/segmentation/segmenter.hpp"
-#include "perception/tracking/tracker.hpp"
+#include "pipeline/scan_pipeline.hpp"
 #include "tools/capture_poses.hpp"
 #include "tools/commands.hpp"
 #include "tools/progress.hpp"
@@ -146,84 +143,63 @@ int run_process(const ProcessOptions& o) {
 
   // Everything the per-scan loop uses is allocated here.
   velodyne::ScanStream stream(*calibration, vs.assembler, 2);
-  ego::Deskewer deskewer(ego_settings->deskew);
-  segmentation::Segmenter segmenter(*segmenter_config);
-  segmentation::Segments segments = segmenter.make_segments();
-  tracking::Tracker tracker(*tracker_config);
-  tracking::TrackerOutput tracked(tracker_config->max_tracks);
-  std::vector<tracking::Detection> detections;
-  detections.reserve(segmenter_config->max_segments);
-  const velodyne::TrailerKind trailer = velodyne::traits(vs.assembler.decoder.model).trailer;
-  const Eigen::Isometry3d sensor_T_vehicle = ego_settings->deskew.vehicle_T_sensor.inverse();
+  pipeline::ScanPipeline pipeline({.deskew = ego_settings->deskew,
+                                   .segmenter = *segmenter_config,
+                                   .tracker = *tracker_config,
+                                   .trailer = velodyne::traits(vs.assembler.decoder.model).trailer,
+                                   .clock = pipeline::StageClock::kThreadCpu});
+  pipeline::ScanResult result = pipeline.make_result();
 
   std::vector<Stage> stages{{"decode", {}}, {"deskew", {}}, {"segment", {}}, {"track", {}}, {"total", {}}};
-  std::uint64_t scans = 0, without_pose = 0, truth_matched = 0;
+  std::uint64_t scans = 0, truth_matched = 0;
   std::size_t truth_next = 0;
   std::string line;
   std::int64_t decode_ns = 0;
-  ego::ScanClockSource clock_source = ego::ScanClockSource::kReceive;
 
   auto handle = [&](velodyne::Scan& scan) {
-    const std::int64_t t0 = cpu_ns();
-    const ego::ScanClock clock = ego::scan_clock(
-        scan.header, trailer,
-        poses ? std::optional<std::int64_t>(poses->history->newest_stamp_ns()) : std::nullopt);
-    clock_source = clock.source;
-    Eigen::Isometry3d world_T_sensor = ego_settings->deskew.vehicle_T_sensor;  // parked: vehicle = world
-    Eigen::Isometry3d world_T_vehicle_start = Eigen::Isometry3d::Identity();
-    if (poses) {
-      const ego::DeskewResult r = deskewer.apply(scan, *poses->history, clock.scan_to_pose_ns);
-      if (r.ok()) {
-        world_T_sensor = r.world_T_sensor;
-        const ego::PoseLookup start = poses->history->at(scan.header.stamp_ns + clock.scan_to_pose_ns);
-        world_T_vehicle_start = start.ok() ? ego::to_isometry(start.pose) : r.world_T_sensor * sensor_T_vehicle;
-      } else {
-        ++without_pose;
-      }
-    }
-    const std::int64_t t1 = cpu_ns();
-    segmenter.segment(segmentation::PointView{&scan.points.data()->x, scan.points.size(), sizeof(velodyne::Point)},
-                      segments);
-    const std::int64_t t2 = cpu_ns();
-    detections.clear();
-    const double sensor_yaw = yaw_of(world_T_sensor.linear());
-    for (std::size_t i = 0; i < segments.segments.size(); ++i) {
-      const segmentation::Segment& s = segments.segments[i];
-      const Eigen::Vector3d c = world_T_sensor * Eigen::Vector3d(s.centroid[0], s.centroid[1], s.centroid[2]);
-      detections.push_back({c.cast<float>(), s.box.length, s.box.width, s.box.height,
-                            static_cast<float>(s.box.yaw + sensor_yaw), s.count, static_cast<std::uint32_t>(i)});
-    }
-    const std::int64_t stamp = scan.header.stamp_ns + clock.scan_to_pose_ns;
-    tracker.update(stamp, detections, tracked);
-    const std::int64_t t3 = cpu_ns();
+    pipeline.process(scan, poses ? poses->history.get() : nullptr, result);
+    const std::int64_t* ns = result.stage_ns;
     stages[0].ms.push_back(static_cast<double>(decode_ns) * 1e-6);
-    stages[1].ms.push_back(static_cast<double>(t1 - t0) * 1e-6);
-    stages[2].ms.push_back(static_cast<double>(t2 - t1) * 1e-6);
-    stages[3].ms.push_back(static_cast<double>(t3 - t2) * 1e-6);
-    stages[4].ms.push_back(static_cast<double>(decode_ns + t3 - t0) * 1e-6);
+    stages[1].ms.push_back(static_cast<double>(ns[pipeline::kDeskew]) * 1e-6);
+    stages[2].ms.push_back(static_cast<double>(ns[pipeline::kSegment]) * 1e-6);
+    stages[3].ms.push_back(static_cast<double>(ns[pipeline::kTrack]) * 1e-6);
+    stages[4].ms.push_back(static_cast<double>(decode_ns + ns[pipeline::kDeskew] +
+                                               ns[pipeline::kSegment] + ns[pipeline::kTrack]) *
+                           1e-6);
     decode_ns = 0;
 
     // The record (outside the timed stages).
+    const Eigen::Isometry3d& start = result.world_T_vehicle_start;
     TracksScan rec;
-    rec.scan = scan.header.sequence;
-    rec.stamp_ns = stamp;
-    rec.ego = {world_T_vehicle_start.translation().x(), world_T_vehicle_start.translation().y(),
-               world_T_vehicle_start.translation().z(), yaw_of(world_T_vehicle_start.linear())};
-    rec.segments.resize(segments.segments.size());
-    for (std::size_t i = 0; i < segments.segments.size(); ++i) {
-      const segmentation::Segment& s = segments.segments[i];
-      const Eigen::Vector3d b = world_T_sensor * Eigen::Vector3d(s.box.cx, s.box.cy, s.box.cz);
-      rec.segments[i] = {static_cast<std::uint32_t>(i), s.count, b.x(), b.y(), b.z(), s.box.length,
-                         s.box.width, s.box.height, s.box.yaw + sensor_yaw, {}, false};
+    rec.scan = result.sequence;
+    rec.stamp_ns = result.stamp_ns;
+    rec.ego = {start.translation().x(), start.translation().y(), start.translation().z(),
+               yaw_of(start.linear())};
+    rec.segments.resize(result.segments.segments.size());
+    for (std::size_t i = 0; i < result.segments.segments.size(); ++i) {
+      const pipeline::WorldBox b = result.world_box(i);
+      rec.segments[i] = {static_cast<std::uint32_t>(i),
+                         result.segments.segments[i].count,
+                         b.x,
+                         b.y,
+                         b.z,
+                         b.length,
+                         b.width,
+                         b.height,
+                         b.yaw,
+                         {},
+                         false};
     }
-    for (const tracking::Track& t : tracked.tracks) rec.tracks.push_back(track_record(t));
+    for (const tracking::Track& t : result.tracked.tracks) rec.tracks.push_back(track_record(t));
     if (!truth.empty()) {
+      const std::int64_t stamp = result.stamp_ns;
       while (truth_next + 1 < truth.size() &&
              std::llabs(truth[truth_next + 1].stamp_ns - stamp) <= std::llabs(truth[truth_next].stamp_ns - stamp)) {
         ++truth_next;
       }
       if (std::llabs(truth[truth_next].stamp_ns - stamp) <= 1'000'000) {
-        truth_composition(truth[truth_next], scan, segments, world_T_sensor, rec.segments);
+        truth_composition(truth[truth_next], scan, result.segments, result.world_T_sensor,
+                          rec.segments);
         ++truth_matched;
       }
     }
@@ -255,20 +231,26 @@ int run_process(const ProcessOptions& o) {
   std::fprintf(stderr, "stac process: %s -> %s: %llu complete scans\n", o.in.c_str(), o.tracks.c_str(),
                static_cast<unsigned long long>(scans));
   if (poses) {
-    std::fprintf(stderr, "  ego         %llu INS fixes (%llu skipped before a GPS week, %llu not aligned); "
+    std::fprintf(stderr,
+                 "  ego         %llu INS fixes (%llu skipped before a GPS week, %llu not aligned); "
                  "scan clock: %s; %llu scans without a pose (not deskewed)\n",
                  static_cast<unsigned long long>(poses->counters.ins_fixes),
                  static_cast<unsigned long long>(poses->counters.no_absolute_time),
-                 static_cast<unsigned long long>(poses->counters.not_aligned), ego::to_string(clock_source),
-                 static_cast<unsigned long long>(without_pose));
+                 static_cast<unsigned long long>(poses->counters.not_aligned),
+                 ego::to_string(result.clock_source),
+                 static_cast<unsigned long long>(pipeline.scans_without_pose()));
   } else {
     std::fprintf(stderr, "  ego         %s: parked sensor, world = vehicle frame\n",
                  o.no_deskew ? "--no-deskew" : ("no INS stream on port " + std::to_string(ego_settings->ins_port)).c_str());
   }
-  const auto& tc = tracker.counters();
-  std::fprintf(stderr, "  tracks      %llu spawned, %llu live at the end; pool overflow %llu, detections dropped %llu\n",
-               static_cast<unsigned long long>(tc.spawned), static_cast<unsigned long long>(tracker.live_tracks()),
-               static_cast<unsigned long long>(tc.pool_overflow), static_cast<unsigned long long>(tc.dropped_detections));
+  const auto& tc = pipeline.tracker().counters();
+  std::fprintf(stderr,
+               "  tracks      %llu spawned, %llu live at the end; pool overflow %llu, detections "
+               "dropped %llu\n",
+               static_cast<unsigned long long>(tc.spawned),
+               static_cast<unsigned long long>(pipeline.tracker().live_tracks()),
+               static_cast<unsigned long long>(tc.pool_overflow),
+               static_cast<unsigned long long>(tc.dropped_detections));
   if (!truth.empty()) {
     std::fprintf(stderr, "  truth       %llu of %llu scans matched to a truth scan (segment composition written)\n",
                  static_cast<unsigned long long>(truth_matched), static_cast<unsigned long long>(scans));
