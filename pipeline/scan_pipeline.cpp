@@ -62,9 +62,11 @@ ScanResult ScanPipeline::make_result() const {
 void ScanPipeline::process(velodyne::Scan& scan, const ego::PoseHistory* poses,
                            ScanResult& out) noexcept {
   const std::int64_t t0 = now_ns(config_.clock);
-  const ego::ScanClock clock = ego::scan_clock(
-      scan.header, config_.trailer,
-      poses != nullptr ? std::optional<std::int64_t>(poses->newest_stamp_ns()) : std::nullopt);
+  const ego::ScanClock clock =
+      ego::scan_clock(scan.header, config_.trailer,
+                      poses != nullptr && poses->pushed() > 0
+                          ? std::optional<std::int64_t>(poses->newest_stamp_ns())
+                          : std::nullopt);
   out.sequence = scan.header.sequence;
   out.receive_stamp_ns = scan.header.stamp_ns;
   out.stamp_ns = scan.header.stamp_ns + clock.scan_to_pose_ns;
