@@ -16,7 +16,9 @@
 #include "pipeline/scan_pipeline.hpp"
 #include "tools/capture_poses.hpp"
 #include "tools/commands.hpp"
+#include "tools/dds_settings.hpp"
 #include "tools/progress.hpp"
+#include "tools/scan_publishing.hpp"
 #include "tools/sensor_status.hpp"
 #include "tools/settings.hpp"
 #include "tools/tracks_jsonl.hpp"
@@ -27,7 +29,35 @@ namespace {
 struct ProcessOptions {
   std::string in, tracks, truth, config, calib, origin;
   bool no_deskew = false;
+  bool dds = false;
+  int domain = -1;
+  double dds_wait_s = 0;
 };
+
+// --dds: the publishing edge, created before the loop; with --dds-wait, waits for a reader.
+struct ProcessDds {
+  std::unique_ptr<dds::Publisher> publisher;
+  std::optional<ScanPublishing> scans;
+};
+rt::Result<ProcessDds> open_dds(const std::filesystem::path& config, const ProcessOptions& o,
+                                const pipeline::PipelineConfig& pc) {
+  if (auto r = ScanPublishing::check_capacities(pc); !r)
+    return rt::Unexpected<rt::Error>{r.error()};
+  auto settings = load_dds_settings(config);
+  if (!settings) return rt::Unexpected<rt::Error>{settings.error()};
+  if (o.domain >= 0) settings->domain_id = static_cast<std::uint32_t>(o.domain);
+  auto p = dds::Publisher::create(*settings);
+  if (!p) return rt::Unexpected<rt::Error>{p.error()};
+  ProcessDds out{std::move(*p), std::nullopt};
+  out.scans.emplace(*out.publisher);
+  const dds_entity_t writer = out.publisher->writer(dds::Topic::kTrackedObjects);
+  for (double waited = 0; waited < o.dds_wait_s; waited += 0.01) {
+    dds_publication_matched_status_t m{};
+    if (dds_get_publication_matched_status(writer, &m) == 0 && m.current_count > 0) break;
+    dds_sleepfor(DDS_MSECS(10));
+  }
+  return out;
+}
 
 // CPU time of this thread (ns): a stage's cost on one core, whatever else the machine does.
 std::int64_t cpu_ns() {
@@ -143,12 +173,20 @@ int run_process(const ProcessOptions& o) {
 
   // Everything the per-scan loop uses is allocated here.
   velodyne::ScanStream stream(*calibration, vs.assembler, 2);
-  pipeline::ScanPipeline pipeline({.deskew = ego_settings->deskew,
-                                   .segmenter = *segmenter_config,
-                                   .tracker = *tracker_config,
-                                   .trailer = velodyne::traits(vs.assembler.decoder.model).trailer,
-                                   .clock = pipeline::StageClock::kThreadCpu});
+  const pipeline::PipelineConfig pc{.deskew = ego_settings->deskew,
+                                    .segmenter = *segmenter_config,
+                                    .tracker = *tracker_config,
+                                    .trailer = velodyne::traits(vs.assembler.decoder.model).trailer,
+                                    .clock = pipeline::StageClock::kThreadCpu};
+  pipeline::ScanPipeline pipeline(pc);
   pipeline::ScanResult result = pipeline.make_result();
+  std::optional<ProcessDds> dds_out;
+  if (o.dds) {
+    auto d = open_dds(config, o, pc);
+    if (!d) return fail(d.error().message);
+    dds_out.emplace(std::move(*d));
+  }
+  std::uint64_t dds_errors = 0;
 
   std::vector<Stage> stages{{"decode", {}}, {"deskew", {}}, {"segment", {}}, {"track", {}}, {"total", {}}};
   std::uint64_t scans = 0, truth_matched = 0;
@@ -206,6 +244,11 @@ int run_process(const ProcessOptions& o) {
     line.clear();
     append_json_line(rec, line);
     out << line;
+    if (dds_out) {
+      auto st = dds_out->scans->publish(result, scans, result.has_pose ? 1 : 0);
+      if (!st && dds_errors++ == 0)
+        std::fprintf(stderr, "stac process: DDS: %s\n", st.error().message.c_str());
+    }
     ++scans;
   };
 
@@ -255,6 +298,13 @@ int run_process(const ProcessOptions& o) {
     std::fprintf(stderr, "  truth       %llu of %llu scans matched to a truth scan (segment composition written)\n",
                  static_cast<unsigned long long>(truth_matched), static_cast<unsigned long long>(scans));
   }
+  if (dds_out) {
+    std::fprintf(
+        stderr,
+        "  dds         %llu scans published on tracked_objects, segments, ego_pose; %llu failed\n",
+        static_cast<unsigned long long>(scans - dds_errors),
+        static_cast<unsigned long long>(dds_errors));
+  }
   print_stats(stages);
   if (scans == 0) return fail(o.in + ": no complete scan in the capture");
   return 0;
@@ -282,6 +332,15 @@ void add_process_command(CLI::App& app) {
   cmd->add_option("--origin", o->origin,
                   "LAT,LON,ALT of the world frame (default: the truth's, else the config's ego.origin)");
   cmd->add_flag("--no-deskew", o->no_deskew, "ignore the INS stream: no deskew, sensor frame = world");
+  cmd->add_flag("--dds", o->dds,
+                "also publish every scan's tracked_objects, segments and ego_pose on DDS (the "
+                "config's dds:)");
+  cmd->add_option("--domain", o->domain, "DDS domain with --dds (default: dds.domain_id)")
+      ->check(CLI::Range(0, 230));
+  cmd->add_option(
+         "--dds-wait", o->dds_wait_s,
+         "with --dds: wait up to S seconds for a tracked_objects reader before the first scan")
+      ->check(CLI::NonNegativeNumber);
   cmd->callback([o] {
     if (const int code = run_process(*o); code != 0) throw CLI::RuntimeError(code);
   });
