@@ -36,7 +36,7 @@ namespace stac::tools {
 namespace {
 
 struct RunOptions {
-  std::string config, calib, ins, ins_address;
+  std::string config, calib, ins, ins_address, bind;
   double seconds = 0;
   std::uint64_t scans = 0;
   int domain = -1, port = -1, ins_port = -1;
@@ -195,6 +195,7 @@ int run_live(const RunOptions& o) {
   // Command-line overrides.
   if (!o.calib.empty()) vs->calibration = o.calib;
   if (o.port >= 0) vs->port = static_cast<std::uint16_t>(o.port);
+  if (!o.bind.empty()) vs->bind_address = o.bind;
   if (o.domain >= 0) dds_config->domain_id = static_cast<std::uint32_t>(o.domain);
   if (!o.ins.empty()) {
     auto t = parse_ins_transport(o.ins);
@@ -506,6 +507,8 @@ void add_run_command(CLI::App& app) {
       ->check(CLI::Range(0, 230));
   cmd->add_option("--port", o->port, "Velodyne UDP port (default: velodyne.port; 0: any free port)")
       ->check(CLI::Range(0, 65535));
+  cmd->add_option("--bind", o->bind,
+                  "Velodyne UDP address to bind (default: velodyne.bind_address)");
   cmd->add_option("--calib", o->calib, "calibration file (default: velodyne.calibration)");
   cmd->add_option("--ins", o->ins, "INS transport: tcp, udp or none (default: run.ins)");
   cmd->add_option("--ins-address", o->ins_address,

@@ -1,0 +1,274 @@
+// `stac run` as a user runs it, over loopback only: `stac sim` -> `stac replay` (UDP to 127.0.0.1
+// and the INS as a TCP server on 127.0.0.1) -> `stac run` (Cyclone on config/dds/loopback.xml,
+// a domain of its own) -> DDS readers in this test.
+#include <arpa/inet.h>
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <regex>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "dds/dds_test_support.hpp"
+#include "dds/idl_types.hpp"
+#include "shared_data.hpp"
+#include "stac_cli.hpp"
+
+extern char** environ;
+
+namespace stac::tools {
+namespace {
+
+using Types = dds::IdlTypes<false>;
+constexpr const char* kYaml = "velodyne/calib/rosdrivers_64e_s2.1-sztaki.yaml";
+
+std::filesystem::path fresh_dir(const std::string& name) {
+  const auto d = std::filesystem::temp_directory_path() / ("stac_run_" + name);
+  std::filesystem::remove_all(d);
+  std::filesystem::create_directories(d);
+  return d;
+}
+
+// A port the kernel just gave out on 127.0.0.1 (closed again for the child to bind).
+std::uint16_t free_port(int type) {
+  const int fd = socket(AF_INET, type, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  socklen_t len = sizeof(a);
+  if (bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof(a)) != 0 ||
+      getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len) != 0) {
+    close(fd);
+    return 0;
+  }
+  close(fd);
+  return ntohs(a.sin_port);
+}
+
+// `stac ARGS` in the background, its stdout and stderr into `log`.
+class Child {
+ public:
+  Child(const std::string& args, const std::filesystem::path& log) : log_(log) {
+    std::vector<std::string> words{STAC_CLI};
+    std::istringstream in(args);
+    for (std::string w; in >> w;) words.push_back(w);
+    std::vector<char*> argv;
+    for (std::string& w : words) argv.push_back(w.data());
+    argv.push_back(nullptr);
+    posix_spawn_file_actions_t fa;
+    posix_spawn_file_actions_init(&fa);
+    posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_adddup2(&fa, 1, 2);
+    if (posix_spawn(&pid_, argv[0], &fa, nullptr, argv.data(), environ) != 0) pid_ = -1;
+    posix_spawn_file_actions_destroy(&fa);
+  }
+  ~Child() {
+    if (pid_ > 0) {
+      kill(pid_, SIGKILL);
+      waitpid(pid_, nullptr, 0);
+    }
+  }
+  [[nodiscard]] bool started() const { return pid_ > 0; }
+  // Sends `sig` and waits: the exit code (-1 when it did not exit normally).
+  int stop(int sig) {
+    kill(pid_, sig);
+    int status = 0;
+    waitpid(pid_, &status, 0);
+    pid_ = -1;
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  }
+  int wait() {
+    int status = 0;
+    waitpid(pid_, &status, 0);
+    pid_ = -1;
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  }
+  [[nodiscard]] std::string output() const {
+    std::ifstream f(log_);
+    return {std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
+  }
+
+ private:
+  std::filesystem::path log_;
+  pid_t pid_ = -1;
+};
+
+// A keep-all reader of one topic in this process.
+class Reader {
+ public:
+  Reader(dds_entity_t participant, const dds_topic_descriptor_t* type, const char* name,
+         dds::Topic t) {
+    topic_ = dds_create_topic(participant, type, name, nullptr, nullptr);
+    dds::QosPtr qos = dds::reader_qos(t);
+    dds_qset_history(qos.get(), DDS_HISTORY_KEEP_ALL, 0);
+    reader_ = dds_create_reader(participant, topic_, qos.get(), nullptr);
+  }
+  [[nodiscard]] bool ok() const { return topic_ > 0 && reader_ > 0; }
+  [[nodiscard]] bool matched() const {
+    dds_subscription_matched_status_t s{};
+    return dds_get_subscription_matched_status(reader_, &s) == 0 && s.current_count > 0;
+  }
+  // Calls f(sample) for every sample available now; returns how many.
+  template <class T, class F>
+  int drain(F&& f) {
+    int n = 0;
+    for (;;) {
+      void* samples[1] = {nullptr};
+      dds_sample_info_t info{};
+      const dds_return_t got = dds_take(reader_, samples, &info, 1, 1);
+      if (got <= 0) return n;
+      if (info.valid_data) {
+        f(*static_cast<const T*>(samples[0]));
+        ++n;
+      }
+      dds_return_loan(reader_, samples, got);
+    }
+  }
+
+ private:
+  dds_entity_t topic_ = 0, reader_ = 0;
+};
+
+struct HealthSeen {
+  std::uint64_t scan_index = 0, deadline_misses = 0;
+  std::uint32_t end_to_end_us = 0;
+  std::map<std::string, std::uint32_t> stages;
+  std::map<std::string, std::uint64_t> drops;
+  std::map<std::string, unsigned> sensors;
+};
+
+std::uint64_t summary_number(const std::string& out, const std::string& pattern) {
+  std::smatch m;
+  if (!std::regex_search(out, m, std::regex(pattern))) return ~0ull;
+  return std::stoull(m[1].str());
+}
+
+TEST(RunCli, ReplayedDriveGivesOneTrackedObjectsSamplePerScanAndHealthThatAgreesWithTheSummary) {
+  STAC_REQUIRE_SHARED_DATA(kYaml);
+  const auto dir = fresh_dir("e2e");
+  const std::string pcap = (dir / "run.pcap").string();
+  const auto sim = stac::testing::stac("sim --scenario urban --seed 3 --duration 3 --calib " +
+                                       stac::testing::shared_data(kYaml).string() + " --out " +
+                                       pcap + " --truth " + (dir / "truth.jsonl").string());
+  ASSERT_EQ(sim.code, 0) << sim.output;
+
+  constexpr std::uint32_t kDomain = 141;
+  const std::string uri = stac::testing::loopback_uri();  // sets DDS_TEST_TAG for the children too
+  const dds_entity_t domain = dds_create_domain(kDomain, uri.c_str());
+  ASSERT_GT(domain, 0);
+  const dds_entity_t participant = dds_create_participant(kDomain, nullptr, nullptr);
+  ASSERT_GT(participant, 0);
+  Reader tracked(participant, Types::tracked_objects(), "stac/tracked_objects",
+                 dds::Topic::kTrackedObjects);
+  Reader health(participant, Types::health(), "stac/health", dds::Topic::kHealth);
+  ASSERT_TRUE(tracked.ok() && health.ok());
+
+  const std::uint16_t udp = free_port(SOCK_DGRAM), tcp = free_port(SOCK_STREAM);
+  ASSERT_TRUE(udp != 0 && tcp != 0);
+  Child run("run --domain " + std::to_string(kDomain) + " --bind 127.0.0.1 --port " +
+                std::to_string(udp) + " --ins tcp --ins-address 127.0.0.1 --ins-port " +
+                std::to_string(tcp),
+            dir / "run.log");
+  ASSERT_TRUE(run.started());
+  for (int i = 0; i < 2000 && !(tracked.matched() && health.matched()); ++i)
+    dds_sleepfor(DDS_MSECS(10));
+  ASSERT_TRUE(tracked.matched() && health.matched()) << run.output();
+
+  const auto replay =
+      stac::testing::stac("replay --in " + pcap + " --to 127.0.0.1 --port " + std::to_string(udp) +
+                          " --tcp-port 5602:" + std::to_string(tcp) + " --wait-tcp");
+  ASSERT_EQ(replay.code, 0) << replay.output;
+
+  // Everything published arrives; stop once nothing came for 2 s.
+  std::vector<std::uint64_t> indices;
+  std::vector<HealthSeen> healths;
+  for (int quiet = 0; quiet < 200;) {
+    const int n = tracked.drain<Types::TrackedObjects>([&](const Types::TrackedObjects& s) {
+      indices.push_back(s.scan_index);
+    }) + health.drain<Types::Health>([&](const Types::Health& s) {
+      HealthSeen h{s.scan_index, s.deadline_misses, s.end_to_end_latency_us, {}, {}, {}};
+      for (std::uint32_t i = 0; i < s.stages._length; ++i)
+        h.stages[s.stages._buffer[i].stage] = s.stages._buffer[i].latency_us;
+      for (std::uint32_t i = 0; i < s.drops._length; ++i)
+        h.drops[s.drops._buffer[i].cause] = s.drops._buffer[i].count;
+      for (std::uint32_t i = 0; i < s.sensors._length; ++i)
+        h.sensors[s.sensors._buffer[i].name] = s.sensors._buffer[i].status;
+      healths.push_back(std::move(h));
+    });
+    quiet = n > 0 ? 0 : quiet + 1;
+    dds_sleepfor(DDS_MSECS(10));
+  }
+  ASSERT_EQ(run.stop(SIGINT), 0) << run.output();
+  const std::string out = run.output();
+  dds_delete(participant);
+  dds_delete(domain);
+
+  // The summary: every scan received was published (none dropped on the way), after a signal.
+  EXPECT_NE(out.find("(signal)"), std::string::npos) << out;
+  const std::uint64_t received = summary_number(out, R"((\d+) received \(complete\))");
+  const std::uint64_t published = summary_number(out, R"((\d+) published,)");
+  const std::uint64_t misses = summary_number(out, R"((\d+) misses of)");
+  EXPECT_EQ(received, published) << out;
+  EXPECT_GE(published, 20u)
+      << out;  // 3 s at 10 Hz: ~28 complete scans unless the kernel dropped packets
+  EXPECT_GT(summary_number(out, R"((\d+) INS fixes)"), 0u) << out;
+  for (const char* word :
+       {"end-to-end", "p50", "p99", "max", "deskew", "segment", "track", "publish"}) {
+    EXPECT_NE(out.find(word), std::string::npos) << word << " missing from:\n" << out;
+  }
+
+  // DDS: one tracked_objects sample per published scan, in order, none lost; health for each.
+  ASSERT_EQ(indices.size(), published) << out;
+  for (std::size_t i = 0; i < indices.size(); ++i) EXPECT_EQ(indices[i], i);
+  ASSERT_EQ(healths.size(), published);
+  const HealthSeen& last = healths.back();
+  EXPECT_EQ(last.scan_index, published - 1);
+  EXPECT_EQ(last.deadline_misses, misses);
+  EXPECT_GT(last.end_to_end_us, 0u);
+  for (const char* stage : {"wait", "deskew", "segment", "track", "handover", "publish"}) {
+    EXPECT_TRUE(last.stages.count(stage)) << stage;
+  }
+  EXPECT_GT(last.stages.at("segment"), 0u);
+  EXPECT_EQ(last.drops.at("results.slots_full"), 0u);
+  EXPECT_EQ(last.drops.at("velodyne.scan_slots_full"), 0u);
+  EXPECT_EQ(last.drops.at("dds.errors"), 0u);
+  EXPECT_TRUE(last.drops.count("velodyne.kernel") && last.drops.count("tracking.pool_full"));
+  EXPECT_LE(last.sensors.at("lidar"), 1u);  // ok, or stale if the last scan waited past the timeout
+  EXPECT_EQ(last.sensors.at("can"), 3u);    // not configured
+  EXPECT_TRUE(last.sensors.count("ins"));
+  for (std::size_t i = 1; i < healths.size(); ++i)
+    EXPECT_GE(healths[i].deadline_misses, healths[i - 1].deadline_misses);
+}
+
+TEST(RunCli, WithoutSensorItStopsByItselfAndReportsTheLidarStalled) {
+  const auto dir = fresh_dir("idle");
+  (void)stac::testing::loopback_uri();
+  Child run("run --seconds 1 --domain 142 --bind 127.0.0.1 --port 0 --ins none", dir / "run.log");
+  ASSERT_TRUE(run.started());
+  ASSERT_EQ(run.wait(), 0) << run.output();
+  const std::string out = run.output();
+  EXPECT_EQ(out.find("(signal)"), std::string::npos) << out;
+  EXPECT_NE(out.find("0 received (complete), 0 published"), std::string::npos) << out;
+  EXPECT_NE(out.find("lidar stalled"), std::string::npos) << out;
+  EXPECT_NE(out.find("ins not configured"), std::string::npos) << out;
+}
+
+TEST(RunCli, BadOptionsAreNamed) {
+  const auto r =
+      stac::testing::stac("run --ins carrier-pigeon --seconds 1 --port 0 --bind 127.0.0.1");
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.output.find("--ins"), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace stac::tools
