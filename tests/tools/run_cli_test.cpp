@@ -250,6 +250,56 @@ TEST(RunCli, ReplayedDriveGivesOneTrackedObjectsSamplePerScanAndHealthThatAgrees
     EXPECT_GE(healths[i].deadline_misses, healths[i - 1].deadline_misses);
 }
 
+TEST(ProcessDds, EveryScanOfTheTracksFileIsPublishedInOrderWithItsTracks) {
+  STAC_REQUIRE_SHARED_DATA(kYaml);
+  const auto dir = fresh_dir("process_dds");
+  const std::string pcap = (dir / "run.pcap").string(), tracks = (dir / "tracks.jsonl").string();
+  const auto sim =
+      stac::testing::stac("sim --scenario parking-lot --seed 4 --duration 1.5 --calib " +
+                          stac::testing::shared_data(kYaml).string() + " --out " + pcap +
+                          " --truth " + (dir / "truth.jsonl").string());
+  ASSERT_EQ(sim.code, 0) << sim.output;
+  constexpr std::uint32_t kDomain = 143;
+  const std::string uri = stac::testing::loopback_uri();
+  const dds_entity_t domain = dds_create_domain(kDomain, uri.c_str());
+  ASSERT_GT(domain, 0);
+  const dds_entity_t participant = dds_create_participant(kDomain, nullptr, nullptr);
+  Reader tracked(participant, Types::tracked_objects(), "stac/tracked_objects",
+                 dds::Topic::kTrackedObjects);
+  ASSERT_TRUE(tracked.ok());
+  Child process("process " + pcap + " --tracks " + tracks + " --dds --domain " +
+                    std::to_string(kDomain) + " --dds-wait 20",
+                dir / "process.log");
+  ASSERT_TRUE(process.started());
+  ASSERT_EQ(process.wait(), 0) << process.output();
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> seen;  // scan index, objects
+  for (int quiet = 0; quiet < 100;) {
+    const int n = tracked.drain<Types::TrackedObjects>([&](const Types::TrackedObjects& s) {
+      seen.emplace_back(s.scan_index, s.objects._length);
+    });
+    quiet = n > 0 ? 0 : quiet + 1;
+    dds_sleepfor(DDS_MSECS(10));
+  }
+  dds_delete(participant);
+  dds_delete(domain);
+  std::ifstream in(tracks);
+  std::vector<std::size_t> tracks_per_line;
+  for (std::string line; std::getline(in, line);) {
+    std::size_t n = 0;
+    for (std::size_t at = line.find("\"state\""); at != std::string::npos;
+         at = line.find("\"state\"", at + 1))
+      ++n;
+    tracks_per_line.push_back(n);
+  }
+  ASSERT_GE(tracks_per_line.size(), 12u);
+  ASSERT_EQ(seen.size(), tracks_per_line.size()) << process.output();
+  for (std::size_t i = 0; i < seen.size(); ++i) {
+    EXPECT_EQ(seen[i].first, i);
+    EXPECT_EQ(seen[i].second, tracks_per_line[i]) << "scan " << i;
+  }
+  EXPECT_NE(process.output().find("scans published on tracked_objects"), std::string::npos);
+}
+
 TEST(RunCli, WithoutSensorItStopsByItselfAndReportsTheLidarStalled) {
   const auto dir = fresh_dir("idle");
   (void)stac::testing::loopback_uri();
