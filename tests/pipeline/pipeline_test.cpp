@@ -1,5 +1,6 @@
-// The perception loop of `stac run` (ScanPipeline::process into a result slot, handed to another
-// thread through a SlotExchange) on real decoded scans of a simulated drive, re-fed many times.
+// The perception loop of `stac run` (ScanPipeline::process with a pose history into a result
+// slot, handed to another thread through a SlotExchange) on real decoded scans of a simulated
+// drive, re-fed many times.
 #include <gtest/gtest.h>
 
 #include <atomic>
@@ -83,14 +84,43 @@ void load_scan(const Fixture& f, std::size_t i, velodyne::Scan& out) {
   out.header.stamp_ns += shift;
   out.header.end_stamp_ns += shift;
   if (out.header.device_utc_ns != 0) out.header.device_utc_ns += shift;
+  constexpr std::int64_t kHourUs = 3'600'000'000;
+  out.header.device_usec_first =
+      static_cast<std::uint32_t>((out.header.device_usec_first + shift / 1000) % kHourUs);
   (void)out.points.resize(src.points.size());
   std::copy(src.points.data(), src.points.data() + src.points.size(), out.points.data());
+}
+
+// A vehicle driving east at 5 m/s around the drive's scans, 200 poses a second, for `scans` scans.
+std::unique_ptr<ego::PoseHistory> straight_drive(const Fixture& f, std::size_t scans) {
+  ScanPipeline parked(f.config);
+  ScanResult r = parked.make_result();
+  velodyne::Scan scan(f.scans.front()->points.capacity());
+  load_scan(f, 0, scan);
+  parked.process(scan, nullptr, r);  // the first scan's time on the pose clock
+  constexpr std::int64_t kStep = 5'000'000;
+  const std::int64_t begin = r.stamp_ns - 2'000'000'000;
+  const std::int64_t end =
+      r.stamp_ns + static_cast<std::int64_t>(scans) * 100'000'000 + 2'000'000'000;
+  auto history = std::make_unique<ego::PoseHistory>(
+      ego::PoseHistoryConfig{.capacity = static_cast<std::size_t>((end - begin) / kStep) + 1,
+                             .max_extrapolation_ns = 50'000'000,
+                             .max_gap_ns = 100'000'000});
+  for (std::int64_t t = begin; t <= end; t += kStep) {
+    ego::PoseSample p;
+    p.stamp_ns = t;
+    p.position_m = Eigen::Vector3d(5.0 * static_cast<double>(t - begin) * 1e-9, 0, 0);
+    p.velocity_mps = Eigen::Vector3d(5, 0, 0);
+    EXPECT_TRUE(history->push(p));
+  }
+  return history;
 }
 
 TEST(ScanPipeline, PerceptionLoopWithHandoverMakesNoAllocationOver1000ScansAfterWarmUp) {
   STAC_REQUIRE_SHARED_DATA(kYaml);
   const Fixture f = decoded_drive("alloc");
   ASSERT_GE(f.scans.size(), 5u);
+  const std::unique_ptr<ego::PoseHistory> poses = straight_drive(f, 1020);
   ScanPipeline pipeline(f.config);
   rt::SlotExchange<ScanResult> results(4, [&] { return pipeline.make_result(); });
   velodyne::Scan scan(f.scans.front()->points.capacity());
@@ -109,9 +139,12 @@ TEST(ScanPipeline, PerceptionLoopWithHandoverMakesNoAllocationOver1000ScansAfter
       }
     }
   });
+  std::size_t deskewed = 0;
   const auto step = [&](std::size_t i) {
     load_scan(f, i, scan);
-    pipeline.process(scan, nullptr, results.current());
+    ScanResult& r = results.current();
+    pipeline.process(scan, poses.get(), r);
+    deskewed += r.has_pose ? 1 : 0;
     (void)results.publish();
   };
   for (std::size_t i = 0; i < 20; ++i) step(i);  // warm-up: the tracker's pool fills
@@ -122,6 +155,8 @@ TEST(ScanPipeline, PerceptionLoopWithHandoverMakesNoAllocationOver1000ScansAfter
   consumer.join();
 
   EXPECT_EQ(counter.allocations(), 0u) << counter.bytes() << " bytes";
+  EXPECT_EQ(deskewed, 1020u);  // every scan went through deskew with a pose
+  EXPECT_EQ(pipeline.scans_without_pose(), 0u);
   EXPECT_GT(consumed.load(), 0u);
   EXPECT_EQ(results.published() + results.dropped(), 1020u);  // every result handed over or counted
   EXPECT_GT(tracks_seen.load(), 0u);
