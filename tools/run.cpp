@@ -439,6 +439,7 @@ int run_live(const RunOptions& o) {
   publisher_thread.join();
 
   // The summary.
+  watchdog.update(rt::monotonic_ns());  // stalls since the last published scan count too
   const double elapsed_s = static_cast<double>(rt::monotonic_ns() - start) * 1e-9;
   const auto u = [](std::uint64_t v) { return static_cast<unsigned long long>(v); };
   const auto ms = [](std::int64_t ns) { return static_cast<double>(ns) * 1e-6; };
