@@ -130,15 +130,10 @@ void truth_composition(const TruthScanRecord& truth, const velodyne::Scan& scan,
 
 int run_process(const ProcessOptions& o) {
   const std::filesystem::path config = config_path(o.config);
-  auto velodyne_settings = load_velodyne_settings(config);
-  if (!velodyne_settings) return fail(velodyne_settings.error().message);
-  auto ego_settings = load_ego_settings(config);
-  if (!ego_settings) return fail(ego_settings.error().message);
-  auto segmenter_config = load_segmentation_settings(config);
-  if (!segmenter_config) return fail(segmenter_config.error().message);
-  auto tracker_config = load_tracking_config(config);
-  if (!tracker_config) return fail(tracker_config.error().message);
-  VelodyneSettings& vs = *velodyne_settings;
+  auto settings = load_pipeline_settings(config);
+  if (!settings) return fail(settings.error().message);
+  VelodyneSettings& vs = settings->velodyne;
+  EgoSettings& ego_settings = settings->ego;
   if (!o.calib.empty()) vs.calibration = o.calib == "stream" ? std::filesystem::path{} : std::filesystem::path(o.calib);
   auto calibration = capture_calibration(vs.calibration, o.in, vs.port, vs.assembler.decoder.model);
   if (!calibration) return fail(calibration.error().message);
@@ -149,19 +144,19 @@ int run_process(const ProcessOptions& o) {
     auto t = read_truth_file(o.truth);
     if (!t) return fail(t.error().message);
     truth = std::move(*t);
-    if (!truth.empty() && truth.front().origin && !ego_settings->origin) {
+    if (!truth.empty() && truth.front().origin && !ego_settings.origin) {
       const auto& g = *truth.front().origin;
-      ego_settings->origin = ego::Geodetic{g[0], g[1], g[2]};
+      ego_settings.origin = ego::Geodetic{g[0], g[1], g[2]};
     }
   }
   if (!o.origin.empty()) {
     auto g = parse_origin(o.origin);
     if (!g) return fail(g.error().message);
-    ego_settings->origin = *g;
+    ego_settings.origin = *g;
   }
   std::optional<CapturePoses> poses;
   if (!o.no_deskew) {
-    auto p = load_capture_poses(o.in, *ego_settings);
+    auto p = load_capture_poses(o.in, ego_settings);
     if (!p) return fail(p.error().message);
     poses = std::move(*p);
   }
@@ -173,9 +168,9 @@ int run_process(const ProcessOptions& o) {
 
   // Everything the per-scan loop uses is allocated here.
   velodyne::ScanStream stream(*calibration, vs.assembler, 2);
-  const pipeline::PipelineConfig pc{.deskew = ego_settings->deskew,
-                                    .segmenter = *segmenter_config,
-                                    .tracker = *tracker_config,
+  const pipeline::PipelineConfig pc{.deskew = ego_settings.deskew,
+                                    .segmenter = settings->segmenter,
+                                    .tracker = settings->tracker,
                                     .trailer = velodyne::traits(vs.assembler.decoder.model).trailer,
                                     .clock = pipeline::StageClock::kThreadCpu};
   pipeline::ScanPipeline pipeline(pc);
@@ -284,7 +279,9 @@ int run_process(const ProcessOptions& o) {
                  static_cast<unsigned long long>(pipeline.scans_without_pose()));
   } else {
     std::fprintf(stderr, "  ego         %s: parked sensor, world = vehicle frame\n",
-                 o.no_deskew ? "--no-deskew" : ("no INS stream on port " + std::to_string(ego_settings->ins_port)).c_str());
+                 o.no_deskew
+                     ? "--no-deskew"
+                     : ("no INS stream on port " + std::to_string(ego_settings.ins_port)).c_str());
   }
   const auto& tc = pipeline.tracker().counters();
   std::fprintf(stderr,

@@ -172,14 +172,10 @@ void pose_loop(PoseInputs& in, ego::EgoEstimator& estimator, const ego::PoseHist
 
 int run_live(const RunOptions& o) {
   const std::filesystem::path config = config_path(o.config);
-  auto vs = load_velodyne_settings(config);
-  if (!vs) return fail(vs.error().message);
-  auto es = load_ego_settings(config);
-  if (!es) return fail(es.error().message);
-  auto seg = load_segmentation_settings(config);
-  if (!seg) return fail(seg.error().message);
-  auto trk = load_tracking_config(config);
-  if (!trk) return fail(trk.error().message);
+  auto settings = load_pipeline_settings(config);
+  if (!settings) return fail(settings.error().message);
+  VelodyneSettings& vs = settings->velodyne;
+  EgoSettings& es = settings->ego;
   auto dds_config = load_dds_settings(config);
   if (!dds_config) return fail(dds_config.error().message);
   auto rs = load_run_settings(config);
@@ -193,9 +189,9 @@ int run_live(const RunOptions& o) {
     can_config = *c;
   }
   // Command-line overrides.
-  if (!o.calib.empty()) vs->calibration = o.calib;
-  if (o.port >= 0) vs->port = static_cast<std::uint16_t>(o.port);
-  if (!o.bind.empty()) vs->bind_address = o.bind;
+  if (!o.calib.empty()) vs.calibration = o.calib;
+  if (o.port >= 0) vs.port = static_cast<std::uint16_t>(o.port);
+  if (!o.bind.empty()) vs.bind_address = o.bind;
   if (o.domain >= 0) dds_config->domain_id = static_cast<std::uint32_t>(o.domain);
   if (!o.ins.empty()) {
     auto t = parse_ins_transport(o.ins);
@@ -203,10 +199,10 @@ int run_live(const RunOptions& o) {
     rs->ins = *t;
   }
   if (!o.ins_address.empty()) rs->ins_address = o.ins_address;
-  if (o.ins_port >= 0) es->ins_port = static_cast<std::uint16_t>(o.ins_port);
-  if (vs->calibration.empty())
+  if (o.ins_port >= 0) es.ins_port = static_cast<std::uint16_t>(o.ins_port);
+  if (vs.calibration.empty())
     return fail("'velodyne.calibration': stac run needs the unit's calibration file");
-  auto calibration = velodyne::load_calibration(vs->calibration);
+  auto calibration = velodyne::load_calibration(vs.calibration);
   if (!calibration) return fail(calibration.error().message);
 
   // Start-up: every allocation of the run happens from here to the threads' start.
@@ -214,31 +210,30 @@ int run_live(const RunOptions& o) {
     if (auto r = rt::lock_memory(); !r)
       std::fprintf(stderr, "stac run: warning: %s\n", r.error().message.c_str());
   }
-  const pipeline::PipelineConfig pc{
-      .deskew = es->deskew,
-      .segmenter = *seg,
-      .tracker = *trk,
-      .trailer = velodyne::traits(vs->assembler.decoder.model).trailer,
-      .clock = pipeline::StageClock::kMonotonic};
+  const pipeline::PipelineConfig pc{.deskew = es.deskew,
+                                    .segmenter = settings->segmenter,
+                                    .tracker = settings->tracker,
+                                    .trailer = velodyne::traits(vs.assembler.decoder.model).trailer,
+                                    .clock = pipeline::StageClock::kMonotonic};
   if (auto r = ScanPublishing::check_capacities(pc); !r) return fail(r.error().message);
   auto publisher = dds::Publisher::create(*dds_config);
   if (!publisher) return fail(publisher.error().message);
-  auto receiver = io::UdpReceiver::open({.bind_address = vs->bind_address,
-                                         .port = vs->port,
-                                         .receive_buffer_bytes = vs->receive_buffer_bytes,
-                                         .sender_address = vs->sender_address,
+  auto receiver = io::UdpReceiver::open({.bind_address = vs.bind_address,
+                                         .port = vs.port,
+                                         .receive_buffer_bytes = vs.receive_buffer_bytes,
+                                         .sender_address = vs.sender_address,
                                          .batch = 32,
                                          .max_payload = 2048});
   if (!receiver) return fail(receiver.error().message);
 
   PoseInputs inputs;
   if (rs->ins == InsTransport::kTcp) {
-    auto c = applanix::TcpClient::open({.address = rs->ins_address, .port = es->ins_port});
+    auto c = applanix::TcpClient::open({.address = rs->ins_address, .port = es.ins_port});
     if (!c) return fail(c.error().message);
     inputs.tcp.emplace(std::move(*c));
   } else if (rs->ins == InsTransport::kUdp) {
     auto l = applanix::UdpListener::open({.bind_address = "0.0.0.0",
-                                          .port = es->ins_port,
+                                          .port = es.ins_port,
                                           .receive_buffer_bytes = 1 << 20,
                                           .sender_address = "",
                                           .batch = 32,
@@ -258,14 +253,12 @@ int run_live(const RunOptions& o) {
     inputs.can_reader.emplace(std::move(*reader));
   }
   const bool have_pose_thread = inputs.tcp || inputs.udp || inputs.can_reader;
-  ego::LocalFrame frame(es->origin);
-  EgoSettings& eg = *es;
-  if (can_config) eg.estimator.odometry = can_config->dead_reckoning;
-  ego::PoseHistory history(eg.history);
-  ego::EgoEstimator estimator(eg.estimator, frame, history);
+  ego::LocalFrame frame(es.origin);
+  if (can_config) es.estimator.odometry = can_config->dead_reckoning;
+  ego::PoseHistory history(es.history);
+  ego::EgoEstimator estimator(es.estimator, frame, history);
 
-  velodyne::ScanStream stream(*calibration, vs->assembler,
-                              static_cast<std::size_t>(vs->scan_slots));
+  velodyne::ScanStream stream(*calibration, vs.assembler, static_cast<std::size_t>(vs.scan_slots));
   pipeline::ScanPipeline pipeline(pc);
   rt::SlotExchange<Frame> results(rs->result_slots, [&] { return Frame{pipeline.make_result()}; });
   ScanPublishing scan_publishing(**publisher);
@@ -273,7 +266,7 @@ int run_live(const RunOptions& o) {
   rt::Watchdog watchdog;
   watchdog.start(
       {rs->velodyne_timeout_ns,
-       inputs.tcp || inputs.udp ? eg.estimator.ins_timeout_ns : std::int64_t{0},
+       inputs.tcp || inputs.udp ? es.estimator.ins_timeout_ns : std::int64_t{0},
        can_config ? can_config->dead_reckoning.stale_timeout_ns : std::int64_t{0}, std::int64_t{0}},
       rt::monotonic_ns());
   Shared shared;
@@ -285,10 +278,10 @@ int run_live(const RunOptions& o) {
   sigaction(SIGTERM, &sa, nullptr);
   std::fprintf(
       stderr, "stac run: Velodyne UDP %s:%u, INS %s, CAN %s, DDS domain %u; Ctrl-C stops\n",
-      vs->bind_address.c_str(), receiver->port(),
+      vs.bind_address.c_str(), receiver->port(),
       rs->ins == InsTransport::kTcp
-          ? (rs->ins_address + ":" + std::to_string(eg.ins_port) + " (tcp)").c_str()
-      : rs->ins == InsTransport::kUdp ? ("udp port " + std::to_string(eg.ins_port)).c_str()
+          ? (rs->ins_address + ":" + std::to_string(es.ins_port) + " (tcp)").c_str()
+      : rs->ins == InsTransport::kUdp ? ("udp port " + std::to_string(es.ins_port)).c_str()
                                       : "none (parked sensor)",
       can_config ? can_config->socketcan.interface.c_str() : "none", dds_config->domain_id);
 
@@ -514,7 +507,7 @@ void add_run_command(CLI::App& app) {
   cmd->add_option("--ins", o->ins, "INS transport: tcp, udp or none (default: run.ins)");
   cmd->add_option("--ins-address", o->ins_address,
                   "INS TCP server IPv4 address (default: run.ins_address)");
-  cmd->add_option("--ins-port", o->ins_port, "INS port (default: eg.ins_port)")
+  cmd->add_option("--ins-port", o->ins_port, "INS port (default: es.ins_port)")
       ->check(CLI::Range(1, 65535));
   cmd->callback([o] {
     if (const int code = run_live(*o); code != 0) throw CLI::RuntimeError(code);

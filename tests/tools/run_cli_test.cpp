@@ -33,10 +33,7 @@ using Types = dds::IdlTypes<false>;
 constexpr const char* kYaml = "velodyne/calib/rosdrivers_64e_s2.1-sztaki.yaml";
 
 std::filesystem::path fresh_dir(const std::string& name) {
-  const auto d = std::filesystem::temp_directory_path() / ("stac_run_" + name);
-  std::filesystem::remove_all(d);
-  std::filesystem::create_directories(d);
-  return d;
+  return stac::testing::fresh_dir("stac_run_" + name);
 }
 
 // A port the kernel just gave out on 127.0.0.1 (closed again for the child to bind).
