@@ -5,6 +5,8 @@
 //   publisher  result slots -> DDS tracked_objects, segments, ego_pose, health; deadline monitor
 // Everything is allocated before the threads start. SIGINT/SIGTERM (or --seconds/--scans) stop
 // the receivers; perception and the publisher drain what was received, then a summary is printed.
+#include <pthread.h>
+
 #include <csignal>
 #include <cstdio>
 #include <optional>
@@ -276,6 +278,13 @@ int run_live(const RunOptions& o) {
   sa.sa_handler = on_signal;
   sigaction(SIGINT, &sa, nullptr);
   sigaction(SIGTERM, &sa, nullptr);
+  // The worker threads start with SIGINT and SIGTERM blocked, so only the main thread takes them
+  // (no receive call is interrupted); it unblocks them once the threads run.
+  sigset_t stop_signals;
+  sigemptyset(&stop_signals);
+  sigaddset(&stop_signals, SIGINT);
+  sigaddset(&stop_signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
   std::fprintf(
       stderr, "stac run: Velodyne UDP %s:%u, INS %s, CAN %s, DDS domain %u; Ctrl-C stops\n",
       vs.bind_address.c_str(), receiver->port(),
@@ -417,6 +426,7 @@ int run_live(const RunOptions& o) {
     }
   });
 
+  pthread_sigmask(SIG_UNBLOCK, &stop_signals, nullptr);
   // The main thread waits for a stop: a signal, --seconds, or --scans published.
   const std::int64_t start = rt::monotonic_ns();
   while (g_signal == 0) {
