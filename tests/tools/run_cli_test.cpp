@@ -247,6 +247,45 @@ TEST(RunCli, ReplayedDriveGivesOneTrackedObjectsSamplePerScanAndHealthThatAgrees
     EXPECT_GE(healths[i].deadline_misses, healths[i - 1].deadline_misses);
 }
 
+TEST(RunCli, InsOverUdpDeskewsTheScansAndSigtermStopsAfterPublishingWhatWasReceived) {
+  STAC_REQUIRE_SHARED_DATA(kYaml);
+  const auto dir = fresh_dir("ins_udp");
+  const std::string pcap = (dir / "run.pcap").string();
+  const auto sim =
+      stac::testing::stac("sim --scenario parking-lot --seed 6 --duration 2 --ins-udp --calib " +
+                          stac::testing::shared_data(kYaml).string() + " --out " + pcap +
+                          " --truth " + (dir / "truth.jsonl").string());
+  ASSERT_EQ(sim.code, 0) << sim.output;
+  (void)stac::testing::loopback_uri();
+  const std::uint16_t lidar = free_port(SOCK_DGRAM), ins = free_port(SOCK_DGRAM);
+  ASSERT_TRUE(lidar != 0 && ins != 0 && lidar != ins);
+  Child run("run --domain 144 --bind 127.0.0.1 --port " + std::to_string(lidar) +
+                " --ins udp --ins-port " + std::to_string(ins),
+            dir / "run.log");
+  ASSERT_TRUE(run.started());
+  for (int i = 0; i < 1000 && run.output().find("Ctrl-C stops") == std::string::npos; ++i)
+    dds_sleepfor(DDS_MSECS(10));
+  // The INS datagrams and the lidar packets of the capture, each to its port, both at the recorded
+  // pace.
+  Child ins_replay("replay --in " + pcap + " --to 127.0.0.1 --port " + std::to_string(ins) +
+                       " --filter-port 5602",
+                   dir / "ins_replay.log");
+  const auto replay = stac::testing::stac("replay --in " + pcap + " --to 127.0.0.1 --port " +
+                                          std::to_string(lidar) + " --filter-port 2368");
+  ASSERT_EQ(replay.code, 0) << replay.output;
+  ASSERT_EQ(ins_replay.wait(), 0) << ins_replay.output();
+  ASSERT_EQ(run.stop(SIGTERM), 0) << run.output();
+  const std::string out = run.output();
+  EXPECT_NE(out.find("(signal)"), std::string::npos) << out;
+  const std::uint64_t received = summary_number(out, R"((\d+) received \(complete\))");
+  EXPECT_EQ(received, summary_number(out, R"((\d+) published,)")) << out;
+  EXPECT_GE(received, 12u) << out;
+  EXPECT_GT(summary_number(out, R"((\d+) INS fixes)"), 300u) << out;  // 200 Hz for about 2 s
+  EXPECT_LE(summary_number(out, R"((\d+) scans without a pose)"), 2u)
+      << out;  // before the first fixes only
+  EXPECT_EQ(summary_number(out, R"((\d+) receive errors)"), 0u) << out;
+}
+
 TEST(ProcessDds, EveryScanOfTheTracksFileIsPublishedInOrderWithItsTracks) {
   STAC_REQUIRE_SHARED_DATA(kYaml);
   const auto dir = fresh_dir("process_dds");
