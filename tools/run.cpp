@@ -77,6 +77,7 @@ struct Frame {
 
 // Counters shared between the threads (each written by one thread).
 struct Shared {
+  std::atomic<bool> stopping{false};  // main: stop requested; the receiver drains its socket first
   std::atomic<bool> receiver_done{false}, perception_done{false};
   std::atomic<std::uint64_t> packets{0}, kernel_drops{0}, receive_errors{0};
   std::atomic<std::uint64_t> scans{0}, incomplete{0}, published{0}, publish_errors{0};
@@ -128,6 +129,7 @@ void pose_loop(PoseInputs& in, ego::EgoEstimator& estimator, const ego::PoseHist
   std::vector<std::uint8_t> bytes(16384);
   std::vector<can::Frame> frames(64);
   std::uint64_t session = 0;
+  bool can_closed = false;
   applanix::Parsed m;
   const int timeout_ms = in.can_reader ? 5 : 50;  // both inputs polled in turn when CAN is read
   for (;;) {
@@ -153,9 +155,14 @@ void pose_loop(PoseInputs& in, ego::EgoEstimator& estimator, const ego::PoseHist
       if (n == io::UdpReceiver::kStopped) stopped = true;
       while (n > 0 && in.udp->next(m)) take(in.udp->parser());
     }
-    if (in.can_reader) {
+    if (in.can_reader && !can_closed) {
       const int n = in.can_reader->read(frames, in.tcp || in.udp ? 0 : timeout_ms);
-      if (n == can::SocketCanReader::kStopped || n == can::SocketCanReader::kClosed) stopped = true;
+      if (n == can::SocketCanReader::kStopped) stopped = true;
+      if (n == can::SocketCanReader::kClosed) {  // the interface went away: the INS goes on
+        std::fprintf(stderr, "stac run: warning: the CAN interface closed; no more odometry\n");
+        can_closed = true;
+        if (!in.tcp && !in.udp) return;
+      }
       for (int i = 0; i < n; ++i) {
         const can::OdometryUpdate u = in.odometry->decode(frames[static_cast<std::size_t>(i)]);
         if (!u.has_speed && !u.has_yaw_rate) continue;
@@ -298,8 +305,10 @@ int run_live(const RunOptions& o) {
     start_thread("receiver", rs->receiver);
     std::array<io::Datagram, 32> batch{};
     for (;;) {
-      const int n = receiver->receive(batch, 100);
-      if (n == io::UdpReceiver::kStopped) break;
+      // After a stop request: what the socket already holds is still read, then the thread ends.
+      const bool stopping = shared.stopping.load(std::memory_order_acquire);
+      const int n = receiver->receive(batch, stopping ? 0 : 100);
+      if (n == io::UdpReceiver::kStopped || (stopping && n == 0)) break;
       if (n == io::UdpReceiver::kError) {
         shared.receive_errors.fetch_add(1, std::memory_order_relaxed);
         idle();
@@ -434,7 +443,7 @@ int run_live(const RunOptions& o) {
     if (o.scans > 0 && shared.published.load(std::memory_order_relaxed) >= o.scans) break;
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
-  receiver->stop();
+  shared.stopping.store(true, std::memory_order_release);
   inputs.stop();
   receiver_thread.join();
   if (pose_thread.joinable()) pose_thread.join();

@@ -216,8 +216,8 @@ TEST(RunCli, ReplayedDriveGivesOneTrackedObjectsSamplePerScanAndHealthThatAgrees
   const std::uint64_t published = summary_number(out, R"((\d+) published,)");
   const std::uint64_t misses = summary_number(out, R"((\d+) misses of)");
   EXPECT_EQ(received, published) << out;
-  EXPECT_GE(published, 20u)
-      << out;  // 3 s at 10 Hz: ~28 complete scans unless the kernel dropped packets
+  // 3 s at 10 Hz: ~28 complete scans, unless packets were lost, which must then be counted.
+  EXPECT_TRUE(published >= 20u || summary_number(out, R"((\d+) dropped by the kernel)") > 0) << out;
   EXPECT_GT(summary_number(out, R"((\d+) INS fixes)"), 0u) << out;
   for (const char* word :
        {"end-to-end", "p50", "p99", "max", "deskew", "segment", "track", "publish"}) {
@@ -266,10 +266,12 @@ TEST(RunCli, InsOverUdpDeskewsTheScansAndSigtermStopsAfterPublishingWhatWasRecei
   for (int i = 0; i < 1000 && run.output().find("Ctrl-C stops") == std::string::npos; ++i)
     dds_sleepfor(DDS_MSECS(10));
   // The INS datagrams and the lidar packets of the capture, each to its port, both at the recorded
-  // pace.
+  // pace; the INS replay starts half a second ahead so that a scan's pose has always arrived
+  // (a pose is only extrapolated 50 ms past the newest, ego.max_extrapolation_s).
   Child ins_replay("replay --in " + pcap + " --to 127.0.0.1 --port " + std::to_string(ins) +
                        " --filter-port 5602",
                    dir / "ins_replay.log");
+  dds_sleepfor(DDS_MSECS(500));
   const auto replay = stac::testing::stac("replay --in " + pcap + " --to 127.0.0.1 --port " +
                                           std::to_string(lidar) + " --filter-port 2368");
   ASSERT_EQ(replay.code, 0) << replay.output;
@@ -279,7 +281,8 @@ TEST(RunCli, InsOverUdpDeskewsTheScansAndSigtermStopsAfterPublishingWhatWasRecei
   EXPECT_NE(out.find("(signal)"), std::string::npos) << out;
   const std::uint64_t received = summary_number(out, R"((\d+) received \(complete\))");
   EXPECT_EQ(received, summary_number(out, R"((\d+) published,)")) << out;
-  EXPECT_GE(received, 12u) << out;
+  // 2 s at 10 Hz: ~18 complete scans, unless packets were lost, which must then be counted.
+  EXPECT_TRUE(received >= 12u || summary_number(out, R"((\d+) dropped by the kernel)") > 0) << out;
   EXPECT_GT(summary_number(out, R"((\d+) INS fixes)"), 300u) << out;  // 200 Hz for about 2 s
   EXPECT_LE(summary_number(out, R"((\d+) scans without a pose)"), 2u)
       << out;  // before the first fixes only
