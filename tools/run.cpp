@@ -73,6 +73,7 @@ struct Frame {
   std::uint64_t incomplete = 0;     // cumulative, as seen by perception at this scan
   std::uint64_t packets_lost = 0;
   std::uint64_t segment_overflow = 0;
+  std::uint64_t without_pose = 0;  // scans not deskewed (no pose at their time)
 };
 
 // Counters shared between the threads (each written by one thread).
@@ -361,6 +362,7 @@ int run_live(const RunOptions& o) {
       f.incomplete = incomplete;
       f.packets_lost = packets_lost;
       f.segment_overflow = overflow;
+      f.without_pose = pipeline.scans_without_pose();
       f.finished_ns = rt::realtime_ns();
       shared.scans.fetch_add(1, std::memory_order_relaxed);
       (void)results.publish();  // full: dropped and counted by the exchange; perception goes on
@@ -371,7 +373,7 @@ int run_live(const RunOptions& o) {
     start_thread("publisher", rs->publisher);
     std::array<std::int64_t, kHealthStages> stage_ns{};
     std::array<dds::StageLatencyIn, kHealthStages> stages{};
-    std::array<dds::DropCountIn, 10> drops{};
+    std::array<dds::DropCountIn, 11> drops{};
     std::array<dds::SensorStatusIn, 3> sensors{};
     bool reported = false;
     for (;;) {
@@ -411,7 +413,8 @@ int run_live(const RunOptions& o) {
           {"tracking.pool_full", tc.pool_overflow},
           {"tracking.detections", tc.dropped_detections},
           {"dds.errors", shared.publish_errors.load(std::memory_order_relaxed)},
-          {"pose.rejected", history.rejected()}};
+          {"pose.rejected", history.rejected()},
+          {"ego.scans_without_pose", f->without_pose}};
       for (std::size_t i = 0; i < sensors.size(); ++i) {
         const rt::InputStatus s = watchdog.status(i, now);
         sensors[i] = {kInputNames[i], sensor_status(s),
