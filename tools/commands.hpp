@@ -21,6 +21,7 @@ CLI::App* add_decode_applanix_command(CLI::App& decode);
 void add_replay_command(CLI::App& app);
 void add_sim_compare_command(CLI::App& app);
 void add_echo_command(CLI::App& app);
+void add_run_command(CLI::App& app);
 
 // Prints "stac: <message>" on stderr and returns the exit code 1, for command callbacks.
 int fail(const std::string& message);

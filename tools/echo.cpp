@@ -5,6 +5,7 @@
 
 #include "dds/idl_types.hpp"
 #include "dds/topics.hpp"
+#include "rt/deadline_monitor.hpp"
 #include "tools/commands.hpp"
 #include "tools/dds_settings.hpp"
 #include "tools/settings.hpp"
@@ -17,6 +18,7 @@ struct EchoOptions {
   int count = 0;
   double timeout_s = 10;
   int domain = -1;
+  bool latency = false;
 };
 
 template <class Time>
@@ -117,6 +119,13 @@ int run_echo(const EchoOptions& o) {
   if (reader < 0) return fail("creating a DDS reader of " + name + ": " + dds_strretcode(reader));
   std::fprintf(stderr, "stac echo: listening on %s (domain %u)\n", name.c_str(), c.domain_id);
 
+  // Woken by a read condition (no polling), so the receive time is when the sample arrived.
+  const dds_entity_t waitset = dds_create_waitset(participant);
+  const dds_entity_t condition = dds_create_readcondition(reader, DDS_ANY_STATE);
+  if (waitset < 0 || condition < 0 || dds_waitset_attach(waitset, condition, reader) < 0) {
+    return fail("creating a DDS waitset for " + name);
+  }
+  rt::LatencyHistogram latency(1'000'000'000, 100'000);  // publish -> receive, 10 us bins over 1 s
   int received = 0;
   const dds_time_t end = dds_time() + static_cast<dds_duration_t>(o.timeout_s * 1e9);
   while ((o.count == 0 || received < o.count) && dds_time() < end) {
@@ -125,15 +134,26 @@ int run_echo(const EchoOptions& o) {
     const dds_return_t n = dds_take(reader, samples, &info, 1, 1);
     if (n < 0) return fail(std::string("reading DDS: ") + dds_strretcode(n));
     if (n == 0) {
-      dds_sleepfor(DDS_MSECS(5));
+      (void)dds_waitset_wait_until(waitset, nullptr, 0, end);
       continue;
     }
+    const dds_time_t now = dds_time();
     if (info.valid_data) {
+      latency.add(now - info.source_timestamp);
       c.ros2_names ? print_sample<true>(*topic, samples[0]) : print_sample<false>(*topic, samples[0]);
       std::fflush(stdout);
       ++received;
     }
     dds_return_loan(reader, samples, n);
+  }
+  if (o.latency && latency.count() > 0) {
+    const auto us = [](std::int64_t ns) { return static_cast<double>(ns) * 1e-3; };
+    std::fprintf(
+        stderr,
+        "stac echo: publish -> receive latency over %llu samples: p50 %.0f us, p99 %.0f us, "
+        "max %.0f us (writer's source timestamp to this reader's take, one host clock)\n",
+        static_cast<unsigned long long>(latency.count()), us(latency.percentile(0.5)),
+        us(latency.percentile(0.99)), us(latency.max_ns()));
   }
   dds_delete(participant);
   if (o.count > 0 && received < o.count) {
@@ -161,6 +181,8 @@ void add_echo_command(CLI::App& app) {
   cmd->add_option("--timeout", o->timeout_s, "give up after this many seconds")->check(CLI::PositiveNumber);
   cmd->add_option("--domain", o->domain, "DDS domain id (default: dds.domain_id of the config)");
   cmd->add_option("--config", o->config, "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
+  cmd->add_flag("--latency", o->latency,
+                "at the end, print the publish -> receive latency (p50, p99, max) of the samples");
   cmd->callback([o] {
     if (const int rc = run_echo(*o); rc != 0) throw CLI::RuntimeError(rc);
   });

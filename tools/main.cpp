@@ -36,6 +36,7 @@ int main(int argc, char** argv) {
       "  stac segment --in scan.bin --out segments.csv --png bev.png  # obstacles of one scan\n"
       "  stac process run.pcap --truth run.truth.jsonl --tracks run.tracks.jsonl  # segment+track\n"
       "  stac echo tracked_objects --count 10        # print what arrives on a DDS topic\n"
+      "  stac run --seconds 60                       # live: sensor UDP -> perception -> DDS\n"
       "Run 'stac <command> --help' for the options of each command.");
   stac::tools::add_decode_command(app);
   stac::tools::add_record_command(app);
@@ -49,6 +50,7 @@ int main(int argc, char** argv) {
   stac::tools::add_segment_command(app);
   stac::tools::add_process_command(app);
   stac::tools::add_echo_command(app);
+  stac::tools::add_run_command(app);
   CLI11_PARSE(app, argc, argv);
   return 0;
 }

@@ -13,13 +13,12 @@
 
 #include "drivers/io/pcap_reader.hpp"
 #include "drivers/velodyne/scan_stream.hpp"
-#include "ego/deskew.hpp"
-#include "ego/time_sync.hpp"
-#include "perception/segmentation/segmenter.hpp"
-#include "perception/tracking/tracker.hpp"
+#include "pipeline/scan_pipeline.hpp"
 #include "tools/capture_poses.hpp"
 #include "tools/commands.hpp"
+#include "tools/dds_settings.hpp"
 #include "tools/progress.hpp"
+#include "tools/scan_publishing.hpp"
 #include "tools/sensor_status.hpp"
 #include "tools/settings.hpp"
 #include "tools/tracks_jsonl.hpp"
@@ -30,7 +29,35 @@ namespace {
 struct ProcessOptions {
   std::string in, tracks, truth, config, calib, origin;
   bool no_deskew = false;
+  bool dds = false;
+  int domain = -1;
+  double dds_wait_s = 0;
 };
+
+// --dds: the publishing edge, created before the loop; with --dds-wait, waits for a reader.
+struct ProcessDds {
+  std::unique_ptr<dds::Publisher> publisher;
+  std::optional<ScanPublishing> scans;
+};
+rt::Result<ProcessDds> open_dds(const std::filesystem::path& config, const ProcessOptions& o,
+                                const pipeline::PipelineConfig& pc) {
+  if (auto r = ScanPublishing::check_capacities(pc); !r)
+    return rt::Unexpected<rt::Error>{r.error()};
+  auto settings = load_dds_settings(config);
+  if (!settings) return rt::Unexpected<rt::Error>{settings.error()};
+  if (o.domain >= 0) settings->domain_id = static_cast<std::uint32_t>(o.domain);
+  auto p = dds::Publisher::create(*settings);
+  if (!p) return rt::Unexpected<rt::Error>{p.error()};
+  ProcessDds out{std::move(*p), std::nullopt};
+  out.scans.emplace(*out.publisher);
+  const dds_entity_t writer = out.publisher->writer(dds::Topic::kTrackedObjects);
+  for (double waited = 0; waited < o.dds_wait_s; waited += 0.01) {
+    dds_publication_matched_status_t m{};
+    if (dds_get_publication_matched_status(writer, &m) == 0 && m.current_count > 0) break;
+    dds_sleepfor(DDS_MSECS(10));
+  }
+  return out;
+}
 
 // CPU time of this thread (ns): a stage's cost on one core, whatever else the machine does.
 std::int64_t cpu_ns() {
@@ -103,15 +130,10 @@ void truth_composition(const TruthScanRecord& truth, const velodyne::Scan& scan,
 
 int run_process(const ProcessOptions& o) {
   const std::filesystem::path config = config_path(o.config);
-  auto velodyne_settings = load_velodyne_settings(config);
-  if (!velodyne_settings) return fail(velodyne_settings.error().message);
-  auto ego_settings = load_ego_settings(config);
-  if (!ego_settings) return fail(ego_settings.error().message);
-  auto segmenter_config = load_segmentation_settings(config);
-  if (!segmenter_config) return fail(segmenter_config.error().message);
-  auto tracker_config = load_tracking_config(config);
-  if (!tracker_config) return fail(tracker_config.error().message);
-  VelodyneSettings& vs = *velodyne_settings;
+  auto settings = load_pipeline_settings(config);
+  if (!settings) return fail(settings.error().message);
+  VelodyneSettings& vs = settings->velodyne;
+  EgoSettings& ego_settings = settings->ego;
   if (!o.calib.empty()) vs.calibration = o.calib == "stream" ? std::filesystem::path{} : std::filesystem::path(o.calib);
   auto calibration = capture_calibration(vs.calibration, o.in, vs.port, vs.assembler.decoder.model);
   if (!calibration) return fail(calibration.error().message);
@@ -122,19 +144,19 @@ int run_process(const ProcessOptions& o) {
     auto t = read_truth_file(o.truth);
     if (!t) return fail(t.error().message);
     truth = std::move(*t);
-    if (!truth.empty() && truth.front().origin && !ego_settings->origin) {
+    if (!truth.empty() && truth.front().origin && !ego_settings.origin) {
       const auto& g = *truth.front().origin;
-      ego_settings->origin = ego::Geodetic{g[0], g[1], g[2]};
+      ego_settings.origin = ego::Geodetic{g[0], g[1], g[2]};
     }
   }
   if (!o.origin.empty()) {
     auto g = parse_origin(o.origin);
     if (!g) return fail(g.error().message);
-    ego_settings->origin = *g;
+    ego_settings.origin = *g;
   }
   std::optional<CapturePoses> poses;
   if (!o.no_deskew) {
-    auto p = load_capture_poses(o.in, *ego_settings);
+    auto p = load_capture_poses(o.in, ego_settings);
     if (!p) return fail(p.error().message);
     poses = std::move(*p);
   }
@@ -146,93 +168,82 @@ int run_process(const ProcessOptions& o) {
 
   // Everything the per-scan loop uses is allocated here.
   velodyne::ScanStream stream(*calibration, vs.assembler, 2);
-  ego::Deskewer deskewer(ego_settings->deskew);
-  segmentation::Segmenter segmenter(*segmenter_config);
-  segmentation::Segments segments = segmenter.make_segments();
-  tracking::Tracker tracker(*tracker_config);
-  tracking::TrackerOutput tracked(tracker_config->max_tracks);
-  std::vector<tracking::Detection> detections;
-  detections.reserve(segmenter_config->max_segments);
-  const velodyne::TrailerKind trailer = velodyne::traits(vs.assembler.decoder.model).trailer;
-  const Eigen::Isometry3d sensor_T_vehicle = ego_settings->deskew.vehicle_T_sensor.inverse();
+  const pipeline::PipelineConfig pc{.deskew = ego_settings.deskew,
+                                    .segmenter = settings->segmenter,
+                                    .tracker = settings->tracker,
+                                    .trailer = velodyne::traits(vs.assembler.decoder.model).trailer,
+                                    .clock = pipeline::StageClock::kThreadCpu};
+  pipeline::ScanPipeline pipeline(pc);
+  pipeline::ScanResult result = pipeline.make_result();
+  std::optional<ProcessDds> dds_out;
+  if (o.dds) {
+    auto d = open_dds(config, o, pc);
+    if (!d) return fail(d.error().message);
+    dds_out.emplace(std::move(*d));
+  }
+  std::uint64_t dds_errors = 0;
 
   std::vector<Stage> stages{{"decode", {}}, {"deskew", {}}, {"segment", {}}, {"track", {}}, {"total", {}}};
-  std::uint64_t scans = 0, without_pose = 0, truth_matched = 0;
+  std::uint64_t scans = 0, truth_matched = 0;
   std::size_t truth_next = 0;
   std::string line;
   std::int64_t decode_ns = 0;
-  ego::ScanClockSource clock_source = ego::ScanClockSource::kReceive;
 
   auto handle = [&](velodyne::Scan& scan) {
-    const std::int64_t t0 = cpu_ns();
-    const ego::ScanClock clock = ego::scan_clock(
-        scan.header, trailer,
-        poses ? std::optional<std::int64_t>(poses->history->newest_stamp_ns()) : std::nullopt);
-    clock_source = clock.source;
-    Eigen::Isometry3d world_T_sensor = ego_settings->deskew.vehicle_T_sensor;  // parked: vehicle = world
-    Eigen::Isometry3d world_T_vehicle_start = Eigen::Isometry3d::Identity();
-    if (poses) {
-      const ego::DeskewResult r = deskewer.apply(scan, *poses->history, clock.scan_to_pose_ns);
-      if (r.ok()) {
-        world_T_sensor = r.world_T_sensor;
-        const ego::PoseLookup start = poses->history->at(scan.header.stamp_ns + clock.scan_to_pose_ns);
-        world_T_vehicle_start = start.ok() ? ego::to_isometry(start.pose) : r.world_T_sensor * sensor_T_vehicle;
-      } else {
-        ++without_pose;
-      }
-    }
-    const std::int64_t t1 = cpu_ns();
-    segmenter.segment(segmentation::PointView{&scan.points.data()->x, scan.points.size(), sizeof(velodyne::Point)},
-                      segments);
-    const std::int64_t t2 = cpu_ns();
-    detections.clear();
-    const double sensor_yaw = yaw_of(world_T_sensor.linear());
-    for (std::size_t i = 0; i < segments.segments.size(); ++i) {
-      const segmentation::Segment& s = segments.segments[i];
-      const Eigen::Vector3d c = world_T_sensor * Eigen::Vector3d(s.centroid[0], s.centroid[1], s.centroid[2]);
-      const Eigen::Vector3d b = world_T_sensor * Eigen::Vector3d(s.box.cx, s.box.cy, s.box.cz);
-      detections.push_back({c.cast<float>(), b.head<2>().cast<float>(), s.box.length, s.box.width, s.box.height,
-                            static_cast<float>(s.box.yaw + sensor_yaw), s.count, static_cast<std::uint32_t>(i)});
-      (void)tracking::complete_end_on(*tracker_config, world_T_sensor.translation().head<2>().cast<float>(),
-                                      detections.back());
-    }
-    const std::int64_t stamp = scan.header.stamp_ns + clock.scan_to_pose_ns;
-    tracker.update(stamp, detections, tracked);
-    const std::int64_t t3 = cpu_ns();
+    pipeline.process(scan, poses ? poses->history.get() : nullptr, result);
+    const std::int64_t* ns = result.stage_ns;
     stages[0].ms.push_back(static_cast<double>(decode_ns) * 1e-6);
-    stages[1].ms.push_back(static_cast<double>(t1 - t0) * 1e-6);
-    stages[2].ms.push_back(static_cast<double>(t2 - t1) * 1e-6);
-    stages[3].ms.push_back(static_cast<double>(t3 - t2) * 1e-6);
-    stages[4].ms.push_back(static_cast<double>(decode_ns + t3 - t0) * 1e-6);
+    stages[1].ms.push_back(static_cast<double>(ns[pipeline::kDeskew]) * 1e-6);
+    stages[2].ms.push_back(static_cast<double>(ns[pipeline::kSegment]) * 1e-6);
+    stages[3].ms.push_back(static_cast<double>(ns[pipeline::kTrack]) * 1e-6);
+    stages[4].ms.push_back(static_cast<double>(decode_ns + ns[pipeline::kDeskew] +
+                                               ns[pipeline::kSegment] + ns[pipeline::kTrack]) *
+                           1e-6);
     decode_ns = 0;
 
     // The record (outside the timed stages).
+    const Eigen::Isometry3d& start = result.world_T_vehicle_start;
     TracksScan rec;
-    rec.scan = scan.header.sequence;
-    rec.stamp_ns = stamp;
-    rec.ego = {world_T_vehicle_start.translation().x(), world_T_vehicle_start.translation().y(),
-               world_T_vehicle_start.translation().z(), yaw_of(world_T_vehicle_start.linear())};
-    rec.segments.resize(segments.segments.size());
-    for (std::size_t i = 0; i < segments.segments.size(); ++i) {
-      const segmentation::Segment& s = segments.segments[i];
-      const Eigen::Vector3d b = world_T_sensor * Eigen::Vector3d(s.box.cx, s.box.cy, s.box.cz);
-      rec.segments[i] = {static_cast<std::uint32_t>(i), s.count, b.x(), b.y(), b.z(), s.box.length,
-                         s.box.width, s.box.height, s.box.yaw + sensor_yaw, {}, false};
+    rec.scan = result.sequence;
+    rec.stamp_ns = result.stamp_ns;
+    rec.ego = {start.translation().x(), start.translation().y(), start.translation().z(),
+               yaw_of(start.linear())};
+    rec.segments.resize(result.segments.segments.size());
+    for (std::size_t i = 0; i < result.segments.segments.size(); ++i) {
+      const pipeline::WorldBox b = result.world_box(i);
+      rec.segments[i] = {static_cast<std::uint32_t>(i),
+                         result.segments.segments[i].count,
+                         b.x,
+                         b.y,
+                         b.z,
+                         b.length,
+                         b.width,
+                         b.height,
+                         b.yaw,
+                         {},
+                         false};
     }
-    for (const tracking::Track& t : tracked.tracks) rec.tracks.push_back(track_record(t));
+    for (const tracking::Track& t : result.tracked.tracks) rec.tracks.push_back(track_record(t));
     if (!truth.empty()) {
+      const std::int64_t stamp = result.stamp_ns;
       while (truth_next + 1 < truth.size() &&
              std::llabs(truth[truth_next + 1].stamp_ns - stamp) <= std::llabs(truth[truth_next].stamp_ns - stamp)) {
         ++truth_next;
       }
       if (std::llabs(truth[truth_next].stamp_ns - stamp) <= 1'000'000) {
-        truth_composition(truth[truth_next], scan, segments, world_T_sensor, rec.segments);
+        truth_composition(truth[truth_next], scan, result.segments, result.world_T_sensor,
+                          rec.segments);
         ++truth_matched;
       }
     }
     line.clear();
     append_json_line(rec, line);
     out << line;
+    if (dds_out) {
+      auto st = dds_out->scans->publish(result, scans, result.has_pose ? 1 : 0);
+      if (!st && dds_errors++ == 0)
+        std::fprintf(stderr, "stac process: DDS: %s\n", st.error().message.c_str());
+    }
     ++scans;
   };
 
@@ -258,23 +269,38 @@ int run_process(const ProcessOptions& o) {
   std::fprintf(stderr, "stac process: %s -> %s: %llu complete scans\n", o.in.c_str(), o.tracks.c_str(),
                static_cast<unsigned long long>(scans));
   if (poses) {
-    std::fprintf(stderr, "  ego         %llu INS fixes (%llu skipped before a GPS week, %llu not aligned); "
+    std::fprintf(stderr,
+                 "  ego         %llu INS fixes (%llu skipped before a GPS week, %llu not aligned); "
                  "scan clock: %s; %llu scans without a pose (not deskewed)\n",
                  static_cast<unsigned long long>(poses->counters.ins_fixes),
                  static_cast<unsigned long long>(poses->counters.no_absolute_time),
-                 static_cast<unsigned long long>(poses->counters.not_aligned), ego::to_string(clock_source),
-                 static_cast<unsigned long long>(without_pose));
+                 static_cast<unsigned long long>(poses->counters.not_aligned),
+                 ego::to_string(result.clock_source),
+                 static_cast<unsigned long long>(pipeline.scans_without_pose()));
   } else {
     std::fprintf(stderr, "  ego         %s: parked sensor, world = vehicle frame\n",
-                 o.no_deskew ? "--no-deskew" : ("no INS stream on port " + std::to_string(ego_settings->ins_port)).c_str());
+                 o.no_deskew
+                     ? "--no-deskew"
+                     : ("no INS stream on port " + std::to_string(ego_settings.ins_port)).c_str());
   }
-  const auto& tc = tracker.counters();
-  std::fprintf(stderr, "  tracks      %llu spawned, %llu live at the end; pool overflow %llu, detections dropped %llu\n",
-               static_cast<unsigned long long>(tc.spawned), static_cast<unsigned long long>(tracker.live_tracks()),
-               static_cast<unsigned long long>(tc.pool_overflow), static_cast<unsigned long long>(tc.dropped_detections));
+  const auto& tc = pipeline.tracker().counters();
+  std::fprintf(stderr,
+               "  tracks      %llu spawned, %llu live at the end; pool overflow %llu, detections "
+               "dropped %llu\n",
+               static_cast<unsigned long long>(tc.spawned),
+               static_cast<unsigned long long>(pipeline.tracker().live_tracks()),
+               static_cast<unsigned long long>(tc.pool_overflow),
+               static_cast<unsigned long long>(tc.dropped_detections));
   if (!truth.empty()) {
     std::fprintf(stderr, "  truth       %llu of %llu scans matched to a truth scan (segment composition written)\n",
                  static_cast<unsigned long long>(truth_matched), static_cast<unsigned long long>(scans));
+  }
+  if (dds_out) {
+    std::fprintf(
+        stderr,
+        "  dds         %llu scans published on tracked_objects, segments, ego_pose; %llu failed\n",
+        static_cast<unsigned long long>(scans - dds_errors),
+        static_cast<unsigned long long>(dds_errors));
   }
   print_stats(stages);
   if (scans == 0) return fail(o.in + ": no complete scan in the capture");
@@ -303,6 +329,15 @@ void add_process_command(CLI::App& app) {
   cmd->add_option("--origin", o->origin,
                   "LAT,LON,ALT of the world frame (default: the truth's, else the config's ego.origin)");
   cmd->add_flag("--no-deskew", o->no_deskew, "ignore the INS stream: no deskew, sensor frame = world");
+  cmd->add_flag("--dds", o->dds,
+                "also publish every scan's tracked_objects, segments and ego_pose on DDS (the "
+                "config's dds:)");
+  cmd->add_option("--domain", o->domain, "DDS domain with --dds (default: dds.domain_id)")
+      ->check(CLI::Range(0, 230));
+  cmd->add_option(
+         "--dds-wait", o->dds_wait_s,
+         "with --dds: wait up to S seconds for a tracked_objects reader before the first scan")
+      ->check(CLI::NonNegativeNumber);
   cmd->callback([o] {
     if (const int code = run_process(*o); code != 0) throw CLI::RuntimeError(code);
   });

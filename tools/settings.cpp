@@ -76,4 +76,17 @@ rt::Result<VelodyneSettings> load_velodyne_settings(const std::filesystem::path&
   return s;
 }
 
+rt::Result<PipelineSettings> load_pipeline_settings(const std::filesystem::path& config_file) {
+  PipelineSettings s;
+  auto velodyne = load_velodyne_settings(config_file);
+  if (!velodyne) return rt::Unexpected<rt::Error>{velodyne.error()};
+  auto ego = load_ego_settings(config_file);
+  if (!ego) return rt::Unexpected<rt::Error>{ego.error()};
+  auto segmenter = load_segmentation_settings(config_file);
+  if (!segmenter) return rt::Unexpected<rt::Error>{segmenter.error()};
+  auto tracker = load_tracking_config(config_file);
+  if (!tracker) return rt::Unexpected<rt::Error>{tracker.error()};
+  return PipelineSettings{std::move(*velodyne), std::move(*ego), *segmenter, *tracker};
+}
+
 }  // namespace stac::tools

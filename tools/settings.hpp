@@ -50,6 +50,16 @@ rt::Result<tracking::TrackerConfig> load_tracking_config(const std::filesystem::
 // The `can:` section: transport, DBC and signal map. Errors name `can.<key>`.
 rt::Result<can::CanConfig> load_can_settings(const std::filesystem::path& config_file);
 
+// The sections every per-scan job reads (stac process, stac run): velodyne, ego, segmentation,
+// tracking; the first error is returned.
+struct PipelineSettings {
+  VelodyneSettings velodyne;
+  EgoSettings ego;
+  segmentation::SegmenterConfig segmenter;
+  tracking::TrackerConfig tracker;
+};
+rt::Result<PipelineSettings> load_pipeline_settings(const std::filesystem::path& config_file);
+
 // The default config file: $STAC_CONFIG, else config/stac.yaml of the source tree.
 std::filesystem::path default_config_path();
 // The --config option's value, or the default when it is empty.

@@ -1,0 +1,119 @@
+#include "pipeline/scan_pipeline.hpp"
+
+#include <time.h>
+
+#include <cmath>
+#include <optional>
+
+namespace stac::pipeline {
+namespace {
+
+std::int64_t now_ns(StageClock c) noexcept {
+  timespec t{};
+  clock_gettime(c == StageClock::kThreadCpu ? CLOCK_THREAD_CPUTIME_ID : CLOCK_MONOTONIC, &t);
+  return static_cast<std::int64_t>(t.tv_sec) * 1'000'000'000 + t.tv_nsec;
+}
+
+double yaw_of(const Eigen::Matrix3d& r) noexcept {
+  return std::atan2(r(1, 0), r(0, 0));
+}
+
+}  // namespace
+
+const char* stage_name(Stage s) noexcept {
+  switch (s) {
+    case kDeskew:
+      return "deskew";
+    case kSegment:
+      return "segment";
+    case kTrack:
+      return "track";
+    case kStageCount:
+      break;
+  }
+  return "?";
+}
+
+WorldBox ScanResult::world_box(std::size_t i) const noexcept {
+  const segmentation::Segment& s = segments.segments[i];
+  const Eigen::Vector3d b = world_T_sensor * Eigen::Vector3d(s.box.cx, s.box.cy, s.box.cz);
+  return {b.x(),
+          b.y(),
+          b.z(),
+          s.box.length,
+          s.box.width,
+          s.box.height,
+          s.box.yaw + yaw_of(world_T_sensor.linear())};
+}
+
+ScanPipeline::ScanPipeline(const PipelineConfig& config)
+    : config_(config),
+      deskewer_(config.deskew),
+      segmenter_(config.segmenter),
+      tracker_(config.tracker),
+      detections_(config.segmenter.max_segments),
+      sensor_T_vehicle_(config.deskew.vehicle_T_sensor.inverse()) {}
+
+ScanResult ScanPipeline::make_result() const {
+  return ScanResult(config_.segmenter.max_segments, config_.segmenter.max_points,
+                    config_.tracker.max_tracks);
+}
+
+void ScanPipeline::process(velodyne::Scan& scan, const ego::PoseHistory* poses,
+                           ScanResult& out) noexcept {
+  const std::int64_t t0 = now_ns(config_.clock);
+  const ego::ScanClock clock =
+      ego::scan_clock(scan.header, config_.trailer,
+                      poses != nullptr && poses->pushed() > 0
+                          ? std::optional<std::int64_t>(poses->newest_stamp_ns())
+                          : std::nullopt);
+  out.sequence = scan.header.sequence;
+  out.receive_stamp_ns = scan.header.stamp_ns;
+  out.stamp_ns = scan.header.stamp_ns + clock.scan_to_pose_ns;
+  out.clock_source = clock.source;
+  out.has_pose = false;
+  out.world_T_sensor = config_.deskew.vehicle_T_sensor;  // parked: vehicle = world
+  out.world_T_vehicle_start = Eigen::Isometry3d::Identity();
+  out.pose = {};
+  if (poses != nullptr) {
+    const ego::DeskewResult r = deskewer_.apply(scan, *poses, clock.scan_to_pose_ns);
+    if (r.ok()) {
+      out.has_pose = true;
+      out.world_T_sensor = r.world_T_sensor;
+      const ego::PoseLookup start = poses->at(out.stamp_ns);
+      out.world_T_vehicle_start =
+          start.ok() ? ego::to_isometry(start.pose) : r.world_T_sensor * sensor_T_vehicle_;
+      out.pose = poses->at(r.reference_ns);
+    } else {
+      ++without_pose_;
+    }
+  }
+  const std::int64_t t1 = now_ns(config_.clock);
+  segmenter_.segment(
+      segmentation::PointView{&scan.points.data()->x, scan.points.size(), sizeof(velodyne::Point)},
+      out.segments);
+  const std::int64_t t2 = now_ns(config_.clock);
+  detections_.clear();
+  const double sensor_yaw = yaw_of(out.world_T_sensor.linear());
+  const Eigen::Vector2f sensor_xy = out.world_T_sensor.translation().head<2>().cast<float>();
+  for (std::size_t i = 0; i < out.segments.segments.size(); ++i) {
+    const segmentation::Segment& s = out.segments.segments[i];
+    const Eigen::Vector3d c =
+        out.world_T_sensor * Eigen::Vector3d(s.centroid[0], s.centroid[1], s.centroid[2]);
+    const Eigen::Vector3d b = out.world_T_sensor * Eigen::Vector3d(s.box.cx, s.box.cy, s.box.cz);
+    tracking::Detection* d = detections_.append();
+    if (d == nullptr) break;  // capacity max_segments: never short
+    *d = {c.cast<float>(), b.head<2>().cast<float>(), s.box.length, s.box.width, s.box.height,
+          static_cast<float>(s.box.yaw + sensor_yaw), s.count, static_cast<std::uint32_t>(i)};
+    (void)tracking::complete_end_on(config_.tracker, sensor_xy, *d);
+  }
+  tracker_.update(out.stamp_ns,
+                  std::span<const tracking::Detection>(detections_.data(), detections_.size()),
+                  out.tracked);
+  const std::int64_t t3 = now_ns(config_.clock);
+  out.stage_ns[kDeskew] = t1 - t0;
+  out.stage_ns[kSegment] = t2 - t1;
+  out.stage_ns[kTrack] = t3 - t2;
+}
+
+}  // namespace stac::pipeline

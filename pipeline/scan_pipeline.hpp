@@ -1,0 +1,86 @@
+// One scan through perception, in fixed memory: deskew (with the pose history, when there is
+// one) -> segment -> detections in the world frame -> track. The constructor allocates
+// everything; process() allocates nothing and throws nothing. The caller owns the ScanResult
+// (from make_result()), so results can live in the slots of a thread handover.
+//
+//   ScanPipeline pipeline(config);  ScanResult r = pipeline.make_result();
+//   pipeline.process(scan, poses, r);   // poses: nullptr for a parked sensor (world = vehicle)
+#pragma once
+
+#include <cstdint>
+
+#include "drivers/velodyne/model.hpp"
+#include "drivers/velodyne/scan.hpp"
+#include "ego/deskew.hpp"
+#include "ego/pose_history.hpp"
+#include "ego/time_sync.hpp"
+#include "perception/segmentation/segmenter.hpp"
+#include "perception/tracking/tracker.hpp"
+
+namespace stac::pipeline {
+
+// Which clock the per-stage times are read on.
+enum class StageClock : std::uint8_t {
+  kThreadCpu,  // CPU time of the calling thread: a stage's cost on one core (offline figures)
+  kMonotonic,  // CLOCK_MONOTONIC: latency as a live deadline sees it
+};
+
+struct PipelineConfig {
+  ego::DeskewConfig deskew;  // its vehicle_T_sensor is also the parked sensor's pose
+  segmentation::SegmenterConfig segmenter;
+  tracking::TrackerConfig tracker;
+  velodyne::TrailerKind trailer = velodyne::TrailerKind::kGpsStatus;  // the model's (scan clock)
+  StageClock clock = StageClock::kThreadCpu;
+};
+
+enum Stage : std::uint8_t { kDeskew, kSegment, kTrack, kStageCount };
+const char* stage_name(Stage s) noexcept;  // "deskew", "segment", "track"
+
+// A box in the world frame (m, rad).
+struct WorldBox {
+  double x = 0, y = 0, z = 0, length = 0, width = 0, height = 0, yaw = 0;
+};
+
+struct ScanResult {
+  ScanResult(std::size_t max_segments, std::size_t max_points, std::size_t max_tracks)
+      : segments(max_segments, max_points), tracked(max_tracks) {}
+
+  std::uint64_t sequence = 0;         // the scan's sequence number (ScanHeader)
+  std::int64_t receive_stamp_ns = 0;  // the scan's stamp on the receive clock (ScanHeader)
+  std::int64_t stamp_ns = 0;          // the same instant on the pose clock (UTC): results' time
+  ego::ScanClockSource clock_source = ego::ScanClockSource::kReceive;
+  bool has_pose = false;  // deskewed and placed in the world by the pose history
+  Eigen::Isometry3d world_T_sensor = Eigen::Isometry3d::Identity();         // at the last firing
+  Eigen::Isometry3d world_T_vehicle_start = Eigen::Isometry3d::Identity();  // at the scan's stamp
+  ego::PoseLookup pose;                     // the vehicle pose at stamp_ns (status kEmpty: none)
+  segmentation::Segments segments;          // sensor frame (see world_box())
+  tracking::TrackerOutput tracked;          // world frame
+  std::int64_t stage_ns[kStageCount] = {};  // on PipelineConfig::clock
+
+  // Segment i's box in the world frame.
+  [[nodiscard]] WorldBox world_box(std::size_t i) const noexcept;
+};
+
+class ScanPipeline {
+ public:
+  explicit ScanPipeline(const PipelineConfig& config);
+
+  [[nodiscard]] ScanResult make_result() const;
+  // One scan (deskewed in place). `poses` may be nullptr: no deskew, the sensor parked at
+  // vehicle_T_sensor in the world.
+  void process(velodyne::Scan& scan, const ego::PoseHistory* poses, ScanResult& out) noexcept;
+
+  [[nodiscard]] const tracking::Tracker& tracker() const noexcept { return tracker_; }
+  [[nodiscard]] std::uint64_t scans_without_pose() const noexcept { return without_pose_; }
+
+ private:
+  PipelineConfig config_;
+  ego::Deskewer deskewer_;
+  segmentation::Segmenter segmenter_;
+  tracking::Tracker tracker_;
+  rt::FixedVector<tracking::Detection> detections_;
+  Eigen::Isometry3d sensor_T_vehicle_;
+  std::uint64_t without_pose_ = 0;
+};
+
+}  // namespace stac::pipeline

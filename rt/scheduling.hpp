@@ -1,0 +1,34 @@
+// Real-time scheduling of a live process, each step optional and each failure a value whose
+// message says what was asked, why it was refused and what to change; the caller prints it once
+// as a warning and runs on without it (a container without CAP_SYS_NICE / CAP_IPC_LOCK, a CPU
+// that is not there).
+//
+//   if (auto r = rt::lock_memory(); !r) warn(r.error().message);          // at start-up
+//   if (auto r = rt::apply_schedule("perception", s); !r) warn(...);      // in each thread
+#pragma once
+
+#include <string>
+
+#include "rt/expected.hpp"
+
+namespace stac::rt {
+
+struct ThreadSchedule {
+  int fifo_priority = 0;  // 1..99: SCHED_FIFO at this priority; 0: the default (SCHED_OTHER)
+  int cpu = -1;           // pin to this CPU (0-based); -1: any CPU
+};
+
+// Checks the values (not the permissions): priority 0..99, cpu >= -1. Errors name `what`.
+Result<bool> validate(const ThreadSchedule& s, const std::string& what);
+
+// mlockall(MCL_CURRENT | MCL_FUTURE): no page fault on memory touched later.
+Result<bool> lock_memory() noexcept;
+
+// Applies `s` to the calling thread: CPU affinity, then the policy. Returns an error naming
+// `thread` for the first part refused (the other part is still tried); nothing to do is true.
+Result<bool> apply_schedule(const std::string& thread, const ThreadSchedule& s);
+
+// Names the calling thread (at most 15 characters shown in top/ps); best effort.
+void name_thread(const char* name) noexcept;
+
+}  // namespace stac::rt

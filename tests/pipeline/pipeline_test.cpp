@@ -1,0 +1,193 @@
+// The perception loop of `stac run` (ScanPipeline::process with a pose history into a result
+// slot, handed to another thread through a SlotExchange) on real decoded scans of a simulated
+// drive, re-fed many times.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <filesystem>
+#include <memory>
+#include <thread>
+#include <vector>
+
+#include "drivers/io/pcap_reader.hpp"
+#include "drivers/velodyne/calibration.hpp"
+#include "drivers/velodyne/scan_stream.hpp"
+#include "pipeline/scan_pipeline.hpp"
+#include "rt/slot_exchange.hpp"
+#include "rt/testing/alloc_counter.hpp"
+#include "shared_data.hpp"
+#include "stac_cli.hpp"
+#include "tools/settings.hpp"
+
+namespace stac::pipeline {
+namespace {
+
+constexpr const char* kYaml = "velodyne/calib/rosdrivers_64e_s2.1-sztaki.yaml";
+
+struct Fixture {
+  tools::VelodyneSettings velodyne;
+  PipelineConfig config;
+  std::vector<std::unique_ptr<velodyne::Scan>> scans;  // complete scans, decoded once
+};
+
+// A 1 s simulated urban drive, decoded into its complete scans with the shipped configuration.
+Fixture decoded_drive(const std::string& name) {
+  Fixture f;
+  const auto dir = std::filesystem::temp_directory_path() / ("stac_pipeline_" + name);
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const std::string pcap = (dir / "run.pcap").string();
+  const auto sim = stac::testing::stac("sim --scenario urban --seed 5 --duration 1 --calib " +
+                                       stac::testing::shared_data(kYaml).string() + " --out " +
+                                       pcap + " --truth " + (dir / "truth.jsonl").string());
+  EXPECT_EQ(sim.code, 0) << sim.output;
+  const std::filesystem::path config = tools::default_config_path();
+  f.velodyne = *tools::load_velodyne_settings(config);
+  const tools::EgoSettings ego = *tools::load_ego_settings(config);
+  f.config = {.deskew = ego.deskew,
+              .segmenter = *tools::load_segmentation_settings(config),
+              .tracker = *tools::load_tracking_config(config),
+              .trailer = velodyne::traits(f.velodyne.assembler.decoder.model).trailer,
+              .clock = StageClock::kMonotonic};
+  auto calibration = velodyne::load_calibration(stac::testing::shared_data(kYaml));
+  EXPECT_TRUE(calibration);
+  velodyne::ScanStream stream(*calibration, f.velodyne.assembler, 2);
+  auto reader = io::PcapReader::open(
+      pcap, io::PcapFilter{.udp_dst_port = f.velodyne.port, .udp_src_port = {}});
+  EXPECT_TRUE(reader);
+  io::Datagram d;
+  while (reader->next(d)) {
+    if (!stream.add_packet(d.payload, d.stamp_ns)) continue;
+    while (velodyne::Scan* s = stream.take()) {
+      if (s->header.complete()) {
+        auto copy = std::make_unique<velodyne::Scan>(s->points.capacity());
+        copy->header = s->header;
+        EXPECT_TRUE(copy->points.resize(s->points.size()));
+        std::copy(s->points.data(), s->points.data() + s->points.size(), copy->points.data());
+        f.scans.push_back(std::move(copy));
+      }
+      stream.release();
+    }
+  }
+  return f;
+}
+
+// Scan i of an endless drive made of the decoded scans again and again, each pass later by the
+// drive's length (stamps move on; the points, timed relative to the stamp, are the same).
+void load_scan(const Fixture& f, std::size_t i, velodyne::Scan& out) {
+  const velodyne::Scan& src = *f.scans[i % f.scans.size()];
+  const std::int64_t period = (f.scans.back()->header.stamp_ns - f.scans.front()->header.stamp_ns) /
+                              static_cast<std::int64_t>(f.scans.size() - 1);
+  const std::int64_t shift = static_cast<std::int64_t>(i / f.scans.size()) * period *
+                             static_cast<std::int64_t>(f.scans.size());
+  out.header = src.header;
+  out.header.stamp_ns += shift;
+  out.header.end_stamp_ns += shift;
+  if (out.header.device_utc_ns != 0) out.header.device_utc_ns += shift;
+  constexpr std::int64_t kHourUs = 3'600'000'000;
+  out.header.device_usec_first =
+      static_cast<std::uint32_t>((out.header.device_usec_first + shift / 1000) % kHourUs);
+  (void)out.points.resize(src.points.size());
+  std::copy(src.points.data(), src.points.data() + src.points.size(), out.points.data());
+}
+
+// A vehicle driving east at 5 m/s around the drive's scans, 200 poses a second, for `scans` scans.
+std::unique_ptr<ego::PoseHistory> straight_drive(const Fixture& f, std::size_t scans) {
+  ScanPipeline parked(f.config);
+  ScanResult r = parked.make_result();
+  velodyne::Scan scan(f.scans.front()->points.capacity());
+  load_scan(f, 0, scan);
+  parked.process(scan, nullptr, r);  // the first scan's time on the pose clock
+  constexpr std::int64_t kStep = 5'000'000;
+  const std::int64_t begin = r.stamp_ns - 2'000'000'000;
+  const std::int64_t end =
+      r.stamp_ns + static_cast<std::int64_t>(scans) * 100'000'000 + 2'000'000'000;
+  auto history = std::make_unique<ego::PoseHistory>(
+      ego::PoseHistoryConfig{.capacity = static_cast<std::size_t>((end - begin) / kStep) + 1,
+                             .max_extrapolation_ns = 50'000'000,
+                             .max_gap_ns = 100'000'000});
+  for (std::int64_t t = begin; t <= end; t += kStep) {
+    ego::PoseSample p;
+    p.stamp_ns = t;
+    p.position_m = Eigen::Vector3d(5.0 * static_cast<double>(t - begin) * 1e-9, 0, 0);
+    p.velocity_mps = Eigen::Vector3d(5, 0, 0);
+    EXPECT_TRUE(history->push(p));
+  }
+  return history;
+}
+
+TEST(ScanPipeline, PerceptionLoopWithHandoverMakesNoAllocationOver1000ScansAfterWarmUp) {
+  STAC_REQUIRE_SHARED_DATA(kYaml);
+  const Fixture f = decoded_drive("alloc");
+  ASSERT_GE(f.scans.size(), 5u);
+  const std::unique_ptr<ego::PoseHistory> poses = straight_drive(f, 1020);
+  ScanPipeline pipeline(f.config);
+  rt::SlotExchange<ScanResult> results(4, [&] { return pipeline.make_result(); });
+  velodyne::Scan scan(f.scans.front()->points.capacity());
+
+  // A consumer thread stands for the publisher: takes each result, reads it, gives it back.
+  std::atomic<bool> stop{false};
+  std::atomic<std::uint64_t> consumed{0}, tracks_seen{0};
+  std::thread consumer([&] {
+    while (!stop.load(std::memory_order_acquire)) {
+      if (ScanResult* r = results.take()) {
+        tracks_seen.fetch_add(r->tracked.tracks.size(), std::memory_order_relaxed);
+        results.release();
+        consumed.fetch_add(1, std::memory_order_relaxed);
+      } else {
+        std::this_thread::yield();
+      }
+    }
+  });
+  std::size_t deskewed = 0;
+  const auto step = [&](std::size_t i) {
+    load_scan(f, i, scan);
+    ScanResult& r = results.current();
+    pipeline.process(scan, poses.get(), r);
+    deskewed += r.has_pose ? 1 : 0;
+    (void)results.publish();
+  };
+  for (std::size_t i = 0; i < 20; ++i) step(i);  // warm-up: the tracker's pool fills
+  rt::testing::AllocationCounter counter;
+  for (std::size_t i = 20; i < 1020; ++i) step(i);
+  counter.stop();
+  stop.store(true, std::memory_order_release);
+  consumer.join();
+
+  EXPECT_EQ(counter.allocations(), 0u) << counter.bytes() << " bytes";
+  EXPECT_EQ(deskewed, 1020u);  // every scan went through deskew with a pose
+  EXPECT_EQ(pipeline.scans_without_pose(), 0u);
+  EXPECT_GT(consumed.load(), 0u);
+  EXPECT_EQ(results.published() + results.dropped(), 1020u);  // every result handed over or counted
+  EXPECT_GT(tracks_seen.load(), 0u);
+  EXPECT_GT(pipeline.tracker().counters().spawned, 0u);
+  static_assert(noexcept(pipeline.process(scan, nullptr, results.current())));
+}
+
+TEST(ScanPipeline, ParkedSensorKeepsTheSensorPoseAndFillsEveryStage) {
+  STAC_REQUIRE_SHARED_DATA(kYaml);
+  const Fixture f = decoded_drive("parked");
+  ASSERT_FALSE(f.scans.empty());
+  ScanPipeline pipeline(f.config);
+  ScanResult r = pipeline.make_result();
+  velodyne::Scan scan(f.scans.front()->points.capacity());
+  for (std::size_t i = 0; i < f.scans.size(); ++i) {
+    load_scan(f, i, scan);
+    pipeline.process(scan, nullptr, r);
+    EXPECT_EQ(r.sequence, f.scans[i]->header.sequence);
+    EXPECT_FALSE(r.has_pose);
+    EXPECT_TRUE(r.world_T_sensor.isApprox(f.config.deskew.vehicle_T_sensor));
+    EXPECT_GT(r.segments.segments.size(), 10u);
+    for (std::int64_t ns : r.stage_ns) EXPECT_GE(ns, 0);
+  }
+  EXPECT_FALSE(r.tracked.tracks.empty());
+  EXPECT_EQ(pipeline.scans_without_pose(), 0u);  // no history given: nothing to miss
+  // A segment's world box is its sensor box moved by the sensor's pose.
+  const segmentation::Segment& s = r.segments.segments[0];
+  const WorldBox b = r.world_box(0);
+  EXPECT_NEAR(b.z, s.box.cz + f.config.deskew.vehicle_T_sensor.translation().z(), 1e-4);
+  EXPECT_FLOAT_EQ(static_cast<float>(b.length), s.box.length);
+}
+
+}  // namespace
+}  // namespace stac::pipeline

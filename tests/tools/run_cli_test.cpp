@@ -1,0 +1,371 @@
+// `stac run` as a user runs it, over loopback only: `stac sim` -> `stac replay` (UDP to 127.0.0.1
+// and the INS as a TCP server on 127.0.0.1) -> `stac run` (Cyclone on config/dds/loopback.xml,
+// a domain of its own) -> DDS readers in this test.
+#include <arpa/inet.h>
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <regex>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "dds/dds_test_support.hpp"
+#include "dds/idl_types.hpp"
+#include "shared_data.hpp"
+#include "stac_cli.hpp"
+
+extern char** environ;
+
+namespace stac::tools {
+namespace {
+
+using Types = dds::IdlTypes<false>;
+constexpr const char* kYaml = "velodyne/calib/rosdrivers_64e_s2.1-sztaki.yaml";
+
+std::filesystem::path fresh_dir(const std::string& name) {
+  return stac::testing::fresh_dir("stac_run_" + name);
+}
+
+// A port the kernel just gave out on 127.0.0.1 (closed again for the child to bind).
+std::uint16_t free_port(int type) {
+  const int fd = socket(AF_INET, type, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  socklen_t len = sizeof(a);
+  if (bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof(a)) != 0 ||
+      getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len) != 0) {
+    close(fd);
+    return 0;
+  }
+  close(fd);
+  return ntohs(a.sin_port);
+}
+
+// `stac ARGS` in the background, its stdout and stderr into `log`.
+class Child {
+ public:
+  Child(const std::string& args, const std::filesystem::path& log) : log_(log) {
+    std::vector<std::string> words{STAC_CLI};
+    std::istringstream in(args);
+    for (std::string w; in >> w;) words.push_back(w);
+    std::vector<char*> argv;
+    for (std::string& w : words) argv.push_back(w.data());
+    argv.push_back(nullptr);
+    posix_spawn_file_actions_t fa;
+    posix_spawn_file_actions_init(&fa);
+    posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_adddup2(&fa, 1, 2);
+    if (posix_spawn(&pid_, argv[0], &fa, nullptr, argv.data(), environ) != 0) pid_ = -1;
+    posix_spawn_file_actions_destroy(&fa);
+  }
+  ~Child() {
+    if (pid_ > 0) {
+      kill(pid_, SIGKILL);
+      waitpid(pid_, nullptr, 0);
+    }
+  }
+  [[nodiscard]] bool started() const { return pid_ > 0; }
+  // Sends `sig` and waits: the exit code (-1 when it did not exit normally).
+  int stop(int sig) {
+    kill(pid_, sig);
+    int status = 0;
+    waitpid(pid_, &status, 0);
+    pid_ = -1;
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  }
+  int wait() {
+    int status = 0;
+    waitpid(pid_, &status, 0);
+    pid_ = -1;
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  }
+  [[nodiscard]] std::string output() const {
+    std::ifstream f(log_);
+    return {std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
+  }
+
+ private:
+  std::filesystem::path log_;
+  pid_t pid_ = -1;
+};
+
+// A keep-all reader of one topic in this process.
+class Reader {
+ public:
+  Reader(dds_entity_t participant, const dds_topic_descriptor_t* type, const char* name,
+         dds::Topic t) {
+    topic_ = dds_create_topic(participant, type, name, nullptr, nullptr);
+    dds::QosPtr qos = dds::reader_qos(t);
+    dds_qset_history(qos.get(), DDS_HISTORY_KEEP_ALL, 0);
+    reader_ = dds_create_reader(participant, topic_, qos.get(), nullptr);
+  }
+  [[nodiscard]] bool ok() const { return topic_ > 0 && reader_ > 0; }
+  [[nodiscard]] bool matched() const {
+    dds_subscription_matched_status_t s{};
+    return dds_get_subscription_matched_status(reader_, &s) == 0 && s.current_count > 0;
+  }
+  // Calls f(sample) for every sample available now; returns how many.
+  template <class T, class F>
+  int drain(F&& f) {
+    int n = 0;
+    for (;;) {
+      void* samples[1] = {nullptr};
+      dds_sample_info_t info{};
+      const dds_return_t got = dds_take(reader_, samples, &info, 1, 1);
+      if (got <= 0) return n;
+      if (info.valid_data) {
+        f(*static_cast<const T*>(samples[0]));
+        ++n;
+      }
+      dds_return_loan(reader_, samples, got);
+    }
+  }
+
+ private:
+  dds_entity_t topic_ = 0, reader_ = 0;
+};
+
+struct HealthSeen {
+  std::uint64_t scan_index = 0, deadline_misses = 0;
+  std::uint32_t end_to_end_us = 0;
+  std::map<std::string, std::uint32_t> stages;
+  std::map<std::string, std::uint64_t> drops;
+  std::map<std::string, unsigned> sensors;
+};
+
+std::uint64_t summary_number(const std::string& out, const std::string& pattern) {
+  std::smatch m;
+  if (!std::regex_search(out, m, std::regex(pattern))) return ~0ull;
+  return std::stoull(m[1].str());
+}
+
+TEST(RunCli, ReplayedDriveGivesOneTrackedObjectsSamplePerScanAndHealthThatAgreesWithTheSummary) {
+  STAC_REQUIRE_SHARED_DATA(kYaml);
+  const auto dir = fresh_dir("e2e");
+  const std::string pcap = (dir / "run.pcap").string();
+  const auto sim = stac::testing::stac("sim --scenario urban --seed 3 --duration 3 --calib " +
+                                       stac::testing::shared_data(kYaml).string() + " --out " +
+                                       pcap + " --truth " + (dir / "truth.jsonl").string());
+  ASSERT_EQ(sim.code, 0) << sim.output;
+
+  constexpr std::uint32_t kDomain = 141;
+  const std::string uri = stac::testing::loopback_uri();  // sets DDS_TEST_TAG for the children too
+  const dds_entity_t domain = dds_create_domain(kDomain, uri.c_str());
+  ASSERT_GT(domain, 0);
+  const dds_entity_t participant = dds_create_participant(kDomain, nullptr, nullptr);
+  ASSERT_GT(participant, 0);
+  Reader tracked(participant, Types::tracked_objects(), "stac/tracked_objects",
+                 dds::Topic::kTrackedObjects);
+  Reader health(participant, Types::health(), "stac/health", dds::Topic::kHealth);
+  ASSERT_TRUE(tracked.ok() && health.ok());
+
+  const std::uint16_t udp = free_port(SOCK_DGRAM), tcp = free_port(SOCK_STREAM);
+  ASSERT_TRUE(udp != 0 && tcp != 0);
+  Child run("run --domain " + std::to_string(kDomain) + " --bind 127.0.0.1 --port " +
+                std::to_string(udp) + " --ins tcp --ins-address 127.0.0.1 --ins-port " +
+                std::to_string(tcp),
+            dir / "run.log");
+  ASSERT_TRUE(run.started());
+  for (int i = 0; i < 2000 && !(tracked.matched() && health.matched()); ++i)
+    dds_sleepfor(DDS_MSECS(10));
+  ASSERT_TRUE(tracked.matched() && health.matched()) << run.output();
+
+  const auto replay =
+      stac::testing::stac("replay --in " + pcap + " --to 127.0.0.1 --port " + std::to_string(udp) +
+                          " --tcp-port 5602:" + std::to_string(tcp) + " --wait-tcp");
+  ASSERT_EQ(replay.code, 0) << replay.output;
+
+  // Everything published arrives; stop once nothing came for 2 s.
+  std::vector<std::uint64_t> indices;
+  std::vector<HealthSeen> healths;
+  for (int quiet = 0; quiet < 200;) {
+    const int n = tracked.drain<Types::TrackedObjects>([&](const Types::TrackedObjects& s) {
+      indices.push_back(s.scan_index);
+    }) + health.drain<Types::Health>([&](const Types::Health& s) {
+      HealthSeen h{s.scan_index, s.deadline_misses, s.end_to_end_latency_us, {}, {}, {}};
+      for (std::uint32_t i = 0; i < s.stages._length; ++i)
+        h.stages[s.stages._buffer[i].stage] = s.stages._buffer[i].latency_us;
+      for (std::uint32_t i = 0; i < s.drops._length; ++i)
+        h.drops[s.drops._buffer[i].cause] = s.drops._buffer[i].count;
+      for (std::uint32_t i = 0; i < s.sensors._length; ++i)
+        h.sensors[s.sensors._buffer[i].name] = s.sensors._buffer[i].status;
+      healths.push_back(std::move(h));
+    });
+    quiet = n > 0 ? 0 : quiet + 1;
+    dds_sleepfor(DDS_MSECS(10));
+  }
+  ASSERT_EQ(run.stop(SIGINT), 0) << run.output();
+  const std::string out = run.output();
+  dds_delete(participant);
+  dds_delete(domain);
+
+  // The summary: every scan received was published or counted as dropped, after a signal.
+  EXPECT_NE(out.find("(signal)"), std::string::npos) << out;
+  const std::uint64_t received = summary_number(out, R"((\d+) received \(complete\))");
+  const std::uint64_t published = summary_number(out, R"((\d+) published,)");
+  const std::uint64_t misses = summary_number(out, R"((\d+) misses of)");
+  const std::uint64_t results_full = summary_number(out, R"(result slots full (\d+))");
+  EXPECT_EQ(received, published + results_full) << out;
+  // 3 s at 10 Hz: ~28 complete scans, unless packets were lost, which must then be counted.
+  EXPECT_TRUE(published >= 20u || summary_number(out, R"((\d+) dropped by the kernel)") > 0) << out;
+  EXPECT_GT(summary_number(out, R"((\d+) INS fixes)"), 0u) << out;
+  for (const char* word :
+       {"end-to-end", "p50", "p99", "max", "deskew", "segment", "track", "publish"}) {
+    EXPECT_NE(out.find(word), std::string::npos) << word << " missing from:\n" << out;
+  }
+
+  // DDS: one tracked_objects sample per published scan, in order, none lost; health for each.
+  ASSERT_EQ(indices.size(), published) << out;
+  for (std::size_t i = 0; i < indices.size(); ++i) EXPECT_EQ(indices[i], i);
+  ASSERT_EQ(healths.size(), published);
+  const HealthSeen& last = healths.back();
+  EXPECT_EQ(last.scan_index, published - 1);
+  EXPECT_EQ(last.deadline_misses, misses);
+  EXPECT_GT(last.end_to_end_us, 0u);
+  for (const char* stage : {"wait", "deskew", "segment", "track", "handover", "publish"}) {
+    EXPECT_TRUE(last.stages.count(stage)) << stage;
+  }
+  EXPECT_GT(last.stages.at("segment"), 0u);
+  // Slots run full only when perception or the publisher falls behind (a sanitizer build): then
+  // the drops are counted, in health as in the summary.
+  EXPECT_EQ(last.drops.at("results.slots_full"), results_full);
+  EXPECT_EQ(last.drops.at("velodyne.scan_slots_full"),
+            summary_number(out, R"(scan slots full (\d+))"));
+  EXPECT_EQ(last.drops.at("dds.errors"), 0u);
+  EXPECT_TRUE(last.drops.count("velodyne.kernel") && last.drops.count("tracking.pool_full"));
+  EXPECT_EQ(last.drops.at("ego.scans_without_pose"),
+            summary_number(out, R"((\d+) scans without a pose)"));
+  EXPECT_LE(last.sensors.at("lidar"), 1u);  // ok, or stale if the last scan waited past the timeout
+  EXPECT_EQ(last.sensors.at("can"), 3u);    // not configured
+  EXPECT_TRUE(last.sensors.count("ins"));
+  for (std::size_t i = 1; i < healths.size(); ++i)
+    EXPECT_GE(healths[i].deadline_misses, healths[i - 1].deadline_misses);
+}
+
+TEST(RunCli, InsOverUdpDeskewsTheScansAndSigtermStopsAfterPublishingWhatWasReceived) {
+  STAC_REQUIRE_SHARED_DATA(kYaml);
+  const auto dir = fresh_dir("ins_udp");
+  const std::string pcap = (dir / "run.pcap").string();
+  const auto sim =
+      stac::testing::stac("sim --scenario parking-lot --seed 6 --duration 2 --ins-udp --calib " +
+                          stac::testing::shared_data(kYaml).string() + " --out " + pcap +
+                          " --truth " + (dir / "truth.jsonl").string());
+  ASSERT_EQ(sim.code, 0) << sim.output;
+  (void)stac::testing::loopback_uri();
+  const std::uint16_t lidar = free_port(SOCK_DGRAM), ins = free_port(SOCK_DGRAM);
+  ASSERT_TRUE(lidar != 0 && ins != 0 && lidar != ins);
+  Child run("run --domain 144 --bind 127.0.0.1 --port " + std::to_string(lidar) +
+                " --ins udp --ins-port " + std::to_string(ins),
+            dir / "run.log");
+  ASSERT_TRUE(run.started());
+  for (int i = 0; i < 1000 && run.output().find("Ctrl-C stops") == std::string::npos; ++i)
+    dds_sleepfor(DDS_MSECS(10));
+  // The INS datagrams and the lidar packets of the capture, each to its port, both at the recorded
+  // pace; the INS replay starts half a second ahead so that a scan's pose has always arrived
+  // (a pose is only extrapolated 50 ms past the newest, ego.max_extrapolation_s).
+  Child ins_replay("replay --in " + pcap + " --to 127.0.0.1 --port " + std::to_string(ins) +
+                       " --filter-port 5602",
+                   dir / "ins_replay.log");
+  dds_sleepfor(DDS_MSECS(500));
+  const auto replay = stac::testing::stac("replay --in " + pcap + " --to 127.0.0.1 --port " +
+                                          std::to_string(lidar) + " --filter-port 2368");
+  ASSERT_EQ(replay.code, 0) << replay.output;
+  ASSERT_EQ(ins_replay.wait(), 0) << ins_replay.output();
+  ASSERT_EQ(run.stop(SIGTERM), 0) << run.output();
+  const std::string out = run.output();
+  EXPECT_NE(out.find("(signal)"), std::string::npos) << out;
+  const std::uint64_t received = summary_number(out, R"((\d+) received \(complete\))");
+  EXPECT_EQ(received, summary_number(out, R"((\d+) published,)") +
+                          summary_number(out, R"(result slots full (\d+))"))
+      << out;
+  // 2 s at 10 Hz: ~18 complete scans, unless packets were lost, which must then be counted.
+  EXPECT_TRUE(received >= 12u || summary_number(out, R"((\d+) dropped by the kernel)") > 0) << out;
+  EXPECT_GT(summary_number(out, R"((\d+) INS fixes)"), 300u) << out;  // 200 Hz for about 2 s
+  EXPECT_LE(summary_number(out, R"((\d+) scans without a pose)"), 2u)
+      << out;  // before the first fixes only
+  EXPECT_EQ(summary_number(out, R"((\d+) receive errors)"), 0u) << out;
+}
+
+TEST(ProcessDds, EveryScanOfTheTracksFileIsPublishedInOrderWithItsTracks) {
+  STAC_REQUIRE_SHARED_DATA(kYaml);
+  const auto dir = fresh_dir("process_dds");
+  const std::string pcap = (dir / "run.pcap").string(), tracks = (dir / "tracks.jsonl").string();
+  const auto sim =
+      stac::testing::stac("sim --scenario parking-lot --seed 4 --duration 1.5 --calib " +
+                          stac::testing::shared_data(kYaml).string() + " --out " + pcap +
+                          " --truth " + (dir / "truth.jsonl").string());
+  ASSERT_EQ(sim.code, 0) << sim.output;
+  constexpr std::uint32_t kDomain = 143;
+  const std::string uri = stac::testing::loopback_uri();
+  const dds_entity_t domain = dds_create_domain(kDomain, uri.c_str());
+  ASSERT_GT(domain, 0);
+  const dds_entity_t participant = dds_create_participant(kDomain, nullptr, nullptr);
+  Reader tracked(participant, Types::tracked_objects(), "stac/tracked_objects",
+                 dds::Topic::kTrackedObjects);
+  ASSERT_TRUE(tracked.ok());
+  Child process("process " + pcap + " --tracks " + tracks + " --dds --domain " +
+                    std::to_string(kDomain) + " --dds-wait 20",
+                dir / "process.log");
+  ASSERT_TRUE(process.started());
+  ASSERT_EQ(process.wait(), 0) << process.output();
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> seen;  // scan index, objects
+  for (int quiet = 0; quiet < 100;) {
+    const int n = tracked.drain<Types::TrackedObjects>([&](const Types::TrackedObjects& s) {
+      seen.emplace_back(s.scan_index, s.objects._length);
+    });
+    quiet = n > 0 ? 0 : quiet + 1;
+    dds_sleepfor(DDS_MSECS(10));
+  }
+  dds_delete(participant);
+  dds_delete(domain);
+  std::ifstream in(tracks);
+  std::vector<std::size_t> tracks_per_line;
+  for (std::string line; std::getline(in, line);) {
+    std::size_t n = 0;
+    for (std::size_t at = line.find("\"state\""); at != std::string::npos;
+         at = line.find("\"state\"", at + 1))
+      ++n;
+    tracks_per_line.push_back(n);
+  }
+  ASSERT_GE(tracks_per_line.size(), 12u);
+  ASSERT_EQ(seen.size(), tracks_per_line.size()) << process.output();
+  for (std::size_t i = 0; i < seen.size(); ++i) {
+    EXPECT_EQ(seen[i].first, i);
+    EXPECT_EQ(seen[i].second, tracks_per_line[i]) << "scan " << i;
+  }
+  EXPECT_NE(process.output().find("scans published on tracked_objects"), std::string::npos);
+}
+
+TEST(RunCli, WithoutSensorItStopsByItselfAndReportsTheLidarStalled) {
+  const auto dir = fresh_dir("idle");
+  (void)stac::testing::loopback_uri();
+  Child run("run --seconds 1 --domain 142 --bind 127.0.0.1 --port 0 --ins none", dir / "run.log");
+  ASSERT_TRUE(run.started());
+  ASSERT_EQ(run.wait(), 0) << run.output();
+  const std::string out = run.output();
+  EXPECT_EQ(out.find("(signal)"), std::string::npos) << out;
+  EXPECT_NE(out.find("0 received (complete), 0 published"), std::string::npos) << out;
+  EXPECT_NE(out.find("lidar stalled"), std::string::npos) << out;
+  EXPECT_NE(out.find("ins not configured"), std::string::npos) << out;
+}
+
+TEST(RunCli, BadOptionsAreNamed) {
+  const auto r =
+      stac::testing::stac("run --ins carrier-pigeon --seconds 1 --port 0 --bind 127.0.0.1");
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.output.find("--ins"), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace stac::tools

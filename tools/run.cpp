@@ -1,0 +1,539 @@
+// stac run: the live component (docs/run.md). Threads:
+//   receiver   UdpReceiver (Velodyne) -> ScanStream slots
+//   pose       Applanix (TCP client or UDP) and CAN -> EgoEstimator -> PoseHistory
+//   perception ScanStream -> ScanPipeline -> result slots (full: the newest result is dropped)
+//   publisher  result slots -> DDS tracked_objects, segments, ego_pose, health; deadline monitor
+// Everything is allocated before the threads start. SIGINT/SIGTERM (or --seconds/--scans) stop
+// the receivers; perception and the publisher drain what was received, then a summary is printed.
+#include <pthread.h>
+
+#include <csignal>
+#include <cstdio>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "drivers/applanix/tcp_client.hpp"
+#include "drivers/applanix/udp_listener.hpp"
+#include "drivers/can/dbc.hpp"
+#include "drivers/can/socketcan.hpp"
+#include "drivers/io/udp_receiver.hpp"
+#include "drivers/velodyne/calibration.hpp"
+#include "drivers/velodyne/scan_stream.hpp"
+#include "ego/ego_estimator.hpp"
+#include "pipeline/scan_pipeline.hpp"
+#include "rt/clock.hpp"
+#include "rt/deadline_monitor.hpp"
+#include "rt/scheduling.hpp"
+#include "rt/slot_exchange.hpp"
+#include "rt/watchdog.hpp"
+#include "tools/commands.hpp"
+#include "tools/dds_settings.hpp"
+#include "tools/run_settings.hpp"
+#include "tools/scan_publishing.hpp"
+#include "tools/settings.hpp"
+
+namespace stac::tools {
+namespace {
+
+struct RunOptions {
+  std::string config, calib, ins, ins_address, bind;
+  double seconds = 0;
+  std::uint64_t scans = 0;
+  int domain = -1, port = -1, ins_port = -1;
+};
+
+volatile std::sig_atomic_t g_signal = 0;
+void on_signal(int) {
+  g_signal = 1;
+}
+
+enum Input : std::size_t { kLidar, kIns, kCan };
+constexpr const char* kInputNames[] = {"lidar", "ins", "can"};
+
+// Health stages: where the time of one scan went, from its last firing to its publication.
+enum HealthStage : std::size_t {
+  kWait,
+  kDeskew,
+  kSegment,
+  kTrack,
+  kHandover,
+  kPublish,
+  kHealthStages
+};
+constexpr const char* kStageNames[] = {"wait", "deskew", "segment", "track", "handover", "publish"};
+
+// One perception result in a slot of the perception -> publisher exchange.
+struct Frame {
+  pipeline::ScanResult result;
+  std::int64_t last_firing_ns = 0;  // receive clock (CLOCK_REALTIME, kernel stamps)
+  std::int64_t started_ns = 0;      // perception took the scan
+  std::int64_t finished_ns = 0;     // perception pushed the result
+  std::uint64_t incomplete = 0;     // cumulative, as seen by perception at this scan
+  std::uint64_t packets_lost = 0;
+  std::uint64_t segment_overflow = 0;
+  std::uint64_t without_pose = 0;  // scans not deskewed (no pose at their time)
+};
+
+// Counters shared between the threads (each written by one thread).
+struct Shared {
+  std::atomic<bool> stopping{false};  // main: stop requested; the receiver drains its socket first
+  std::atomic<bool> receiver_done{false}, perception_done{false};
+  std::atomic<std::uint64_t> packets{0}, kernel_drops{0}, receive_errors{0};
+  std::atomic<std::uint64_t> scans{0}, incomplete{0}, published{0}, publish_errors{0};
+  std::atomic<std::uint8_t> ego_source{0};  // 0 none, 1 INS, 2 CAN dead reckoning
+};
+
+void idle() {
+  std::this_thread::sleep_for(std::chrono::microseconds(200));
+}
+
+void start_thread(const char* name, const rt::ThreadSchedule& s) {
+  rt::name_thread(name);
+  if (auto r = rt::apply_schedule(name, s); !r)
+    std::fprintf(stderr, "stac run: warning: %s\n", r.error().message.c_str());
+}
+
+std::uint8_t sensor_status(const rt::InputStatus& s) {
+  switch (s.state) {
+    case rt::InputState::kOk:
+      return 0;
+    case rt::InputState::kStalled:
+      return 1;
+    case rt::InputState::kNotConfigured:
+      return 3;
+  }
+  return 2;
+}
+
+std::uint32_t to_us(std::int64_t ns) {
+  return static_cast<std::uint32_t>(std::clamp<std::int64_t>(ns / 1000, 0, UINT32_MAX));
+}
+
+// The pose thread's inputs, opened at start-up.
+struct PoseInputs {
+  std::optional<applanix::TcpClient> tcp;
+  std::optional<applanix::UdpListener> udp;
+  std::optional<can::SocketCanReader> can_reader;
+  std::optional<can::OdometryDecoder> odometry;
+  void stop() {
+    if (tcp) tcp->stop();
+    if (udp) udp->stop();
+    if (can_reader) can_reader->stop();
+  }
+};
+
+void pose_loop(PoseInputs& in, ego::EgoEstimator& estimator, const ego::PoseHistory& history,
+               rt::Watchdog& watchdog, Shared& shared) {
+  applanix::StreamParser parser;
+  std::vector<std::uint8_t> bytes(16384);
+  std::vector<can::Frame> frames(64);
+  std::uint64_t session = 0;
+  bool can_closed = false;
+  applanix::Parsed m;
+  const int timeout_ms = in.can_reader ? 5 : 50;  // both inputs polled in turn when CAN is read
+  for (;;) {
+    bool stopped = false;
+    auto take = [&](const applanix::StreamParser& p) {
+      const bool fix = std::holds_alternative<applanix::Group1>(m.content);
+      estimator.add_ins(m, p);
+      if (fix) watchdog.beat(kIns, rt::monotonic_ns());
+    };
+    if (in.tcp) {
+      const int n = in.tcp->receive(bytes, timeout_ms);
+      if (n == applanix::TcpClient::kStopped) stopped = true;
+      if (in.tcp->session() != session) {
+        session = in.tcp->session();
+        parser.end_of_stream();
+      }
+      if (n > 0) {
+        parser.feed({bytes.data(), static_cast<std::size_t>(n)});
+        while (parser.next(m)) take(parser);
+      }
+    } else if (in.udp) {
+      const int n = in.udp->receive(timeout_ms);
+      if (n == io::UdpReceiver::kStopped) stopped = true;
+      while (n > 0 && in.udp->next(m)) take(in.udp->parser());
+    }
+    if (in.can_reader && !can_closed) {
+      const int n = in.can_reader->read(frames, in.tcp || in.udp ? 0 : timeout_ms);
+      if (n == can::SocketCanReader::kStopped) stopped = true;
+      if (n == can::SocketCanReader::kClosed) {  // the interface went away: the INS goes on
+        std::fprintf(stderr, "stac run: warning: the CAN interface closed; no more odometry\n");
+        can_closed = true;
+        if (!in.tcp && !in.udp) return;
+      }
+      for (int i = 0; i < n; ++i) {
+        const can::OdometryUpdate u = in.odometry->decode(frames[static_cast<std::size_t>(i)]);
+        if (!u.has_speed && !u.has_yaw_rate) continue;
+        estimator.add_odometry(u);
+        watchdog.beat(kCan, rt::monotonic_ns());
+      }
+    }
+    const ego::EgoSource s = estimator.source(history.newest_stamp_ns());
+    shared.ego_source.store(s == ego::EgoSource::kIns             ? 1
+                            : s == ego::EgoSource::kDeadReckoning ? 2
+                                                                  : 0,
+                            std::memory_order_relaxed);
+    if (stopped) return;
+  }
+}
+
+int run_live(const RunOptions& o) {
+  const std::filesystem::path config = config_path(o.config);
+  auto settings = load_pipeline_settings(config);
+  if (!settings) return fail(settings.error().message);
+  VelodyneSettings& vs = settings->velodyne;
+  EgoSettings& es = settings->ego;
+  auto dds_config = load_dds_settings(config);
+  if (!dds_config) return fail(dds_config.error().message);
+  auto rs = load_run_settings(config);
+  if (!rs) return fail(rs.error().message);
+  std::optional<can::CanConfig> can_config;
+  if (rs->can) {
+    auto c = load_can_settings(config);
+    if (!c) return fail(c.error().message);
+    if (c->transport != can::Transport::kSocketCan)
+      return fail("'can.transport': stac run reads socketcan only");
+    can_config = *c;
+  }
+  // Command-line overrides.
+  if (!o.calib.empty()) vs.calibration = o.calib;
+  if (o.port >= 0) vs.port = static_cast<std::uint16_t>(o.port);
+  if (!o.bind.empty()) vs.bind_address = o.bind;
+  if (o.domain >= 0) dds_config->domain_id = static_cast<std::uint32_t>(o.domain);
+  if (!o.ins.empty()) {
+    auto t = parse_ins_transport(o.ins);
+    if (!t) return fail("--ins: " + t.error().message);
+    rs->ins = *t;
+  }
+  if (!o.ins_address.empty()) rs->ins_address = o.ins_address;
+  if (o.ins_port >= 0) es.ins_port = static_cast<std::uint16_t>(o.ins_port);
+  if (vs.calibration.empty())
+    return fail("'velodyne.calibration': stac run needs the unit's calibration file");
+  auto calibration = velodyne::load_calibration(vs.calibration);
+  if (!calibration) return fail(calibration.error().message);
+
+  // Start-up: every allocation of the run happens from here to the threads' start.
+  if (rs->lock_memory) {
+    if (auto r = rt::lock_memory(); !r)
+      std::fprintf(stderr, "stac run: warning: %s\n", r.error().message.c_str());
+  }
+  const pipeline::PipelineConfig pc{.deskew = es.deskew,
+                                    .segmenter = settings->segmenter,
+                                    .tracker = settings->tracker,
+                                    .trailer = velodyne::traits(vs.assembler.decoder.model).trailer,
+                                    .clock = pipeline::StageClock::kMonotonic};
+  if (auto r = ScanPublishing::check_capacities(pc); !r) return fail(r.error().message);
+  auto publisher = dds::Publisher::create(*dds_config);
+  if (!publisher) return fail(publisher.error().message);
+  auto receiver = io::UdpReceiver::open({.bind_address = vs.bind_address,
+                                         .port = vs.port,
+                                         .receive_buffer_bytes = vs.receive_buffer_bytes,
+                                         .sender_address = vs.sender_address,
+                                         .batch = 32,
+                                         .max_payload = 2048});
+  if (!receiver) return fail(receiver.error().message);
+
+  PoseInputs inputs;
+  if (rs->ins == InsTransport::kTcp) {
+    auto c = applanix::TcpClient::open({.address = rs->ins_address, .port = es.ins_port});
+    if (!c) return fail(c.error().message);
+    inputs.tcp.emplace(std::move(*c));
+  } else if (rs->ins == InsTransport::kUdp) {
+    auto l = applanix::UdpListener::open({.bind_address = "0.0.0.0",
+                                          .port = es.ins_port,
+                                          .receive_buffer_bytes = 1 << 20,
+                                          .sender_address = "",
+                                          .batch = 32,
+                                          .max_payload = 8192});
+    if (!l) return fail(l.error().message);
+    inputs.udp.emplace(std::move(*l));
+  }
+  if (can_config) {
+    auto db = can::load_dbc(can_config->dbc);
+    if (!db) return fail(db.error().message);
+    auto decoder = can::OdometryDecoder::create(*db, can_config->signals);
+    if (!decoder) return fail(decoder.error().message);
+    can_config->socketcan.filters = decoder->filters();
+    auto reader = can::SocketCanReader::open(can_config->socketcan);
+    if (!reader) return fail(reader.error().message);
+    inputs.odometry.emplace(std::move(*decoder));
+    inputs.can_reader.emplace(std::move(*reader));
+  }
+  const bool have_pose_thread = inputs.tcp || inputs.udp || inputs.can_reader;
+  ego::LocalFrame frame(es.origin);
+  if (can_config) es.estimator.odometry = can_config->dead_reckoning;
+  ego::PoseHistory history(es.history);
+  ego::EgoEstimator estimator(es.estimator, frame, history);
+
+  velodyne::ScanStream stream(*calibration, vs.assembler, static_cast<std::size_t>(vs.scan_slots));
+  pipeline::ScanPipeline pipeline(pc);
+  rt::SlotExchange<Frame> results(rs->result_slots, [&] { return Frame{pipeline.make_result()}; });
+  ScanPublishing scan_publishing(**publisher);
+  rt::DeadlineMonitor monitor(rs->deadline, kHealthStages);
+  rt::Watchdog watchdog;
+  watchdog.start(
+      {rs->velodyne_timeout_ns,
+       inputs.tcp || inputs.udp ? es.estimator.ins_timeout_ns : std::int64_t{0},
+       can_config ? can_config->dead_reckoning.stale_timeout_ns : std::int64_t{0}, std::int64_t{0}},
+      rt::monotonic_ns());
+  Shared shared;
+  const ego::PoseHistory* poses = inputs.tcp || inputs.udp ? &history : nullptr;
+
+  struct sigaction sa {};
+  sa.sa_handler = on_signal;
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+  // The worker threads start with SIGINT and SIGTERM blocked, so only the main thread takes them
+  // (no receive call is interrupted); it unblocks them once the threads run.
+  sigset_t stop_signals;
+  sigemptyset(&stop_signals);
+  sigaddset(&stop_signals, SIGINT);
+  sigaddset(&stop_signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
+  std::fprintf(
+      stderr, "stac run: Velodyne UDP %s:%u, INS %s, CAN %s, DDS domain %u; Ctrl-C stops\n",
+      vs.bind_address.c_str(), receiver->port(),
+      rs->ins == InsTransport::kTcp
+          ? (rs->ins_address + ":" + std::to_string(es.ins_port) + " (tcp)").c_str()
+      : rs->ins == InsTransport::kUdp ? ("udp port " + std::to_string(es.ins_port)).c_str()
+                                      : "none (parked sensor)",
+      can_config ? can_config->socketcan.interface.c_str() : "none", dds_config->domain_id);
+
+  std::thread receiver_thread([&] {
+    start_thread("receiver", rs->receiver);
+    std::array<io::Datagram, 32> batch{};
+    for (;;) {
+      // After a stop request: what the socket already holds is still read, then the thread ends.
+      const bool stopping = shared.stopping.load(std::memory_order_acquire);
+      const int n = receiver->receive(batch, stopping ? 0 : 100);
+      if (n == io::UdpReceiver::kStopped || (stopping && n == 0)) break;
+      if (n == io::UdpReceiver::kError) {
+        shared.receive_errors.fetch_add(1, std::memory_order_relaxed);
+        idle();
+        continue;
+      }
+      for (int i = 0; i < n; ++i) {
+        const io::Datagram& d = batch[static_cast<std::size_t>(i)];
+        (void)stream.add_packet(d.payload, d.stamp_ns);
+      }
+      if (n > 0) {
+        watchdog.beat(kLidar, rt::monotonic_ns());
+        shared.packets.fetch_add(static_cast<std::uint64_t>(n), std::memory_order_relaxed);
+      }
+      shared.kernel_drops.store(receiver->counters().kernel_drops, std::memory_order_relaxed);
+    }
+    shared.receiver_done.store(true, std::memory_order_release);
+  });
+  std::thread pose_thread;
+  if (have_pose_thread) {
+    pose_thread = std::thread([&] {
+      start_thread("pose", rs->pose);
+      pose_loop(inputs, estimator, history, watchdog, shared);
+    });
+  }
+  std::thread perception_thread([&] {
+    start_thread("perception", rs->perception);
+    std::uint64_t incomplete = 0, packets_lost = 0, overflow = 0;
+    for (;;) {
+      velodyne::Scan* scan = stream.take();
+      if (scan == nullptr) {
+        if (!shared.receiver_done.load(std::memory_order_acquire)) {
+          idle();
+          continue;
+        }
+        if ((scan = stream.take()) == nullptr) break;
+      }
+      packets_lost += scan->header.packets_lost;
+      if (!scan->header.complete()) {  // the first scan after start-up or a gap, or points dropped
+        shared.incomplete.store(++incomplete, std::memory_order_relaxed);
+        stream.release();
+        continue;
+      }
+      Frame& f = results.current();
+      f.started_ns = rt::realtime_ns();
+      f.last_firing_ns = scan->header.end_stamp_ns;
+      pipeline.process(*scan, poses, f.result);
+      stream.release();
+      const segmentation::SegmentCounters& c = f.result.segments.counters;
+      overflow += c.ignored_over_capacity + c.dropped_cell_overflow + c.dropped_segment_overflow;
+      f.incomplete = incomplete;
+      f.packets_lost = packets_lost;
+      f.segment_overflow = overflow;
+      f.without_pose = pipeline.scans_without_pose();
+      f.finished_ns = rt::realtime_ns();
+      shared.scans.fetch_add(1, std::memory_order_relaxed);
+      (void)results.publish();  // full: dropped and counted by the exchange; perception goes on
+    }
+    shared.perception_done.store(true, std::memory_order_release);
+  });
+  std::thread publisher_thread([&] {
+    start_thread("publisher", rs->publisher);
+    std::array<std::int64_t, kHealthStages> stage_ns{};
+    std::array<dds::StageLatencyIn, kHealthStages> stages{};
+    std::array<dds::DropCountIn, 11> drops{};
+    std::array<dds::SensorStatusIn, 3> sensors{};
+    bool reported = false;
+    for (;;) {
+      Frame* f = results.take();
+      if (f == nullptr) {
+        if (!shared.perception_done.load(std::memory_order_acquire)) {
+          idle();
+          continue;
+        }
+        if ((f = results.take()) == nullptr) break;
+      }
+      const std::int64_t t0 = rt::realtime_ns();
+      const std::uint64_t index = shared.published.load(std::memory_order_relaxed);
+      auto status = scan_publishing.publish(f->result, index,
+                                            shared.ego_source.load(std::memory_order_relaxed));
+      const std::int64_t t1 = rt::realtime_ns();
+      const std::int64_t end_to_end = t1 - f->last_firing_ns;
+      stage_ns = {f->started_ns - f->last_firing_ns,
+                  f->result.stage_ns[pipeline::kDeskew],
+                  f->result.stage_ns[pipeline::kSegment],
+                  f->result.stage_ns[pipeline::kTrack],
+                  t0 - f->finished_ns,
+                  t1 - t0};
+      (void)monitor.record(stage_ns, end_to_end);
+      const std::int64_t now = rt::monotonic_ns();
+      watchdog.update(now);
+      for (std::size_t i = 0; i < kHealthStages; ++i)
+        stages[i] = {kStageNames[i], to_us(stage_ns[i])};
+      const tracking::TrackerCounters& tc = f->result.tracked.counters;
+      drops = {
+          dds::DropCountIn{"velodyne.kernel", shared.kernel_drops.load(std::memory_order_relaxed)},
+          {"velodyne.scan_slots_full", stream.scans_dropped()},
+          {"velodyne.incomplete_scan", f->incomplete},
+          {"velodyne.packets_lost", f->packets_lost},
+          {"results.slots_full", results.dropped()},
+          {"segmentation.overflow", f->segment_overflow},
+          {"tracking.pool_full", tc.pool_overflow},
+          {"tracking.detections", tc.dropped_detections},
+          {"dds.errors", shared.publish_errors.load(std::memory_order_relaxed)},
+          {"pose.rejected", history.rejected()},
+          {"ego.scans_without_pose", f->without_pose}};
+      for (std::size_t i = 0; i < sensors.size(); ++i) {
+        const rt::InputStatus s = watchdog.status(i, now);
+        sensors[i] = {kInputNames[i], sensor_status(s),
+                      static_cast<float>(static_cast<double>(s.age_ns) * 1e-9)};
+      }
+      const dds::HealthIn health{.scan = {f->result.stamp_ns, index},
+                                 .stages = stages,
+                                 .end_to_end_latency_us = to_us(end_to_end),
+                                 .deadline_misses = monitor.misses(),
+                                 .drops = drops,
+                                 .sensors = sensors};
+      if (auto h = (*publisher)->publish_health(health); !h && status) status = h;
+      results.release();
+      if (status) {
+        shared.published.fetch_add(1, std::memory_order_relaxed);
+      } else {
+        shared.publish_errors.fetch_add(1, std::memory_order_relaxed);
+        if (!reported) std::fprintf(stderr, "stac run: DDS: %s\n", status.error().message.c_str());
+        reported = true;
+      }
+    }
+  });
+
+  pthread_sigmask(SIG_UNBLOCK, &stop_signals, nullptr);
+  // The main thread waits for a stop: a signal, --seconds, or --scans published.
+  const std::int64_t start = rt::monotonic_ns();
+  while (g_signal == 0) {
+    if (o.seconds > 0 && static_cast<double>(rt::monotonic_ns() - start) * 1e-9 >= o.seconds) break;
+    if (o.scans > 0 && shared.published.load(std::memory_order_relaxed) >= o.scans) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  shared.stopping.store(true, std::memory_order_release);
+  inputs.stop();
+  receiver_thread.join();
+  if (pose_thread.joinable()) pose_thread.join();
+  perception_thread.join();
+  publisher_thread.join();
+
+  // The summary.
+  watchdog.update(rt::monotonic_ns());  // stalls since the last published scan count too
+  const double elapsed_s = static_cast<double>(rt::monotonic_ns() - start) * 1e-9;
+  const auto u = [](std::uint64_t v) { return static_cast<unsigned long long>(v); };
+  const auto ms = [](std::int64_t ns) { return static_cast<double>(ns) * 1e-6; };
+  const io::UdpReceiverCounters& rc = receiver->counters();
+  std::fprintf(stderr, "stac run: stopped after %.1f s%s\n", elapsed_s,
+               g_signal != 0 ? " (signal)" : "");
+  std::fprintf(stderr,
+               "  packets     %llu received, %llu dropped by the kernel, %llu truncated, %llu "
+               "receive errors\n",
+               u(rc.received), u(rc.kernel_drops), u(rc.truncated),
+               u(shared.receive_errors.load()));
+  std::fprintf(
+      stderr,
+      "  scans       %llu received (complete), %llu published, %llu incomplete (not processed)\n",
+      u(shared.scans.load()), u(shared.published.load()), u(shared.incomplete.load()));
+  std::fprintf(
+      stderr,
+      "  drops       scan slots full %llu, result slots full %llu, DDS errors %llu, tracking pool "
+      "full %llu, detections %llu\n",
+      u(stream.scans_dropped()), u(results.dropped()), u(shared.publish_errors.load()),
+      u(pipeline.tracker().counters().pool_overflow),
+      u(pipeline.tracker().counters().dropped_detections));
+  std::fprintf(
+      stderr, "  ego         %llu INS fixes, %llu dead-reckoned poses, %llu scans without a pose\n",
+      u(estimator.counters().ins_fixes), u(estimator.counters().dead_reckoned),
+      u(pipeline.scans_without_pose()));
+  std::fprintf(stderr, "  inputs     ");
+  for (std::size_t i = 0; i < 3; ++i) {
+    std::fprintf(stderr, " %s %s (%llu stalls)", kInputNames[i],
+                 rt::to_string(watchdog.status(i, rt::monotonic_ns()).state),
+                 u(watchdog.stalls(i)));
+  }
+  std::fprintf(stderr, "\n  deadline    %.1f ms: %llu misses of %llu published scans\n",
+               ms(monitor.budget_ns()), u(monitor.misses()), u(monitor.end_to_end().count()));
+  std::fprintf(stderr, "  %-12s %9s %9s %9s   (ms, wall clock; histogram bins of 0.1 ms)\n",
+               "latency", "p50", "p99", "max");
+  const auto row = [&](const char* name, const rt::LatencyHistogram& h) {
+    std::fprintf(stderr, "  %-12s %9.3f %9.3f %9.3f\n", name, ms(h.percentile(0.5)),
+                 ms(h.percentile(0.99)), ms(h.max_ns()));
+  };
+  for (std::size_t i = 0; i < kHealthStages; ++i) row(kStageNames[i], monitor.stage(i));
+  row("end-to-end", monitor.end_to_end());
+  return 0;
+}
+
+}  // namespace
+
+void add_run_command(CLI::App& app) {
+  auto o = std::make_shared<RunOptions>();
+  CLI::App* cmd =
+      app.add_subcommand("run", "The live component: sensor UDP -> perception -> DDS topics");
+  cmd->description(
+      "Receives the HDL-64E's UDP packets, the Applanix INS (TCP or UDP) and optionally the "
+      "vehicle\n"
+      "CAN bus, runs every complete scan through deskew -> segment -> track on its own thread and\n"
+      "publishes tracked_objects, segments, ego_pose and health on DDS, watching the deadline\n"
+      "(run.deadline_ms) and the inputs. Stops on Ctrl-C/SIGTERM, --seconds or --scans and prints\n"
+      "a summary: scans, drops by cause, deadline misses, latencies (docs/run.md).");
+  cmd->add_option("--config", o->config,
+                  "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
+  cmd->add_option("--seconds", o->seconds, "stop after this many seconds")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--scans", o->scans, "stop after this many scans are published")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--domain", o->domain, "DDS domain (default: dds.domain_id)")
+      ->check(CLI::Range(0, 230));
+  cmd->add_option("--port", o->port, "Velodyne UDP port (default: velodyne.port; 0: any free port)")
+      ->check(CLI::Range(0, 65535));
+  cmd->add_option("--bind", o->bind,
+                  "Velodyne UDP address to bind (default: velodyne.bind_address)");
+  cmd->add_option("--calib", o->calib, "calibration file (default: velodyne.calibration)");
+  cmd->add_option("--ins", o->ins, "INS transport: tcp, udp or none (default: run.ins)");
+  cmd->add_option("--ins-address", o->ins_address,
+                  "INS TCP server IPv4 address (default: run.ins_address)");
+  cmd->add_option("--ins-port", o->ins_port, "INS port (default: es.ins_port)")
+      ->check(CLI::Range(1, 65535));
+  cmd->callback([o] {
+    if (const int code = run_live(*o); code != 0) throw CLI::RuntimeError(code);
+  });
+}
+
+}  // namespace stac::tools

@@ -1,0 +1,66 @@
+#include "tools/scan_publishing.hpp"
+
+#include "dds/idl_types.hpp"
+
+namespace stac::tools {
+
+ScanPublishing::ScanPublishing(dds::Publisher& publisher)
+    : publisher_(publisher), objects_(dds::kMaxObjects), segments_(dds::kMaxSegments) {}
+
+rt::Result<bool> ScanPublishing::check_capacities(const pipeline::PipelineConfig& config) {
+  if (config.tracker.max_tracks > dds::kMaxObjects) {
+    return rt::make_error("'tracking.max_tracks' " + std::to_string(config.tracker.max_tracks) +
+                          " exceeds the tracked_objects bound of " +
+                          std::to_string(dds::kMaxObjects) + " (idl/stac.idl)");
+  }
+  if (config.segmenter.max_segments > dds::kMaxSegments) {
+    return rt::make_error(
+        "'segmentation.max_segments' " + std::to_string(config.segmenter.max_segments) +
+        " exceeds the segments bound of " + std::to_string(dds::kMaxSegments) + " (idl/stac.idl)");
+  }
+  return true;
+}
+
+rt::Result<bool> ScanPublishing::publish(const pipeline::ScanResult& r, std::uint64_t scan_index,
+                                         std::uint8_t source) {
+  const dds::ScanStamp stamp{r.stamp_ns, scan_index};
+  const std::size_t n_tracks = std::min<std::size_t>(r.tracked.tracks.size(), objects_.size());
+  for (std::size_t i = 0; i < n_tracks; ++i)
+    objects_[i] = dds::to_tracked_object(r.tracked.tracks[i]);
+  rt::Result<bool> status = publisher_.publish_tracked_objects(stamp, {objects_.data(), n_tracks});
+
+  const std::size_t n_segments =
+      std::min<std::size_t>(r.segments.segments.size(), segments_.size());
+  for (std::size_t i = 0; i < n_segments; ++i) {
+    const pipeline::WorldBox b = r.world_box(i);
+    segments_[i] = {static_cast<std::uint32_t>(i),
+                    {b.x, b.y, b.z},
+                    {b.length, b.width, b.height},
+                    static_cast<float>(b.yaw),
+                    r.segments.segments[i].count};
+  }
+  if (auto s = publisher_.publish_segments(stamp, {segments_.data(), n_segments}); !s && status)
+    status = s;
+
+  dds::EgoPoseIn pose;
+  pose.stamp_ns = r.stamp_ns;
+  if (r.pose.ok()) {
+    const ego::PoseSample& p = r.pose.pose;
+    pose.stamp_ns = p.stamp_ns;
+    pose.position = {p.position_m.x(), p.position_m.y(), p.position_m.z()};
+    pose.orientation = {p.attitude.x(), p.attitude.y(), p.attitude.z(), p.attitude.w()};
+    pose.velocity = {p.velocity_mps.x(), p.velocity_mps.y(), p.velocity_mps.z()};
+    pose.yaw_rate = static_cast<float>(p.angular_rate_rps.z());
+    pose.source = source;
+  } else {
+    const Eigen::Vector3d t = r.world_T_vehicle_start.translation();
+    const Eigen::Quaterniond q(r.world_T_vehicle_start.linear());
+    pose.position = {t.x(), t.y(), t.z()};
+    pose.orientation = {q.x(), q.y(), q.z(), q.w()};
+    pose.source = 0;
+  }
+  if (auto s = publisher_.publish_ego_pose(pose); !s && status) status = s;
+  return status;
+}
+
+}  // namespace stac::tools

@@ -1,0 +1,33 @@
+// A pipeline result as DDS samples: tracked_objects, segments and ego_pose of one scan, converted
+// into storage allocated at construction (the IDL bounds) and written by the publishing edge.
+// Used by `stac run` (its publisher thread) and `stac process --dds`. Not thread-safe.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "dds/publisher.hpp"
+#include "pipeline/scan_pipeline.hpp"
+#include "rt/expected.hpp"
+
+namespace stac::tools {
+
+class ScanPublishing {
+ public:
+  explicit ScanPublishing(dds::Publisher& publisher);
+
+  // Checks at start-up that the pipeline's capacities fit the IDL bounds (errors name the key).
+  static rt::Result<bool> check_capacities(const pipeline::PipelineConfig& config);
+
+  // Publishes the three per-scan topics; `source` is the ego pose's (0 none, 1 INS, 2 CAN).
+  // The first failed write is returned (the others are still tried).
+  rt::Result<bool> publish(const pipeline::ScanResult& result, std::uint64_t scan_index,
+                           std::uint8_t source);
+
+ private:
+  dds::Publisher& publisher_;
+  std::vector<dds::TrackedObjectIn> objects_;
+  std::vector<dds::SegmentIn> segments_;
+};
+
+}  // namespace stac::tools
