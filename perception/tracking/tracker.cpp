@@ -309,6 +309,7 @@ void Tracker::absorb_fragments(std::span<const Detection> detections) noexcept {
   const auto max_len = static_cast<float>(config_.absorb_max_length_m);
   const auto max_wid = static_cast<float>(config_.absorb_max_width_m);
   const auto max_gap = static_cast<float>(config_.absorb_gap_m);
+  const float reach_sq = max_len * max_len + max_wid * max_wid;
   const auto person = [&](const Detection& d) {
     return narrow_and_tall(config_, d.length, d.width, d.height);
   };
@@ -326,8 +327,11 @@ void Tracker::absorb_fragments(std::span<const Detection> detections) noexcept {
     float best_gap = max_gap;
     Extent best_union{};
     float best_heading = 0, best_area = 0;
+    const Eigen::Vector2f fc = f.position(true);
     for (std::size_t hi = 0; hi < nd; ++hi) {
       if (hi == fi || det_match_[hi] < 0) continue;
+      // A union that fits has a diagonal of at most reach: farther centres never fit (cheap test).
+      if ((merged_[hi].position(true) - fc).squaredNorm() > reach_sq) continue;
       // A person or bicyclist takes only low pieces (legs, a wheel), whatever their tracks' ages,
       // and stays narrow.
       const bool narrow_host = person(merged_[hi]);
@@ -410,17 +414,23 @@ void Tracker::merge_overlapping(std::int64_t stamp_ns) noexcept {
     if (merged_track_[i] != 0) continue;
     Slot& a = slots_[live_[i]];
     const bool narrow = person(a.track);  // takes only low tracks (legs) into its box
+    const float grow = narrow ? static_cast<float>(config_.absorb_narrow_gap_m) : margin;
+    float reach = 0, ca = 1, sa = 0;  // of a's grown box; refreshed when a is corrected
+    const auto shape = [&] {
+      reach = 0.5f * std::hypot(a.track.length + 2 * grow, a.track.width + 2 * grow);
+      ca = std::cos(a.track.yaw), sa = std::sin(a.track.yaw);
+    };
+    shape();
     for (std::size_t j = 0; j < n; ++j) {
       if (j == i || merged_track_[j] != 0) continue;
       const Slot& b = slots_[live_[j]];
+      const float dx = static_cast<float>(b.x(0) - a.x(0)),
+                  dy = static_cast<float>(b.x(1) - a.x(1));
+      if (dx * dx + dy * dy > reach * reach) continue;  // outside the grown box's circle
       if (person(b.track) ||
           (narrow ? b.track.height >= config_.absorb_keep_height_m : !older(a.track, b.track))) {
         continue;
       }
-      const float ca = std::cos(a.track.yaw), sa = std::sin(a.track.yaw);
-      const float dx = static_cast<float>(b.x(0) - a.x(0)),
-                  dy = static_cast<float>(b.x(1) - a.x(1));
-      const float grow = narrow ? static_cast<float>(config_.absorb_narrow_gap_m) : margin;
       if (std::abs(ca * dx + sa * dy) > 0.5f * a.track.length + grow ||
           std::abs(-sa * dx + ca * dy) > 0.5f * a.track.width + grow) {
         continue;
@@ -433,6 +443,7 @@ void Tracker::merge_overlapping(std::int64_t stamp_ns) noexcept {
       if (a.track.segment < 0 && b.measured >= 0) {
         correct(a, merged_[static_cast<std::size_t>(b.measured)], stamp_ns);
         a.measured = b.measured;
+        shape();
       }
       merged_track_[j] = 1;
       ++counters_.deleted_overlap;
