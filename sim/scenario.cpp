@@ -1,6 +1,7 @@
 #include "sim/scenario.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <numbers>
@@ -309,9 +310,13 @@ class Builder {
   }
   static std::int64_t cell_key(std::int64_t cx, std::int64_t cy) { return cx * 1'000'003 + cy; }
 
-  // Whether actor j must be kept clear of actor a: cars of everyone, everyone of cars.
+  // Whether actors a and b must be kept clear of each other: cars of everyone, pedestrians of
+  // each other and of bicyclists (bicyclists of each other are not checked).
   static bool must_clear(const Actor& a, const Actor& b) {
-    return a.cls == ObjectClass::kCar || b.cls == ObjectClass::kCar;
+    if (a.cls == ObjectClass::kCar || b.cls == ObjectClass::kCar) return true;
+    const bool pa = a.cls == ObjectClass::kPedestrian, pb = b.cls == ObjectClass::kPedestrian;
+    return (pa && (pb || b.cls == ObjectClass::kBicyclist)) ||
+           (pb && a.cls == ObjectClass::kBicyclist);
   }
 
   // First time (s) actor a, with footprints fp (clearance included), meets the ego or an
@@ -435,21 +440,52 @@ void traffic(Builder& b, double x0, double x1, double cross_x, double duration, 
       if (b.commit()) break;
     }
   }
+  // Sidewalk walkers keep right: those heading +x on one lane of the sidewalk, those heading -x
+  // on the other (standing ones anywhere), so nobody walks through an oncoming walker. A group
+  // walks in file, each a 0.4-0.8 m gap behind the one before. A faster walker that catches up
+  // waits (commit); one that meets a walker it cannot wait out is drawn again (up to 3 times).
   for (int i = 0; i < walkers; ++i) {
-    const int side = r.chance(0.5) ? 1 : -1;
-    const double y = side * (g.road_half_width + r.uniform(1.0, g.sidewalk_width - 0.4));
-    const double x = r.uniform(x0, x1);
     const double v = r.chance(0.2) ? 0.0 : r.uniform(0.9, 1.7);
     const int group = r.chance(0.25) ? r.integer(2, 4) : 1;
-    for (int k = 0; k < group; ++k) {
-      Actor& p = b.pedestrian(x + k * r.uniform(0.6, 1.2), y - side * k * 0.1);
-      if (v > 0) b.drive(p, x + k * 0.9, y, r.chance(0.5) ? 0.0 : std::numbers::pi, v, duration);
+    double x = 0, y = 0, yaw = 0, length = 0;
+    bool placed = false;
+    for (int attempt = 0; attempt < 3 && !placed; ++attempt) {
+      const int side = r.chance(0.5) ? 1 : -1;
+      const bool east = r.chance(0.5);
+      yaw = east ? 0.0 : std::numbers::pi;
+      const bool outer = (side < 0) == east;  // on the walker's right
+      const double off = v == 0.0 ? r.uniform(1.0, g.sidewalk_width - 0.4)
+                                  : (outer ? 2.65 : 1.5) + r.uniform(-0.15, 0.15);
+      y = side * (g.road_half_width + off);
+      x = r.uniform(x0, x1);
+      Actor& p = b.pedestrian(x, y);
+      if (v > 0) b.drive(p, x, y, yaw, v, duration);
+      length = p.size.x;
+      placed = b.commit();
+    }
+    if (!placed) continue;
+    double behind = 0.0;
+    for (int k = 1; k < group; ++k) {
+      Actor& p = b.pedestrian(0, 0);
+      behind += length / 2 + p.size.x / 2 + r.uniform(0.4, 0.8);
+      length = p.size.x;
+      const double px = x - std::cos(yaw) * behind;
+      p.path.points = {{px, y, 0}};
+      if (v > 0) b.drive(p, px, y, yaw, v, duration);
+      b.commit();
     }
   }
-  for (int i = 0; i < walkers / 6; ++i) {  // crossing the street at the crosswalk
+  // Crossing the street at the crosswalks (3 m wide, beside the crossing road on either side):
+  // each crossing walker on a line of its own, 1 m from the next, so none walks through another.
+  std::array<int, 6> lines = {0, 1, 2, 3, 4, 5};
+  for (std::size_t k = lines.size() - 1; k > 0; --k) {
+    std::swap(lines[k], lines[static_cast<std::size_t>(r.integer(0, static_cast<int>(k)))]);
+  }
+  for (int i = 0; i < walkers / 6; ++i) {
     const int dir = r.chance(0.5) ? 1 : -1;
     Actor& p = b.pedestrian(0, 0);
-    const double x = cross_x + (r.chance(0.5) ? -1 : 1) * (g.cross_half_width + 1.5);
+    const int line = lines[static_cast<std::size_t>(i) % lines.size()];
+    const double x = cross_x + (line % 2 ? -1 : 1) * (g.cross_half_width + 0.5 + (line / 2));
     b.drive(p, x, -dir * (g.road_half_width + 2), dir * std::numbers::pi / 2, r.uniform(1.0, 1.6), duration,
             r.uniform(0.5, 3), r.uniform(0, 8));
   }
@@ -589,6 +625,12 @@ rt::Result<Scenario> make_scenario(const std::string& name, std::uint64_t seed, 
     g.cross_road_x = 1e9;
     b.set_ego(straight(-20, 0, 1.0));
     b.street_furniture(-60, 80, g);
+    // The bicyclists first: the pedestrians, placed after them, keep clear of them.
+    for (int i = 0; i < 6; ++i) {
+      Actor& c = b.cyclist(0, 0);
+      b.drive(c, r.uniform(-40, 40), r.uniform(-5, 5), r.chance(0.5) ? 0 : std::numbers::pi,
+              r.uniform(3, 5), duration);
+    }
     for (int i = 0, placed = 0; placed < 150 && i < 600;
          ++i) {  // pedestrians everywhere, no traffic
       Actor& p = b.pedestrian(r.uniform(-40, 60), r.uniform(-11, 11));
@@ -596,10 +638,6 @@ rt::Result<Scenario> make_scenario(const std::string& name, std::uint64_t seed, 
         b.drive(p, p.path.points[0].x, p.path.points[0].y, r.uniform(0, 2 * std::numbers::pi), r.uniform(0.6, 1.6), duration);
       }
       if (b.commit()) ++placed;
-    }
-    for (int i = 0; i < 6; ++i) {
-      Actor& c = b.cyclist(0, 0);
-      b.drive(c, r.uniform(-40, 40), r.uniform(-5, 5), r.chance(0.5) ? 0 : std::numbers::pi, r.uniform(3, 5), duration);
     }
   } else {
     std::string list;
