@@ -497,32 +497,30 @@ TEST(CompleteEndOn, ALowBumperFarAwayIsCompletedToo) {
 }
 
 TEST(Tracker, NewTrackInsideAnOlderTracksBoxMergesIntoItAndTheOldIdLivesOn) {
-  // A car tracked for 10 scans is lost for 3; it comes back 1.2 m off its prediction, beyond the
-  // Mahalanobis gate of a coasting track with little velocity uncertainty left? No: a detection
-  // outside the gate spawns a track; inside the old box it is merged into the old id at once.
-  TrackerConfig c;
-  c.gate_distance_m = 1.0;  // make the return fall outside the gate
-  Tracker tracker(c);
-  TrackerOutput out(c.max_tracks);
-  for (int k = 0; k < 10; ++k)
-    tracker.update(k * kScanNs, std::vector<Detection>{box(30, 5, 4.5, 1.8, 1.5, 0, 0)}, out);
-  ASSERT_EQ(out.tracks.size(), 1u);
-  const std::uint64_t id = out.tracks[0].id;
-  for (int k = 10; k < 13; ++k) tracker.update(k * kScanNs, std::vector<Detection>{}, out);
-  tracker.update(13 * kScanNs, std::vector<Detection>{box(31.2, 5, 4.5, 1.8, 1.5, 0, 7)}, out);
+  // A car tracked for 10 scans is lost for 3 and comes back 1.2 m from its prediction, outside
+  // the (narrowed) gate: the detection spawns a track, which lies inside the old track's box and
+  // is merged into the old id at once. With the merge off, the return keeps a track of its own.
+  const auto run = [](double overlap_margin_m, TrackerOutput& out) {
+    TrackerConfig c;
+    c.gate_distance_m = 1.0;
+    c.overlap_margin_m = overlap_margin_m;
+    Tracker tracker(c);
+    for (int k = 0; k < 10; ++k)
+      tracker.update(k * kScanNs, std::vector<Detection>{box(30, 5, 4.5, 1.8, 1.5, 0, 0)}, out);
+    const std::uint64_t id = out.tracks[0].id;
+    for (int k = 10; k < 13; ++k) tracker.update(k * kScanNs, std::vector<Detection>{}, out);
+    tracker.update(13 * kScanNs, std::vector<Detection>{box(31.2, 5, 4.5, 1.8, 1.5, 0, 7)}, out);
+    return std::pair{id, tracker.counters().deleted_overlap};
+  };
+  TrackerOutput out(TrackerConfig{}.max_tracks);
+  const auto [id, merged] = run(TrackerConfig{}.overlap_margin_m, out);
   ASSERT_EQ(out.tracks.size(), 1u);
   EXPECT_EQ(out.tracks[0].id, id);
   EXPECT_EQ(out.tracks[0].state, TrackState::kConfirmed);
   EXPECT_EQ(out.tracks[0].segment, 7);
   EXPECT_GT(out.tracks[0].position.x(), 30.6f);  // corrected towards the new measurement
-  EXPECT_EQ(tracker.counters().deleted_overlap, 1u);
-  // Off: the return keeps a track of its own.
-  c.overlap_margin_m = -1;
-  Tracker off(c);
-  for (int k = 0; k < 10; ++k)
-    off.update(k * kScanNs, std::vector<Detection>{box(30, 5, 4.5, 1.8, 1.5, 0, 0)}, out);
-  for (int k = 10; k < 13; ++k) off.update(k * kScanNs, std::vector<Detection>{}, out);
-  off.update(13 * kScanNs, std::vector<Detection>{box(31.2, 5, 4.5, 1.8, 1.5, 0, 7)}, out);
+  EXPECT_EQ(merged, 1u);
+  (void)run(-1, out);
   EXPECT_EQ(out.tracks.size(), 2u);
 }
 
