@@ -13,6 +13,7 @@ constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 constexpr std::uint32_t kUnvisited = kNone - 1;  // an obstacle cell not yet in a component
 constexpr std::uint32_t kWeak = kNone - 2;       // points above the clearance, but low: joins a
                                                  // component it touches, never starts one
+constexpr std::uint32_t kMaxPersons = 8;         // split: more person-sized groups are foliage
 constexpr std::uint32_t kQueued = kNone - 2;     // split: a high cell in the group being grown
 
 // A part of a component (the whole of it, or its cells nearest one seed when it is split).
@@ -385,6 +386,7 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
       s.part[slot] = high ? kUnvisited : kNone;
     }
     std::uint32_t shared = kNone;  // the seed of all groups that are not one person
+    std::uint32_t persons = 0;
     for (const std::uint32_t start : s.component_cells) {
       if (s.part[start] != kUnvisited) continue;
       const std::size_t begin = s.split_queue.size();
@@ -408,6 +410,8 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
                           group.x1 - group.x0 < person_cells &&
                           group.y1 - group.y0 < person_cells &&
                           s.parts.size() + 1 < s.parts.capacity();  // room left for `shared`
+      // More person-sized groups than a group of people has: foliage (bush tops), left whole.
+      if (person && ++persons > kMaxPersons) return false;
       if (!person && shared == kNone) shared = static_cast<std::uint32_t>(s.parts.size());
       const std::uint32_t seed = person ? static_cast<std::uint32_t>(s.parts.size()) : shared;
       if (seed == s.parts.size()) *s.parts.append() = Part{};  // capacity kept above
@@ -509,7 +513,10 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
     // Too large as a whole (a building, a long wall): dropped whole, not split.
     const bool too_large = pts > c.max_segment_points || (x1 - x0 + 1) > max_extent_cells ||
                            (y1 - y0 + 1) > max_extent_cells;
-    if (!(split_height > 0 && !too_large && split(component))) {  // one part: the whole
+    // Smaller than a person on both sides: one object, nothing to split.
+    const bool too_small = x1 - x0 < person_cells && y1 - y0 < person_cells;
+    if (!(split_height > 0 && !too_large && !too_small &&
+          split(component))) {  // one part: the whole
       s.parts.clear();
       Part* whole = s.parts.append();  // capacity max_segments + 1 >= 2
       *whole = Part{pts, static_cast<std::uint32_t>(s.component_cells.size()), x0, x1, y0, y1};
