@@ -63,34 +63,34 @@ struct TrackerConfig {
   // tall: people pushing a bike, taller than a sedan's pieces) are never joined to another object;
   // they take only low pieces (under absorb_keep_height_m: legs, a wheel) at most
   // absorb_narrow_gap_m away and stay within those bounds. absorb_gap_m 0: off.
-  double absorb_gap_m = 2.0;
-  double absorb_max_length_m = 6.0;
-  double absorb_max_width_m = 2.6;
-  double absorb_velocity_mps = 1.5;
-  double absorb_keep_length_m = 2.2;
-  double absorb_keep_width_m = 1.0;
-  double absorb_keep_height_m = 1.0;
-  double absorb_narrow_gap_m = 0.3;
-  double absorb_keep_wide_m = 1.4;
-  double absorb_keep_wide_height_m = 1.6;
+  double absorb_gap_m = 2.0;               // m, box to box
+  double absorb_max_length_m = 6.0;        // m
+  double absorb_max_width_m = 2.6;         // m
+  double absorb_velocity_mps = 1.5;        // m/s
+  double absorb_keep_length_m = 2.2;       // m
+  double absorb_keep_width_m = 1.0;        // m
+  double absorb_keep_height_m = 1.0;       // m
+  double absorb_narrow_gap_m = 0.3;        // m
+  double absorb_keep_wide_m = 1.4;         // m
+  double absorb_keep_wide_height_m = 1.6;  // m
   // Overlapping tracks: a track whose position lies inside an older track's box grown by
   // overlap_margin_m (neither a person nor a bicyclist, as above, who take only low tracks
   // within absorb_narrow_gap_m) is the same object when both boxes fit in
-  // absorb_max_length_m x absorb_max_width_m: it is merged into the older one,
-  // which keeps its id and, when only the younger was updated in this
-  // scan, is corrected with the younger's measurement. overlap_margin_m < 0: off.
-  double overlap_margin_m = 1.0;
+  // absorb_max_length_m x absorb_max_width_m: it is merged into the older one, which keeps its
+  // id and, when only the younger was measured in this scan, is corrected with the younger's
+  // measurement. overlap_margin_m < 0: off.
+  double overlap_margin_m = 1.0;  // m
   // End-on vehicles (complete_end_on): a face across the ray end_on_min_width_m..max_width_m
   // wide, at most end_on_max_depth_m deep along it and end_on_min_height_m tall is the rear or
   // front of a vehicle whose body, unseen, extends away from the sensor: its box becomes
   // end_on_length_m long along the ray, when it is at least end_on_min_range_m away (nearer,
   // vehicles show their sides; bicycles seen side-on would pass). end_on_length_m 0: off.
-  double end_on_length_m = 4.5;
-  double end_on_min_range_m = 15.0;
-  double end_on_min_width_m = 1.2;
-  double end_on_max_width_m = 2.7;
-  double end_on_max_depth_m = 1.6;
-  double end_on_min_height_m = 0.0;
+  double end_on_length_m = 4.5;      // m
+  double end_on_min_range_m = 15.0;  // m, sensor to box centre
+  double end_on_min_width_m = 1.2;   // m, across the ray
+  double end_on_max_width_m = 2.7;   // m
+  double end_on_max_depth_m = 1.6;   // m, along the ray
+  double end_on_min_height_m = 0.0;  // m
   // Box smoothing: weight of the new measurement in the exponential average (0..1].
   double box_smoothing = 0.3;
   // Holistic features: headings of slower smoothed velocities are not differentiated (m/s).
