@@ -95,12 +95,7 @@ class Builder {
     source_ = static_cast<std::uint32_t>(out_.sources.size());
     out_.sources.push_back(in + " " + o.truth[k]);
     velodyne::ScanStream stream(*calibration, vs.assembler, 2);
-    const pipeline::PipelineConfig pc{
-        .deskew = ego_settings.deskew,
-        .segmenter = settings->segmenter,
-        .tracker = settings->tracker,
-        .trailer = velodyne::traits(vs.assembler.decoder.model).trailer,
-        .clock = pipeline::StageClock::kThreadCpu};
+    const pipeline::PipelineConfig pc = offline_pipeline_config(*settings);
     pipeline::ScanPipeline pipeline(pc);
     pipeline::ScanResult result = pipeline.make_result();
     counts_ = {};
@@ -133,16 +128,10 @@ class Builder {
   void handle(const velodyne::Scan& scan, const pipeline::ScanResult& result) {
     ++counts_.scans;
     // The truth scan of this scan (as `stac process`), and its segments' composition.
-    const std::int64_t stamp = result.stamp_ns;
-    while (truth_next_ + 1 < truth_.size() &&
-           std::llabs(truth_[truth_next_ + 1].stamp_ns - stamp) <=
-               std::llabs(truth_[truth_next_].stamp_ns - stamp)) {
-      ++truth_next_;
-    }
-    const TruthScanRecord& ts = truth_[truth_next_];
-    const bool matched = std::llabs(ts.stamp_ns - stamp) <= 1'000'000;
+    const TruthScanRecord* ts = nearest_truth_scan(truth_, truth_next_, result.stamp_ns);
     records_.assign(result.segments.segments.size(), SegmentRecord{});
-    if (matched) truth_composition(ts, scan, result.segments, result.world_T_sensor, records_);
+    if (ts != nullptr)
+      truth_composition(*ts, scan, result.segments, result.world_T_sensor, records_);
 
     seen_.clear();
     for (const tracking::Track& track : result.tracked.tracks) {
@@ -169,7 +158,7 @@ class Builder {
       b.largest = std::max(b.largest, seg.count);
       for (const auto& [truth_id, n] : records_[si].truth) {
         ObjectClass c = ObjectClass::kBackground;
-        for (const TruthObjectRecord& obj : ts.objects) {
+        for (const TruthObjectRecord& obj : ts->objects) {
           if (static_cast<std::int64_t>(obj.id) == truth_id) c = class_of(obj.cls);
         }
         b.class_points[static_cast<std::size_t>(c)] += n;

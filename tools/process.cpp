@@ -125,11 +125,7 @@ int run_process(const ProcessOptions& o) {
 
   // Everything the per-scan loop uses is allocated here.
   velodyne::ScanStream stream(*calibration, vs.assembler, 2);
-  const pipeline::PipelineConfig pc{.deskew = ego_settings.deskew,
-                                    .segmenter = settings->segmenter,
-                                    .tracker = settings->tracker,
-                                    .trailer = velodyne::traits(vs.assembler.decoder.model).trailer,
-                                    .clock = pipeline::StageClock::kThreadCpu};
+  const pipeline::PipelineConfig pc = offline_pipeline_config(*settings);
   pipeline::ScanPipeline pipeline(pc);
   pipeline::ScanResult result = pipeline.make_result();
   std::optional<ProcessDds> dds_out;
@@ -182,13 +178,8 @@ int run_process(const ProcessOptions& o) {
     }
     for (const tracking::Track& t : result.tracked.tracks) rec.tracks.push_back(track_record(t));
     if (!truth.empty()) {
-      const std::int64_t stamp = result.stamp_ns;
-      while (truth_next + 1 < truth.size() &&
-             std::llabs(truth[truth_next + 1].stamp_ns - stamp) <= std::llabs(truth[truth_next].stamp_ns - stamp)) {
-        ++truth_next;
-      }
-      if (std::llabs(truth[truth_next].stamp_ns - stamp) <= 1'000'000) {
-        truth_composition(truth[truth_next], scan, result.segments, result.world_T_sensor,
+      if (const TruthScanRecord* ts = nearest_truth_scan(truth, truth_next, result.stamp_ns)) {
+        truth_composition(*ts, scan, result.segments, result.world_T_sensor,
                           rec.segments);
         ++truth_matched;
       }

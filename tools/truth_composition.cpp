@@ -1,8 +1,26 @@
 #include "tools/truth_composition.hpp"
 
 #include <cmath>
+#include <cstdlib>
 
 namespace stac::tools {
+
+pipeline::PipelineConfig offline_pipeline_config(const PipelineSettings& settings) {
+  return {.deskew = settings.ego.deskew,
+          .segmenter = settings.segmenter,
+          .tracker = settings.tracker,
+          .trailer = velodyne::traits(settings.velodyne.assembler.decoder.model).trailer,
+          .clock = pipeline::StageClock::kThreadCpu};
+}
+
+const TruthScanRecord* nearest_truth_scan(const std::vector<TruthScanRecord>& truth,
+                                          std::size_t& next, std::int64_t stamp_ns) {
+  while (next + 1 < truth.size() && std::llabs(truth[next + 1].stamp_ns - stamp_ns) <=
+                                        std::llabs(truth[next].stamp_ns - stamp_ns)) {
+    ++next;
+  }
+  return std::llabs(truth[next].stamp_ns - stamp_ns) <= 1'000'000 ? &truth[next] : nullptr;
+}
 
 // Which truth object each segment point lies in (the smallest box holding it, grown by 5 cm),
 // counted per segment; -1 for points in no box.
