@@ -12,9 +12,6 @@
 
 #include "drivers/io/pcap_reader.hpp"
 #include "drivers/velodyne/scan_stream.hpp"
-#include "perception/classification/accumulated_cloud.hpp"
-#include "perception/classification/holistic.hpp"
-#include "perception/descriptors/descriptors.hpp"
 #include "pipeline/scan_pipeline.hpp"
 #include "tools/capture_poses.hpp"
 #include "tools/commands.hpp"
@@ -22,6 +19,7 @@
 #include "tools/progress.hpp"
 #include "tools/sensor_status.hpp"
 #include "tools/settings.hpp"
+#include "tools/track_describer.hpp"
 #include "tools/truth_composition.hpp"
 
 namespace stac::tools {
@@ -32,7 +30,6 @@ using classification::ObjectClass;
 // The thesis's dataset rule (REFERENCE.md §5).
 constexpr std::uint32_t kMinSegments = 10;
 constexpr std::uint32_t kMinLargestSegment = 75;  // points; at least one segment over this
-constexpr std::size_t kAccumulatedCapacity = 4096;
 
 struct DatasetOptions {
   std::vector<std::string> in, truth;
@@ -48,8 +45,6 @@ ObjectClass class_of(const std::string& cls) {
 }
 
 struct TrackBuild {
-  explicit TrackBuild(std::uint64_t id) : cloud(kAccumulatedCapacity, id + 1) {}
-  classification::AccumulatedCloud cloud;
   DatasetTrack track;
   std::uint32_t largest = 0;
   std::array<std::uint64_t, 4> class_points{};  // per ObjectClass, truth points
@@ -118,7 +113,8 @@ class Builder {
     progress.finish();
     if (!reader->error().empty())
       std::fprintf(stderr, "stac dataset: warning: %s\n", reader->error().c_str());
-    for (auto& [id, b] : live_) finish(*b);
+    describer_.end_all();
+    for (auto& [id, b] : live_) finish(b);
     live_.clear();
     if (counts_.scans == 0) return rt::make_error(in + ": no complete scan in the capture");
     return counts_;
@@ -133,29 +129,20 @@ class Builder {
     if (ts != nullptr)
       truth_composition(*ts, scan, result.segments, result.world_T_sensor, records_);
 
-    seen_.clear();
     for (const tracking::Track& track : result.tracked.tracks) {
-      seen_.push_back(track.id);
       if (track.segment < 0) continue;
       const auto si = static_cast<std::size_t>(track.segment);
-      auto it = live_.find(track.id);
-      if (it == live_.end()) {
-        it = live_.emplace(track.id, std::make_unique<TrackBuild>(track.id)).first;
-        ++counts_.tracks;
-      }
-      TrackBuild& b = *it->second;
-      const segmentation::Segment& seg = result.segments.segments[si];
-      const descriptors::SegmentView view{&scan.points.data()->x, sizeof(velodyne::Point),
-                                          result.segments.indices(seg), 0};
-      describer_.compute(view, descriptors_);
-      b.cloud.add_segment(view);
-      describer_.compute(b.cloud.view(), accumulated_);
-      classification::holistic_descriptor(track, &accumulated_, holistic_);
-      b.track.segment_rows.insert(b.track.segment_rows.end(), descriptors_.values.begin(),
-                                  descriptors_.values.end());
-      b.track.holistic_rows.insert(b.track.holistic_rows.end(), holistic_.begin(), holistic_.end());
+      auto [it, added] = live_.try_emplace(track.id);
+      counts_.tracks += added ? 1 : 0;
+      TrackBuild& b = it->second;
+      describer_.describe(scan, result, track);
+      b.track.id = track.id;
+      b.track.segment_rows.insert(b.track.segment_rows.end(), describer_.segment().begin(),
+                                  describer_.segment().end());
+      b.track.holistic_rows.insert(b.track.holistic_rows.end(), describer_.holistic().begin(),
+                                   describer_.holistic().end());
       ++b.track.segments;
-      b.largest = std::max(b.largest, seg.count);
+      b.largest = std::max(b.largest, result.segments.segments[si].count);
       for (const auto& [truth_id, n] : records_[si].truth) {
         ObjectClass c = ObjectClass::kBackground;
         for (const TruthObjectRecord& obj : ts->objects) {
@@ -165,12 +152,10 @@ class Builder {
       }
     }
     // Tracks the tracker no longer reports are complete.
-    for (auto it = live_.begin(); it != live_.end();) {
-      if (std::find(seen_.begin(), seen_.end(), it->first) == seen_.end()) {
-        finish(*it->second);
-        it = live_.erase(it);
-      } else {
-        ++it;
+    for (const std::uint64_t id : describer_.end_scan(result)) {
+      if (auto it = live_.find(id); it != live_.end()) {
+        finish(it->second);
+        live_.erase(it);
       }
     }
   }
@@ -192,12 +177,9 @@ class Builder {
   std::size_t truth_next_ = 0;
   std::uint32_t source_ = 0;
   RunCounts counts_;
-  std::map<std::uint64_t, std::unique_ptr<TrackBuild>> live_;
-  std::vector<std::uint64_t> seen_;
+  std::map<std::uint64_t, TrackBuild> live_;
   std::vector<SegmentRecord> records_;
-  descriptors::DescriptorPipeline describer_{descriptors::DescriptorConfig{}};
-  descriptors::Descriptors descriptors_, accumulated_;
-  classification::HolisticDescriptor holistic_{};
+  TrackDescriber describer_;
 };
 
 int run_dataset(const DatasetOptions& o) {
