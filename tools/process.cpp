@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -17,10 +18,12 @@
 #include "tools/capture_poses.hpp"
 #include "tools/commands.hpp"
 #include "tools/dds_settings.hpp"
+#include "tools/model_file.hpp"
 #include "tools/progress.hpp"
 #include "tools/scan_publishing.hpp"
 #include "tools/sensor_status.hpp"
 #include "tools/settings.hpp"
+#include "tools/track_describer.hpp"
 #include "tools/tracks_jsonl.hpp"
 #include "tools/truth_composition.hpp"
 
@@ -28,7 +31,7 @@ namespace stac::tools {
 namespace {
 
 struct ProcessOptions {
-  std::string in, tracks, truth, config, calib, origin;
+  std::string in, tracks, truth, config, calib, origin, model;
   bool no_deskew = false;
   bool dds = false;
   int domain = -1;
@@ -85,6 +88,45 @@ void print_stats(const std::vector<Stage>& stages) {
 
 double yaw_of(const Eigen::Matrix3d& r) { return std::atan2(r(1, 0), r(0, 0)); }
 
+// --model: every track's class by the augmented discrete Bayes filter, updated with each segment
+// (docs/classification.md), carried while it coasts.
+class TrackClassifying {
+ public:
+  explicit TrackClassifying(classification::TrackClassifierModel model)
+      : model_(std::move(model)) {}
+  // Classifies the tracks updated this scan and labels every record (records[i] is track i).
+  void update(const velodyne::Scan& scan, const pipeline::ScanResult& result,
+              std::vector<TrackRecord>& records) {
+    for (std::size_t i = 0; i < result.tracked.tracks.size(); ++i) {
+      const tracking::Track& t = result.tracked.tracks[i];
+      State& s = states_[t.id];
+      if (t.segment >= 0) {
+        describer_.describe(scan, result, t);
+        classification::LogOdds hs{};
+        s.valid =
+            classification::add_segment(model_, describer_.segment(), s.evidence, hs) &&
+            classification::track_log_odds(model_, s.evidence, describer_.holistic(), s.log_odds);
+      }
+      if (!s.valid) continue;
+      records[i].classified = true;
+      records[i].cls = classification::class_name(classification::predict(s.log_odds));
+      for (std::size_t k = 0; k < 3; ++k)
+        records[i].log_odds[k] = static_cast<double>(s.log_odds[k]);
+    }
+    for (const std::uint64_t id : describer_.end_scan(result)) states_.erase(id);
+  }
+
+ private:
+  struct State {
+    classification::TrackEvidence evidence;
+    classification::LogOdds log_odds{};
+    bool valid = false;
+  };
+  classification::TrackClassifierModel model_;
+  TrackDescriber describer_;
+  std::map<std::uint64_t, State> states_;
+};
+
 int run_process(const ProcessOptions& o) {
   const std::filesystem::path config = config_path(o.config);
   auto settings = load_pipeline_settings(config);
@@ -120,6 +162,12 @@ int run_process(const ProcessOptions& o) {
 
   auto reader = io::PcapReader::open(o.in, io::PcapFilter{.udp_dst_port = vs.port, .udp_src_port = {}});
   if (!reader) return fail(reader.error().message);
+  std::optional<TrackClassifying> classifying;
+  if (!o.model.empty()) {
+    auto m = read_model_file(o.model);
+    if (!m) return fail(m.error().message);
+    classifying.emplace(std::move(*m));
+  }
   std::ofstream out(o.tracks);
   if (!out) return fail(o.tracks + ": cannot create the tracks file");
 
@@ -136,7 +184,8 @@ int run_process(const ProcessOptions& o) {
   }
   std::uint64_t dds_errors = 0;
 
-  std::vector<Stage> stages{{"decode", {}}, {"deskew", {}}, {"segment", {}}, {"track", {}}, {"total", {}}};
+  std::vector<Stage> stages{{"decode", {}}, {"deskew", {}}, {"segment", {}},
+                            {"track", {}},  {"total", {}},  {"classify", {}}};
   std::uint64_t scans = 0, truth_matched = 0;
   std::size_t truth_next = 0;
   std::string line;
@@ -177,6 +226,11 @@ int run_process(const ProcessOptions& o) {
                          false};
     }
     for (const tracking::Track& t : result.tracked.tracks) rec.tracks.push_back(track_record(t));
+    if (classifying) {
+      const std::int64_t c0 = cpu_ns();
+      classifying->update(scan, result, rec.tracks);
+      stages[5].ms.push_back(static_cast<double>(cpu_ns() - c0) * 1e-6);
+    }
     if (!truth.empty()) {
       if (const TruthScanRecord* ts = nearest_truth_scan(truth, truth_next, result.stamp_ns)) {
         truth_composition(*ts, scan, result.segments, result.world_T_sensor,
@@ -277,6 +331,9 @@ void add_process_command(CLI::App& app) {
   cmd->add_option("--origin", o->origin,
                   "LAT,LON,ALT of the world frame (default: the truth's, else the config's ego.origin)");
   cmd->add_flag("--no-deskew", o->no_deskew, "ignore the INS stream: no deskew, sensor frame = world");
+  cmd->add_option("--model", o->model,
+                  "track classifier model (`stac train`): every track gets a class and log odds "
+                  "(ADBF; classify stage timed apart, not in total)");
   cmd->add_flag("--dds", o->dds,
                 "also publish every scan's tracked_objects, segments and ego_pose on DDS (the "
                 "config's dds:)");

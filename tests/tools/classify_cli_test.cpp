@@ -4,10 +4,12 @@
 
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <string>
 
 #include "stac_cli.hpp"
+#include "tools/tracks_jsonl.hpp"
 
 namespace {
 
@@ -83,6 +85,31 @@ TEST_F(ClassifyCli, DatasetTrainEvalBeatsThePriorOnAHeldOutDrive) {
   EXPECT_DOUBLE_EQ(adbf, m["track.adbf.overall"].get<double>());
   EXPECT_GT(adbf, prior + 0.2) << eval.output;
   EXPECT_GT(adbf, 0.7) << eval.output;
+
+  // stac process --model: every track carries a class and its log odds in the tracks file.
+  const CliResult process = stac("process " + at("test.pcap") + " --tracks " +
+                                 at("test.tracks.jsonl") + " --model " + at("model.stac"));
+  ASSERT_EQ(process.code, 0) << process.output;
+  EXPECT_NE(process.output.find("classify"), std::string::npos) << process.output;
+  auto scans = stac::tools::read_tracks_file(at("test.tracks.jsonl"));
+  ASSERT_TRUE(scans) << scans.error().message;
+  std::map<std::string, int> classes;
+  std::size_t tracks = 0, classified = 0;
+  for (const stac::tools::TracksScan& scan : *scans) {
+    for (const stac::tools::TrackRecord& t : scan.tracks) {
+      ++tracks;
+      if (!t.classified) continue;
+      ++classified;
+      ++classes[t.cls];
+      const bool any_positive = t.log_odds[0] > 0 || t.log_odds[1] > 0 || t.log_odds[2] > 0;
+      EXPECT_EQ(t.cls == "background", !any_positive) << t.cls;
+    }
+  }
+  EXPECT_GT(classified, tracks / 2);
+  EXPECT_GT(classes["car"], 0);
+  EXPECT_GT(classes["pedestrian"], 0);
+  EXPECT_GT(classes["background"], 0);
+  EXPECT_EQ(classes.size(), 3u + (classes.count("bicyclist") != 0 ? 1u : 0u));
 }
 
 TEST_F(ClassifyCli, MalformedInputsAreRefusedWithMessages) {
@@ -113,6 +140,11 @@ TEST_F(ClassifyCli, MalformedInputsAreRefusedWithMessages) {
       stac("eval --classes --truth " + at("test.jsonl") + " --data x --model y");
   EXPECT_NE(mixed.code, 0);
   EXPECT_NE(mixed.output.find("--truth/--tracks"), std::string::npos) << mixed.output;
+
+  const CliResult process = stac("process " + at("test.pcap") + " --tracks " + at("x.jsonl") +
+                                 " --model " + at("junk.stac"));
+  EXPECT_NE(process.code, 0);
+  EXPECT_NE(process.output.find("junk.stac"), std::string::npos) << process.output;
 
   const CliResult tracking = stac("eval --truth " + at("test.jsonl"));
   EXPECT_NE(tracking.code, 0);
