@@ -61,7 +61,10 @@ int run_train(const TrainOptions& o) {
                "%zu rounds...\n",
                examples.size(), per[0], per[1], per[2], per[3], o.rounds);
   const auto t0 = std::chrono::steady_clock::now();
+  Progress progress("train: boosting", 1.0);
+  config.progress = [&progress](double f) { progress.update(f); };
   auto model = learning::train_track_classifier(examples, classification::build_layouts(), config);
+  progress.finish();
   if (!model) return fail("training failed: " + model.error().message);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
