@@ -9,6 +9,7 @@
 #include <string>
 
 #include "stac_cli.hpp"
+#include "tools/dataset_file.hpp"
 #include "tools/tracks_jsonl.hpp"
 
 namespace {
@@ -106,6 +107,20 @@ TEST_F(ClassifyCli, DatasetTrainEvalBeatsThePriorOnAHeldOutDrive) {
     }
   }
   EXPECT_GT(classified, tracks / 2);
+  // The class at each dataset track's last update is the ADBF track-wise prediction of eval.
+  std::map<std::uint64_t, std::string> last;
+  for (const stac::tools::TracksScan& scan : *scans) {
+    for (const stac::tools::TrackRecord& t : scan.tracks) {
+      if (t.segment >= 0 && t.classified) last[t.id] = t.cls;
+    }
+  }
+  auto test_set = stac::tools::read_dataset(at("test_data"));
+  ASSERT_TRUE(test_set) << test_set.error().message;
+  std::size_t agree = 0;
+  for (const stac::tools::DatasetTrack& t : test_set->tracks) {
+    agree += last[t.id] == stac::classification::class_name(t.label) ? 1 : 0;
+  }
+  EXPECT_DOUBLE_EQ(static_cast<double>(agree) / static_cast<double>(test_set->tracks.size()), adbf);
   EXPECT_GT(classes["car"], 0);
   EXPECT_GT(classes["pedestrian"], 0);
   EXPECT_GT(classes["background"], 0);
