@@ -51,7 +51,7 @@ struct TrackBuild {
 };
 
 struct RunCounts {
-  std::uint64_t scans = 0, tracks = 0, kept = 0;
+  std::uint64_t scans = 0, tracks = 0, kept = 0, truth_matched = 0;
 };
 
 class Builder {
@@ -117,6 +117,10 @@ class Builder {
     for (auto& [id, b] : live_) finish(b);
     live_.clear();
     if (counts_.scans == 0) return rt::make_error(in + ": no complete scan in the capture");
+    if (counts_.truth_matched == 0) {
+      return rt::make_error("no scan of " + in + " matches a scan of " + o.truth[k] +
+                            " by time: give each capture its own truth file");
+    }
     return counts_;
   }
 
@@ -126,8 +130,10 @@ class Builder {
     // The truth scan of this scan (as `stac process`), and its segments' composition.
     const TruthScanRecord* ts = nearest_truth_scan(truth_, truth_next_, result.stamp_ns);
     records_.assign(result.segments.segments.size(), SegmentRecord{});
-    if (ts != nullptr)
+    if (ts != nullptr) {
       truth_composition(*ts, scan, result.segments, result.world_T_sensor, records_);
+      ++counts_.truth_matched;
+    }
 
     for (const tracking::Track& track : result.tracked.tracks) {
       if (track.segment < 0) continue;

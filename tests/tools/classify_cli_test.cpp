@@ -133,6 +133,21 @@ TEST_F(ClassifyCli, MalformedInputsAreRefusedWithMessages) {
   EXPECT_NE(pairs.code, 0);
   EXPECT_NE(pairs.output.find("one --truth per --in"), std::string::npos) << pairs.output;
 
+  {  // the empty street's truth, 1000 s later: no scan of the drive pairs with it
+    std::ifstream in(at("empty.jsonl"));
+    std::ofstream out(at("late.jsonl"));
+    for (std::string line; std::getline(in, line);) {
+      nlohmann::json j = nlohmann::json::parse(line);
+      j["time"] = j["time"].get<double>() + 1000.0;
+      j["end_time"] = j["end_time"].get<double>() + 1000.0;
+      out << j.dump() << '\n';
+    }
+  }
+  const CliResult late = stac("dataset --in " + at("test.pcap") + " --truth " + at("late.jsonl") +
+                              " --out " + at("bad_data"));
+  EXPECT_NE(late.code, 0);
+  EXPECT_NE(late.output.find("by time"), std::string::npos) << late.output;
+
   const CliResult no_data = stac("train --data " + at("nowhere") + " --out " + at("m.stac"));
   EXPECT_NE(no_data.code, 0);
   EXPECT_NE(no_data.output.find("stac dataset"), std::string::npos) << no_data.output;
