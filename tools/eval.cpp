@@ -9,6 +9,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "tools/class_eval.hpp"
 #include "tools/commands.hpp"
 #include "tools/evaluation.hpp"
 #include "tools/progress.hpp"
@@ -19,6 +20,8 @@ namespace {
 struct EvalOptions {
   std::string truth, tracks, report;
   EvalConfig config;
+  bool classes = false;
+  ClassEvalOptions class_options;
 };
 
 std::string band_name(int b, const EvalConfig& c) {
@@ -285,8 +288,15 @@ void add_eval_command(CLI::App& app) {
   auto o = std::make_shared<EvalOptions>();
   CLI::App* cmd = app.add_subcommand(
       "eval", "Segmentation and tracking metrics (CLEAR MOT, HOTA) of a tracks file against the truth");
-  cmd->add_option("--truth", o->truth, "truth JSON lines written by `stac sim --truth`")->required()->check(CLI::ExistingFile);
-  cmd->add_option("--tracks", o->tracks, "tracks JSON lines written by `stac process --tracks`")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--truth", o->truth, "truth JSON lines written by `stac sim --truth` (required without --classes)")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--tracks", o->tracks,
+                  "tracks JSON lines written by `stac process --tracks` (required without --classes)")
+      ->check(CLI::ExistingFile);
+  cmd->add_flag("--classes", o->classes,
+                "classification instead (thesis Table 1.2): needs --data and --model, not --truth/--tracks");
+  cmd->add_option("--data", o->class_options.data, "with --classes: a `stac dataset` folder (repeatable)");
+  cmd->add_option("--model", o->class_options.model, "with --classes: the model file of `stac train`");
   cmd->add_option("--report", o->report, "folder for report.md, metrics.json and the plots");
   cmd->add_option("--max-range", o->config.max_range_m, "evaluate truth objects within this range of the ego (m)")
       ->capture_default_str();
@@ -295,9 +305,26 @@ void add_eval_command(CLI::App& app) {
   cmd->add_flag("--with-coasting", o->config.count_coasting,
                 "count coasting tracks (predicted, not updated in the scan) as outputs too");
   cmd->footer("Metric definitions: docs/evaluation.md.\nExample:\n"
-              "  stac eval --truth run.truth.jsonl --tracks run.tracks.jsonl --report eval/");
+              "  stac eval --truth run.truth.jsonl --tracks run.tracks.jsonl --report eval/\n"
+              "  stac eval --classes --data test/ --model model.stac --report cls/  # classification");
   cmd->callback([o] {
-    const int code = run_eval(*o);
+    int code = 0;
+    if (o->classes) {
+      if (!o->truth.empty() || !o->tracks.empty()) {
+        code = fail("--classes evaluates a classifier on --data and --model; --truth/--tracks are for tracking");
+      } else if (o->class_options.data.empty() || o->class_options.model.empty()) {
+        code = fail("--classes needs --data DIR (a `stac dataset` folder) and --model MODEL (`stac train --out`)");
+      } else {
+        o->class_options.report = o->report;
+        code = run_class_eval(o->class_options);
+      }
+    } else if (o->truth.empty() || o->tracks.empty()) {
+      code = fail("--truth and --tracks are required (or --classes with --data and --model)");
+    } else if (!o->class_options.data.empty() || !o->class_options.model.empty()) {
+      code = fail("--data and --model go with --classes");
+    } else {
+      code = run_eval(*o);
+    }
     if (code != 0) throw CLI::RuntimeError(code);
   });
 }

@@ -36,6 +36,9 @@ int main(int argc, char** argv) {
       "  stac segment --in scan.bin --out segments.csv --png bev.png  # obstacles of one scan\n"
       "  stac process run.pcap --truth run.truth.jsonl --tracks run.tracks.jsonl  # segment+track\n"
       "  stac echo tracked_objects --count 10        # print what arrives on a DDS topic\n"
+      "  stac dataset --in run.pcap --truth run.truth.jsonl --out data/  # labelled tracks\n"
+      "  stac train --data data/ --out model.stac  # track classifier\n"
+      "  stac eval --classes --data test/ --model model.stac --report cls/  # Table 1.2\n"
       "  stac run --seconds 60                       # live: sensor UDP -> perception -> DDS\n"
       "Run 'stac <command> --help' for the options of each command.");
   stac::tools::add_decode_command(app);
@@ -51,6 +54,8 @@ int main(int argc, char** argv) {
   stac::tools::add_process_command(app);
   stac::tools::add_echo_command(app);
   stac::tools::add_run_command(app);
+  stac::tools::add_dataset_command(app);
+  stac::tools::add_train_command(app);
   CLI11_PARSE(app, argc, argv);
   return 0;
 }

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -17,17 +18,20 @@
 #include "tools/capture_poses.hpp"
 #include "tools/commands.hpp"
 #include "tools/dds_settings.hpp"
+#include "tools/model_file.hpp"
 #include "tools/progress.hpp"
 #include "tools/scan_publishing.hpp"
 #include "tools/sensor_status.hpp"
 #include "tools/settings.hpp"
+#include "tools/track_describer.hpp"
 #include "tools/tracks_jsonl.hpp"
+#include "tools/truth_composition.hpp"
 
 namespace stac::tools {
 namespace {
 
 struct ProcessOptions {
-  std::string in, tracks, truth, config, calib, origin;
+  std::string in, tracks, truth, config, calib, origin, model;
   bool no_deskew = false;
   bool dds = false;
   int domain = -1;
@@ -84,49 +88,44 @@ void print_stats(const std::vector<Stage>& stages) {
 
 double yaw_of(const Eigen::Matrix3d& r) { return std::atan2(r(1, 0), r(0, 0)); }
 
-// Which truth object each segment point lies in (the smallest box holding it, grown by 5 cm),
-// counted per segment; -1 for points in no box.
-void truth_composition(const TruthScanRecord& truth, const velodyne::Scan& scan,
-                       const segmentation::Segments& segments, const Eigen::Isometry3d& world_T_sensor,
-                       std::vector<SegmentRecord>& out) {
-  constexpr double kGrow = 0.05;
-  for (std::size_t si = 0; si < segments.segments.size(); ++si) {
-    const segmentation::Segment& seg = segments.segments[si];
-    const Eigen::Vector3d c = world_T_sensor * Eigen::Vector3d(seg.centroid[0], seg.centroid[1], seg.centroid[2]);
-    const double reach = 0.5 * std::hypot(seg.box.length, seg.box.width) + 1.0;
-    std::vector<const TruthObjectRecord*> near;
-    for (const TruthObjectRecord& o : truth.objects) {
-      if (std::hypot(o.x - c.x(), o.y - c.y()) < reach + 0.5 * std::hypot(o.length, o.width)) near.push_back(&o);
-    }
-    std::vector<std::pair<std::int64_t, std::uint32_t>> counts;
-    auto add = [&](std::int64_t id) {
-      for (auto& [k, n] : counts) {
-        if (k == id) return void(++n);
+// --model: every track's class by the augmented discrete Bayes filter, updated with each segment
+// (docs/classification.md), carried while it coasts.
+class TrackClassifying {
+ public:
+  explicit TrackClassifying(classification::TrackClassifierModel model)
+      : model_(std::move(model)) {}
+  // Classifies the tracks updated this scan and labels every record (records[i] is track i).
+  void update(const velodyne::Scan& scan, const pipeline::ScanResult& result,
+              std::vector<TrackRecord>& records) {
+    for (std::size_t i = 0; i < result.tracked.tracks.size(); ++i) {
+      const tracking::Track& t = result.tracked.tracks[i];
+      State& s = states_[t.id];
+      if (t.segment >= 0) {
+        describer_.describe(scan, result, t);
+        classification::LogOdds hs{};
+        s.valid =
+            classification::add_segment(model_, describer_.segment(), s.evidence, hs) &&
+            classification::track_log_odds(model_, s.evidence, describer_.holistic(), s.log_odds);
       }
-      counts.emplace_back(id, 1);
-    };
-    for (std::uint32_t idx : segments.indices(seg)) {
-      const velodyne::Point& p = scan.points[idx];
-      const Eigen::Vector3d w = world_T_sensor * Eigen::Vector3d(p.x, p.y, p.z);
-      const TruthObjectRecord* best = nullptr;
-      double best_volume = 0;
-      for (const TruthObjectRecord* o : near) {
-        const double dx = w.x() - o->x, dy = w.y() - o->y;
-        const double u = std::cos(o->yaw) * dx + std::sin(o->yaw) * dy;
-        const double v = -std::sin(o->yaw) * dx + std::cos(o->yaw) * dy;
-        if (std::abs(u) > o->length / 2 + kGrow || std::abs(v) > o->width / 2 + kGrow ||
-            std::abs(w.z() - o->z) > o->height / 2 + kGrow) {
-          continue;
-        }
-        const double volume = o->length * o->width * o->height;
-        if (best == nullptr || volume < best_volume) best = o, best_volume = volume;
-      }
-      add(best == nullptr ? -1 : static_cast<std::int64_t>(best->id));
+      if (!s.valid) continue;
+      records[i].classified = true;
+      records[i].cls = classification::class_name(classification::predict(s.log_odds));
+      for (std::size_t k = 0; k < 3; ++k)
+        records[i].log_odds[k] = static_cast<double>(s.log_odds[k]);
     }
-    out[si].truth = std::move(counts);
-    out[si].has_truth = true;
+    for (const std::uint64_t id : describer_.end_scan(result)) states_.erase(id);
   }
-}
+
+ private:
+  struct State {
+    classification::TrackEvidence evidence;
+    classification::LogOdds log_odds{};
+    bool valid = false;
+  };
+  classification::TrackClassifierModel model_;
+  TrackDescriber describer_;
+  std::map<std::uint64_t, State> states_;
+};
 
 int run_process(const ProcessOptions& o) {
   const std::filesystem::path config = config_path(o.config);
@@ -163,16 +162,18 @@ int run_process(const ProcessOptions& o) {
 
   auto reader = io::PcapReader::open(o.in, io::PcapFilter{.udp_dst_port = vs.port, .udp_src_port = {}});
   if (!reader) return fail(reader.error().message);
+  std::optional<TrackClassifying> classifying;
+  if (!o.model.empty()) {
+    auto m = read_model_file(o.model);
+    if (!m) return fail(m.error().message);
+    classifying.emplace(std::move(*m));
+  }
   std::ofstream out(o.tracks);
   if (!out) return fail(o.tracks + ": cannot create the tracks file");
 
   // Everything the per-scan loop uses is allocated here.
   velodyne::ScanStream stream(*calibration, vs.assembler, 2);
-  const pipeline::PipelineConfig pc{.deskew = ego_settings.deskew,
-                                    .segmenter = settings->segmenter,
-                                    .tracker = settings->tracker,
-                                    .trailer = velodyne::traits(vs.assembler.decoder.model).trailer,
-                                    .clock = pipeline::StageClock::kThreadCpu};
+  const pipeline::PipelineConfig pc = offline_pipeline_config(*settings);
   pipeline::ScanPipeline pipeline(pc);
   pipeline::ScanResult result = pipeline.make_result();
   std::optional<ProcessDds> dds_out;
@@ -183,7 +184,8 @@ int run_process(const ProcessOptions& o) {
   }
   std::uint64_t dds_errors = 0;
 
-  std::vector<Stage> stages{{"decode", {}}, {"deskew", {}}, {"segment", {}}, {"track", {}}, {"total", {}}};
+  std::vector<Stage> stages{{"decode", {}}, {"deskew", {}}, {"segment", {}},
+                            {"track", {}},  {"total", {}},  {"classify", {}}};
   std::uint64_t scans = 0, truth_matched = 0;
   std::size_t truth_next = 0;
   std::string line;
@@ -224,14 +226,14 @@ int run_process(const ProcessOptions& o) {
                          false};
     }
     for (const tracking::Track& t : result.tracked.tracks) rec.tracks.push_back(track_record(t));
+    if (classifying) {
+      const std::int64_t c0 = cpu_ns();
+      classifying->update(scan, result, rec.tracks);
+      stages[5].ms.push_back(static_cast<double>(cpu_ns() - c0) * 1e-6);
+    }
     if (!truth.empty()) {
-      const std::int64_t stamp = result.stamp_ns;
-      while (truth_next + 1 < truth.size() &&
-             std::llabs(truth[truth_next + 1].stamp_ns - stamp) <= std::llabs(truth[truth_next].stamp_ns - stamp)) {
-        ++truth_next;
-      }
-      if (std::llabs(truth[truth_next].stamp_ns - stamp) <= 1'000'000) {
-        truth_composition(truth[truth_next], scan, result.segments, result.world_T_sensor,
+      if (const TruthScanRecord* ts = nearest_truth_scan(truth, truth_next, result.stamp_ns)) {
+        truth_composition(*ts, scan, result.segments, result.world_T_sensor,
                           rec.segments);
         ++truth_matched;
       }
@@ -329,6 +331,9 @@ void add_process_command(CLI::App& app) {
   cmd->add_option("--origin", o->origin,
                   "LAT,LON,ALT of the world frame (default: the truth's, else the config's ego.origin)");
   cmd->add_flag("--no-deskew", o->no_deskew, "ignore the INS stream: no deskew, sensor frame = world");
+  cmd->add_option("--model", o->model,
+                  "track classifier model (`stac train`): every track gets a class and log odds "
+                  "(ADBF; classify stage timed apart, not in total)");
   cmd->add_flag("--dds", o->dds,
                 "also publish every scan's tracked_objects, segments and ego_pose on DDS (the "
                 "config's dds:)");

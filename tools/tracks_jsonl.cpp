@@ -156,12 +156,19 @@ void append_json_line(const TracksScan& s, std::string& out) {
   for (std::size_t i = 0; i < s.tracks.size(); ++i) {
     const TrackRecord& t = s.tracks[i];
     std::snprintf(buf, sizeof(buf),
-                  "%s{\"id\":%" PRIu64 ",\"state\":\"%s\",\"x\":%.4f,\"y\":%.4f,\"z\":%.4f,\"vx\":%.4f,"
+                  "%s{\"id\":%" PRIu64
+                  ",\"state\":\"%s\",\"x\":%.4f,\"y\":%.4f,\"z\":%.4f,\"vx\":%.4f,"
                   "\"vy\":%.4f,\"length\":%.3f,\"width\":%.3f,\"height\":%.3f,\"yaw\":%.5f,"
-                  "\"points\":%u,\"age\":%u,\"segment\":%d}",
-                  i == 0 ? "" : ",", t.id, t.state.c_str(), t.x, t.y, t.z, t.vx, t.vy, t.length, t.width,
-                  t.height, t.yaw, t.points, t.age, t.segment);
+                  "\"points\":%u,\"age\":%u,\"segment\":%d",
+                  i == 0 ? "" : ",", t.id, t.state.c_str(), t.x, t.y, t.z, t.vx, t.vy, t.length,
+                  t.width, t.height, t.yaw, t.points, t.age, t.segment);
     out += buf;
+    if (t.classified) {
+      std::snprintf(buf, sizeof(buf), ",\"class\":\"%s\",\"log_odds\":[%.4f,%.4f,%.4f]",
+                    t.cls.c_str(), t.log_odds[0], t.log_odds[1], t.log_odds[2]);
+      out += buf;
+    }
+    out += '}';
   }
   out += "]}\n";
 }
@@ -220,6 +227,18 @@ rt::Result<TracksScan> parse_tracks_line(std::string_view line) {
       r.points = integer<std::uint32_t>(t, "points", w);
       r.age = integer<std::uint32_t>(t, "age", w);
       r.segment = integer<std::int32_t>(t, "segment", w);
+      if (t.contains("class")) {
+        r.classified = true;
+        r.cls = text(t, "class", w);
+        const auto lo = t.find("log_odds");
+        if (lo == t.end() || !lo->is_array() || lo->size() != 3) {
+          throw FieldError{"'tracks[].log_odds' must be 3 numbers when 'class' is given"};
+        }
+        for (std::size_t k = 0; k < 3; ++k) {
+          if (!(*lo)[k].is_number()) throw FieldError{"'tracks[].log_odds' must be 3 numbers"};
+          r.log_odds[k] = (*lo)[k].get<double>();
+        }
+      }
       s.tracks.push_back(std::move(r));
     }
   });

@@ -39,6 +39,10 @@ struct TrackRecord {
   double length = 0, width = 0, height = 0, yaw = 0;
   std::uint32_t points = 0, age = 0;
   std::int32_t segment = -1;  // segment id updated this scan, -1 when coasting
+  // `stac process --model`: the track's class (ADBF) and log odds (car, pedestrian, bicyclist).
+  bool classified = false;
+  std::string cls;
+  std::array<double, 3> log_odds{};
 };
 
 struct TracksScan {

@@ -176,11 +176,16 @@ void BoostingTrainer::round() {
 
 rt::Result<GridClassifier> train_boosting(const TrainingSet& data,
                                           const classification::Layout& layout,
-                                          const BoostingConfig& config) {
+                                          const BoostingConfig& config,
+                                          const std::function<void(std::size_t)>& on_rounds) {
   auto initial = initial_classifier(data, layout, config);
   if (!initial) return initial;
   BoostingTrainer trainer(data, std::move(initial).value(), config);
-  trainer.run(config.rounds);
+  const std::size_t chunk = std::max<std::size_t>(1, config.rounds / 100);
+  while (trainer.rounds_done() < config.rounds) {
+    trainer.run(std::min(chunk, config.rounds - trainer.rounds_done()));
+    if (on_rounds) on_rounds(trainer.rounds_done());
+  }
   return trainer.classifier();
 }
 

@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <vector>
 
@@ -84,9 +85,11 @@ class BoostingTrainer {
   std::size_t rounds_ = 0;
 };
 
-// initial_classifier + config.rounds rounds.
+// initial_classifier + config.rounds rounds; `on_rounds` (optional) is told the rounds done about
+// every 1% of them (progress bars). The model does not depend on it.
 rt::Result<GridClassifier> train_boosting(const TrainingSet& data,
                                           const classification::Layout& layout,
-                                          const BoostingConfig& config);
+                                          const BoostingConfig& config,
+                                          const std::function<void(std::size_t)>& on_rounds = {});
 
 }  // namespace stac::learning

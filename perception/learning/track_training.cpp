@@ -40,9 +40,16 @@ rt::Result<classification::TrackClassifierModel> train_track_classifier(
                           std::to_string(tracks.size()) + " tracks)");
 
   classification::TrackClassifierModel model;
-  auto seg = train_boosting(segments, layouts.segment, config.segment);
+  const double total = static_cast<double>(config.segment.rounds + config.holistic.rounds);
+  const auto report = [&](std::size_t before) {
+    return [&config, before, total](std::size_t done) {
+      if (config.progress) config.progress(static_cast<double>(before + done) / total);
+    };
+  };
+  auto seg = train_boosting(segments, layouts.segment, config.segment, report(0));
   if (!seg) return rt::make_error("segment classifier: " + seg.error().message);
-  auto hol = train_boosting(holistic, layouts.holistic, config.holistic);
+  auto hol =
+      train_boosting(holistic, layouts.holistic, config.holistic, report(config.segment.rounds));
   if (!hol) return rt::make_error("holistic classifier: " + hol.error().message);
   model.segment = std::move(seg).value();
   model.holistic = std::move(hol).value();

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <vector>
 
@@ -27,6 +28,8 @@ struct TrackTrainingConfig {
   LogisticConfig filter;
   double held_out_fraction = 0.3;  // tracks kept for the filter fit, drawn with split_seed
   std::uint64_t split_seed = 1;
+  // Optional: told the fraction of the boosting rounds (segment, then holistic) done, in [0, 1].
+  std::function<void(double)> progress;
 };
 
 // Fails with a message on an empty split, descriptors of the wrong size, or a failed fit.

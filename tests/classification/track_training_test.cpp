@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 
 #include "rt/testing/alloc_counter.hpp"
@@ -97,6 +98,21 @@ TEST(TrackTraining, SameSeedsSameModelBytes) {
   auto b = train_track_classifier(train, layouts(), config());
   ASSERT_TRUE(a.has_value() && b.has_value());
   EXPECT_EQ(serialize(*a), serialize(*b));
+}
+
+TEST(TrackTraining, ProgressRisesToOneAndDoesNotChangeTheModel) {
+  const auto train = synthetic_tracks(300, 3);
+  TrackTrainingConfig c = config();
+  std::vector<double> seen;
+  c.progress = [&seen](double f) { seen.push_back(f); };
+  auto a = train_track_classifier(train, layouts(), c);
+  auto b = train_track_classifier(train, layouts(), config());
+  ASSERT_TRUE(a.has_value() && b.has_value());
+  EXPECT_EQ(serialize(*a), serialize(*b));
+  ASSERT_GE(seen.size(), 2u);
+  EXPECT_TRUE(std::is_sorted(seen.begin(), seen.end()));
+  EXPECT_GT(seen.front(), 0.0);
+  EXPECT_DOUBLE_EQ(seen.back(), 1.0);
 }
 
 TEST(TrackTraining, RefusesWrongSizesAndEmptySplits) {

@@ -273,6 +273,29 @@ TEST(TracksJsonl, WrittenLinesReadBackAndTimeKeepsItsDigits) {
   ASSERT_EQ(back->segments.size(), 1u);
   EXPECT_EQ(back->segments[0].truth, (std::vector<std::pair<std::int64_t, std::uint32_t>>{{-1, 2}, {5, 30}}));
   EXPECT_DOUBLE_EQ(back->ego.yaw, 0.5);
+  EXPECT_FALSE(back->tracks[0].classified);
+}
+
+TEST(TracksJsonl, ClassifiedTracksCarryTheirClassAndLogOdds) {
+  TracksScan s = output_scan(1, {track(3, 1, 2), track(4, 7, 8)});
+  s.tracks[1].classified = true;
+  s.tracks[1].cls = "pedestrian";
+  s.tracks[1].log_odds = {-2.5, 1.25, -0.5};
+  std::string line;
+  append_json_line(s, line);
+  auto back = parse_tracks_line(line);
+  ASSERT_TRUE(back) << back.error().message;
+  EXPECT_FALSE(back->tracks[0].classified);
+  ASSERT_TRUE(back->tracks[1].classified);
+  EXPECT_EQ(back->tracks[1].cls, "pedestrian");
+  EXPECT_EQ(back->tracks[1].log_odds, (std::array<double, 3>{-2.5, 1.25, -0.5}));
+  const std::string no_odds = "\"class\":\"pedestrian\",\"log_odds\":[-2.5000,1.2500,-0.5000]";
+  ASSERT_NE(line.find(no_odds), std::string::npos) << line;
+  std::string broken = line;
+  broken.replace(broken.find(no_odds), no_odds.size(), "\"class\":\"pedestrian\"");
+  auto bad = parse_tracks_line(broken);
+  ASSERT_FALSE(bad);
+  EXPECT_NE(bad.error().message.find("log_odds"), std::string::npos) << bad.error().message;
 }
 
 TEST(TracksJsonl, ReadsTheSimulatorsTruthLines) {

@@ -1,0 +1,184 @@
+// stac dataset -> train -> eval --classes on real short simulated drives: a training drive and
+// an empty street (background) for training, another seed held out for the evaluation.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "stac_cli.hpp"
+#include "tools/dataset_file.hpp"
+#include "tools/tracks_jsonl.hpp"
+
+namespace {
+
+using stac::testing::CliResult;
+using stac::testing::stac;
+
+nlohmann::json read_json(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  return nlohmann::json::parse(in);
+}
+
+class ClassifyCli : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new std::filesystem::path(stac::testing::fresh_dir("stac_classify_cli"));
+    for (const auto& [name, args] :
+         {std::pair<std::string, std::string>{"train", "--scenario urban --seed 1 --duration 5"},
+          {"test", "--scenario urban --seed 2 --duration 5"},
+          {"empty", "--scenario empty --seed 3 --duration 4"}}) {
+      const std::string base = (*dir_ / name).string();
+      const CliResult sim =
+          stac("sim " + args + " --out " + base + ".pcap --truth " + base + ".jsonl");
+      ASSERT_EQ(sim.code, 0) << sim.output;
+    }
+  }
+  static void TearDownTestSuite() { delete dir_; }
+  static std::string at(const std::string& name) { return (*dir_ / name).string(); }
+  static std::filesystem::path* dir_;
+};
+std::filesystem::path* ClassifyCli::dir_ = nullptr;
+
+TEST_F(ClassifyCli, DatasetTrainEvalBeatsThePriorOnAHeldOutDrive) {
+  const CliResult train_data =
+      stac("dataset --in " + at("train.pcap") + " --truth " + at("train.jsonl") + " --in " +
+           at("empty.pcap") + " --truth " + at("empty.jsonl") + " --out " + at("train_data"));
+  ASSERT_EQ(train_data.code, 0) << train_data.output;
+  const nlohmann::json manifest = read_json(at("train_data") + "/manifest.json");
+  EXPECT_EQ(manifest["sources"].size(), 2u);
+  for (const char* c : {"car", "pedestrian", "background"}) {
+    EXPECT_GT(manifest["tracks_per_class"][c].get<int>(), 0) << c << "\n" << manifest.dump(2);
+  }
+  const CliResult test_data = stac("dataset --in " + at("test.pcap") + " --truth " +
+                                   at("test.jsonl") + " --out " + at("test_data"));
+  ASSERT_EQ(test_data.code, 0) << test_data.output;
+
+  const CliResult train =
+      stac("train --data " + at("train_data") + " --out " + at("model.stac") + " --rounds 200");
+  ASSERT_EQ(train.code, 0) << train.output;
+  EXPECT_TRUE(std::filesystem::is_regular_file(at("model.stac")));
+  EXPECT_NE(train.output.find("trained on"), std::string::npos) << train.output;
+
+  const CliResult eval = stac("eval --classes --data " + at("test_data") + " --model " +
+                              at("model.stac") + " --report " + at("report"));
+  ASSERT_EQ(eval.code, 0) << eval.output;
+  for (const char* f : {"metrics.json", "confusion.png", "pr.png"}) {
+    EXPECT_GT(std::filesystem::file_size(at("report") + "/" + f), 100u) << f;
+  }
+  const nlohmann::json m = read_json(at("report") + "/metrics.json");
+  ASSERT_TRUE(m.contains("track_accuracy")) << m.dump(2);
+  for (const char* wise : {"track", "segment"}) {
+    for (const char* f :
+         {"adbf", "normalized_dbf", "naive_dbf", "segment_only", "holistic_only", "prior_only"}) {
+      for (const char* c : {"car", "pedestrian", "bicyclist", "overall"}) {
+        const std::string key = std::string(wise) + "." + f + "." + c;
+        ASSERT_TRUE(m.contains(key)) << key;
+        EXPECT_GE(m[key].get<double>(), 0.0) << key;
+        EXPECT_LE(m[key].get<double>(), 1.0) << key;
+      }
+    }
+  }
+  const double adbf = m["track_accuracy"].get<double>(),
+               prior = m["track.prior_only.overall"].get<double>();
+  EXPECT_DOUBLE_EQ(adbf, m["track.adbf.overall"].get<double>());
+  EXPECT_GT(adbf, prior + 0.2) << eval.output;
+  EXPECT_GT(adbf, 0.7) << eval.output;
+
+  // stac process --model: every track carries a class and its log odds in the tracks file.
+  const CliResult process = stac("process " + at("test.pcap") + " --tracks " +
+                                 at("test.tracks.jsonl") + " --model " + at("model.stac"));
+  ASSERT_EQ(process.code, 0) << process.output;
+  EXPECT_NE(process.output.find("classify"), std::string::npos) << process.output;
+  auto scans = stac::tools::read_tracks_file(at("test.tracks.jsonl"));
+  ASSERT_TRUE(scans) << scans.error().message;
+  std::map<std::string, int> classes;
+  std::size_t tracks = 0, classified = 0;
+  for (const stac::tools::TracksScan& scan : *scans) {
+    for (const stac::tools::TrackRecord& t : scan.tracks) {
+      ++tracks;
+      if (!t.classified) continue;
+      ++classified;
+      ++classes[t.cls];
+      const bool any_positive = t.log_odds[0] > 0 || t.log_odds[1] > 0 || t.log_odds[2] > 0;
+      EXPECT_EQ(t.cls == "background", !any_positive) << t.cls;
+    }
+  }
+  EXPECT_GT(classified, tracks / 2);
+  // The class at each dataset track's last update is the ADBF track-wise prediction of eval.
+  std::map<std::uint64_t, std::string> last;
+  for (const stac::tools::TracksScan& scan : *scans) {
+    for (const stac::tools::TrackRecord& t : scan.tracks) {
+      if (t.segment >= 0 && t.classified) last[t.id] = t.cls;
+    }
+  }
+  auto test_set = stac::tools::read_dataset(at("test_data"));
+  ASSERT_TRUE(test_set) << test_set.error().message;
+  std::size_t agree = 0;
+  for (const stac::tools::DatasetTrack& t : test_set->tracks) {
+    agree += last[t.id] == stac::classification::class_name(t.label) ? 1 : 0;
+  }
+  EXPECT_DOUBLE_EQ(static_cast<double>(agree) / static_cast<double>(test_set->tracks.size()), adbf);
+  EXPECT_GT(classes["car"], 0);
+  EXPECT_GT(classes["pedestrian"], 0);
+  EXPECT_GT(classes["background"], 0);
+  EXPECT_EQ(classes.size(), 3u + (classes.count("bicyclist") != 0 ? 1u : 0u));
+}
+
+TEST_F(ClassifyCli, MalformedInputsAreRefusedWithMessages) {
+  const CliResult pairs = stac("dataset --in " + at("test.pcap") + " --truth " + at("test.jsonl") +
+                               " --in " + at("empty.pcap") + " --out " + at("bad_data"));
+  EXPECT_NE(pairs.code, 0);
+  EXPECT_NE(pairs.output.find("one --truth per --in"), std::string::npos) << pairs.output;
+
+  {  // the empty street's truth, 1000 s later: no scan of the drive pairs with it
+    std::ifstream in(at("empty.jsonl"));
+    std::ofstream out(at("late.jsonl"));
+    for (std::string line; std::getline(in, line);) {
+      nlohmann::json j = nlohmann::json::parse(line);
+      j["time"] = j["time"].get<double>() + 1000.0;
+      j["end_time"] = j["end_time"].get<double>() + 1000.0;
+      out << j.dump() << '\n';
+    }
+  }
+  const CliResult late = stac("dataset --in " + at("test.pcap") + " --truth " + at("late.jsonl") +
+                              " --out " + at("bad_data"));
+  EXPECT_NE(late.code, 0);
+  EXPECT_NE(late.output.find("by time"), std::string::npos) << late.output;
+
+  const CliResult no_data = stac("train --data " + at("nowhere") + " --out " + at("m.stac"));
+  EXPECT_NE(no_data.code, 0);
+  EXPECT_NE(no_data.output.find("stac dataset"), std::string::npos) << no_data.output;
+
+  {
+    std::ofstream junk(at("junk.stac"));
+    junk << "not a model";
+  }
+  std::filesystem::create_directories(at("some_data"));
+  const CliResult bad_model =
+      stac("eval --classes --data " + at("some_data") + " --model " + at("junk.stac"));
+  EXPECT_NE(bad_model.code, 0);
+  EXPECT_NE(bad_model.output.find("junk.stac"), std::string::npos) << bad_model.output;
+
+  const CliResult no_model = stac("eval --classes --data " + at("some_data"));
+  EXPECT_NE(no_model.code, 0);
+  EXPECT_NE(no_model.output.find("--model"), std::string::npos) << no_model.output;
+
+  const CliResult mixed =
+      stac("eval --classes --truth " + at("test.jsonl") + " --data x --model y");
+  EXPECT_NE(mixed.code, 0);
+  EXPECT_NE(mixed.output.find("--truth/--tracks"), std::string::npos) << mixed.output;
+
+  const CliResult process = stac("process " + at("test.pcap") + " --tracks " + at("x.jsonl") +
+                                 " --model " + at("junk.stac"));
+  EXPECT_NE(process.code, 0);
+  EXPECT_NE(process.output.find("junk.stac"), std::string::npos) << process.output;
+
+  const CliResult tracking = stac("eval --truth " + at("test.jsonl"));
+  EXPECT_NE(tracking.code, 0);
+  EXPECT_NE(tracking.output.find("--tracks are required"), std::string::npos) << tracking.output;
+}
+
+}  // namespace

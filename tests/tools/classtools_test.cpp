@@ -1,0 +1,161 @@
+// Model and dataset files of the track classifier: round trips, and every bad file refused with
+// a message naming it.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <vector>
+
+#include "perception/classification/holistic.hpp"
+#include "perception/learning/track_training.hpp"
+#include "rt/splitmix64.hpp"
+#include "tools/dataset_file.hpp"
+#include "tools/model_file.hpp"
+
+namespace stac::tools {
+namespace {
+
+// An empty folder of this name under the system temp folder.
+std::filesystem::path fresh_dir(const std::string& name) {
+  const auto d = std::filesystem::temp_directory_path() / name;
+  std::filesystem::remove_all(d);
+  std::filesystem::create_directories(d);
+  return d;
+}
+
+using classification::ObjectClass;
+
+std::vector<std::uint8_t> read_bytes(const std::filesystem::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+void write_bytes(const std::filesystem::path& p, const std::vector<std::uint8_t>& b) {
+  std::ofstream out(p, std::ios::binary | std::ios::trunc);
+  out.write(reinterpret_cast<const char*>(b.data()), static_cast<std::streamsize>(b.size()));
+}
+
+// Tracks whose descriptors are noise shifted by the class: learnable in a few rounds.
+Dataset synthetic_dataset(std::size_t tracks) {
+  Dataset d;
+  d.sources = {"synthetic"};
+  rt::SplitMix64 rng(7);
+  for (std::size_t i = 0; i < tracks; ++i) {
+    DatasetTrack t;
+    t.id = i;
+    t.label = static_cast<ObjectClass>(i % 4);
+    t.segments = 3;
+    const float shift = static_cast<float>(i % 4);
+    for (std::size_t k = 0; k < t.segments * descriptors::kDimensions; ++k) {
+      t.segment_rows.push_back(shift + static_cast<float>(rng.next() % 1000) / 2000.0f);
+    }
+    for (std::size_t k = 0; k < t.segments * classification::kHolisticDimensions; ++k) {
+      t.holistic_rows.push_back(shift + static_cast<float>(rng.next() % 1000) / 2000.0f);
+    }
+    d.tracks.push_back(std::move(t));
+  }
+  return d;
+}
+
+classification::TrackClassifierModel trained_model() {
+  const Dataset d = synthetic_dataset(40);
+  std::vector<learning::TrackExample> ex;
+  for (const DatasetTrack& t : d.tracks) {
+    ex.push_back(
+        {t.label,
+         t.segment_rows,
+         {t.holistic_rows.end() - static_cast<std::ptrdiff_t>(classification::kHolisticDimensions),
+          t.holistic_rows.end()}});
+  }
+  learning::TrackTrainingConfig c;
+  c.segment.rounds = 20;
+  c.holistic.rounds = 20;
+  auto m = learning::train_track_classifier(ex, classification::build_layouts(), c);
+  EXPECT_TRUE(m) << m.error().message;
+  return std::move(*m);
+}
+
+TEST(ModelFile, RoundTripsAndRefusesMissingTruncatedCorruptAndFolders) {
+  const auto dir = fresh_dir("stac_model_file");
+  const auto path = dir / "m.stac";
+  const classification::TrackClassifierModel model = trained_model();
+  ASSERT_TRUE(write_model_file(path, model));
+  EXPECT_FALSE(std::filesystem::exists(dir / "m.stac.tmp"));
+  auto back = read_model_file(path);
+  ASSERT_TRUE(back) << back.error().message;
+  EXPECT_EQ(classification::serialize(*back), classification::serialize(model));
+
+  auto missing = read_model_file(dir / "none.stac");
+  ASSERT_FALSE(missing);
+  EXPECT_NE(missing.error().message.find("none.stac"), std::string::npos);
+  EXPECT_NE(missing.error().message.find("stac train"), std::string::npos);
+
+  auto folder = read_model_file(dir);
+  ASSERT_FALSE(folder);
+  EXPECT_NE(folder.error().message.find("folder"), std::string::npos);
+
+  const std::vector<std::uint8_t> bytes = read_bytes(path);
+  std::vector<std::uint8_t> half(bytes.begin(),
+                                 bytes.begin() + static_cast<std::ptrdiff_t>(bytes.size() / 2));
+  write_bytes(dir / "half.stac", half);
+  std::vector<std::uint8_t> flipped = bytes;
+  flipped[bytes.size() / 2] ^= 0x40;
+  write_bytes(dir / "flip.stac", flipped);
+  std::vector<std::uint8_t> version = bytes;
+  version[8] = 99;  // the u32 after the 8-byte magic
+  write_bytes(dir / "version.stac", version);
+  write_bytes(dir / "empty.stac", {});
+  for (const char* name : {"half.stac", "flip.stac", "version.stac", "empty.stac"}) {
+    auto r = read_model_file(dir / name);
+    ASSERT_FALSE(r) << name;
+    EXPECT_NE(r.error().message.find(name), std::string::npos) << r.error().message;
+    EXPECT_NE(r.error().message.find("retrain"), std::string::npos) << r.error().message;
+  }
+  EXPECT_FALSE(write_model_file(dir / "no" / "such" / "m.stac", model));
+}
+
+TEST(DatasetFile, RoundTripsAppendsAndRefusesMissingTruncatedAndCorrupt) {
+  const auto dir = fresh_dir("stac_dataset_file");
+  const Dataset d = synthetic_dataset(6);
+  ASSERT_TRUE(write_dataset(dir / "a", d));
+  EXPECT_TRUE(std::filesystem::exists(dir / "a" / "manifest.json"));
+  auto back = read_dataset(dir / "a");
+  ASSERT_TRUE(back) << back.error().message;
+  ASSERT_EQ(back->tracks.size(), d.tracks.size());
+  for (std::size_t i = 0; i < d.tracks.size(); ++i) {
+    EXPECT_EQ(back->tracks[i].id, d.tracks[i].id);
+    EXPECT_EQ(back->tracks[i].label, d.tracks[i].label);
+    EXPECT_EQ(back->tracks[i].segment_rows, d.tracks[i].segment_rows);
+    EXPECT_EQ(back->tracks[i].holistic_rows, d.tracks[i].holistic_rows);
+  }
+  Dataset both = std::move(*back);
+  auto again = read_dataset(dir / "a");
+  ASSERT_TRUE(again);
+  append_dataset(both, std::move(*again));
+  EXPECT_EQ(both.tracks.size(), 12u);
+  EXPECT_EQ(both.sources.size(), 2u);
+  EXPECT_EQ(both.tracks.back().source, 1u);
+
+  auto missing = read_dataset(dir / "none");
+  ASSERT_FALSE(missing);
+  EXPECT_NE(missing.error().message.find("stac dataset"), std::string::npos);
+
+  const std::vector<std::uint8_t> bytes = read_bytes(dir / "a" / "tracks.bin");
+  std::filesystem::create_directories(dir / "half");
+  write_bytes(dir / "half" / "tracks.bin",
+              {bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(bytes.size() / 2)});
+  std::filesystem::create_directories(dir / "flip");
+  std::vector<std::uint8_t> flipped = bytes;
+  flipped[bytes.size() / 3] ^= 1;
+  write_bytes(dir / "flip" / "tracks.bin", flipped);
+  for (const char* name : {"half", "flip"}) {
+    auto r = read_dataset(dir / name);
+    ASSERT_FALSE(r) << name;
+    EXPECT_NE(r.error().message.find((dir / name / "tracks.bin").string()), std::string::npos)
+        << r.error().message;
+  }
+}
+
+}  // namespace
+}  // namespace stac::tools

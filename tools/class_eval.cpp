@@ -1,0 +1,227 @@
+#include "tools/class_eval.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cstdio>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <span>
+
+#include "perception/classification/holistic.hpp"
+#include "perception/classification/model.hpp"
+#include "tools/chart.hpp"
+#include "tools/commands.hpp"
+#include "tools/dataset_file.hpp"
+#include "tools/model_file.hpp"
+#include "tools/progress.hpp"
+
+namespace stac::tools {
+namespace {
+
+using classification::LogOdds;
+using classification::ObjectClass;
+constexpr std::size_t kLabels = 4;  // car, pedestrian, bicyclist, background
+
+enum Filter : std::size_t {
+  kAdbf,
+  kNormalized,
+  kNaive,
+  kSegmentOnly,
+  kHolisticOnly,
+  kPriorOnly,
+  kFilters
+};
+constexpr std::array<const char*, kFilters> kFilterNames = {
+    "adbf", "normalized_dbf", "naive_dbf", "segment_only", "holistic_only", "prior_only"};
+
+struct Tally {
+  std::array<std::array<std::uint64_t, kLabels>, kLabels> confusion{};  // [truth][predicted]
+  void add(ObjectClass truth, ObjectClass predicted) {
+    ++confusion[static_cast<std::size_t>(truth)][static_cast<std::size_t>(predicted)];
+  }
+  [[nodiscard]] std::uint64_t total() const {
+    std::uint64_t n = 0;
+    for (const auto& row : confusion)
+      for (std::uint64_t v : row) n += v;
+    return n;
+  }
+  [[nodiscard]] double accuracy() const {
+    std::uint64_t ok = 0;
+    for (std::size_t i = 0; i < kLabels; ++i) ok += confusion[i][i];
+    return total() == 0 ? 0.0 : static_cast<double>(ok) / static_cast<double>(total());
+  }
+  // 1-vs-all: the fraction where "is class c" is predicted right.
+  [[nodiscard]] double one_vs_all(std::size_t c) const {
+    std::uint64_t ok = 0;
+    for (std::size_t i = 0; i < kLabels; ++i)
+      for (std::size_t j = 0; j < kLabels; ++j)
+        if ((i == c) == (j == c)) ok += confusion[i][j];
+    return total() == 0 ? 0.0 : static_cast<double>(ok) / static_cast<double>(total());
+  }
+};
+
+struct Scored {
+  float score;  // the ADBF log odds of one class
+  bool positive;
+};
+
+// Precision-recall points of one class by sweeping the threshold over the scores.
+void pr_curve(std::vector<Scored> s, ChartSeries& out) {
+  std::sort(s.begin(), s.end(), [](const Scored& a, const Scored& b) { return a.score > b.score; });
+  std::size_t positives = 0;
+  for (const Scored& x : s) positives += x.positive ? 1 : 0;
+  if (positives == 0) return;
+  std::size_t tp = 0;
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    tp += s[i].positive ? 1 : 0;
+    if (i + 1 < s.size() && s[i + 1].score == s[i].score) continue;
+    out.x.push_back(static_cast<double>(tp) / static_cast<double>(positives));
+    out.y.push_back(static_cast<double>(tp) / static_cast<double>(i + 1));
+  }
+}
+
+rt::Result<bool> save_confusion(const Tally& t, const std::string& title,
+                                const std::filesystem::path& png) {
+  constexpr int kCell = 90, kLeft = 120, kTop = 70;
+  cv::Mat img(kTop + kCell * 4 + 40, kLeft + kCell * 4 + 20, CV_8UC3, cv::Scalar(255, 255, 255));
+  cv::putText(img, title, {10, 25}, cv::FONT_HERSHEY_SIMPLEX, 0.6, {0, 0, 0}, 1, cv::LINE_AA);
+  cv::putText(img, "rows: truth, columns: predicted", {10, 50}, cv::FONT_HERSHEY_SIMPLEX, 0.45,
+              {80, 80, 80}, 1, cv::LINE_AA);
+  for (std::size_t i = 0; i < kLabels; ++i) {
+    std::uint64_t row = 0;
+    for (std::uint64_t v : t.confusion[i]) row += v;
+    const int y = kTop + static_cast<int>(i) * kCell;
+    cv::putText(img, classification::class_name(static_cast<ObjectClass>(i)), {5, y + kCell / 2},
+                cv::FONT_HERSHEY_SIMPLEX, 0.45, {0, 0, 0}, 1, cv::LINE_AA);
+    for (std::size_t j = 0; j < kLabels; ++j) {
+      const int x = kLeft + static_cast<int>(j) * kCell;
+      const double f =
+          row == 0 ? 0.0 : static_cast<double>(t.confusion[i][j]) / static_cast<double>(row);
+      const auto shade = static_cast<int>(255.0 * (1.0 - f));
+      cv::rectangle(img, {x, y}, {x + kCell - 2, y + kCell - 2}, cv::Scalar(255, shade, shade),
+                    cv::FILLED);
+      cv::putText(img, std::to_string(t.confusion[i][j]), {x + 20, y + kCell / 2},
+                  cv::FONT_HERSHEY_SIMPLEX, 0.6,
+                  f > 0.5 ? cv::Scalar(255, 255, 255) : cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+      if (i == 0) {
+        cv::putText(img, classification::class_name(static_cast<ObjectClass>(j)),
+                    {x, kTop + kCell * 4 + 25}, cv::FONT_HERSHEY_SIMPLEX, 0.4, {0, 0, 0}, 1,
+                    cv::LINE_AA);
+      }
+    }
+  }
+  try {
+    if (!cv::imwrite(png.string(), img))
+      return rt::make_error(png.string() + ": cannot write the PNG");
+  } catch (const cv::Exception& e) {
+    return rt::make_error(png.string() + ": " + e.what());
+  }
+  return true;
+}
+
+}  // namespace
+
+int run_class_eval(const ClassEvalOptions& o) {
+  auto model = read_model_file(o.model);
+  if (!model) return fail(model.error().message);
+  Dataset data;
+  for (const std::string& dir : o.data) {
+    auto d = read_dataset(dir);
+    if (!d) return fail(d.error().message);
+    append_dataset(data, std::move(*d));
+  }
+  if (data.tracks.empty()) return fail("the datasets hold no track: nothing to evaluate");
+
+  const classification::TrackClassifierModel& m = *model;
+  const LogOdds prior = m.holistic.model().prior;
+  std::array<Tally, kFilters> tracks{}, segments{};
+  std::array<std::vector<Scored>, classification::kClassCount> scores;
+  const std::size_t sd = descriptors::kDimensions, hd = classification::kHolisticDimensions;
+  Progress progress("eval: classifying", static_cast<double>(data.tracks.size()));
+  std::size_t done = 0;
+  for (const DatasetTrack& t : data.tracks) {
+    classification::TrackEvidence evidence;
+    std::array<LogOdds, kFilters> out{};
+    for (std::uint32_t k = 0; k < t.segments; ++k) {
+      const std::span<const float> seg(t.segment_rows.data() + k * sd, sd);
+      const std::span<const float> hol(t.holistic_rows.data() + k * hd, hd);
+      LogOdds hs{}, hh{};
+      if (!classification::add_segment(m, seg, evidence, hs) || !m.holistic.classify(hol, hh) ||
+          !classification::track_log_odds(m, evidence, hol, out[kAdbf])) {
+        return fail(
+            "descriptor sizes differ from the model's (dataset and model of different builds?)");
+      }
+      out[kNormalized] = classification::normalized_dbf(evidence, hh);
+      out[kNaive] = classification::naive_dbf(evidence, hh);
+      out[kSegmentOnly] = hs;
+      out[kHolisticOnly] = hh;
+      out[kPriorOnly] = prior;
+      for (std::size_t f = 0; f < kFilters; ++f)
+        segments[f].add(t.label, classification::predict(out[f]));
+    }
+    for (std::size_t f = 0; f < kFilters; ++f)
+      tracks[f].add(t.label, classification::predict(out[f]));
+    for (std::size_t c = 0; c < classification::kClassCount; ++c) {
+      scores[c].push_back({out[kAdbf][c], static_cast<std::size_t>(t.label) == c});
+    }
+    progress.update(static_cast<double>(++done));
+  }
+  progress.finish();
+
+  nlohmann::json metrics = {{"track_accuracy", tracks[kAdbf].accuracy()},
+                            {"segment_accuracy", segments[kAdbf].accuracy()},
+                            {"tracks", tracks[kAdbf].total()},
+                            {"segments", segments[kAdbf].total()}};
+  std::printf("stac eval --classes: %llu tracks, %llu segments; model %s\n",
+              static_cast<unsigned long long>(tracks[kAdbf].total()),
+              static_cast<unsigned long long>(segments[kAdbf].total()), o.model.c_str());
+  std::printf("%-8s %-15s %9s %11s %10s %8s\n", "", "filter", "car", "pedestrian", "bicyclist",
+              "overall");
+  for (int wise = 0; wise < 2; ++wise) {
+    const auto& tallies = wise == 0 ? tracks : segments;
+    const char* w = wise == 0 ? "track" : "segment";
+    for (std::size_t f = 0; f < kFilters; ++f) {
+      std::printf("%-8s %-15s", w, kFilterNames[f]);
+      for (std::size_t c = 0; c < classification::kClassCount; ++c) {
+        const double a = tallies[f].one_vs_all(c);
+        std::printf(" %9.3f", a);
+        metrics[std::string(w) + "." + kFilterNames[f] + "." +
+                classification::class_name(static_cast<ObjectClass>(c))] = a;
+      }
+      std::printf(" %8.3f\n", tallies[f].accuracy());
+      metrics[std::string(w) + "." + kFilterNames[f] + ".overall"] = tallies[f].accuracy();
+    }
+  }
+  nlohmann::json confusion = nlohmann::json::array();
+  for (const auto& row : tracks[kAdbf].confusion) confusion.push_back(row);
+  metrics["track_confusion_adbf"] = confusion;
+
+  if (!o.report.empty()) {
+    const std::filesystem::path dir = o.report;
+    std::error_code ec;
+    std::filesystem::create_directories(dir, ec);
+    if (ec) return fail(o.report + ": cannot create the report folder (" + ec.message() + ")");
+    std::ofstream js(dir / "metrics.json");
+    js << metrics.dump(2) << '\n';
+    js.close();
+    if (!js) return fail((dir / "metrics.json").string() + ": cannot write");
+    if (auto r = save_confusion(tracks[kAdbf], "Track-wise confusion, ADBF", dir / "confusion.png");
+        !r) {
+      return fail(r.error().message);
+    }
+    Chart chart{
+        "Precision-recall, ADBF track-wise (1-vs-all)", "recall", "precision", {}, 800, 420};
+    for (std::size_t c = 0; c < classification::kClassCount; ++c) {
+      ChartSeries s{classification::class_name(static_cast<ObjectClass>(c)), {}, {}};
+      pr_curve(scores[c], s);
+      if (!s.x.empty()) chart.series.push_back(std::move(s));
+    }
+    if (auto r = save_chart(chart, dir / "pr.png"); !r) return fail(r.error().message);
+    std::printf("report: %s/metrics.json, confusion.png, pr.png\n", o.report.c_str());
+  }
+  return 0;
+}
+
+}  // namespace stac::tools

@@ -1,0 +1,245 @@
+// stac dataset: labelled tracks from simulated drives, for `stac train` and `stac eval --classes`.
+// Each capture runs through the per-scan pipeline as in `stac process` (decode -> INS deskew ->
+// segment -> track); every segment a track is updated with is described (descriptors::
+// DescriptorPipeline), added to the track's accumulated cloud and gives the track's holistic
+// descriptor at that time. A track's label is the majority truth class of its segments' points.
+#include <cstdio>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "drivers/io/pcap_reader.hpp"
+#include "drivers/velodyne/scan_stream.hpp"
+#include "pipeline/scan_pipeline.hpp"
+#include "tools/capture_poses.hpp"
+#include "tools/commands.hpp"
+#include "tools/dataset_file.hpp"
+#include "tools/progress.hpp"
+#include "tools/sensor_status.hpp"
+#include "tools/settings.hpp"
+#include "tools/track_describer.hpp"
+#include "tools/truth_composition.hpp"
+
+namespace stac::tools {
+namespace {
+
+using classification::ObjectClass;
+
+// The thesis's dataset rule (REFERENCE.md §5).
+constexpr std::uint32_t kMinSegments = 10;
+constexpr std::uint32_t kMinLargestSegment = 75;  // points; at least one segment over this
+
+struct DatasetOptions {
+  std::vector<std::string> in, truth;
+  std::string out, config, calib;
+  bool no_deskew = false;
+};
+
+ObjectClass class_of(const std::string& cls) {
+  if (cls == "car") return ObjectClass::kCar;
+  if (cls == "pedestrian") return ObjectClass::kPedestrian;
+  if (cls == "bicyclist") return ObjectClass::kBicyclist;
+  return ObjectClass::kBackground;
+}
+
+struct TrackBuild {
+  DatasetTrack track;
+  std::uint32_t largest = 0;
+  std::array<std::uint64_t, 4> class_points{};  // per ObjectClass, truth points
+};
+
+struct RunCounts {
+  std::uint64_t scans = 0, tracks = 0, kept = 0, truth_matched = 0;
+};
+
+class Builder {
+ public:
+  explicit Builder(Dataset& out) : out_(out) {}
+
+  rt::Result<RunCounts> run(const DatasetOptions& o, std::size_t k) {
+    const std::string& in = o.in[k];
+    auto settings = load_pipeline_settings(config_path(o.config));
+    if (!settings) return rt::Unexpected<rt::Error>{settings.error()};
+    VelodyneSettings& vs = settings->velodyne;
+    EgoSettings& ego_settings = settings->ego;
+    if (!o.calib.empty())
+      vs.calibration =
+          o.calib == "stream" ? std::filesystem::path{} : std::filesystem::path(o.calib);
+    auto calibration = capture_calibration(vs.calibration, in, vs.port, vs.assembler.decoder.model);
+    if (!calibration) return rt::Unexpected<rt::Error>{calibration.error()};
+    auto t = read_truth_file(o.truth[k]);
+    if (!t) return rt::Unexpected<rt::Error>{t.error()};
+    truth_ = std::move(*t);
+    if (truth_.empty()) return rt::make_error(o.truth[k] + ": no truth scans");
+    if (truth_.front().origin && !ego_settings.origin) {
+      const auto& g = *truth_.front().origin;
+      ego_settings.origin = ego::Geodetic{g[0], g[1], g[2]};
+    }
+    std::optional<CapturePoses> poses;
+    if (!o.no_deskew) {
+      auto p = load_capture_poses(in, ego_settings);
+      if (!p) return rt::Unexpected<rt::Error>{p.error()};
+      poses = std::move(*p);
+    }
+    auto reader =
+        io::PcapReader::open(in, io::PcapFilter{.udp_dst_port = vs.port, .udp_src_port = {}});
+    if (!reader) return rt::Unexpected<rt::Error>{reader.error()};
+
+    source_ = static_cast<std::uint32_t>(out_.sources.size());
+    out_.sources.push_back(in + " " + o.truth[k]);
+    velodyne::ScanStream stream(*calibration, vs.assembler, 2);
+    const pipeline::PipelineConfig pc = offline_pipeline_config(*settings);
+    pipeline::ScanPipeline pipeline(pc);
+    pipeline::ScanResult result = pipeline.make_result();
+    counts_ = {};
+    truth_next_ = 0;
+    Progress progress("dataset " + std::filesystem::path(in).filename().string(),
+                      static_cast<double>(std::filesystem::file_size(in)));
+    io::Datagram d;
+    while (reader->next(d)) {
+      if (stream.add_packet(d.payload, d.stamp_ns)) {
+        while (velodyne::Scan* scan = stream.take()) {
+          if (scan->header.complete()) {
+            pipeline.process(*scan, poses ? poses->history.get() : nullptr, result);
+            handle(*scan, result);
+          }
+          stream.release();
+        }
+      }
+      progress.update(static_cast<double>(reader->bytes_read()));
+    }
+    progress.finish();
+    if (!reader->error().empty())
+      std::fprintf(stderr, "stac dataset: warning: %s\n", reader->error().c_str());
+    describer_.end_all();
+    for (auto& [id, b] : live_) finish(b);
+    live_.clear();
+    if (counts_.scans == 0) return rt::make_error(in + ": no complete scan in the capture");
+    if (counts_.truth_matched == 0) {
+      return rt::make_error("no scan of " + in + " matches a scan of " + o.truth[k] +
+                            " by time: give each capture its own truth file");
+    }
+    return counts_;
+  }
+
+ private:
+  void handle(const velodyne::Scan& scan, const pipeline::ScanResult& result) {
+    ++counts_.scans;
+    // The truth scan of this scan (as `stac process`), and its segments' composition.
+    const TruthScanRecord* ts = nearest_truth_scan(truth_, truth_next_, result.stamp_ns);
+    records_.assign(result.segments.segments.size(), SegmentRecord{});
+    if (ts != nullptr) {
+      truth_composition(*ts, scan, result.segments, result.world_T_sensor, records_);
+      ++counts_.truth_matched;
+    }
+
+    for (const tracking::Track& track : result.tracked.tracks) {
+      if (track.segment < 0) continue;
+      const auto si = static_cast<std::size_t>(track.segment);
+      auto [it, added] = live_.try_emplace(track.id);
+      counts_.tracks += added ? 1 : 0;
+      TrackBuild& b = it->second;
+      describer_.describe(scan, result, track);
+      b.track.id = track.id;
+      b.track.segment_rows.insert(b.track.segment_rows.end(), describer_.segment().begin(),
+                                  describer_.segment().end());
+      b.track.holistic_rows.insert(b.track.holistic_rows.end(), describer_.holistic().begin(),
+                                   describer_.holistic().end());
+      ++b.track.segments;
+      b.largest = std::max(b.largest, result.segments.segments[si].count);
+      for (const auto& [truth_id, n] : records_[si].truth) {
+        ObjectClass c = ObjectClass::kBackground;
+        for (const TruthObjectRecord& obj : ts->objects) {
+          if (static_cast<std::int64_t>(obj.id) == truth_id) c = class_of(obj.cls);
+        }
+        b.class_points[static_cast<std::size_t>(c)] += n;
+      }
+    }
+    // Tracks the tracker no longer reports are complete.
+    for (const std::uint64_t id : describer_.end_scan(result)) {
+      if (auto it = live_.find(id); it != live_.end()) {
+        finish(it->second);
+        live_.erase(it);
+      }
+    }
+  }
+
+  void finish(TrackBuild& b) {
+    if (b.track.segments < kMinSegments || b.largest <= kMinLargestSegment) return;
+    std::size_t best = static_cast<std::size_t>(ObjectClass::kBackground);
+    for (std::size_t c = 0; c < 4; ++c) {
+      if (b.class_points[c] > b.class_points[best]) best = c;
+    }
+    b.track.label = static_cast<ObjectClass>(best);
+    b.track.source = source_;
+    out_.tracks.push_back(std::move(b.track));
+    ++counts_.kept;
+  }
+
+  Dataset& out_;
+  std::vector<TruthScanRecord> truth_;
+  std::size_t truth_next_ = 0;
+  std::uint32_t source_ = 0;
+  RunCounts counts_;
+  std::map<std::uint64_t, TrackBuild> live_;
+  std::vector<SegmentRecord> records_;
+  TrackDescriber describer_;
+};
+
+int run_dataset(const DatasetOptions& o) {
+  if (o.in.size() != o.truth.size()) {
+    return fail("give one --truth per --in (" + std::to_string(o.in.size()) + " --in, " +
+                std::to_string(o.truth.size()) + " --truth)");
+  }
+  Dataset data;
+  Builder builder(data);
+  for (std::size_t k = 0; k < o.in.size(); ++k) {
+    auto r = builder.run(o, k);
+    if (!r) return fail(r.error().message);
+    std::fprintf(stderr,
+                 "stac dataset: %s: %llu scans, %llu tracks, %llu kept (>= %u segments, one over "
+                 "%u points)\n",
+                 o.in[k].c_str(), static_cast<unsigned long long>(r->scans),
+                 static_cast<unsigned long long>(r->tracks),
+                 static_cast<unsigned long long>(r->kept), kMinSegments, kMinLargestSegment);
+  }
+  if (auto w = write_dataset(o.out, data); !w) return fail(w.error().message);
+  std::array<std::size_t, 4> per{};
+  for (const DatasetTrack& t : data.tracks) ++per[static_cast<std::size_t>(t.label)];
+  std::printf("%s: %zu tracks (car %zu, pedestrian %zu, bicyclist %zu, background %zu)\n",
+              o.out.c_str(), data.tracks.size(), per[0], per[1], per[2], per[3]);
+  return 0;
+}
+
+}  // namespace
+
+void add_dataset_command(CLI::App& app) {
+  auto o = std::make_shared<DatasetOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "dataset", "Labelled track descriptors from simulated drives, for stac train");
+  cmd->description(
+      "Runs each capture through the per-scan pipeline (as `stac process`), describes every\n"
+      "segment each track is updated with and the track's holistic descriptor after it, labels\n"
+      "each track by the majority truth class of its segments' points (car, pedestrian,\n"
+      "bicyclist, else background), keeps tracks of at least 10 segments with one over 75\n"
+      "points, and writes DIR/tracks.bin and DIR/manifest.json (docs/classification.md).");
+  cmd->add_option("--in", o->in, "pcap capture of a `stac sim` drive (repeatable)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--truth", o->truth, "its truth file (one per --in, same order)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--out", o->out, "output folder")->required();
+  cmd->add_option("--config", o->config,
+                  "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
+  cmd->add_option("--calib", o->calib, "calibration file or 'stream' (default: the config's)");
+  cmd->add_flag("--no-deskew", o->no_deskew,
+                "ignore the INS stream: no deskew, sensor frame = world");
+  cmd->callback([o] {
+    if (const int code = run_dataset(*o); code != 0) throw CLI::RuntimeError(code);
+  });
+}
+
+}  // namespace stac::tools

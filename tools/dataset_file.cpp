@@ -1,0 +1,194 @@
+#include "tools/dataset_file.hpp"
+
+#include <array>
+#include <bit>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <nlohmann/json.hpp>
+
+#include "perception/classification/holistic.hpp"
+
+namespace stac::tools {
+namespace {
+
+static_assert(std::endian::native == std::endian::little, "the dataset format is little-endian");
+
+constexpr char kMagic[8] = {'S', 'T', 'A', 'C', 'D', 'S', 'E', 'T'};
+constexpr std::size_t kHeaderBytes = 8 + 4 * 4 + 8 * 3;
+
+using classification::ObjectClass;
+
+std::size_t segment_dims() {
+  return descriptors::kDimensions;
+}
+std::size_t holistic_dims() {
+  return classification::kHolisticDimensions;
+}
+
+void put_bytes(std::vector<std::uint8_t>& b, const void* p, std::size_t n) {
+  const std::size_t at = b.size();
+  b.resize(at + n);
+  if (n != 0) std::memcpy(b.data() + at, p, n);
+}
+template <class T>
+void put(std::vector<std::uint8_t>& b, const T& v) {
+  put_bytes(b, &v, sizeof(T));
+}
+void put_floats(std::vector<std::uint8_t>& b, const std::vector<float>& v) {
+  put_bytes(b, v.data(), v.size() * sizeof(float));
+}
+
+struct Reader {
+  std::span<const std::uint8_t> bytes;
+  std::size_t at = 0;
+  template <class T>
+  bool get(T& v) {
+    if (bytes.size() - at < sizeof(T)) return false;
+    std::memcpy(&v, bytes.data() + at, sizeof(T));
+    at += sizeof(T);
+    return true;
+  }
+  bool get_floats(std::vector<float>& v, std::size_t n) {
+    if ((bytes.size() - at) / sizeof(float) < n) return false;
+    v.resize(n);
+    std::memcpy(v.data(), bytes.data() + at, n * sizeof(float));
+    at += n * sizeof(float);
+    return true;
+  }
+};
+
+}  // namespace
+
+rt::Result<bool> write_dataset(const std::filesystem::path& dir, const Dataset& data) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec)
+    return rt::make_error(dir.string() + ": cannot create the dataset folder (" + ec.message() +
+                          ")");
+  std::vector<std::uint8_t> b;
+  put_bytes(b, kMagic, sizeof(kMagic));
+  put(b, kDatasetFormatVersion);
+  put(b, static_cast<std::uint32_t>(segment_dims()));
+  put(b, static_cast<std::uint32_t>(holistic_dims()));
+  put(b, static_cast<std::uint32_t>(data.sources.size()));
+  put(b, classification::layout_hash(classification::segment_layout()));
+  put(b, classification::layout_hash(classification::holistic_layout()));
+  put(b, static_cast<std::uint64_t>(data.tracks.size()));
+  for (const std::string& s : data.sources) {
+    put(b, static_cast<std::uint32_t>(s.size()));
+    put_bytes(b, s.data(), s.size());
+  }
+  nlohmann::json classes = nlohmann::json::object(), segments = nlohmann::json::object();
+  for (int c = 0; c <= 3; ++c) {
+    classes[classification::class_name(static_cast<ObjectClass>(c))] = 0;
+    segments[classification::class_name(static_cast<ObjectClass>(c))] = 0;
+  }
+  std::uint64_t total_segments = 0;
+  for (const DatasetTrack& t : data.tracks) {
+    put(b, t.id);
+    put(b, t.source);
+    put(b, static_cast<std::uint32_t>(t.label));
+    put(b, t.segments);
+    put_floats(b, t.segment_rows);
+    put_floats(b, t.holistic_rows);
+    const char* name = classification::class_name(t.label);
+    classes[name] = classes[name].get<std::uint64_t>() + 1;
+    segments[name] = segments[name].get<std::uint64_t>() + t.segments;
+    total_segments += t.segments;
+  }
+  put(b, classification::fnv1a64(b));
+  const std::filesystem::path bin = dir / "tracks.bin";
+  {
+    std::ofstream out(bin, std::ios::binary | std::ios::trunc);
+    out.write(reinterpret_cast<const char*>(b.data()), static_cast<std::streamsize>(b.size()));
+    out.close();
+    if (!out) return rt::make_error(bin.string() + ": write failed");
+  }
+  const nlohmann::json manifest = {{"format", "stac-dataset"},
+                                   {"version", kDatasetFormatVersion},
+                                   {"sources", data.sources},
+                                   {"tracks", data.tracks.size()},
+                                   {"segments", total_segments},
+                                   {"tracks_per_class", classes},
+                                   {"segments_per_class", segments},
+                                   {"segment_dimensions", segment_dims()},
+                                   {"holistic_dimensions", holistic_dims()}};
+  std::ofstream m(dir / "manifest.json");
+  m << manifest.dump(2) << '\n';
+  m.close();
+  if (!m) return rt::make_error((dir / "manifest.json").string() + ": write failed");
+  return true;
+}
+
+rt::Result<Dataset> read_dataset(const std::filesystem::path& dir) {
+  const std::filesystem::path bin = dir / "tracks.bin";
+  const std::string name = bin.string();
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(bin, ec)) {
+    return rt::make_error(name +
+                          ": missing; make the dataset with `stac dataset --in RUN.pcap "
+                          "--truth RUN.truth.jsonl --out " +
+                          dir.string() + "`");
+  }
+  std::ifstream in(bin, std::ios::binary);
+  const std::vector<std::uint8_t> bytes{std::istreambuf_iterator<char>(in),
+                                        std::istreambuf_iterator<char>()};
+  const auto bad = [&](const std::string& what) {
+    return rt::make_error(name + ": " + what + "; remake it with this build's `stac dataset`");
+  };
+  if (bytes.size() < kHeaderBytes + 8 || std::memcmp(bytes.data(), kMagic, 8) != 0) {
+    return bad("not a stac dataset (bad magic or too short)");
+  }
+  std::uint64_t stored = 0;
+  std::memcpy(&stored, bytes.data() + bytes.size() - 8, 8);
+  Reader r{std::span(bytes).first(bytes.size() - 8), 8};
+  std::uint32_t version = 0, sd = 0, hd = 0, nsources = 0;
+  std::uint64_t sh = 0, hh = 0, ntracks = 0;
+  r.get(version);
+  if (version != kDatasetFormatVersion) {
+    return bad("format version " + std::to_string(version) + ", this build reads " +
+               std::to_string(kDatasetFormatVersion));
+  }
+  if (classification::fnv1a64(r.bytes) != stored)
+    return bad("checksum mismatch (truncated or corrupt)");
+  r.get(sd), r.get(hd), r.get(nsources), r.get(sh), r.get(hh), r.get(ntracks);
+  if (sd != segment_dims() || hd != holistic_dims() ||
+      sh != classification::layout_hash(classification::segment_layout()) ||
+      hh != classification::layout_hash(classification::holistic_layout())) {
+    return bad("descriptor layout differs from this build's");
+  }
+  Dataset d;
+  for (std::uint32_t i = 0; i < nsources; ++i) {
+    std::uint32_t n = 0;
+    if (!r.get(n) || r.bytes.size() - r.at < n) return bad("truncated source list");
+    d.sources.emplace_back(reinterpret_cast<const char*>(r.bytes.data() + r.at), n);
+    r.at += n;
+  }
+  for (std::uint64_t i = 0; i < ntracks; ++i) {
+    DatasetTrack t;
+    std::uint32_t label = 0;
+    if (!r.get(t.id) || !r.get(t.source) || !r.get(label) || !r.get(t.segments))
+      return bad("truncated track");
+    if (label > 3 || t.source >= nsources || t.segments == 0) return bad("bad track record");
+    t.label = static_cast<ObjectClass>(label);
+    if (!r.get_floats(t.segment_rows, std::size_t{t.segments} * sd) ||
+        !r.get_floats(t.holistic_rows, std::size_t{t.segments} * hd)) {
+      return bad("truncated track descriptors");
+    }
+    d.tracks.push_back(std::move(t));
+  }
+  if (r.at != r.bytes.size()) return bad("trailing bytes");
+  return d;
+}
+
+void append_dataset(Dataset& into, Dataset&& more) {
+  const auto offset = static_cast<std::uint32_t>(into.sources.size());
+  for (std::string& s : more.sources) into.sources.push_back(std::move(s));
+  for (DatasetTrack& t : more.tracks) {
+    t.source += offset;
+    into.tracks.push_back(std::move(t));
+  }
+}
+
+}  // namespace stac::tools

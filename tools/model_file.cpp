@@ -1,0 +1,65 @@
+#include "tools/model_file.hpp"
+
+#include <cstdint>
+#include <fstream>
+#include <iterator>
+#include <system_error>
+#include <vector>
+
+namespace stac::tools {
+
+rt::Result<bool> write_model_file(const std::filesystem::path& path,
+                                  const classification::TrackClassifierModel& model) {
+  const std::vector<std::uint8_t> bytes = classification::serialize(model);
+  std::filesystem::path tmp = path;
+  tmp += ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) {
+      return rt::make_error(path.string() +
+                            ": cannot create the model file; check the folder exists and is "
+                            "writable");
+    }
+    out.write(reinterpret_cast<const char*>(bytes.data()),
+              static_cast<std::streamsize>(bytes.size()));
+    out.close();
+    if (!out) {
+      std::error_code ec;
+      std::filesystem::remove(tmp, ec);
+      return rt::make_error(path.string() + ": write failed (disk full?); nothing was written");
+    }
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) {
+    std::filesystem::remove(tmp, ec);
+    return rt::make_error(path.string() + ": cannot replace the model file (" + ec.message() + ")");
+  }
+  return true;
+}
+
+rt::Result<classification::TrackClassifierModel> read_model_file(
+    const std::filesystem::path& path) {
+  const std::string name = path.string();
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) {
+    return rt::make_error(
+        name + ": no such model file; train one with `stac train --data DIR --out " + name + "`");
+  }
+  if (std::filesystem::is_directory(path, ec)) {
+    return rt::make_error(name + ": is a folder, not a model file (`stac train --out` writes one)");
+  }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return rt::make_error(name + ": cannot open the model file (permissions?)");
+  const std::vector<std::uint8_t> bytes{std::istreambuf_iterator<char>(in),
+                                        std::istreambuf_iterator<char>()};
+  if (in.bad()) return rt::make_error(name + ": read failed");
+  auto model = classification::deserialize(bytes);
+  if (!model) {
+    return rt::make_error(name + ": not a usable track classifier model (" + model.error().message +
+                          "); retrain it with this build's `stac train`");
+  }
+  return std::move(*model);
+}
+
+}  // namespace stac::tools

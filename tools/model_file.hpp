@@ -1,0 +1,19 @@
+// Track classifier model files (the bytes of classification::serialize, docs/classification.md
+// "Model format"): every failure names the file and says what to do.
+#pragma once
+
+#include <filesystem>
+
+#include "perception/classification/model.hpp"
+#include "rt/expected.hpp"
+
+namespace stac::tools {
+
+// Writes through a temporary file renamed over `path`, so a failed write leaves no half model.
+rt::Result<bool> write_model_file(const std::filesystem::path& path,
+                                  const classification::TrackClassifierModel& model);
+// Missing, unreadable, truncated, corrupt, another format version or descriptor layout: an error
+// "<path>: <what>; <what to do>".
+rt::Result<classification::TrackClassifierModel> read_model_file(const std::filesystem::path& path);
+
+}  // namespace stac::tools

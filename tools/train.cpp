@@ -1,0 +1,111 @@
+// stac train: a track classifier (segment and holistic boosting, ADBF weights) from `stac dataset`
+// folders, written as a model file (docs/classification.md).
+#include <chrono>
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "perception/classification/holistic.hpp"
+#include "perception/learning/track_training.hpp"
+#include "tools/commands.hpp"
+#include "tools/dataset_file.hpp"
+#include "tools/model_file.hpp"
+#include "tools/progress.hpp"
+
+namespace stac::tools {
+namespace {
+
+struct TrainOptions {
+  std::vector<std::string> data;
+  std::string out;
+  std::uint64_t seed = 1;
+  std::size_t rounds = 1000;
+  double held_out = 0.3;
+};
+
+int run_train(const TrainOptions& o) {
+  Dataset all;
+  {
+    Progress progress("train: reading", static_cast<double>(o.data.size()));
+    for (std::size_t i = 0; i < o.data.size(); ++i) {
+      auto d = read_dataset(o.data[i]);
+      if (!d) return fail(d.error().message);
+      append_dataset(all, std::move(*d));
+      progress.update(static_cast<double>(i + 1));
+    }
+  }
+  if (all.tracks.empty()) return fail("the datasets hold no track: nothing to train on");
+  std::vector<learning::TrackExample> examples;
+  examples.reserve(all.tracks.size());
+  std::array<std::size_t, 4> per{};
+  for (DatasetTrack& t : all.tracks) {
+    learning::TrackExample e;
+    e.label = t.label;
+    e.segments = std::move(t.segment_rows);
+    const std::size_t hd = classification::kHolisticDimensions;
+    e.holistic.assign(t.holistic_rows.end() - static_cast<std::ptrdiff_t>(hd),
+                      t.holistic_rows.end());
+    examples.push_back(std::move(e));
+    ++per[static_cast<std::size_t>(t.label)];
+  }
+  learning::TrackTrainingConfig config;
+  config.segment.rounds = o.rounds;
+  config.holistic.rounds = o.rounds;
+  config.segment.seed = o.seed;
+  config.holistic.seed = o.seed + 1;
+  config.split_seed = o.seed;
+  config.held_out_fraction = o.held_out;
+  std::fprintf(stderr,
+               "stac train: %zu tracks (car %zu, pedestrian %zu, bicyclist %zu, background %zu), "
+               "%zu rounds...\n",
+               examples.size(), per[0], per[1], per[2], per[3], o.rounds);
+  const auto t0 = std::chrono::steady_clock::now();
+  Progress progress("train: boosting", 1.0);
+  config.progress = [&progress](double f) { progress.update(f); };
+  auto model = learning::train_track_classifier(examples, classification::build_layouts(), config);
+  progress.finish();
+  if (!model) return fail("training failed: " + model.error().message);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (auto w = write_model_file(o.out, *model); !w) return fail(w.error().message);
+  std::printf("%s: trained on %zu tracks (held out %.0f%% for the ADBF weights) in %.1f s\n",
+              o.out.c_str(), examples.size(), 100.0 * o.held_out, seconds);
+  const classification::AdbfParams& p = model->adbf;
+  for (std::size_t c = 0; c < classification::kClassCount; ++c) {
+    std::printf(
+        "  %-10s prior(seg) %+.2f  prior(hol) %+.2f  adbf alpha %+.3f beta %+.3f gamma %+.3f\n",
+        classification::class_name(static_cast<classification::ObjectClass>(c)),
+        static_cast<double>(model->segment.model().prior[c]),
+        static_cast<double>(model->holistic.model().prior[c]), static_cast<double>(p.alpha[c]),
+        static_cast<double>(p.beta[c]), static_cast<double>(p.gamma[c]));
+  }
+  return 0;
+}
+
+}  // namespace
+
+void add_train_command(CLI::App& app) {
+  auto o = std::make_shared<TrainOptions>();
+  CLI::App* cmd =
+      app.add_subcommand("train", "Train the track classifier on `stac dataset` folders");
+  cmd->description(
+      "Reads the datasets, trains the segment and holistic boosting classifiers on one part of\n"
+      "the tracks and the augmented discrete Bayes filter's weights on the held-out rest\n"
+      "(learning::train_track_classifier), and writes the model file.");
+  cmd->add_option("--data", o->data, "dataset folder written by `stac dataset` (repeatable)")
+      ->required();
+  cmd->add_option("--out", o->out, "output: the model file")->required();
+  cmd->add_option("--seed", o->seed, "seed of the split and of boosting")->capture_default_str();
+  cmd->add_option("--rounds", o->rounds, "boosting rounds of each classifier")
+      ->capture_default_str()
+      ->check(CLI::Range(std::size_t{1}, std::size_t{1000000}));
+  cmd->add_option("--held-out", o->held_out, "fraction of tracks kept for the ADBF weights")
+      ->capture_default_str()
+      ->check(CLI::Range(0.05, 0.95));
+  cmd->callback([o] {
+    if (const int code = run_train(*o); code != 0) throw CLI::RuntimeError(code);
+  });
+}
+
+}  // namespace stac::tools
