@@ -3,6 +3,7 @@
 #include "tools/settings.hpp"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <fstream>
@@ -21,7 +22,11 @@ std::filesystem::path with_line(const std::string& pattern, const std::string& r
   text << in.rdbuf();
   const std::string edited = std::regex_replace(text.str(), std::regex(pattern), replacement);
   EXPECT_NE(edited, text.str()) << pattern;
-  const auto path = std::filesystem::temp_directory_path() / "stac_settings_test.yaml";
+  // One file per test and process: ctest runs the tests of this file in parallel.
+  const auto path = std::filesystem::temp_directory_path() /
+                    ("stac_settings_test_" +
+                     std::string(testing::UnitTest::GetInstance()->current_test_info()->name()) +
+                     "_" + std::to_string(::getpid()) + ".yaml");
   std::ofstream(path) << edited;
   return path;
 }
@@ -41,7 +46,8 @@ TEST(EgoSettings, OriginAndExtrinsicsAreRead) {
   ASSERT_TRUE(s) << s.error().message;
   ASSERT_TRUE(s->origin);
   EXPECT_EQ(s->origin->lat_deg, 44.2);
-  auto yawed = load_ego_settings(with_line(R"(sensor_rpy_deg: \[0.0, 0.0, 0.0\])", "sensor_rpy_deg: [0, 0, 90]"));
+  auto yawed = load_ego_settings(
+      with_line(R"(sensor_rpy_deg: \[0.0, 0.0, 0.0\])", "sensor_rpy_deg: [0, 0, 90]"));
   ASSERT_TRUE(yawed) << yawed.error().message;
   const Eigen::Vector3d x = yawed->deskew.vehicle_T_sensor.linear() * Eigen::Vector3d::UnitX();
   EXPECT_NEAR(x.y(), 1.0, 1e-12);  // the sensor's forward points to the vehicle's left
