@@ -94,17 +94,18 @@ void ScanPipeline::process(velodyne::Scan& scan, const ego::PoseHistory* poses,
       out.segments);
   const std::int64_t t2 = now_ns(config_.clock);
   detections_.clear();
-  const double sensor_yaw = yaw_of(out.world_T_sensor.linear());
   const Eigen::Vector2f sensor_xy = out.world_T_sensor.translation().head<2>().cast<float>();
   for (std::size_t i = 0; i < out.segments.segments.size(); ++i) {
     const segmentation::Segment& s = out.segments.segments[i];
     const Eigen::Vector3d c =
         out.world_T_sensor * Eigen::Vector3d(s.centroid[0], s.centroid[1], s.centroid[2]);
-    const Eigen::Vector3d b = out.world_T_sensor * Eigen::Vector3d(s.box.cx, s.box.cy, s.box.cz);
+    const WorldBox b = out.world_box(i);
     tracking::Detection* d = detections_.append();
     if (d == nullptr) break;  // capacity max_segments: never short
-    *d = {c.cast<float>(), b.head<2>().cast<float>(), s.box.length, s.box.width, s.box.height,
-          static_cast<float>(s.box.yaw + sensor_yaw), s.count, static_cast<std::uint32_t>(i)};
+    *d = {c.cast<float>(), Eigen::Vector2d(b.x, b.y).cast<float>(),
+          s.box.length,    s.box.width,
+          s.box.height,    static_cast<float>(b.yaw),
+          s.count,         static_cast<std::uint32_t>(i)};
     (void)tracking::complete_end_on(config_.tracker, sensor_xy, *d);
   }
   tracker_.update(out.stamp_ns,

@@ -65,6 +65,17 @@ Extent extent_in(const Detection& d, const Eigen::Vector2f& centre, float h) {
   return extent_in(d.position(true), d.length, d.width, d.yaw, centre, h);
 }
 
+// A box that fits what one fragmented object may span (absorb_max_length_m x _width_m).
+bool fits_one_object(const TrackerConfig& c, float length, float width) {
+  return std::max(length, width) <= c.absorb_max_length_m &&
+         std::min(length, width) <= c.absorb_max_width_m;
+}
+
+// Which of two tracks is older: more hits, then the lower id (the merges keep the older).
+bool older(const Track& a, const Track& b) {
+  return a.hits > b.hits || (a.hits == b.hits && a.id < b.id);
+}
+
 // People and bicyclists: never joined to other objects (TrackerConfig::absorb_keep_*).
 bool narrow_and_tall(const TrackerConfig& c, float length, float width, float height) {
   const float wide = std::min(length, width);
@@ -262,8 +273,8 @@ void Tracker::correct(Slot& s, const Detection& d, std::int64_t stamp_ns) noexce
 
 bool Tracker::spawn(const Detection& d, std::int64_t stamp_ns) noexcept {
   const Eigen::Vector2f xy = d.position(config_.position_from_box);
-  if (!d.centroid.allFinite() ||
-      !xy.allFinite()) {  // never gated either: NaN fails every comparison
+  // Never gated either: NaN fails every comparison.
+  if (!d.centroid.allFinite() || !xy.allFinite()) {
     ++counters_.invalid_detections;
     return false;
   }
@@ -338,9 +349,7 @@ void Tracker::absorb_fragments(std::span<const Detection> detections) noexcept {
       if (narrow_host && f.height >= config_.absorb_keep_height_m) continue;
       if (own != nullptr && !narrow_host) {
         const Slot& host = slots_[live_[static_cast<std::size_t>(det_match_[hi])]];
-        if (host.track.hits < own->track.hits ||
-            (host.track.hits == own->track.hits && host.track.id > own->track.id))
-          continue;
+        if (!older(host.track, own->track)) continue;
         if (own->track.state != TrackState::kTentative &&
             (host.x.tail<2>() - own->x.tail<2>()).norm() > config_.absorb_velocity_mps) {
           continue;
@@ -359,7 +368,7 @@ void Tracker::absorb_fragments(std::span<const Detection> detections) noexcept {
         const Extent u{std::min(a.u0, b.u0), std::max(a.u1, b.u1), std::min(a.v0, b.v0),
                        std::max(a.v1, b.v1)};
         const float lu = u.u1 - u.u0, lv = u.v1 - u.v0;
-        if (std::max(lu, lv) > max_len || std::min(lu, lv) > max_wid) continue;
+        if (!fits_one_object(config_, lu, lv)) continue;
         if (narrow_host && !narrow_and_tall(config_, lu, lv, merged_[hi].height)) continue;
         if (best == hi && lu * lv >= best_area) continue;
         best = hi, best_gap = gap, best_union = u, best_heading = heading, best_area = lu * lv;
@@ -401,13 +410,7 @@ void Tracker::merge_overlapping(std::int64_t stamp_ns) noexcept {
   const auto person = [&](const Track& t) {
     return narrow_and_tall(config_, t.length, t.width, t.height);
   };
-  const auto older = [](const Track& a, const Track& b) {
-    return a.hits > b.hits || (a.hits == b.hits && a.id < b.id);
-  };
-  const auto fits = [&](const Track& t) {
-    return std::max(t.length, t.width) <= config_.absorb_max_length_m &&
-           std::min(t.length, t.width) <= config_.absorb_max_width_m;
-  };
+  const auto fits = [&](const Track& t) { return fits_one_object(config_, t.length, t.width); };
   const std::size_t n = live_.size();
   std::fill_n(merged_track_.begin(), n, std::uint8_t{0});
   for (std::size_t i = 0; i < n; ++i) {
