@@ -16,10 +16,7 @@ using stac::testing::CliResult;
 using stac::testing::stac;
 
 std::filesystem::path fresh_dir(const std::string& name) {
-  const auto d = std::filesystem::temp_directory_path() / ("stac_segment_" + name);
-  std::filesystem::remove_all(d);
-  std::filesystem::create_directories(d);
-  return d;
+  return stac::testing::fresh_dir("stac_segment_" + name);
 }
 
 // The number after `label` in the summary, e.g. "segments   217 of ...".

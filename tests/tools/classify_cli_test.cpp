@@ -1,6 +1,7 @@
 // stac dataset -> train -> eval --classes on real short simulated drives: a training drive and
 // an empty street (background) for training, another seed held out for the evaluation.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -25,7 +26,10 @@ nlohmann::json read_json(const std::filesystem::path& p) {
 class ClassifyCli : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    dir_ = new std::filesystem::path(stac::testing::fresh_dir("stac_classify_cli"));
+    // One folder per process: ctest runs this suite's tests in parallel, each in its own process
+    // with its own SetUpTestSuite, and a shared folder would be emptied under a running test.
+    dir_ = new std::filesystem::path(
+        stac::testing::fresh_dir("stac_classify_cli_" + std::to_string(::getpid())));
     for (const auto& [name, args] :
          {std::pair<std::string, std::string>{"train", "--scenario urban --seed 1 --duration 5"},
           {"test", "--scenario urban --seed 2 --duration 5"},
@@ -36,7 +40,10 @@ class ClassifyCli : public ::testing::Test {
       ASSERT_EQ(sim.code, 0) << sim.output;
     }
   }
-  static void TearDownTestSuite() { delete dir_; }
+  static void TearDownTestSuite() {
+    std::filesystem::remove_all(*dir_);
+    delete dir_;
+  }
   static std::string at(const std::string& name) { return (*dir_ / name).string(); }
   static std::filesystem::path* dir_;
 };

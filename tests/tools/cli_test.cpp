@@ -24,10 +24,7 @@ using stac::testing::CliResult;
 using stac::testing::stac;
 
 std::filesystem::path fresh_dir(const std::string& name) {
-  const auto d = std::filesystem::temp_directory_path() / ("stac_cli_" + name);
-  std::filesystem::remove_all(d);
-  std::filesystem::create_directories(d);
-  return d;
+  return stac::testing::fresh_dir("stac_cli_" + name);
 }
 
 // Half a second of the synthetic rotating sensor (every return at 10 m) as a pcap.

@@ -19,10 +19,7 @@ using stac::testing::stac;
 constexpr std::int64_t kStart = 1'767'268'800'000'000'000;
 
 std::filesystem::path fresh_dir(const std::string& name) {
-  const auto d = std::filesystem::temp_directory_path() / ("stac_eval_cli_" + name);
-  std::filesystem::remove_all(d);
-  std::filesystem::create_directories(d);
-  return d;
+  return stac::testing::fresh_dir("stac_eval_cli_" + name);
 }
 
 // 20 scans: a car driving along y = 4 and a pedestrian, truth as `stac sim` writes it; tracks
