@@ -141,9 +141,16 @@ struct DescriptorPipeline::State {
     const double scale = 1.0 / std::sqrt(static_cast<double>(kHogProjectedDim));
     for (int v = 0; v < kViews; ++v) {
       for (int a = 0; a < 2; ++a) {
+        // Drawn row by row (kHogProjectedDim x raw size) and stored transposed (raw size x
+        // kHogProjectedDim), so the product below runs over contiguous outputs.
         auto& m = projection[v][a];
-        m.resize(kHogProjectedDim * kHogShapes[v][a].size());
-        for (float& e : m) e = static_cast<float>(normal.next() * scale);
+        const std::size_t raw_n = kHogShapes[v][a].size();
+        m.resize(kHogProjectedDim * raw_n);
+        for (std::size_t r = 0; r < kHogProjectedDim; ++r) {
+          for (std::size_t j = 0; j < raw_n; ++j) {
+            m[j * kHogProjectedDim + r] = static_cast<float>(normal.next() * scale);
+          }
+        }
       }
     }
   }
@@ -163,7 +170,7 @@ struct DescriptorPipeline::State {
   std::vector<float> sum, count, smooth_tmp;
   GradientCache gradients;
   HogWindow windows[3];  // 15x30, 30x30, 15x15
-  std::vector<float> projection[kViews][2];  // row-major kHogProjectedDim x raw size
+  std::vector<float> projection[kViews][2];  // raw size x kHogProjectedDim (transposed)
   float raw[kMaxHogRaw];
 };
 
@@ -397,12 +404,16 @@ void DescriptorPipeline::compute(const SegmentView& segment, Descriptors& out) n
           continue;
         }
         win.compute(st.gradients, x0, y0, st.raw);
-        for (std::size_t r = 0; r < kHogProjectedDim; ++r) {
-          const float* row = m + r * raw_n;
-          float acc = 0.0f;
-          for (std::size_t j = 0; j < raw_n; ++j) acc += row[j] * st.raw[j];
-          dst[r] = acc;
+        // dst = M raw, each output summed over j in order (the same sums as row by row), the
+        // 20 outputs side by side so the compiler vectorises across them; empty bins skipped.
+        float acc[kHogProjectedDim] = {};
+        for (std::size_t j = 0; j < raw_n; ++j) {
+          const float r = st.raw[j];
+          if (r == 0.0f) continue;
+          const float* col = m + j * kHogProjectedDim;
+          for (std::size_t k2 = 0; k2 < kHogProjectedDim; ++k2) acc[k2] += col[k2] * r;
         }
+        std::copy(acc, acc + kHogProjectedDim, dst);
         ++space;
       }
     }

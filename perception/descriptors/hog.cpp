@@ -20,45 +20,47 @@ int reflect(int i, int n) noexcept {
 }  // namespace
 
 GradientCache::GradientCache(std::size_t max_pixels, int bins)
-    : bins_(bins), stamp_(max_pixels, 0), gradient_(max_pixels) {}
+    : bins_(bins), gradient_(max_pixels) {}
 
 void GradientCache::reset(const float* pixels, int width, int height) noexcept {
-  pixels_ = pixels;
   width_ = width;
   height_ = height;
-  if (++epoch_ == 0) {  // wrapped: forget every stamp
-    std::fill(stamp_.begin(), stamp_.end(), 0u);
-    epoch_ = 1;
+  const float bins = static_cast<float>(bins_);
+  for (int y = 0; y < height; ++y) {
+    const float* row = pixels + static_cast<std::ptrdiff_t>(y) * width;
+    const float* up = pixels + static_cast<std::ptrdiff_t>(reflect(y - 1, height)) * width;
+    const float* down = pixels + static_cast<std::ptrdiff_t>(reflect(y + 1, height)) * width;
+    Gradient* out = gradient_.data() + static_cast<std::ptrdiff_t>(y) * width;
+    for (int x = 0; x < width; ++x) {
+      const int left = x > 0 ? x - 1 : reflect(x - 1, width);
+      const int right = x + 1 < width ? x + 1 : reflect(x + 1, width);
+      const float dx = row[right] - row[left];
+      const float dy = down[x] - up[x];
+      Gradient& g = out[x];
+      if (dx == 0.0f && dy == 0.0f) {
+        g = Gradient{{0.0f, 0.0f}, {0, 0}};
+        continue;
+      }
+      const float magnitude = std::sqrt(dx * dx + dy * dy);
+      if (magnitude == 0.0f) {  // both differences tiny enough to underflow
+        g = Gradient{{0.0f, 0.0f}, {0, 0}};
+        continue;
+      }
+      float angle = std::atan2(dy, dx);  // (-pi, pi]
+      if (angle < 0) angle += 2 * kPi;   // [0, 2 pi) as cv::cartToPolar
+      const float position = angle * (bins / kPi) - 0.5f;
+      int bin = static_cast<int>(std::floor(position));
+      const float fraction = position - static_cast<float>(bin);
+      // position is in [-0.5, 2 bins): one or two wraps at most, no integer division.
+      if (bin < 0) bin += bins_;
+      while (bin >= bins_) bin -= bins_;
+      const int next = bin + 1 == bins_ ? 0 : bin + 1;
+      g.weight[0] = magnitude * (1.0f - fraction);
+      g.weight[1] = magnitude * fraction;
+      g.bin[0] = static_cast<std::uint8_t>(bin);
+      g.bin[1] = static_cast<std::uint8_t>(next);
+    }
   }
-}
-
-const GradientCache::Gradient& GradientCache::at(int x, int y) noexcept {
-  const std::size_t i = static_cast<std::size_t>(y) * static_cast<std::size_t>(width_) +
-                        static_cast<std::size_t>(x);
-  Gradient& g = gradient_[i];
-  if (stamp_[i] == epoch_) return g;
-  stamp_[i] = epoch_;
-  const float* row = pixels_ + static_cast<std::ptrdiff_t>(y) * width_;
-  const float dx = row[reflect(x + 1, width_)] - row[reflect(x - 1, width_)];
-  const float dy = pixels_[static_cast<std::ptrdiff_t>(reflect(y + 1, height_)) * width_ + x] -
-                   pixels_[static_cast<std::ptrdiff_t>(reflect(y - 1, height_)) * width_ + x];
-  const float magnitude = std::sqrt(dx * dx + dy * dy);
-  if (magnitude == 0.0f) {
-    g = Gradient{{0.0f, 0.0f}, {0, 0}};
-    return g;
-  }
-  float angle = std::atan2(dy, dx);  // (-pi, pi]
-  if (angle < 0) angle += 2 * kPi;   // [0, 2 pi) as cv::cartToPolar
-  const float position = angle * (static_cast<float>(bins_) / kPi) - 0.5f;
-  int bin = static_cast<int>(std::floor(position));
-  const float fraction = position - static_cast<float>(bin);
-  bin = ((bin % bins_) + bins_) % bins_;
-  const int next = bin + 1 == bins_ ? 0 : bin + 1;
-  g.weight[0] = magnitude * (1.0f - fraction);
-  g.weight[1] = magnitude * fraction;
-  g.bin[0] = static_cast<std::uint8_t>(bin);
-  g.bin[1] = static_cast<std::uint8_t>(next);
-  return g;
 }
 
 HogWindow::HogWindow(const HogShape& shape) : shape_(shape) {
@@ -98,12 +100,13 @@ HogWindow::HogWindow(const HogShape& shape) : shape_(shape) {
   }
 }
 
-void HogWindow::compute(GradientCache& gradients, int x0, int y0, float* out) const noexcept {
+void HogWindow::compute(const GradientCache& gradients, int x0, int y0, float* out) const noexcept {
   const std::size_t n = shape_.size();
   std::fill(out, out + n, 0.0f);
   for (int y = 0; y < shape_.height; ++y) {
+    const GradientCache::Gradient* row = gradients.row(y0 + y) + x0;
     for (int x = 0; x < shape_.width; ++x) {
-      const GradientCache::Gradient& g = gradients.at(x0 + x, y0 + y);
+      const GradientCache::Gradient& g = row[x];
       if (g.weight[0] == 0.0f && g.weight[1] == 0.0f) continue;
       const Share& s = shares_[static_cast<std::size_t>(y * shape_.width + x)];
       for (int k = 0; k < 4; ++k) {

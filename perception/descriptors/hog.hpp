@@ -22,26 +22,26 @@ struct HogShape {
   }
 };
 
-// Per-pixel gradients of one image, computed on demand and cached until the next reset():
-// central differences [-1 0 1] with reflect-101 borders (OpenCV's convention), magnitude split
-// between the two nearest orientation bins.
+// Per-pixel gradients of one image, computed for the whole image by reset() and kept until
+// the next one: central differences [-1 0 1] with reflect-101 borders (OpenCV's convention),
+// magnitude split between the two nearest orientation bins.
 class GradientCache {
  public:
   explicit GradientCache(std::size_t max_pixels, int bins);
-  // `pixels` row-major, `width` floats a row, stays valid until the next reset().
+  // `pixels` row-major, `width` floats a row, width * height <= max_pixels.
   void reset(const float* pixels, int width, int height) noexcept;
 
   struct Gradient {
     float weight[2];  // magnitude shares of bin[0] and bin[1]
     std::uint8_t bin[2];
   };
-  const Gradient& at(int x, int y) noexcept;
+  [[nodiscard]] const Gradient& at(int x, int y) const noexcept { return row(y)[x]; }
+  [[nodiscard]] const Gradient* row(int y) const noexcept {
+    return gradient_.data() + static_cast<std::ptrdiff_t>(y) * width_;
+  }
 
  private:
-  const float* pixels_ = nullptr;
   int width_ = 0, height_ = 0, bins_ = 6;
-  std::uint32_t epoch_ = 0;
-  std::vector<std::uint32_t> stamp_;
   std::vector<Gradient> gradient_;
 };
 
@@ -51,7 +51,7 @@ class HogWindow {
   // The descriptor (shape.size() floats, OpenCV's order: cells column-major - cell (cx, cy) at
   // (cx * cells_high + cy) * bins) of the window with top-left (x0, y0); the window must lie in
   // the image of `gradients`.
-  void compute(GradientCache& gradients, int x0, int y0, float* out) const noexcept;
+  void compute(const GradientCache& gradients, int x0, int y0, float* out) const noexcept;
   [[nodiscard]] const HogShape& shape() const noexcept { return shape_; }
 
  private:
