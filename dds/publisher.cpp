@@ -189,16 +189,23 @@ class TypedPublisher final : public Publisher {
     d.existence_probability = o.existence_probability;
     std::copy(o.class_log_odds.begin(), o.class_log_odds.end(), d.class_log_odds);
     // classification[]: every class with its probability (logistic of its log odds), most probable
-    // first; labels 1 car, 2 pedestrian, 3 bicyclist, 4 background.
+    // first; labels 1 car, 2 pedestrian, 3 bicyclist, 4 background. Unclassified: one entry,
+    // label 0 (unknown), probability 1.
     auto* c = d.classification._buffer;
-    for (std::uint32_t k = 0; k < 4; ++k) {
-      c[k].label = static_cast<std::uint8_t>(k + 1);
-      c[k].probability = 1.0f / (1.0f + std::exp(-o.class_log_odds[k]));
+    if (o.classified) {
+      for (std::uint32_t k = 0; k < 4; ++k) {
+        c[k].label = static_cast<std::uint8_t>(k + 1);
+        c[k].probability = 1.0f / (1.0f + std::exp(-o.class_log_odds[k]));
+      }
+      for (int k = 1; k < 4; ++k) {  // insertion sort: stable, and never allocates
+        for (int j = k; j > 0 && c[j].probability > c[j - 1].probability; --j) std::swap(c[j], c[j - 1]);
+      }
+      d.classification._length = 4;
+    } else {
+      c[0].label = 0;
+      c[0].probability = 1.0f;
+      d.classification._length = 1;
     }
-    for (int k = 1; k < 4; ++k) {  // insertion sort: stable, and never allocates
-      for (int j = k; j > 0 && c[j].probability > c[j - 1].probability; --j) std::swap(c[j], c[j - 1]);
-    }
-    d.classification._length = 4;
     set(d.kinematics.position, o.position);
     set(d.kinematics.velocity, o.velocity);
     std::copy(o.position_covariance.begin(), o.position_covariance.end(), d.kinematics.position_covariance);

@@ -37,6 +37,7 @@ struct ScanStamp {
 struct TrackedObjectIn {
   std::uint64_t object_id = 0;
   float existence_probability = 0;               // 0..1
+  bool classified = false;                       // false: classification[] = {unknown, 1}
   std::array<float, 4> class_log_odds{};         // car, pedestrian, bicyclist, background
   Vec3 position, velocity;                       // world (m, m/s)
   std::array<float, 9> position_covariance{};    // x,y,z row-major (m^2)
@@ -50,8 +51,8 @@ struct TrackedObjectIn {
 
 // A tracker's track as an object (the edge may read perception; perception never reads DDS).
 // Covariance: x,y variance from position_std_m (its largest axis), velocity covariance zero;
-// existence probability 1 for confirmed and coasting tracks, 0.5 for tentative ones; class log
-// odds zero (no classifier yet).
+// existence probability 1 for confirmed and coasting tracks, 0.5 for tentative ones; not
+// classified (the caller sets classified and class_log_odds from the classification stage).
 TrackedObjectIn to_tracked_object(const tracking::Track& track) noexcept;
 
 struct SegmentIn {

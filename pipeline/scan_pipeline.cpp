@@ -28,6 +28,8 @@ const char* stage_name(Stage s) noexcept {
       return "segment";
     case kTrack:
       return "track";
+    case kClassify:
+      return "classify";
     case kStageCount:
       break;
   }
@@ -51,6 +53,15 @@ ScanPipeline::ScanPipeline(const PipelineConfig& config)
       deskewer_(config.deskew),
       segmenter_(config.segmenter),
       tracker_(config.tracker),
+      classifier_(config.model != nullptr || config.describe
+                      ? std::make_unique<classification::TrackClassifier>(
+                            [&] {
+                              classification::TrackClassifierConfig c = config.classifier;
+                              c.max_tracks = config.tracker.max_tracks;
+                              return c;
+                            }(),
+                            config.model)
+                      : nullptr),
       detections_(config.segmenter.max_segments),
       sensor_T_vehicle_(config.deskew.vehicle_T_sensor.inverse()) {}
 
@@ -112,9 +123,16 @@ void ScanPipeline::process(velodyne::Scan& scan, const ego::PoseHistory* poses,
                   std::span<const tracking::Detection>(detections_.data(), detections_.size()),
                   out.tracked);
   const std::int64_t t3 = now_ns(config_.clock);
+  out.classes.clear();
+  if (classifier_ != nullptr) {
+    classifier_->classify(&scan.points.data()->x, sizeof(velodyne::Point), out.segments,
+                          out.tracked, out.classes);
+  }
+  const std::int64_t t4 = classifier_ != nullptr ? now_ns(config_.clock) : t3;
   out.stage_ns[kDeskew] = t1 - t0;
   out.stage_ns[kSegment] = t2 - t1;
   out.stage_ns[kTrack] = t3 - t2;
+  out.stage_ns[kClassify] = t4 - t3;
 }
 
 }  // namespace stac::pipeline

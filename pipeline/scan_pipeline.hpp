@@ -1,5 +1,5 @@
 // One scan through perception, in fixed memory: deskew (with the pose history, when there is
-// one) -> segment -> detections in the world frame -> track. The constructor allocates
+// one) -> segment -> detections in the world frame -> track -> classify (with a model). The constructor allocates
 // everything; process() allocates nothing and throws nothing. The caller owns the ScanResult
 // (from make_result()), so results can live in the slots of a thread handover.
 //
@@ -8,12 +8,14 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 
 #include "drivers/velodyne/model.hpp"
 #include "drivers/velodyne/scan.hpp"
 #include "ego/deskew.hpp"
 #include "ego/pose_history.hpp"
 #include "ego/time_sync.hpp"
+#include "perception/classification/track_classifier.hpp"
 #include "perception/segmentation/segmenter.hpp"
 #include "perception/tracking/tracker.hpp"
 
@@ -29,12 +31,15 @@ struct PipelineConfig {
   ego::DeskewConfig deskew;  // its vehicle_T_sensor is also the parked sensor's pose
   segmentation::SegmenterConfig segmenter;
   tracking::TrackerConfig tracker;
+  classification::TrackClassifierConfig classifier;  // its max_tracks is the tracker's
+  std::shared_ptr<const classification::TrackClassifierModel> model;  // null: tracks unclassified
+  bool describe = false;  // run the classify stage without a model too (an observer's descriptors)
   velodyne::TrailerKind trailer = velodyne::TrailerKind::kGpsStatus;  // the model's (scan clock)
   StageClock clock = StageClock::kThreadCpu;
 };
 
-enum Stage : std::uint8_t { kDeskew, kSegment, kTrack, kStageCount };
-const char* stage_name(Stage s) noexcept;  // "deskew", "segment", "track"
+enum Stage : std::uint8_t { kDeskew, kSegment, kTrack, kClassify, kStageCount };
+const char* stage_name(Stage s) noexcept;  // "deskew", "segment", "track", "classify"
 
 // A box in the world frame (m, rad).
 struct WorldBox {
@@ -43,7 +48,7 @@ struct WorldBox {
 
 struct ScanResult {
   ScanResult(std::size_t max_segments, std::size_t max_points, std::size_t max_tracks)
-      : segments(max_segments, max_points), tracked(max_tracks) {}
+      : segments(max_segments, max_points), tracked(max_tracks), classes(max_tracks) {}
 
   std::uint64_t sequence = 0;         // the scan's sequence number (ScanHeader)
   std::int64_t receive_stamp_ns = 0;  // the scan's stamp on the receive clock (ScanHeader)
@@ -55,6 +60,8 @@ struct ScanResult {
   ego::PoseLookup pose;                     // the vehicle pose at stamp_ns (status kEmpty: none)
   segmentation::Segments segments;          // sensor frame (see world_box())
   tracking::TrackerOutput tracked;          // world frame
+  rt::FixedVector<classification::TrackClass> classes;  // classes[i]: tracked.tracks[i]'s class
+                                                        // (empty when the stage does not run)
   std::int64_t stage_ns[kStageCount] = {};  // on PipelineConfig::clock
 
   // Segment i's box in the world frame.
@@ -71,6 +78,8 @@ class ScanPipeline {
   void process(velodyne::Scan& scan, const ego::PoseHistory* poses, ScanResult& out) noexcept;
 
   [[nodiscard]] const tracking::Tracker& tracker() const noexcept { return tracker_; }
+  // Null when the classify stage does not run (no model, describe off).
+  [[nodiscard]] classification::TrackClassifier* classifier() noexcept { return classifier_.get(); }
   [[nodiscard]] std::uint64_t scans_without_pose() const noexcept { return without_pose_; }
 
  private:
@@ -78,6 +87,7 @@ class ScanPipeline {
   ego::Deskewer deskewer_;
   segmentation::Segmenter segmenter_;
   tracking::Tracker tracker_;
+  std::unique_ptr<classification::TrackClassifier> classifier_;
   rt::FixedVector<tracking::Detection> detections_;
   Eigen::Isometry3d sensor_T_vehicle_;
   std::uint64_t without_pose_ = 0;

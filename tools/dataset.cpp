@@ -1,10 +1,12 @@
 // stac dataset: labelled tracks from simulated drives, for `stac train` and `stac eval --classes`.
 // Each capture runs through the per-scan pipeline as in `stac process` (decode -> INS deskew ->
-// segment -> track); every segment a track is updated with is described (descriptors::
-// DescriptorPipeline), added to the track's accumulated cloud and gives the track's holistic
+// segment -> track -> classify stage); every segment a track is updated with is described by the
+// pipeline's classification stage (classification::TrackClassifier, the same code `stac run`
+// classifies with), added to the track's accumulated cloud and gives the track's holistic
 // descriptor at that time. A track's label is the majority truth class of its segments' points.
 #include <cstdio>
 #include <map>
+#include <set>
 #include <memory>
 #include <optional>
 #include <string>
@@ -19,7 +21,6 @@
 #include "tools/progress.hpp"
 #include "tools/sensor_status.hpp"
 #include "tools/settings.hpp"
-#include "tools/track_describer.hpp"
 #include "tools/truth_composition.hpp"
 
 namespace stac::tools {
@@ -54,9 +55,22 @@ struct RunCounts {
   std::uint64_t scans = 0, tracks = 0, kept = 0, truth_matched = 0;
 };
 
-class Builder {
+class Builder : public classification::TrackClassifier::Observer {
  public:
   explicit Builder(Dataset& out) : out_(out) {}
+
+  // The classify stage's descriptors of one track update (called inside pipeline.process()).
+  void on_update(const tracking::Track& track, std::span<const float> segment,
+                 std::span<const float> holistic) noexcept override {
+    auto [it, added] = live_.try_emplace(track.id);
+    counts_.tracks += added ? 1 : 0;
+    TrackBuild& b = it->second;
+    b.track.id = track.id;
+    b.track.segment_rows.insert(b.track.segment_rows.end(), segment.begin(), segment.end());
+    b.track.holistic_rows.insert(b.track.holistic_rows.end(), holistic.begin(), holistic.end());
+    ++b.track.segments;
+    updated_.insert(track.id);
+  }
 
   rt::Result<RunCounts> run(const DatasetOptions& o, std::size_t k) {
     const std::string& in = o.in[k];
@@ -90,8 +104,9 @@ class Builder {
     source_ = static_cast<std::uint32_t>(out_.sources.size());
     out_.sources.push_back(in + " " + o.truth[k]);
     velodyne::ScanStream stream(*calibration, vs.assembler, 2);
-    const pipeline::PipelineConfig pc = offline_pipeline_config(*settings);
+    const pipeline::PipelineConfig pc = offline_pipeline_config(*settings, nullptr, true);
     pipeline::ScanPipeline pipeline(pc);
+    pipeline.classifier()->set_observer(this);
     pipeline::ScanResult result = pipeline.make_result();
     counts_ = {};
     truth_next_ = 0;
@@ -113,7 +128,6 @@ class Builder {
     progress.finish();
     if (!reader->error().empty())
       std::fprintf(stderr, "stac dataset: warning: %s\n", reader->error().c_str());
-    describer_.end_all();
     for (auto& [id, b] : live_) finish(b);
     live_.clear();
     if (counts_.scans == 0) return rt::make_error(in + ": no complete scan in the capture");
@@ -135,19 +149,12 @@ class Builder {
       ++counts_.truth_matched;
     }
 
+    current_.clear();
     for (const tracking::Track& track : result.tracked.tracks) {
-      if (track.segment < 0) continue;
+      current_.insert(track.id);
+      if (track.segment < 0 || updated_.count(track.id) == 0) continue;
       const auto si = static_cast<std::size_t>(track.segment);
-      auto [it, added] = live_.try_emplace(track.id);
-      counts_.tracks += added ? 1 : 0;
-      TrackBuild& b = it->second;
-      describer_.describe(scan, result, track);
-      b.track.id = track.id;
-      b.track.segment_rows.insert(b.track.segment_rows.end(), describer_.segment().begin(),
-                                  describer_.segment().end());
-      b.track.holistic_rows.insert(b.track.holistic_rows.end(), describer_.holistic().begin(),
-                                   describer_.holistic().end());
-      ++b.track.segments;
+      TrackBuild& b = live_.at(track.id);
       b.largest = std::max(b.largest, result.segments.segments[si].count);
       for (const auto& [truth_id, n] : records_[si].truth) {
         ObjectClass c = ObjectClass::kBackground;
@@ -157,12 +164,15 @@ class Builder {
         b.class_points[static_cast<std::size_t>(c)] += n;
       }
     }
+    updated_.clear();
     // Tracks the tracker no longer reports are complete.
-    for (const std::uint64_t id : describer_.end_scan(result)) {
-      if (auto it = live_.find(id); it != live_.end()) {
-        finish(it->second);
-        live_.erase(it);
+    for (auto it = live_.begin(); it != live_.end();) {
+      if (current_.count(it->first) != 0) {
+        ++it;
+        continue;
       }
+      finish(it->second);
+      it = live_.erase(it);
     }
   }
 
@@ -185,7 +195,7 @@ class Builder {
   RunCounts counts_;
   std::map<std::uint64_t, TrackBuild> live_;
   std::vector<SegmentRecord> records_;
-  TrackDescriber describer_;
+  std::set<std::uint64_t> updated_, current_;  // updated this scan; reported this scan
 };
 
 int run_dataset(const DatasetOptions& o) {

@@ -62,4 +62,15 @@ rt::Result<classification::TrackClassifierModel> read_model_file(
   return std::move(*model);
 }
 
+rt::Result<std::shared_ptr<const classification::TrackClassifierModel>> job_model(
+    const std::string& option, const std::filesystem::path& configured) {
+  const std::filesystem::path path = option.empty() ? configured
+                                     : option == "none" ? std::filesystem::path{}
+                                                        : std::filesystem::path(option);
+  if (path.empty()) return std::shared_ptr<const classification::TrackClassifierModel>{};
+  auto m = read_model_file(path);
+  if (!m) return rt::Unexpected<rt::Error>{m.error()};
+  return std::make_shared<const classification::TrackClassifierModel>(std::move(*m));
+}
+
 }  // namespace stac::tools

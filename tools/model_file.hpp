@@ -3,6 +3,8 @@
 #pragma once
 
 #include <filesystem>
+#include <memory>
+#include <string>
 
 #include "perception/classification/model.hpp"
 #include "rt/expected.hpp"
@@ -15,5 +17,10 @@ rt::Result<bool> write_model_file(const std::filesystem::path& path,
 // Missing, unreadable, truncated, corrupt, another format version or descriptor layout: an error
 // "<path>: <what>; <what to do>".
 rt::Result<classification::TrackClassifierModel> read_model_file(const std::filesystem::path& path);
+
+// The model a per-scan job classifies with: the command line's `option` when given ("none": no
+// model), else the config's `configured` path (empty: no model). Null: tracks stay unclassified.
+rt::Result<std::shared_ptr<const classification::TrackClassifierModel>> job_model(
+    const std::string& option, const std::filesystem::path& configured);
 
 }  // namespace stac::tools

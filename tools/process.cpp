@@ -7,7 +7,6 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
-#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -23,7 +22,6 @@
 #include "tools/scan_publishing.hpp"
 #include "tools/sensor_status.hpp"
 #include "tools/settings.hpp"
-#include "tools/track_describer.hpp"
 #include "tools/tracks_jsonl.hpp"
 #include "tools/truth_composition.hpp"
 
@@ -88,45 +86,6 @@ void print_stats(const std::vector<Stage>& stages) {
 
 double yaw_of(const Eigen::Matrix3d& r) { return std::atan2(r(1, 0), r(0, 0)); }
 
-// --model: every track's class by the augmented discrete Bayes filter, updated with each segment
-// (docs/classification.md), carried while it coasts.
-class TrackClassifying {
- public:
-  explicit TrackClassifying(classification::TrackClassifierModel model)
-      : model_(std::move(model)) {}
-  // Classifies the tracks updated this scan and labels every record (records[i] is track i).
-  void update(const velodyne::Scan& scan, const pipeline::ScanResult& result,
-              std::vector<TrackRecord>& records) {
-    for (std::size_t i = 0; i < result.tracked.tracks.size(); ++i) {
-      const tracking::Track& t = result.tracked.tracks[i];
-      State& s = states_[t.id];
-      if (t.segment >= 0) {
-        describer_.describe(scan, result, t);
-        classification::LogOdds hs{};
-        s.valid =
-            classification::add_segment(model_, describer_.segment(), s.evidence, hs) &&
-            classification::track_log_odds(model_, s.evidence, describer_.holistic(), s.log_odds);
-      }
-      if (!s.valid) continue;
-      records[i].classified = true;
-      records[i].cls = classification::class_name(classification::predict(s.log_odds));
-      for (std::size_t k = 0; k < 3; ++k)
-        records[i].log_odds[k] = static_cast<double>(s.log_odds[k]);
-    }
-    for (const std::uint64_t id : describer_.end_scan(result)) states_.erase(id);
-  }
-
- private:
-  struct State {
-    classification::TrackEvidence evidence;
-    classification::LogOdds log_odds{};
-    bool valid = false;
-  };
-  classification::TrackClassifierModel model_;
-  TrackDescriber describer_;
-  std::map<std::uint64_t, State> states_;
-};
-
 int run_process(const ProcessOptions& o) {
   const std::filesystem::path config = config_path(o.config);
   auto settings = load_pipeline_settings(config);
@@ -162,18 +121,14 @@ int run_process(const ProcessOptions& o) {
 
   auto reader = io::PcapReader::open(o.in, io::PcapFilter{.udp_dst_port = vs.port, .udp_src_port = {}});
   if (!reader) return fail(reader.error().message);
-  std::optional<TrackClassifying> classifying;
-  if (!o.model.empty()) {
-    auto m = read_model_file(o.model);
-    if (!m) return fail(m.error().message);
-    classifying.emplace(std::move(*m));
-  }
+  auto model = job_model(o.model, settings->classification.model);
+  if (!model) return fail(model.error().message);
   std::ofstream out(o.tracks);
   if (!out) return fail(o.tracks + ": cannot create the tracks file");
 
   // Everything the per-scan loop uses is allocated here.
   velodyne::ScanStream stream(*calibration, vs.assembler, 2);
-  const pipeline::PipelineConfig pc = offline_pipeline_config(*settings);
+  const pipeline::PipelineConfig pc = offline_pipeline_config(*settings, *model);
   pipeline::ScanPipeline pipeline(pc);
   pipeline::ScanResult result = pipeline.make_result();
   std::optional<ProcessDds> dds_out;
@@ -184,8 +139,8 @@ int run_process(const ProcessOptions& o) {
   }
   std::uint64_t dds_errors = 0;
 
-  std::vector<Stage> stages{{"decode", {}}, {"deskew", {}}, {"segment", {}},
-                            {"track", {}},  {"total", {}},  {"classify", {}}};
+  std::vector<Stage> stages{{"decode", {}}, {"deskew", {}},   {"segment", {}},
+                            {"track", {}},  {"classify", {}}, {"total", {}}};
   std::uint64_t scans = 0, truth_matched = 0;
   std::size_t truth_next = 0;
   std::string line;
@@ -198,8 +153,11 @@ int run_process(const ProcessOptions& o) {
     stages[1].ms.push_back(static_cast<double>(ns[pipeline::kDeskew]) * 1e-6);
     stages[2].ms.push_back(static_cast<double>(ns[pipeline::kSegment]) * 1e-6);
     stages[3].ms.push_back(static_cast<double>(ns[pipeline::kTrack]) * 1e-6);
-    stages[4].ms.push_back(static_cast<double>(decode_ns + ns[pipeline::kDeskew] +
-                                               ns[pipeline::kSegment] + ns[pipeline::kTrack]) *
+    if (pipeline.classifier() != nullptr)
+      stages[4].ms.push_back(static_cast<double>(ns[pipeline::kClassify]) * 1e-6);
+    stages[5].ms.push_back(static_cast<double>(decode_ns + ns[pipeline::kDeskew] +
+                                               ns[pipeline::kSegment] + ns[pipeline::kTrack] +
+                                               ns[pipeline::kClassify]) *
                            1e-6);
     decode_ns = 0;
 
@@ -225,11 +183,14 @@ int run_process(const ProcessOptions& o) {
                          {},
                          false};
     }
-    for (const tracking::Track& t : result.tracked.tracks) rec.tracks.push_back(track_record(t));
-    if (classifying) {
-      const std::int64_t c0 = cpu_ns();
-      classifying->update(scan, result, rec.tracks);
-      stages[5].ms.push_back(static_cast<double>(cpu_ns() - c0) * 1e-6);
+    for (std::size_t i = 0; i < result.tracked.tracks.size(); ++i) {
+      TrackRecord& r = rec.tracks.emplace_back(track_record(result.tracked.tracks[i]));
+      if (i < result.classes.size() && result.classes[i].classified) {
+        const classification::TrackClass& c = result.classes[i];
+        r.classified = true;
+        r.cls = classification::class_name(c.label);
+        for (std::size_t k = 0; k < 3; ++k) r.log_odds[k] = static_cast<double>(c.log_odds[k]);
+      }
     }
     if (!truth.empty()) {
       if (const TruthScanRecord* ts = nearest_truth_scan(truth, truth_next, result.stamp_ns)) {
@@ -317,7 +278,7 @@ void add_process_command(CLI::App& app) {
   cmd->description(
       "Runs a capture through the per-scan pipeline as fast as possible, deterministically:\n"
       "decode -> deskew (with the capture's Applanix INS stream, when it has one) -> segment ->\n"
-      "track, and writes one JSON line per scan (segments and tracks in the world frame,\n"
+      "track -> classify (with a model), and writes one JSON line per scan (segments and tracks in the world frame,\n"
       "docs/evaluation.md). With --truth (a `stac sim` truth file) each segment also says which\n"
       "truth objects its points fall in, for `stac eval`. Prints CPU time per stage at the end.");
   cmd->add_option("capture", o->in, "pcap capture (HDL-64E UDP, optionally the POS LV stream)")
@@ -332,8 +293,8 @@ void add_process_command(CLI::App& app) {
                   "LAT,LON,ALT of the world frame (default: the truth's, else the config's ego.origin)");
   cmd->add_flag("--no-deskew", o->no_deskew, "ignore the INS stream: no deskew, sensor frame = world");
   cmd->add_option("--model", o->model,
-                  "track classifier model (`stac train`): every track gets a class and log odds "
-                  "(ADBF; classify stage timed apart, not in total)");
+                  "track classifier model (`stac train`) or 'none' (default: the config's "
+                  "classification.model): every track gets a class and log odds (ADBF)");
   cmd->add_flag("--dds", o->dds,
                 "also publish every scan's tracked_objects, segments and ego_pose on DDS (the "
                 "config's dds:)");

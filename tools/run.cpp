@@ -30,6 +30,7 @@
 #include "rt/watchdog.hpp"
 #include "tools/commands.hpp"
 #include "tools/dds_settings.hpp"
+#include "tools/model_file.hpp"
 #include "tools/run_settings.hpp"
 #include "tools/scan_publishing.hpp"
 #include "tools/settings.hpp"
@@ -38,7 +39,7 @@ namespace stac::tools {
 namespace {
 
 struct RunOptions {
-  std::string config, calib, ins, ins_address, bind;
+  std::string config, calib, ins, ins_address, bind, model;
   double seconds = 0;
   std::uint64_t scans = 0;
   int domain = -1, port = -1, ins_port = -1;
@@ -58,11 +59,13 @@ enum HealthStage : std::size_t {
   kDeskew,
   kSegment,
   kTrack,
+  kClassify,
   kHandover,
   kPublish,
   kHealthStages
 };
-constexpr const char* kStageNames[] = {"wait", "deskew", "segment", "track", "handover", "publish"};
+constexpr const char* kStageNames[] = {"wait",     "deskew",   "segment", "track",
+                                       "classify", "handover", "publish"};
 
 // One perception result in a slot of the perception -> publisher exchange.
 struct Frame {
@@ -220,9 +223,14 @@ int run_live(const RunOptions& o) {
     if (auto r = rt::lock_memory(); !r)
       std::fprintf(stderr, "stac run: warning: %s\n", r.error().message.c_str());
   }
+  auto model = job_model(o.model, settings->classification.model);
+  if (!model) return fail(model.error().message);
   const pipeline::PipelineConfig pc{.deskew = es.deskew,
                                     .segmenter = settings->segmenter,
                                     .tracker = settings->tracker,
+                                    .classifier = settings->classification.classifier,
+                                    .model = *model,
+                                    .describe = false,
                                     .trailer = velodyne::traits(vs.assembler.decoder.model).trailer,
                                     .clock = pipeline::StageClock::kMonotonic};
   if (auto r = ScanPublishing::check_capacities(pc); !r) return fail(r.error().message);
@@ -395,6 +403,7 @@ int run_live(const RunOptions& o) {
                   f->result.stage_ns[pipeline::kDeskew],
                   f->result.stage_ns[pipeline::kSegment],
                   f->result.stage_ns[pipeline::kTrack],
+                  f->result.stage_ns[pipeline::kClassify],
                   t0 - f->finished_ns,
                   t1 - t0};
       (void)monitor.record(stage_ns, end_to_end);
@@ -526,6 +535,8 @@ void add_run_command(CLI::App& app) {
   cmd->add_option("--bind", o->bind,
                   "Velodyne UDP address to bind (default: velodyne.bind_address)");
   cmd->add_option("--calib", o->calib, "calibration file (default: velodyne.calibration)");
+  cmd->add_option("--model", o->model,
+                  "track classifier model (`stac train`) or 'none' (default: classification.model)");
   cmd->add_option("--ins", o->ins, "INS transport: tcp, udp or none (default: run.ins)");
   cmd->add_option("--ins-address", o->ins_address,
                   "INS TCP server IPv4 address (default: run.ins_address)");

@@ -1,5 +1,7 @@
 #include "tools/scan_publishing.hpp"
 
+#include <algorithm>
+
 #include "dds/idl_types.hpp"
 
 namespace stac::tools {
@@ -25,8 +27,17 @@ rt::Result<bool> ScanPublishing::publish(const pipeline::ScanResult& r, std::uin
                                          std::uint8_t source) {
   const dds::ScanStamp stamp{r.stamp_ns, scan_index};
   const std::size_t n_tracks = std::min<std::size_t>(r.tracked.tracks.size(), objects_.size());
-  for (std::size_t i = 0; i < n_tracks; ++i)
-    objects_[i] = dds::to_tracked_object(r.tracked.tracks[i]);
+  for (std::size_t i = 0; i < n_tracks; ++i) {
+    dds::TrackedObjectIn& o = objects_[i];
+    o = dds::to_tracked_object(r.tracked.tracks[i]);
+    if (i < r.classes.size() && r.classes[i].classified) {
+      // Background's log odds: minus the largest foreground one, so it is positive exactly
+      // when every foreground class is negative (the thesis's prediction rule).
+      const classification::LogOdds& l = r.classes[i].log_odds;
+      o.classified = true;
+      o.class_log_odds = {l[0], l[1], l[2], -std::max({l[0], l[1], l[2]})};
+    }
+  }
   rt::Result<bool> status = publisher_.publish_tracked_objects(stamp, {objects_.data(), n_tracks});
 
   const std::size_t n_segments =

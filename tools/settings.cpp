@@ -86,7 +86,10 @@ rt::Result<PipelineSettings> load_pipeline_settings(const std::filesystem::path&
   if (!segmenter) return rt::Unexpected<rt::Error>{segmenter.error()};
   auto tracker = load_tracking_config(config_file);
   if (!tracker) return rt::Unexpected<rt::Error>{tracker.error()};
-  return PipelineSettings{std::move(*velodyne), std::move(*ego), *segmenter, *tracker};
+  auto classification = load_classification_settings(config_file);
+  if (!classification) return rt::Unexpected<rt::Error>{classification.error()};
+  return PipelineSettings{std::move(*velodyne), std::move(*ego), *segmenter, *tracker,
+                          std::move(*classification)};
 }
 
 }  // namespace stac::tools

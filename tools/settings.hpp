@@ -12,6 +12,7 @@
 #include "ego/deskew.hpp"
 #include "ego/ego_estimator.hpp"
 #include "ego/local_frame.hpp"
+#include "perception/classification/track_classifier.hpp"
 #include "perception/segmentation/segmenter.hpp"
 #include "perception/tracking/tracker.hpp"
 #include "rt/expected.hpp"
@@ -50,13 +51,23 @@ rt::Result<tracking::TrackerConfig> load_tracking_config(const std::filesystem::
 // The `can:` section: transport, DBC and signal map. Errors name `can.<key>`.
 rt::Result<can::CanConfig> load_can_settings(const std::filesystem::path& config_file);
 
+// The `classification:` section: the model file and the stage's capacities (its max_tracks is
+// the tracker's, set by the pipeline).
+struct ClassificationSettings {
+  classification::TrackClassifierConfig classifier;
+  std::filesystem::path model;  // empty ("none"): tracks are not classified
+};
+rt::Result<ClassificationSettings> load_classification_settings(
+    const std::filesystem::path& config_file);
+
 // The sections every per-scan job reads (stac process, stac run): velodyne, ego, segmentation,
-// tracking; the first error is returned.
+// tracking, classification; the first error is returned.
 struct PipelineSettings {
   VelodyneSettings velodyne;
   EgoSettings ego;
   segmentation::SegmenterConfig segmenter;
   tracking::TrackerConfig tracker;
+  ClassificationSettings classification;
 };
 rt::Result<PipelineSettings> load_pipeline_settings(const std::filesystem::path& config_file);
 

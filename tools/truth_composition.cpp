@@ -5,10 +5,15 @@
 
 namespace stac::tools {
 
-pipeline::PipelineConfig offline_pipeline_config(const PipelineSettings& settings) {
+pipeline::PipelineConfig offline_pipeline_config(
+    const PipelineSettings& settings,
+    std::shared_ptr<const classification::TrackClassifierModel> model, bool describe) {
   return {.deskew = settings.ego.deskew,
           .segmenter = settings.segmenter,
           .tracker = settings.tracker,
+          .classifier = settings.classification.classifier,
+          .model = std::move(model),
+          .describe = describe,
           .trailer = velodyne::traits(settings.velodyne.assembler.decoder.model).trailer,
           .clock = pipeline::StageClock::kThreadCpu};
 }

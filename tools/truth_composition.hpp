@@ -4,6 +4,7 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <memory>
 #include <vector>
 
 #include "drivers/velodyne/scan.hpp"
@@ -15,7 +16,11 @@
 namespace stac::tools {
 
 // The per-scan pipeline of the settings, timed by thread CPU time (offline, deterministic).
-pipeline::PipelineConfig offline_pipeline_config(const PipelineSettings& settings);
+// `model` null: no classification (unless `describe`: the classify stage runs for an observer).
+pipeline::PipelineConfig offline_pipeline_config(
+    const PipelineSettings& settings,
+    std::shared_ptr<const classification::TrackClassifierModel> model = nullptr,
+    bool describe = false);
 
 // Advances `next` to the truth scan nearest `stamp_ns` (truth in time order, not empty) and
 // returns it when within 1 ms, else null.

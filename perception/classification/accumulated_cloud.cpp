@@ -51,6 +51,11 @@ void AccumulatedCloud::clear() noexcept {
   seen_ = 0;
 }
 
+void AccumulatedCloud::clear(std::uint64_t seed) noexcept {
+  clear();
+  rng_ = rt::SplitMix64(seed);
+}
+
 descriptors::SegmentView AccumulatedCloud::view() const noexcept {
   descriptors::SegmentView v;
   v.xyzi = xyzi_.get();

@@ -49,6 +49,8 @@ class HolisticFeatures {
 
 struct Track {
   std::uint64_t id = 0;  // stable for the track's life, never reused
+  std::uint32_t slot = 0;  // the tracker's pool slot holding it (< max_tracks); reused by a
+                          // later track once this one ends (per-track state elsewhere keys on it)
   TrackState state = TrackState::kTentative;
   Eigen::Vector3f position = Eigen::Vector3f::Zero();  // filtered centroid, world (m)
   Eigen::Vector2f velocity = Eigen::Vector2f::Zero();  // filtered x,y velocity (m/s)

@@ -295,6 +295,7 @@ bool Tracker::spawn(const Detection& d, std::int64_t stamp_ns) noexcept {
   s.track = Track{};
   Track& t = s.track;
   t.id = next_id_++;
+  t.slot = index;
   t.state = config_.confirm_hits <= 1 ? TrackState::kConfirmed : TrackState::kTentative;
   t.length = std::isfinite(d.length) ? d.length : 0.0f;
   t.width = std::isfinite(d.width) ? d.width : 0.0f;

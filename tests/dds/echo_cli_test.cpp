@@ -37,6 +37,7 @@ TEST(StacEcho, ReceivesTrackedObjectsFromAnotherProcess) {
   TrackedObjectIn o;
   o.object_id = 77;
   o.position = {12.5, -4.0, 0.5};
+  o.classified = true;
   o.class_log_odds = {3, -3, -3, -3};
   std::vector<TrackedObjectIn> objects{o};
   for (std::uint64_t scan = 0; scan < 5; ++scan) {

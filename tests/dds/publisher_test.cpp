@@ -30,6 +30,7 @@ TrackedObjectIn object(std::uint64_t id) {
   TrackedObjectIn o;
   o.object_id = id;
   o.existence_probability = 0.75f;
+  o.classified = true;
   o.class_log_odds = {2.0f, -1.0f, -3.0f, 0.5f};
   o.position = {10.5, -3.25, 0.75};
   o.velocity = {4.0, 1.5, 0.0};
@@ -57,6 +58,7 @@ TEST(DdsPublisher, TrackedObjectsRoundTripEveryFieldWithSequencesAtTheirBounds) 
   for (std::size_t k = 0; k < footprint.size(); ++k) footprint[k] = {static_cast<float>(k), -static_cast<float>(k)};
   std::vector<TrackedObjectIn> objects;
   for (std::uint64_t id = 0; id < kMaxObjects; ++id) objects.push_back(object(1000 + id));
+  objects[1].classified = false;
   objects[0].footprint = footprint;
   const ScanStamp scan{1'700'000'000'123'456'789, 42};
   auto ok = pub->publish_tracked_objects(scan, objects);
@@ -92,6 +94,11 @@ TEST(DdsPublisher, TrackedObjectsRoundTripEveryFieldWithSequencesAtTheirBounds) 
   EXPECT_EQ(o.point_count, 321u);
   EXPECT_EQ(o.age, 17u);
   EXPECT_EQ(o.state, 1);
+  // Not classified (no model, or no segment yet): one entry, label 0 (unknown), probability 1.
+  const auto& unknown = s->objects._buffer[1];
+  ASSERT_EQ(unknown.classification._length, 1u);
+  EXPECT_EQ(unknown.classification._buffer[0].label, 0);
+  EXPECT_FLOAT_EQ(unknown.classification._buffer[0].probability, 1.0f);
   // Without a footprint the box's corners are published, centred on the position.
   const auto& last = s->objects._buffer[kMaxObjects - 1];
   EXPECT_EQ(last.object_id, 1000u + kMaxObjects - 1);

@@ -47,6 +47,9 @@ Fixture decoded_drive(const std::string& name) {
   f.config = {.deskew = ego.deskew,
               .segmenter = *tools::load_segmentation_settings(config),
               .tracker = *tools::load_tracking_config(config),
+              .classifier = {},
+              .model = nullptr,
+              .describe = false,
               .trailer = velodyne::traits(f.velodyne.assembler.decoder.model).trailer,
               .clock = StageClock::kMonotonic};
   auto calibration = velodyne::load_calibration(stac::testing::shared_data(kYaml));
@@ -116,22 +119,49 @@ std::unique_ptr<ego::PoseHistory> straight_drive(const Fixture& f, std::size_t s
   return history;
 }
 
+// A full-size model with made-up responses (the classify stage's work does not depend on them):
+// grids over [-1, 1] of every descriptor element, responses alternating in sign.
+std::shared_ptr<const classification::TrackClassifierModel> made_up_model() {
+  const auto grid = [](classification::Layout layout) {
+    classification::GridModel m;
+    m.layout = std::move(layout);
+    m.resolutions = {10, 100};
+    m.prior = {-1.0f, -1.5f, -2.0f};
+    const std::size_t grids = classification::layout_dimensions(m.layout) * 2;
+    m.lower.assign(grids, -1.0f);
+    for (std::size_t g = 0; g < grids; ++g) m.scale.push_back(g % 2 == 0 ? 5.0f : 50.0f);
+    const std::size_t cells = classification::layout_dimensions(m.layout) * 110;
+    for (std::size_t c = 0; c < cells * classification::kClassCount; ++c)
+      m.table.push_back(0.001f * static_cast<float>(static_cast<int>(c % 7) - 3));
+    auto classifier = classification::GridClassifier::create(std::move(m));
+    EXPECT_TRUE(classifier.has_value()) << classifier.error().message;
+    return std::move(classifier).value();
+  };
+  return std::make_shared<const classification::TrackClassifierModel>(
+      classification::TrackClassifierModel{grid(classification::segment_layout()),
+                                           grid(classification::holistic_layout()),
+                                           {}});
+}
+
 TEST(ScanPipeline, PerceptionLoopWithHandoverMakesNoAllocationOver1000ScansAfterWarmUp) {
   STAC_REQUIRE_SHARED_DATA(kYaml);
-  const Fixture f = decoded_drive("alloc");
+  Fixture f = decoded_drive("alloc");
   ASSERT_GE(f.scans.size(), 5u);
   const std::unique_ptr<ego::PoseHistory> poses = straight_drive(f, 1020);
+  f.config.model = made_up_model();  // classification on: every stage of the loop
   ScanPipeline pipeline(f.config);
   rt::SlotExchange<ScanResult> results(4, [&] { return pipeline.make_result(); });
   velodyne::Scan scan(f.scans.front()->points.capacity());
 
   // A consumer thread stands for the publisher: takes each result, reads it, gives it back.
   std::atomic<bool> stop{false};
-  std::atomic<std::uint64_t> consumed{0}, tracks_seen{0};
+  std::atomic<std::uint64_t> consumed{0}, tracks_seen{0}, classified{0};
   std::thread consumer([&] {
     while (!stop.load(std::memory_order_acquire)) {
       if (ScanResult* r = results.take()) {
         tracks_seen.fetch_add(r->tracked.tracks.size(), std::memory_order_relaxed);
+        for (const classification::TrackClass& c : r->classes)
+          classified.fetch_add(c.classified ? 1 : 0, std::memory_order_relaxed);
         results.release();
         consumed.fetch_add(1, std::memory_order_relaxed);
       } else {
@@ -160,6 +190,8 @@ TEST(ScanPipeline, PerceptionLoopWithHandoverMakesNoAllocationOver1000ScansAfter
   EXPECT_GT(consumed.load(), 0u);
   EXPECT_EQ(results.published() + results.dropped(), 1020u);  // every result handed over or counted
   EXPECT_GT(tracks_seen.load(), 0u);
+  EXPECT_GT(classified.load(), 0u);
+  EXPECT_GT(pipeline.classifier()->counters().holistic_described, 0u);
   EXPECT_GT(pipeline.tracker().counters().spawned, 0u);
   static_assert(noexcept(pipeline.process(scan, nullptr, results.current())));
 }
@@ -178,6 +210,7 @@ TEST(ScanPipeline, ParkedSensorKeepsTheSensorPoseAndFillsEveryStage) {
     EXPECT_FALSE(r.has_pose);
     EXPECT_TRUE(r.world_T_sensor.isApprox(f.config.deskew.vehicle_T_sensor));
     EXPECT_GT(r.segments.segments.size(), 10u);
+    EXPECT_TRUE(r.classes.empty());  // no model: the classify stage does not run
     for (std::int64_t ns : r.stage_ns) EXPECT_GE(ns, 0);
   }
   EXPECT_FALSE(r.tracked.tracks.empty());

@@ -72,5 +72,41 @@ TEST(EgoSettings, EveryBrokenKeyIsNamed) {
   }
 }
 
+// classification.model's line (velodyne.model is another key of the same name).
+const char* const kModelLine = R"(model: \S+( +# track classifier))";
+
+TEST(ClassificationSettings, TheShippedConfigLoadsAndPathsAreRelativeToTheFile) {
+  auto s = load_classification_settings(kShipped);
+  ASSERT_TRUE(s) << s.error().message;
+  EXPECT_EQ(s->classifier.accumulated_points, 4096u);
+  EXPECT_EQ(s->classifier.holistic_every, 5u);
+  EXPECT_EQ(s->classifier.descriptors.max_points, 30000u);
+  const auto edited = with_line(kModelLine, "model: models/x.stacmodel$1");
+  auto m = load_classification_settings(edited);
+  ASSERT_TRUE(m) << m.error().message;
+  EXPECT_EQ(m->model, edited.parent_path() / "models/x.stacmodel");
+  auto none = load_classification_settings(with_line(kModelLine, "model:  none$1"));
+  ASSERT_TRUE(none) << none.error().message;
+  EXPECT_TRUE(none->model.empty());
+}
+
+TEST(ClassificationSettings, EveryBrokenKeyIsNamed) {
+  const std::pair<std::string, std::string> cases[] = {
+      {kModelLine, "model: \"\"$1"},
+      {"accumulated_points: 4096", "accumulated_points: 0"},
+      {"holistic_every: 5", "holistic_every: 0"},
+      {"holistic_every: 5", "holistic_every: often"},
+      {"max_segment_points: 30000", "max_segment_pts: 30000"},
+  };
+  for (const auto& [pattern, replacement] : cases) {
+    auto s = load_classification_settings(with_line(pattern, replacement));
+    ASSERT_FALSE(s) << replacement;
+    std::string key = replacement.substr(0, replacement.find(':'));
+    if (key == "max_segment_pts") key = "max_segment_points";
+    EXPECT_NE(s.error().message.find("classification." + key), std::string::npos)
+        << s.error().message;
+  }
+}
+
 }  // namespace
 }  // namespace stac::tools

@@ -1,0 +1,92 @@
+#include "perception/classification/track_classifier.hpp"
+
+#include <stdexcept>
+#include <string>
+
+namespace stac::classification {
+
+const char* validate(const TrackClassifierConfig& c) noexcept {
+  if (c.max_tracks < 1 || c.max_tracks > 100'000) return "max_tracks must be in [1, 100000]";
+  if (c.accumulated_points < 1 || c.accumulated_points > 1'000'000)
+    return "accumulated_points must be in [1, 1000000]";
+  if (c.holistic_every < 1 || c.holistic_every > 10'000)
+    return "holistic_every must be in [1, 10000]";
+  return descriptors::validate(c.descriptors);
+}
+
+namespace {
+
+const TrackClassifierConfig& checked(const TrackClassifierConfig& c) {
+  if (const char* e = validate(c); e[0] != '\0')
+    throw std::invalid_argument(std::string("classification: ") + e);
+  return c;
+}
+
+}  // namespace
+
+TrackClassifier::TrackClassifier(const TrackClassifierConfig& config,
+                                 std::shared_ptr<const TrackClassifierModel> model)
+    : config_(checked(config)), model_(std::move(model)), describer_(config.descriptors) {
+  slots_.reserve(config.max_tracks);
+  for (std::size_t i = 0; i < config.max_tracks; ++i) slots_.emplace_back(config.accumulated_points);
+}
+
+void TrackClassifier::classify(const float* xyzi, std::size_t stride_bytes,
+                               const segmentation::Segments& segments,
+                               const tracking::TrackerOutput& tracked,
+                               rt::FixedVector<TrackClass>& out) noexcept {
+  out.clear();
+  for (const tracking::Track& t : tracked.tracks) {
+    if (t.slot >= slots_.size()) {
+      ++counters_.slot_mismatch;
+      TrackClass* c = out.append();
+      if (c == nullptr) break;
+      *c = TrackClass{};
+      c->id = t.id;
+      continue;
+    }
+    Slot& s = slots_[t.slot];
+    if (s.id != t.id) {  // a new track in this pool slot: forget the one before
+      s.id = t.id;
+      s.cloud.clear(t.id + 1);
+      s.evidence.reset();
+      s.cls = TrackClass{};
+      s.cls.id = t.id;
+      s.since_holistic = 0;
+      s.accumulated_ok = false;
+    }
+    if (t.segment >= 0 && static_cast<std::size_t>(t.segment) < segments.segments.size()) {
+      const segmentation::Segment& seg = segments.segments[static_cast<std::size_t>(t.segment)];
+      const descriptors::SegmentView view{xyzi, stride_bytes, segments.indices(seg), 0};
+      describer_.compute(view, segment_);
+      ++counters_.segments_described;
+      if (segment_.status != descriptors::Status::kOk) {
+        ++counters_.segments_empty;
+      } else {
+        s.cloud.add_segment(view);
+        if (!s.accumulated_ok || ++s.since_holistic >= config_.holistic_every) {
+          describer_.compute(s.cloud.view(), s.accumulated);
+          ++counters_.holistic_described;
+          s.accumulated_ok = true;
+          s.since_holistic = 0;
+        }
+        holistic_descriptor(t, &s.accumulated, holistic_);
+        if (observer_ != nullptr) observer_->on_update(t, segment_.values, holistic_);
+        if (model_ != nullptr) {
+          LogOdds hs{};
+          LogOdds track{};
+          if (add_segment(*model_, segment_.values, s.evidence, hs) &&
+              track_log_odds(*model_, s.evidence, holistic_, track)) {
+            s.cls.classified = true;
+            s.cls.log_odds = track;
+            s.cls.label = predict(track);
+            s.cls.segments = s.evidence.segments;
+          }
+        }
+      }
+    }
+    if (!out.push_back(s.cls)) break;
+  }
+}
+
+}  // namespace stac::classification

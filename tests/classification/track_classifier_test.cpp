@@ -1,0 +1,221 @@
+// The per-scan classification stage: one class per reported track, evidence kept per pool slot
+// and forgotten when the slot holds a new track, the accumulated cloud described every
+// holistic_every segments, the same log odds as the model's own functions, no allocation.
+#include "perception/classification/track_classifier.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "rt/testing/alloc_counter.hpp"
+#include "synthetic.hpp"
+
+namespace stac::classification {
+namespace {
+
+// Two objects' points (x, y, z, intensity; stride 16): a car-sized box of `car_points` and a
+// thin pole, both in front of the sensor; one segment each.
+struct Scene {
+  std::vector<float> xyzi;
+  segmentation::Segments segments{8, 4096};
+
+  explicit Scene(int frame) {
+    const auto add_object = [&](float x0, float y0, float lx, float ly, float lz, int n) {
+      segmentation::Segment* s = segments.segments.append();
+      s->first = static_cast<std::uint32_t>(segments.point_indices.size());
+      for (int i = 0; i < n; ++i) {
+        const float u = static_cast<float>((i * 37 + frame * 11) % 101) / 101.0f;
+        const float v = static_cast<float>((i * 53 + frame * 7) % 97) / 97.0f;
+        const float w = static_cast<float>((i * 29) % 89) / 89.0f;
+        const auto index = static_cast<std::uint32_t>(xyzi.size() / 4);
+        xyzi.insert(xyzi.end(), {x0 + lx * u, y0 + ly * v, lz * w - 1.7f, 40.0f + 100.0f * w});
+        (void)segments.point_indices.push_back(index);
+      }
+      s->count = static_cast<std::uint32_t>(n);
+    };
+    add_object(10.0f, -1.0f, 4.5f, 1.8f, 1.5f, 300 + 10 * frame);
+    add_object(6.0f, 4.0f, 0.2f, 0.2f, 3.0f, 60);
+  }
+};
+
+tracking::Track track(std::uint64_t id, std::uint32_t slot, std::int32_t segment) {
+  tracking::Track t;
+  t.id = id;
+  t.slot = slot;
+  t.segment = segment;
+  t.length = 4.5f;
+  t.width = 1.8f;
+  t.height = 1.5f;
+  return t;
+}
+
+TrackClassifierModel full_size_model() {
+  const auto seg = testing::noisy(200, descriptors::kDimensions, 0.1, 3);
+  const auto hol = testing::noisy(200, kHolisticDimensions, 0.1, 4);
+  return {testing::trained(seg, segment_layout(), {.rounds = 30, .seed = 3}),
+          testing::trained(hol, holistic_layout(), {.rounds = 30, .seed = 4}),
+          {{0.5f, 1.0f, 2.0f}, {1.0f, 0.5f, 1.5f}, {2.0f, 1.0f, 0.5f}}};
+}
+
+TrackClassifierConfig small_config() {
+  TrackClassifierConfig c;
+  c.max_tracks = 4;
+  c.accumulated_points = 1024;
+  c.holistic_every = 3;
+  return c;
+}
+
+class Recorder : public TrackClassifier::Observer {
+ public:
+  void on_update(const tracking::Track& t, std::span<const float> segment,
+                 std::span<const float> holistic) noexcept override {
+    ids.push_back(t.id);
+    segments.emplace_back(segment.begin(), segment.end());
+    holistics.emplace_back(holistic.begin(), holistic.end());
+  }
+  std::vector<std::uint64_t> ids;
+  std::vector<std::vector<float>> segments, holistics;
+};
+
+TEST(TrackClassifier, OneClassPerTrackAndTheModelsOwnLogOdds) {
+  auto model = std::make_shared<const TrackClassifierModel>(full_size_model());
+  TrackClassifier stage(small_config(), model);
+  Recorder seen;
+  stage.set_observer(&seen);
+  tracking::TrackerOutput tracked(4);
+  rt::FixedVector<TrackClass> out(4);
+  TrackEvidence evidence;  // the model's own functions on the same descriptors, for track 1
+  for (int frame = 0; frame < 7; ++frame) {
+    const Scene scene(frame);
+    tracked.tracks.clear();
+    ASSERT_TRUE(tracked.tracks.push_back(track(1, 2, 0)));
+    // Track 2 (the pole) coasts in frames 3 and 4: no segment.
+    ASSERT_TRUE(tracked.tracks.push_back(track(2, 0, frame == 3 || frame == 4 ? -1 : 1)));
+    const std::size_t before = seen.ids.size();
+    stage.classify(scene.xyzi.data(), 16, scene.segments, tracked, out);
+    ASSERT_EQ(out.size(), 2u);
+    EXPECT_EQ(out[0].id, 1u);
+    EXPECT_EQ(out[1].id, 2u);
+    EXPECT_TRUE(out[0].classified);
+    EXPECT_EQ(out[0].segments, static_cast<std::uint32_t>(frame + 1));
+    ASSERT_EQ(seen.ids[before], 1u);
+    LogOdds hs{}, expected{};
+    ASSERT_TRUE(add_segment(*model, seen.segments[before], evidence, hs));
+    ASSERT_TRUE(track_log_odds(*model, evidence, seen.holistics[before], expected));
+    EXPECT_EQ(out[0].log_odds, expected);
+    EXPECT_EQ(out[0].label, predict(expected));
+    if (frame == 3 || frame == 4) {  // coasting: no update, the class of frame 2 is kept
+      EXPECT_EQ(seen.ids.size(), before + 1);
+      EXPECT_EQ(out[1].segments, 3u);
+    }
+  }
+  EXPECT_EQ(stage.counters().segments_described, 12u);
+  EXPECT_EQ(stage.counters().slot_mismatch, 0u);
+}
+
+TEST(TrackClassifier, AccumulatedCloudIsDescribedAtTheFirstSegmentThenEveryN) {
+  TrackClassifier stage(small_config(), nullptr);  // no model: descriptors only
+  Recorder seen;
+  stage.set_observer(&seen);
+  tracking::TrackerOutput tracked(4);
+  rt::FixedVector<TrackClass> out(4);
+  for (int frame = 0; frame < 8; ++frame) {
+    const Scene scene(frame);
+    tracked.tracks.clear();
+    tracking::Track t = track(5, 1, 0);
+    for (int k = 0; k <= frame; ++k)
+      t.features.add_segment(Eigen::Vector3f(1.0f * static_cast<float>(k), 0, 0),
+                             static_cast<std::int64_t>(k) * 100'000'000, 0.5);
+    ASSERT_TRUE(tracked.tracks.push_back(t));
+    stage.classify(scene.xyzi.data(), 16, scene.segments, tracked, out);
+    ASSERT_EQ(out.size(), 1u);
+    EXPECT_FALSE(out[0].classified);  // no model
+  }
+  ASSERT_EQ(seen.holistics.size(), 8u);
+  const auto accumulated = [&](std::size_t i) {
+    return std::vector<float>(seen.holistics[i].begin() + kHolisticMotionDimensions,
+                              seen.holistics[i].end());
+  };
+  // holistic_every 3: described at segments 1, 4, 7 (indices 0, 3, 6), kept in between.
+  for (std::size_t i = 1; i < 8; ++i) {
+    if (i == 3 || i == 6)
+      EXPECT_NE(accumulated(i), accumulated(i - 1)) << i;
+    else
+      EXPECT_EQ(accumulated(i), accumulated(i - 1)) << i;
+  }
+  // The motion part is current every scan: segment count = frame + 1.
+  for (std::size_t i = 0; i < 8; ++i) EXPECT_EQ(seen.holistics[i][5], static_cast<float>(i + 1));
+  EXPECT_EQ(stage.counters().holistic_described, 3u);
+  EXPECT_EQ(seen.segments[0].size(), descriptors::kDimensions);
+}
+
+TEST(TrackClassifier, ANewTrackInAReusedSlotStartsAfresh) {
+  auto model = std::make_shared<const TrackClassifierModel>(full_size_model());
+  TrackClassifier stage(small_config(), model);
+  tracking::TrackerOutput tracked(4);
+  rt::FixedVector<TrackClass> out(4);
+  for (int frame = 0; frame < 4; ++frame) {
+    const Scene scene(frame);
+    tracked.tracks.clear();
+    ASSERT_TRUE(tracked.tracks.push_back(track(7, 3, 0)));
+    stage.classify(scene.xyzi.data(), 16, scene.segments, tracked, out);
+  }
+  EXPECT_EQ(out[0].segments, 4u);
+  // Track 7 ended; track 9 takes slot 3 and is first seen without a segment (tentative coast).
+  const Scene scene(4);
+  tracked.tracks.clear();
+  ASSERT_TRUE(tracked.tracks.push_back(track(9, 3, -1)));
+  stage.classify(scene.xyzi.data(), 16, scene.segments, tracked, out);
+  EXPECT_EQ(out[0].id, 9u);
+  EXPECT_FALSE(out[0].classified);
+  EXPECT_EQ(out[0].segments, 0u);
+  tracked.tracks.clear();
+  ASSERT_TRUE(tracked.tracks.push_back(track(9, 3, 1)));
+  stage.classify(scene.xyzi.data(), 16, scene.segments, tracked, out);
+  EXPECT_TRUE(out[0].classified);
+  EXPECT_EQ(out[0].segments, 1u);
+  // A slot beyond the pool is counted, reported unclassified, never read.
+  tracked.tracks.clear();
+  ASSERT_TRUE(tracked.tracks.push_back(track(11, 4, 0)));
+  stage.classify(scene.xyzi.data(), 16, scene.segments, tracked, out);
+  EXPECT_EQ(stage.counters().slot_mismatch, 1u);
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(out[0].id, 11u);
+  EXPECT_FALSE(out[0].classified);
+}
+
+TEST(TrackClassifier, ClassifyAllocatesNothing) {
+  auto model = std::make_shared<const TrackClassifierModel>(full_size_model());
+  TrackClassifier stage(small_config(), model);
+  tracking::TrackerOutput tracked(4);
+  rt::FixedVector<TrackClass> out(4);
+  std::vector<Scene> scenes;
+  for (int frame = 0; frame < 10; ++frame) scenes.emplace_back(frame);
+  rt::testing::AllocationCounter counter;
+  for (int frame = 0; frame < 10; ++frame) {
+    tracked.tracks.clear();
+    (void)tracked.tracks.push_back(track(1, 0, 0));
+    (void)tracked.tracks.push_back(track(2, 1, 1));
+    stage.classify(scenes[static_cast<std::size_t>(frame)].xyzi.data(), 16,
+                   scenes[static_cast<std::size_t>(frame)].segments, tracked, out);
+  }
+  counter.stop();
+  EXPECT_EQ(counter.allocations(), 0u) << counter.bytes() << " bytes";
+  EXPECT_TRUE(out[0].classified);
+  static_assert(noexcept(stage.classify(nullptr, 16, scenes[0].segments, tracked, out)));
+}
+
+TEST(TrackClassifier, BadConfigurationIsRefusedWithAMessage) {
+  TrackClassifierConfig c = small_config();
+  c.holistic_every = 0;
+  EXPECT_NE(std::string(validate(c)), "");
+  EXPECT_THROW(TrackClassifier(c, nullptr), std::invalid_argument);
+  c = small_config();
+  c.accumulated_points = 0;
+  EXPECT_NE(std::string(validate(c)).find("accumulated_points"), std::string::npos);
+  EXPECT_EQ(std::string(validate(small_config())), "");
+}
+
+}  // namespace
+}  // namespace stac::classification
