@@ -95,6 +95,16 @@ class Normal {
   bool has_spare_ = false;
 };
 
+// A pixel rectangle, corners inclusive; empty when x1 < x0.
+struct Rect {
+  int x0, y0, x1, y1;
+  // Grown by `px` on every side, clipped to a w x h image.
+  [[nodiscard]] Rect grown(int px, int w, int h) const noexcept {
+    return {std::max(x0 - px, 0), std::max(y0 - px, 0), std::min(x1 + px, w - 1),
+            std::min(y1 + px, h - 1)};
+  }
+};
+
 // Zero mean, unit mean square; an all-equal vector becomes all zeros.
 void whiten(float* v, std::size_t n) noexcept {
   double mean = 0.0;
@@ -129,6 +139,7 @@ const std::array<Space, kSpaceCount>& spaces() noexcept { return layout().spaces
 struct DescriptorPipeline::State {
   explicit State(const DescriptorConfig& c)
       : x(c.max_points), y(c.max_points), z(c.max_points), value(c.max_points),
+        pixel(c.max_points),
         gradients(c.max_image_px * c.max_image_px, 6),
         windows{HogWindow(kHogShapes[0][0]), HogWindow(kHogShapes[0][1]),
                 HogWindow(kHogShapes[2][0])} {
@@ -162,6 +173,7 @@ struct DescriptorPipeline::State {
 
   // Canonical cloud (structure of arrays) and normalised intensity in [0.25, 1].
   std::vector<float> x, y, z, value;
+  std::vector<std::int32_t> pixel;  // a point's pixel in the view being drawn, -1: cropped
   std::size_t n = 0;
   float yaw = 0.0f;
   // Views (0..255 scale, smoothed) and their sizes; accumulators shared between views.
@@ -259,25 +271,28 @@ void canonicalize(const SegmentView& segment, const DescriptorConfig& config,
   }
 }
 
-// 3x3 Gaussian of OpenCV's cvSmooth(CV_GAUSSIAN, 3, 3): [1 2 1] / 4 separably, reflect-101.
-void smooth3(float* img, float* tmp, int w, int h) noexcept {
-  for (int r = 0; r < h; ++r) {
+// 3x3 Gaussian of OpenCV's cvSmooth(CV_GAUSSIAN, 3, 3): [1 2 1] / 4 separably, reflect-101 at
+// the image's borders, written in `out` only (the caller knows the image is zero elsewhere, and
+// stays so); the same sums as over the whole image.
+void smooth3(float* img, float* tmp, int w, int h, const Rect& out) noexcept {
+  const int r0 = std::max(out.y0 - 1, 0), r1 = std::min(out.y1 + 1, h - 1);
+  for (int r = r0; r <= r1; ++r) {  // the rows the column pass reads
     const float* in = img + static_cast<std::ptrdiff_t>(r) * w;
     float* o = tmp + static_cast<std::ptrdiff_t>(r) * w;
-    for (int c = 0; c < w; ++c) {
+    for (int c = out.x0; c <= out.x1; ++c) {
       const float l = in[c > 0 ? c - 1 : (w > 1 ? 1 : 0)];
       const float rr = in[c + 1 < w ? c + 1 : (w > 1 ? w - 2 : 0)];
       o[c] = 0.25f * l + 0.5f * in[c] + 0.25f * rr;
     }
   }
-  for (int r = 0; r < h; ++r) {
+  for (int r = out.y0; r <= out.y1; ++r) {
     const int up = r > 0 ? r - 1 : (h > 1 ? 1 : 0);
     const int down = r + 1 < h ? r + 1 : (h > 1 ? h - 2 : 0);
     const float* a = tmp + static_cast<std::ptrdiff_t>(up) * w;
     const float* m = tmp + static_cast<std::ptrdiff_t>(r) * w;
     const float* b = tmp + static_cast<std::ptrdiff_t>(down) * w;
     float* o = img + static_cast<std::ptrdiff_t>(r) * w;
-    for (int c = 0; c < w; ++c) o[c] = 0.25f * a[c] + 0.5f * m[c] + 0.25f * b[c];
+    for (int c = out.x0; c <= out.x1; ++c) o[c] = 0.25f * a[c] + 0.5f * m[c] + 0.25f * b[c];
   }
 }
 
@@ -352,31 +367,57 @@ void DescriptorPipeline::compute(const SegmentView& segment, Descriptors& out) n
     fit(max_u - min_u, w, pad_w);
     fit(max_v - min_v, h, pad_h);
     const std::size_t pixels = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
-    std::fill(st.sum.begin(), st.sum.begin() + static_cast<std::ptrdiff_t>(pixels), 0.0f);
-    std::fill(st.count.begin(), st.count.begin() + static_cast<std::ptrdiff_t>(pixels), 0.0f);
+    // Each point's pixel, and the rectangle they cover: everything outside it (grown by the
+    // smoothing's and the gradient's 1 px each) is exactly zero, so only that part is worked on.
+    Rect occupied{w, h, -1, -1};  // x0, y0, x1, y1 (inclusive); empty when x1 < x0
     for (std::size_t i = 0; i < n; ++i) {
       const float col = std::floor(us[i] * ppm - min_u + pad_w);
       const float row = std::floor(max_v - vs[i] * ppm + pad_h);
       if (!(col >= 0 && col < static_cast<float>(w) && row >= 0 && row < static_cast<float>(h))) {
         ++out.pixels_cropped;
+        st.pixel[i] = -1;
         continue;
       }
-      const std::size_t p = static_cast<std::size_t>(row) * static_cast<std::size_t>(w) +
-                            static_cast<std::size_t>(col);
-      st.sum[p] += st.value[i];
-      st.count[p] += 1.0f;
+      const int c = static_cast<int>(col), r = static_cast<int>(row);
+      st.pixel[i] = r * w + c;
+      occupied.x0 = std::min(occupied.x0, c);
+      occupied.x1 = std::max(occupied.x1, c);
+      occupied.y0 = std::min(occupied.y0, r);
+      occupied.y1 = std::max(occupied.y1, r);
     }
     float* img = st.images[v].data();
-    for (std::size_t p = 0; p < pixels; ++p) {
-      img[p] = st.count[p] > 0 ? 255.0f * st.sum[p] / st.count[p] : 0.0f;
+    std::fill(img, img + pixels, 0.0f);
+    Rect roi{0, 0, -1, -1};  // where gradients may be non-zero
+    if (occupied.x1 >= occupied.x0) {
+      for (int r = occupied.y0; r <= occupied.y1; ++r) {
+        const std::ptrdiff_t a = static_cast<std::ptrdiff_t>(r) * w + occupied.x0;
+        const std::ptrdiff_t b = static_cast<std::ptrdiff_t>(r) * w + occupied.x1 + 1;
+        std::fill(st.sum.begin() + a, st.sum.begin() + b, 0.0f);
+        std::fill(st.count.begin() + a, st.count.begin() + b, 0.0f);
+      }
+      for (std::size_t i = 0; i < n; ++i) {
+        if (st.pixel[i] < 0) continue;
+        const auto p = static_cast<std::size_t>(st.pixel[i]);
+        st.sum[p] += st.value[i];
+        st.count[p] += 1.0f;
+      }
+      for (int r = occupied.y0; r <= occupied.y1; ++r) {
+        for (int c = occupied.x0; c <= occupied.x1; ++c) {
+          const std::size_t p = static_cast<std::size_t>(r) * static_cast<std::size_t>(w) +
+                                static_cast<std::size_t>(c);
+          img[p] = st.count[p] > 0 ? 255.0f * st.sum[p] / st.count[p] : 0.0f;
+        }
+      }
+      const Rect smoothed = occupied.grown(1, w, h);
+      smooth3(img, st.smooth_tmp.data(), w, h, smoothed);
+      roi = smoothed.grown(1, w, h);
     }
-    smooth3(img, st.smooth_tmp.data(), w, h);
     st.width[v] = w;
     st.height[v] = h;
 
     // (d) HOG windows at the 4 offsets: centre (int(u W), int(v H)), shifted into the image;
     // each projected by its array's fixed random matrix.
-    st.gradients.reset(img, w, h);
+    st.gradients.reset(img, w, h, roi.x0, roi.y0, roi.x1 + 1, roi.y1 + 1);
     for (int a = 0; a < 2; ++a) {
       const HogWindow& win = st.window(v, a);
       const HogShape& shape = win.shape();

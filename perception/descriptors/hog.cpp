@@ -22,16 +22,21 @@ int reflect(int i, int n) noexcept {
 GradientCache::GradientCache(std::size_t max_pixels, int bins)
     : bins_(bins), gradient_(max_pixels) {}
 
-void GradientCache::reset(const float* pixels, int width, int height) noexcept {
+void GradientCache::reset(const float* pixels, int width, int height, int x0, int y0, int x1,
+                          int y1) noexcept {
   width_ = width;
   height_ = height;
+  x0_ = std::clamp(x0, 0, width);
+  x1_ = std::clamp(x1, x0_, width);
+  y0_ = std::clamp(y0, 0, height);
+  y1_ = std::clamp(y1, y0_, height);
   const float bins = static_cast<float>(bins_);
-  for (int y = 0; y < height; ++y) {
+  for (int y = y0_; y < y1_; ++y) {
     const float* row = pixels + static_cast<std::ptrdiff_t>(y) * width;
     const float* up = pixels + static_cast<std::ptrdiff_t>(reflect(y - 1, height)) * width;
     const float* down = pixels + static_cast<std::ptrdiff_t>(reflect(y + 1, height)) * width;
     Gradient* out = gradient_.data() + static_cast<std::ptrdiff_t>(y) * width;
-    for (int x = 0; x < width; ++x) {
+    for (int x = x0_; x < x1_; ++x) {
       const int left = x > 0 ? x - 1 : reflect(x - 1, width);
       const int right = x + 1 < width ? x + 1 : reflect(x + 1, width);
       const float dx = row[right] - row[left];
@@ -103,9 +108,12 @@ HogWindow::HogWindow(const HogShape& shape) : shape_(shape) {
 void HogWindow::compute(const GradientCache& gradients, int x0, int y0, float* out) const noexcept {
   const std::size_t n = shape_.size();
   std::fill(out, out + n, 0.0f);
-  for (int y = 0; y < shape_.height; ++y) {
+  // Only where gradients were computed: elsewhere they are zero and add nothing.
+  const int ya = std::max(gradients.y0() - y0, 0), yb = std::min(gradients.y1() - y0, shape_.height);
+  const int xa = std::max(gradients.x0() - x0, 0), xb = std::min(gradients.x1() - x0, shape_.width);
+  for (int y = ya; y < yb; ++y) {
     const GradientCache::Gradient* row = gradients.row(y0 + y) + x0;
-    for (int x = 0; x < shape_.width; ++x) {
+    for (int x = xa; x < xb; ++x) {
       const GradientCache::Gradient& g = row[x];
       if (g.weight[0] == 0.0f && g.weight[1] == 0.0f) continue;
       const Share& s = shares_[static_cast<std::size_t>(y * shape_.width + x)];

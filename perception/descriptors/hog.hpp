@@ -29,19 +29,32 @@ class GradientCache {
  public:
   explicit GradientCache(std::size_t max_pixels, int bins);
   // `pixels` row-major, `width` floats a row, width * height <= max_pixels.
-  void reset(const float* pixels, int width, int height) noexcept;
+  void reset(const float* pixels, int width, int height) noexcept {
+    reset(pixels, width, height, 0, 0, width, height);
+  }
+  // The same when the gradient is known to be zero outside columns [x0, x1) and rows [y0, y1)
+  // (an empty range: everywhere): only there is it computed, and only there do windows look.
+  void reset(const float* pixels, int width, int height, int x0, int y0, int x1,
+             int y1) noexcept;
 
   struct Gradient {
     float weight[2];  // magnitude shares of bin[0] and bin[1]
     std::uint8_t bin[2];
   };
+  // Inside the computed rectangle only (see x0()..y1()).
   [[nodiscard]] const Gradient& at(int x, int y) const noexcept { return row(y)[x]; }
   [[nodiscard]] const Gradient* row(int y) const noexcept {
     return gradient_.data() + static_cast<std::ptrdiff_t>(y) * width_;
   }
+  // Where gradients were computed (outside: zero, and not stored).
+  [[nodiscard]] int x0() const noexcept { return x0_; }
+  [[nodiscard]] int y0() const noexcept { return y0_; }
+  [[nodiscard]] int x1() const noexcept { return x1_; }
+  [[nodiscard]] int y1() const noexcept { return y1_; }
 
  private:
   int width_ = 0, height_ = 0, bins_ = 6;
+  int x0_ = 0, y0_ = 0, x1_ = 0, y1_ = 0;
   std::vector<Gradient> gradient_;
 };
 
