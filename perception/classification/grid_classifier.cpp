@@ -131,26 +131,36 @@ std::uint32_t GridClassifier::bin(std::size_t grid, float value) const noexcept 
 bool GridClassifier::classify(std::span<const float> x, LogOdds& out) const noexcept {
   out = model_.prior;
   if (x.size() != dimensions_) return false;
+  LogOdds sum{};
+  (void)partial(x, 0, dimensions_, sum);
+  for (std::size_t k = 0; k < kClassCount; ++k) out[k] += sum[k];
+  return true;
+}
+
+// Same bins as bin(), without its branches; two accumulators (even and odd elements) halve the
+// chain of dependent adds. NaN elements add nothing (then no t below is NaN: lower, scale are
+// finite, scale > 0).
+bool GridClassifier::partial(std::span<const float> x, std::size_t begin, std::size_t end,
+                             LogOdds& sum) const noexcept {
+  if (begin > end || end > dimensions_ || x.size() != end - begin) return false;
   const std::size_t resolutions = model_.resolutions.size();
   const float* table = model_.table.data();
   const float* lower = model_.lower.data();
   const float* scale = model_.scale.data();
-  // Same bins as bin(), without its branches; two accumulators (even and odd elements) halve
-  // the chain of dependent adds.
-  float sum[2][kClassCount] = {};
-  for (std::size_t e = 0; e < dimensions_; ++e) {
-    const float v = x[e];
-    if (std::isnan(v)) continue;  // then no t below is NaN: lower, scale are finite, scale > 0
+  float acc[2][kClassCount] = {};
+  for (std::size_t e = begin; e < end; ++e) {
+    const float v = x[e - begin];
+    if (std::isnan(v)) continue;
     const float* element = table + e * cells_per_element_ * kClassCount;
-    float* acc = sum[e & 1];
+    float* a = acc[e & 1];
     for (std::size_t r = 0; r < resolutions; ++r) {
       const std::size_t g = e * resolutions + r;
       const float t = std::min(std::max((v - lower[g]) * scale[g], 0.0f), last_bin_[r]);
       const float* cell = element + (bin_offset_[r] + static_cast<std::uint32_t>(t)) * kClassCount;
-      for (std::size_t k = 0; k < kClassCount; ++k) acc[k] += cell[k];
+      for (std::size_t k = 0; k < kClassCount; ++k) a[k] += cell[k];
     }
   }
-  for (std::size_t k = 0; k < kClassCount; ++k) out[k] += sum[0][k] + sum[1][k];
+  for (std::size_t k = 0; k < kClassCount; ++k) sum[k] += acc[0][k] + acc[1][k];
   return true;
 }
 

@@ -70,6 +70,11 @@ class GridClassifier {
   // range fall in bin 0, above it in the last bin; NaN elements add nothing. False (and out =
   // prior) when x.size() != dimensions(). No allocation, exception or I/O.
   [[nodiscard]] bool classify(std::span<const float> x, LogOdds& out) const noexcept;
+  // The part of classify()'s sum that elements [begin, end) give (x holds just those elements),
+  // added to `sum`: prior + partial(all) = classify() up to float rounding. False (sum
+  // unchanged) when the range is outside the layout or x.size() != end - begin.
+  [[nodiscard]] bool partial(std::span<const float> x, std::size_t begin, std::size_t end,
+                             LogOdds& sum) const noexcept;
 
   // Grid g = element * resolutions.size() + r; its cells are [cell_offset(g), + resolutions[r]),
   // cell c's responses are table[c * kClassCount + k].

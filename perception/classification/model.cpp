@@ -154,6 +154,11 @@ bool track_log_odds(const TrackClassifierModel& model, const TrackEvidence& evid
   return ok;
 }
 
+LogOdds track_log_odds(const TrackClassifierModel& model, const TrackEvidence& evidence,
+                       const LogOdds& holistic) noexcept {
+  return augmented_dbf(evidence, model.holistic.model().prior, holistic, model.adbf);
+}
+
 ExpectedLayouts build_layouts() {
   return {segment_layout(), holistic_layout()};
 }

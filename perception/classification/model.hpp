@@ -30,6 +30,11 @@ struct TrackClassifierModel {
 [[nodiscard]] bool track_log_odds(const TrackClassifierModel& model, const TrackEvidence& evidence,
                                   std::span<const float> holistic, LogOdds& out) noexcept;
 
+// The same from the holistic log odds H_H(w) already computed (e.g. from parts, partial()).
+[[nodiscard]] LogOdds track_log_odds(const TrackClassifierModel& model,
+                                     const TrackEvidence& evidence,
+                                     const LogOdds& holistic) noexcept;
+
 inline constexpr std::uint32_t kModelFormatVersion = 1;
 inline constexpr char kModelMagic[8] = {'S', 'T', 'A', 'C', 'C', 'L', 'S', '\0'};
 

@@ -27,8 +27,34 @@ const TrackClassifierConfig& checked(const TrackClassifierConfig& c) {
 TrackClassifier::TrackClassifier(const TrackClassifierConfig& config,
                                  std::shared_ptr<const TrackClassifierModel> model)
     : config_(checked(config)), model_(std::move(model)), describer_(config.descriptors) {
+  if (model_ != nullptr && (model_->segment.dimensions() != descriptors::kDimensions ||
+                            model_->holistic.dimensions() != kHolisticDimensions)) {
+    throw std::invalid_argument(
+        "classification: the model's descriptor sizes are not this build's (retrain it)");
+  }
   slots_.reserve(config.max_tracks);
   for (std::size_t i = 0; i < config.max_tracks; ++i) slots_.emplace_back(config.accumulated_points);
+}
+
+void TrackClassifier::classify_update(Slot& s, bool refresh) noexcept {
+  const GridClassifier& holistic = model_->holistic;
+  const std::span<const float> h(holistic_);
+  constexpr std::size_t kMotion = kHolisticMotionDimensions;
+  if (refresh) {
+    s.accumulated_sum = {};
+    if (!holistic.partial(h.subspan(kMotion), kMotion, h.size(), s.accumulated_sum)) return;
+  }
+  LogOdds hh = s.accumulated_sum;
+  LogOdds hs{};
+  if (!holistic.partial(h.first(kMotion), 0, kMotion, hh) ||
+      !add_segment(*model_, segment_.values, s.evidence, hs))
+    return;
+  for (std::size_t k = 0; k < kClassCount; ++k) hh[k] += holistic.model().prior[k];
+  const LogOdds track = track_log_odds(*model_, s.evidence, hh);
+  s.cls.classified = true;
+  s.cls.log_odds = track;
+  s.cls.label = predict(track);
+  s.cls.segments = s.evidence.segments;
 }
 
 void TrackClassifier::classify(const float* xyzi, std::size_t stride_bytes,
@@ -64,7 +90,8 @@ void TrackClassifier::classify(const float* xyzi, std::size_t stride_bytes,
         ++counters_.segments_empty;
       } else {
         s.cloud.add_segment(view);
-        if (!s.accumulated_ok || ++s.since_holistic >= config_.holistic_every) {
+        const bool refresh = !s.accumulated_ok || ++s.since_holistic >= config_.holistic_every;
+        if (refresh) {
           describer_.compute(s.cloud.view(), s.accumulated);
           ++counters_.holistic_described;
           s.accumulated_ok = true;
@@ -72,17 +99,7 @@ void TrackClassifier::classify(const float* xyzi, std::size_t stride_bytes,
         }
         holistic_descriptor(t, &s.accumulated, holistic_);
         if (observer_ != nullptr) observer_->on_update(t, segment_.values, holistic_);
-        if (model_ != nullptr) {
-          LogOdds hs{};
-          LogOdds track{};
-          if (add_segment(*model_, segment_.values, s.evidence, hs) &&
-              track_log_odds(*model_, s.evidence, holistic_, track)) {
-            s.cls.classified = true;
-            s.cls.log_odds = track;
-            s.cls.label = predict(track);
-            s.cls.segments = s.evidence.segments;
-          }
-        }
+        if (model_ != nullptr) classify_update(s, refresh);
       }
     }
     if (!out.push_back(s.cls)) break;

@@ -10,7 +10,8 @@
 // points), so they are recomputed at a track's first segment and then every
 // `holistic_every` segments; the motion elements of the holistic descriptor are current every
 // scan. `stac dataset` runs this same stage (through an Observer), so training sees exactly the
-// descriptors the runtime classifies.
+// descriptors the runtime classifies. The holistic classifier's sum over the accumulated cloud's
+// elements is kept with them, so an update costs the segment classifier and 9 holistic elements.
 #pragma once
 
 #include <cstddef>
@@ -90,8 +91,13 @@ class TrackClassifier {
     std::uint32_t since_holistic = 0;  // segments added since the accumulated cloud was described
     bool accumulated_ok = false;
     descriptors::Descriptors accumulated;  // the accumulated cloud's last descriptors
+    LogOdds accumulated_sum{};  // their part of the holistic log odds (GridClassifier::partial)
     explicit Slot(std::size_t points) : cloud(points) {}
   };
+
+  // The model's update of one slot from segment_ and holistic_ (refresh: the accumulated part of
+  // holistic_ is new).
+  void classify_update(Slot& s, bool refresh) noexcept;
 
   TrackClassifierConfig config_;
   std::shared_ptr<const TrackClassifierModel> model_;

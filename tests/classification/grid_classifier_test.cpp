@@ -109,6 +109,28 @@ TEST(GridClassifier, ClassifyEqualsTheSumOverBinOfEveryGrid) {
   }
 }
 
+TEST(GridClassifier, PartialSumsOfTwoRangesAddUpToClassify) {
+  const auto data = testing::noisy(300, 8, 0.1, 7);
+  const GridClassifier c = testing::trained(data, testing::flat_layout(8), {.rounds = 200});
+  std::mt19937 rng(8);
+  std::normal_distribution<float> g(0.0f, 3.0f);
+  std::vector<float> x(8);
+  for (int t = 0; t < 200; ++t) {
+    for (auto& v : x) v = g(rng);
+    if (t % 5 == 0) x[6] = std::nanf("");
+    LogOdds full{}, parts = c.model().prior, tail{};
+    ASSERT_TRUE(c.classify(x, full));
+    const std::span<const float> all(x);
+    ASSERT_TRUE(c.partial(all.subspan(3), 3, 8, tail));
+    ASSERT_TRUE(c.partial(all.first(3), 0, 3, parts));
+    for (std::size_t k = 0; k < kClassCount; ++k) EXPECT_NEAR(parts[k] + tail[k], full[k], 1e-4f);
+  }
+  LogOdds sum{};
+  EXPECT_FALSE(c.partial(std::span<const float>(x).first(3), 6, 9, sum));  // past the layout
+  EXPECT_FALSE(c.partial(std::span<const float>(x).first(2), 0, 3, sum));  // wrong size
+  EXPECT_EQ(sum, LogOdds{});
+}
+
 TEST(GridClassifier, WrongInputSizeIsRefusedWithThePrior) {
   const GridClassifier c = two_element_classifier();
   const float x[3] = {1, 2, 3};

@@ -1,0 +1,53 @@
+#!/usr/bin/env bash
+# Reproduces the shipped track classifier, config/models/stac_default.stacmodel, from simulated
+# drives: `stac sim` -> `stac dataset` per drive, `stac train` on the training drives, and
+# `stac eval --classes` on held-out drives (docs/classification.md, "The default model").
+# Deterministic: the same binary gives the same model bytes.
+#
+#   tools/train_default_model.sh [WORK_DIR]     (default: build/default-model)
+#
+# Environment: STAC (the binary, default build/tools/stac), JOBS (drives simulated and described
+# in parallel, default 1), DURATION (s per drive, default 20), OUT (the model file written, default
+# config/models/stac_default.stacmodel).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+STAC=${STAC:-build/tools/stac}
+WORK=${1:-build/default-model}
+JOBS=${JOBS:-1}
+DURATION=${DURATION:-20}
+OUT=${OUT:-config/models/stac_default.stacmodel}
+# scenario:seed. No test or tuning run uses these seeds.
+TRAIN=(urban:101 urban:102 urban:103 urban:104 urban:105 urban:106 urban:107 urban:108
+       urban:109 urban:110 urban:111 urban:112 intersection:121 intersection:122
+       crowd:131 parking-lot:141 highway:151 empty:161 empty:162)
+TEST=(urban:201 urban:202 urban:203 urban:204 intersection:221 empty:261)
+
+[[ -x "$STAC" ]] || { echo "$0: $STAC is missing: build first (cmake --build build)" >&2; exit 1; }
+mkdir -p "$WORK"
+
+# One drive: simulated and described, skipped when its dataset is already there.
+drive() {
+  local name=${1%%:*} seed=${1##*:} dir="$WORK/$1"
+  [[ -f "$dir/data/manifest.json" ]] && return 0
+  mkdir -p "$dir"
+  "$STAC" sim --scenario "$name" --seed "$seed" --duration "$DURATION" \
+    --out "$dir/run.pcap" --truth "$dir/run.truth.jsonl" > "$dir/sim.log" 2>&1
+  "$STAC" dataset --in "$dir/run.pcap" --truth "$dir/run.truth.jsonl" --out "$dir/data.tmp" \
+    > "$dir/dataset.log" 2>&1
+  rm -rf "$dir/data" && mv "$dir/data.tmp" "$dir/data"
+  rm -f "$dir/run.pcap"  # 90 MB a drive; the dataset is what training reads
+  echo "  $1: $(tail -n 1 "$dir/dataset.log")"
+}
+export -f drive
+export STAC WORK DURATION
+
+echo "$0: ${#TRAIN[@]} training and ${#TEST[@]} held-out drives of ${DURATION} s in $WORK"
+printf '%s\n' "${TRAIN[@]}" "${TEST[@]}" | xargs -P "$JOBS" -I{} bash -c 'drive {}'
+
+train_args=() test_args=()
+for d in "${TRAIN[@]}"; do train_args+=(--data "$WORK/$d/data"); done
+for d in "${TEST[@]}"; do test_args+=(--data "$WORK/$d/data"); done
+mkdir -p "$(dirname "$OUT")"
+"$STAC" train "${train_args[@]}" --out "$OUT"
+"$STAC" eval --classes "${test_args[@]}" --model "$OUT" --report "$WORK/eval"
+echo "$0: model $OUT; held-out report $WORK/eval/report.md"
