@@ -30,6 +30,8 @@ const char* stage_name(Stage s) noexcept {
       return "track";
     case kClassify:
       return "classify";
+    case kClassifyDeferred:
+      return "classify_deferred";
     case kStageCount:
       break;
   }
@@ -58,6 +60,7 @@ ScanPipeline::ScanPipeline(const PipelineConfig& config)
                             [&] {
                               classification::TrackClassifierConfig c = config.classifier;
                               c.max_tracks = config.tracker.max_tracks;
+                              c.max_points = config.segmenter.max_points;
                               return c;
                             }(),
                             config.model)
@@ -124,7 +127,10 @@ void ScanPipeline::process(velodyne::Scan& scan, const ego::PoseHistory* poses,
                   out.tracked);
   const std::int64_t t3 = now_ns(config_.clock);
   out.classes.clear();
-  if (classifier_ != nullptr) {
+  if (classifier_ != nullptr && config_.defer_classification) {
+    classifier_->report(out.tracked, out.classes);
+    classifier_->defer(out.segments, out.tracked);
+  } else if (classifier_ != nullptr) {
     classifier_->classify(&scan.points.data()->x, sizeof(velodyne::Point), out.segments,
                           out.tracked, out.classes);
   }
@@ -133,6 +139,14 @@ void ScanPipeline::process(velodyne::Scan& scan, const ego::PoseHistory* poses,
   out.stage_ns[kSegment] = t2 - t1;
   out.stage_ns[kTrack] = t3 - t2;
   out.stage_ns[kClassify] = t4 - t3;
+  out.stage_ns[kClassifyDeferred] = deferred_classify_ns_;
+}
+
+void ScanPipeline::classify_deferred(const velodyne::Scan& scan) noexcept {
+  if (classifier_ == nullptr || !config_.defer_classification) return;
+  const std::int64_t t0 = now_ns(config_.clock);
+  classifier_->update_deferred(&scan.points.data()->x, sizeof(velodyne::Point));
+  deferred_classify_ns_ = now_ns(config_.clock) - t0;
 }
 
 }  // namespace stac::pipeline

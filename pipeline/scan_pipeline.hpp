@@ -34,12 +34,17 @@ struct PipelineConfig {
   classification::TrackClassifierConfig classifier;  // its max_tracks is the tracker's
   std::shared_ptr<const classification::TrackClassifierModel> model;  // null: tracks unclassified
   bool describe = false;  // run the classify stage without a model too (an observer's descriptors)
+  // true: process() reports the classes the scans before left and keeps this scan's segments;
+  // classify_deferred() classifies them after the result is handed on (stac run: the tracks'
+  // latency does not wait for classification; classes come one scan later, docs/run.md).
+  bool defer_classification = false;
   velodyne::TrailerKind trailer = velodyne::TrailerKind::kGpsStatus;  // the model's (scan clock)
   StageClock clock = StageClock::kThreadCpu;
 };
 
-enum Stage : std::uint8_t { kDeskew, kSegment, kTrack, kClassify, kStageCount };
-const char* stage_name(Stage s) noexcept;  // "deskew", "segment", "track", "classify"
+// kClassifyDeferred: the previous scan's classify_deferred() (0 unless defer_classification).
+enum Stage : std::uint8_t { kDeskew, kSegment, kTrack, kClassify, kClassifyDeferred, kStageCount };
+const char* stage_name(Stage s) noexcept;  // "deskew", ..., "classify", "classify_deferred"
 
 // A box in the world frame (m, rad).
 struct WorldBox {
@@ -77,6 +82,11 @@ class ScanPipeline {
   // vehicle_T_sensor in the world.
   void process(velodyne::Scan& scan, const ego::PoseHistory* poses, ScanResult& out) noexcept;
 
+  // With defer_classification: classifies the segments of the last process()ed scan, which must
+  // be `scan`, still unchanged; its time is the next result's stage_ns[kClassify]. No-op
+  // otherwise. No allocation, exception or I/O.
+  void classify_deferred(const velodyne::Scan& scan) noexcept;
+
   [[nodiscard]] const tracking::Tracker& tracker() const noexcept { return tracker_; }
   // Null when the classify stage does not run (no model, describe off).
   [[nodiscard]] classification::TrackClassifier* classifier() noexcept { return classifier_.get(); }
@@ -91,6 +101,7 @@ class ScanPipeline {
   rt::FixedVector<tracking::Detection> detections_;
   Eigen::Isometry3d sensor_T_vehicle_;
   std::uint64_t without_pose_ = 0;
+  std::int64_t deferred_classify_ns_ = 0;  // the last classify_deferred()'s time
 };
 
 }  // namespace stac::pipeline

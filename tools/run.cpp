@@ -60,12 +60,14 @@ enum HealthStage : std::size_t {
   kSegment,
   kTrack,
   kClassify,
+  kClassifyDeferred,
   kHandover,
   kPublish,
   kHealthStages
 };
-constexpr const char* kStageNames[] = {"wait",     "deskew",   "segment", "track",
-                                       "classify", "handover", "publish"};
+constexpr const char* kStageNames[] = {"wait",     "deskew",   "segment",
+                                       "track",    "classify", "classify_deferred",
+                                       "handover", "publish"};
 
 // One perception result in a slot of the perception -> publisher exchange.
 struct Frame {
@@ -231,6 +233,7 @@ int run_live(const RunOptions& o) {
                                     .classifier = settings->classification.classifier,
                                     .model = *model,
                                     .describe = false,
+                                    .defer_classification = rs->classify_after_publish,
                                     .trailer = velodyne::traits(vs.assembler.decoder.model).trailer,
                                     .clock = pipeline::StageClock::kMonotonic};
   if (auto r = ScanPublishing::check_capacities(pc); !r) return fail(r.error().message);
@@ -364,7 +367,6 @@ int run_live(const RunOptions& o) {
       f.started_ns = rt::realtime_ns();
       f.last_firing_ns = scan->header.end_stamp_ns;
       pipeline.process(*scan, poses, f.result);
-      stream.release();
       const segmentation::SegmentCounters& c = f.result.segments.counters;
       overflow += c.ignored_over_capacity + c.dropped_cell_overflow + c.dropped_segment_overflow;
       f.incomplete = incomplete;
@@ -374,6 +376,8 @@ int run_live(const RunOptions& o) {
       f.finished_ns = rt::realtime_ns();
       shared.scans.fetch_add(1, std::memory_order_relaxed);
       (void)results.publish();  // full: dropped and counted by the exchange; perception goes on
+      pipeline.classify_deferred(*scan);  // classify_after_publish: off the tracks' latency
+      stream.release();
     }
     shared.perception_done.store(true, std::memory_order_release);
   });
@@ -404,6 +408,7 @@ int run_live(const RunOptions& o) {
                   f->result.stage_ns[pipeline::kSegment],
                   f->result.stage_ns[pipeline::kTrack],
                   f->result.stage_ns[pipeline::kClassify],
+                  f->result.stage_ns[pipeline::kClassifyDeferred],
                   t0 - f->finished_ns,
                   t1 - t0};
       (void)monitor.record(stage_ns, end_to_end);

@@ -41,6 +41,7 @@ rt::Result<RunSettings> load_run_settings(const std::filesystem::path& config_fi
   STAC_CONFIG_GET(r, double, "latency_histogram_max_ms", histogram_ms);
   STAC_CONFIG_GET(r, int, "result_slots", slots);
   STAC_CONFIG_GET(r, bool, "lock_memory", s.lock_memory);
+  STAC_CONFIG_GET(r, bool, "classify_after_publish", s.classify_after_publish);
   STAC_CONFIG_GET(r, std::string, "ins", ins);
   STAC_CONFIG_GET(r, std::string, "ins_address", s.ins_address);
   STAC_CONFIG_GET(r, bool, "can", s.can);

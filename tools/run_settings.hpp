@@ -18,6 +18,8 @@ struct RunSettings {
   rt::DeadlineConfig deadline;   // budget and histogram range
   std::size_t result_slots = 4;  // perception -> publisher results in flight
   bool lock_memory = true;       // mlockall at start-up
+  bool classify_after_publish = true;  // a scan's tracks are published before its segments are
+                                       // classified (classes one scan later, docs/run.md)
   rt::ThreadSchedule receiver, perception, publisher, pose;
   InsTransport ins = InsTransport::kTcp;
   std::string ins_address;  // tcp: the POS computer (IPv4); port: ego.ins_port

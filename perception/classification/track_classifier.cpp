@@ -1,5 +1,6 @@
 #include "perception/classification/track_classifier.hpp"
 
+#include <algorithm>
 #include <stdexcept>
 #include <string>
 
@@ -11,6 +12,7 @@ const char* validate(const TrackClassifierConfig& c) noexcept {
     return "accumulated_points must be in [1, 1000000]";
   if (c.holistic_every < 1 || c.holistic_every > 10'000)
     return "holistic_every must be in [1, 10000]";
+  if (c.max_points < 1 || c.max_points > 100'000'000) return "max_points must be in [1, 1e8]";
   return descriptors::validate(c.descriptors);
 }
 
@@ -32,6 +34,8 @@ TrackClassifier::TrackClassifier(const TrackClassifierConfig& config,
     throw std::invalid_argument(
         "classification: the model's descriptor sizes are not this build's (retrain it)");
   }
+  deferred_tracks_ = rt::FixedVector<tracking::Track>(config.max_tracks);
+  deferred_ = segmentation::Segments(config.max_tracks, config.max_points);
   slots_.reserve(config.max_tracks);
   for (std::size_t i = 0; i < config.max_tracks; ++i) slots_.emplace_back(config.accumulated_points);
 }
@@ -57,18 +61,12 @@ void TrackClassifier::classify_update(Slot& s, bool refresh) noexcept {
   s.cls.segments = s.evidence.segments;
 }
 
-void TrackClassifier::classify(const float* xyzi, std::size_t stride_bytes,
-                               const segmentation::Segments& segments,
-                               const tracking::TrackerOutput& tracked,
-                               rt::FixedVector<TrackClass>& out) noexcept {
-  out.clear();
-  for (const tracking::Track& t : tracked.tracks) {
+void TrackClassifier::update(const float* xyzi, std::size_t stride_bytes,
+                             const segmentation::Segments& segments,
+                             std::span<const tracking::Track> tracks) noexcept {
+  for (const tracking::Track& t : tracks) {
     if (t.slot >= slots_.size()) {
       ++counters_.slot_mismatch;
-      TrackClass* c = out.append();
-      if (c == nullptr) break;
-      *c = TrackClass{};
-      c->id = t.id;
       continue;
     }
     Slot& s = slots_[t.slot];
@@ -81,29 +79,84 @@ void TrackClassifier::classify(const float* xyzi, std::size_t stride_bytes,
       s.since_holistic = 0;
       s.accumulated_ok = false;
     }
-    if (t.segment >= 0 && static_cast<std::size_t>(t.segment) < segments.segments.size()) {
-      const segmentation::Segment& seg = segments.segments[static_cast<std::size_t>(t.segment)];
-      const descriptors::SegmentView view{xyzi, stride_bytes, segments.indices(seg), 0};
-      describer_.compute(view, segment_);
-      ++counters_.segments_described;
-      if (segment_.status != descriptors::Status::kOk) {
-        ++counters_.segments_empty;
-      } else {
-        s.cloud.add_segment(view);
-        const bool refresh = !s.accumulated_ok || ++s.since_holistic >= config_.holistic_every;
-        if (refresh) {
-          describer_.compute(s.cloud.view(), s.accumulated);
-          ++counters_.holistic_described;
-          s.accumulated_ok = true;
-          s.since_holistic = 0;
-        }
-        holistic_descriptor(t, &s.accumulated, holistic_);
-        if (observer_ != nullptr) observer_->on_update(t, segment_.values, holistic_);
-        if (model_ != nullptr) classify_update(s, refresh);
-      }
+    if (t.segment < 0 || static_cast<std::size_t>(t.segment) >= segments.segments.size()) continue;
+    const segmentation::Segment& seg = segments.segments[static_cast<std::size_t>(t.segment)];
+    const descriptors::SegmentView view{xyzi, stride_bytes, segments.indices(seg), 0};
+    describer_.compute(view, segment_);
+    ++counters_.segments_described;
+    if (segment_.status != descriptors::Status::kOk) {
+      ++counters_.segments_empty;
+      continue;
     }
-    if (!out.push_back(s.cls)) break;
+    s.cloud.add_segment(view);
+    const bool refresh = !s.accumulated_ok || ++s.since_holistic >= config_.holistic_every;
+    if (refresh) {
+      describer_.compute(s.cloud.view(), s.accumulated);
+      ++counters_.holistic_described;
+      s.accumulated_ok = true;
+      s.since_holistic = 0;
+    }
+    holistic_descriptor(t, &s.accumulated, holistic_);
+    if (observer_ != nullptr) observer_->on_update(t, segment_.values, holistic_);
+    if (model_ != nullptr) classify_update(s, refresh);
   }
+}
+
+void TrackClassifier::report(const tracking::TrackerOutput& tracked,
+                             rt::FixedVector<TrackClass>& out) const noexcept {
+  out.clear();
+  for (const tracking::Track& t : tracked.tracks) {
+    TrackClass* c = out.append();
+    if (c == nullptr) break;
+    if (t.slot < slots_.size() && slots_[t.slot].id == t.id) {
+      *c = slots_[t.slot].cls;
+    } else {  // not seen by update() yet (deferred), or out of the pool
+      *c = TrackClass{};
+      c->id = t.id;
+    }
+  }
+}
+
+void TrackClassifier::classify(const float* xyzi, std::size_t stride_bytes,
+                               const segmentation::Segments& segments,
+                               const tracking::TrackerOutput& tracked,
+                               rt::FixedVector<TrackClass>& out) noexcept {
+  update(xyzi, stride_bytes, segments,
+         std::span<const tracking::Track>(tracked.tracks.data(), tracked.tracks.size()));
+  report(tracked, out);
+}
+
+void TrackClassifier::defer(const segmentation::Segments& segments,
+                            const tracking::TrackerOutput& tracked) noexcept {
+  deferred_tracks_.clear();
+  deferred_.segments.clear();
+  deferred_.point_indices.clear();
+  for (const tracking::Track& t : tracked.tracks) {
+    tracking::Track* copy = deferred_tracks_.append();
+    if (copy == nullptr) break;
+    *copy = t;
+    copy->segment = -1;
+    if (t.segment < 0 || static_cast<std::size_t>(t.segment) >= segments.segments.size()) continue;
+    const segmentation::Segment& seg = segments.segments[static_cast<std::size_t>(t.segment)];
+    const std::span<const std::uint32_t> indices = segments.indices(seg);
+    const std::size_t first = deferred_.point_indices.size();
+    segmentation::Segment* kept = deferred_.segments.append();
+    if (kept == nullptr || !deferred_.point_indices.resize(first + indices.size())) {
+      if (kept != nullptr) (void)deferred_.segments.resize(deferred_.segments.size() - 1);
+      ++counters_.deferred_overflow;
+      continue;
+    }
+    std::copy(indices.begin(), indices.end(), deferred_.point_indices.data() + first);
+    *kept = seg;
+    kept->first = static_cast<std::uint32_t>(first);
+    copy->segment = static_cast<std::int32_t>(deferred_.segments.size() - 1);
+  }
+}
+
+void TrackClassifier::update_deferred(const float* xyzi, std::size_t stride_bytes) noexcept {
+  update(xyzi, stride_bytes, deferred_,
+         std::span<const tracking::Track>(deferred_tracks_.data(), deferred_tracks_.size()));
+  deferred_tracks_.clear();
 }
 
 }  // namespace stac::classification

@@ -34,6 +34,7 @@ struct TrackClassifierConfig {
   std::size_t max_tracks = 512;          // = the tracker's max_tracks (one slot per pool slot)
   std::size_t accumulated_points = 4096;  // points kept per track's accumulated cloud
   std::uint32_t holistic_every = 5;  // accumulated cloud described every N segments (1: always)
+  std::size_t max_points = 300'000;  // = the segmenter's max_points (defer()'s copy of indices)
   descriptors::DescriptorConfig descriptors;
 };
 
@@ -54,6 +55,7 @@ struct TrackClassifierCounters {
   std::uint64_t holistic_described = 0;  // accumulated clouds described
   std::uint64_t segments_empty = 0;      // no finite point: not classified
   std::uint64_t slot_mismatch = 0;       // a track whose slot is out of range (never expected)
+  std::uint64_t deferred_overflow = 0;   // segments defer() could not keep (never expected)
 };
 
 class TrackClassifier {
@@ -79,6 +81,16 @@ class TrackClassifier {
   void classify(const float* xyzi, std::size_t stride_bytes, const segmentation::Segments& segments,
                 const tracking::TrackerOutput& tracked, rt::FixedVector<TrackClass>& out) noexcept;
 
+  // The same in two steps, for a loop that publishes a scan's tracks before it classifies the
+  // scan's segments (stac run, docs/run.md): report() gives the tracks' classes as the scans
+  // before left them (a track new in this scan: unclassified), defer() keeps a copy of what the
+  // update needs (tracks, their segments' point indices), and update_deferred() classifies them
+  // later, with the scan's points still valid. Same classes one scan later than classify().
+  void report(const tracking::TrackerOutput& tracked, rt::FixedVector<TrackClass>& out) const noexcept;
+  void defer(const segmentation::Segments& segments, const tracking::TrackerOutput& tracked) noexcept;
+  void update_deferred(const float* xyzi, std::size_t stride_bytes) noexcept;
+  [[nodiscard]] bool has_deferred() const noexcept { return !deferred_tracks_.empty(); }
+
   [[nodiscard]] const TrackClassifierCounters& counters() const noexcept { return counters_; }
   [[nodiscard]] const TrackClassifierConfig& config() const noexcept { return config_; }
 
@@ -95,6 +107,8 @@ class TrackClassifier {
     explicit Slot(std::size_t points) : cloud(points) {}
   };
 
+  void update(const float* xyzi, std::size_t stride_bytes, const segmentation::Segments& segments,
+              std::span<const tracking::Track> tracks) noexcept;
   // The model's update of one slot from segment_ and holistic_ (refresh: the accumulated part of
   // holistic_ is new).
   void classify_update(Slot& s, bool refresh) noexcept;
@@ -106,6 +120,8 @@ class TrackClassifier {
   descriptors::Descriptors segment_;
   HolisticDescriptor holistic_{};
   std::vector<Slot> slots_;
+  rt::FixedVector<tracking::Track> deferred_tracks_;
+  segmentation::Segments deferred_;
   TrackClassifierCounters counters_;
 };
 

@@ -208,6 +208,46 @@ TEST(TrackClassifier, ClassifyAllocatesNothing) {
   static_assert(noexcept(stage.classify(nullptr, 16, scenes[0].segments, tracked, out)));
 }
 
+TEST(TrackClassifier, DeferredClassesAreTheImmediateOnesOneScanLater) {
+  auto model = std::make_shared<const TrackClassifierModel>(full_size_model());
+  TrackClassifier now(small_config(), model), later(small_config(), model);
+  tracking::TrackerOutput tracked(4);
+  rt::FixedVector<TrackClass> immediate(4), deferred(4), previous(4);
+  for (int frame = 0; frame < 6; ++frame) {
+    Scene scene(frame);
+    tracked.tracks.clear();
+    (void)tracked.tracks.push_back(track(1, 0, 0));
+    if (frame >= 2) (void)tracked.tracks.push_back(track(3, 2, 1));  // new in frame 2
+    now.classify(scene.xyzi.data(), 16, scene.segments, tracked, immediate);
+    later.report(tracked, deferred);
+    later.defer(scene.segments, tracked);
+    EXPECT_TRUE(later.has_deferred());
+    // The scan's own buffers change before the deferred update: it kept its own copy.
+    std::fill(scene.segments.point_indices.data(),
+              scene.segments.point_indices.data() + scene.segments.point_indices.size(), 0u);
+    scene.segments.segments.clear();
+    later.update_deferred(scene.xyzi.data(), 16);  // the points themselves are still there
+    ASSERT_EQ(deferred.size(), tracked.tracks.size());
+    EXPECT_EQ(deferred[0].id, 1u);
+    if (frame == 0) {
+      EXPECT_FALSE(deferred[0].classified);
+    }
+    if (frame == 2) {
+      EXPECT_FALSE(deferred[1].classified);  // first seen: not classified yet
+    }
+    for (std::size_t i = 0; i < deferred.size() && frame > 0; ++i) {
+      if (i >= previous.size() || previous[i].id != deferred[i].id) continue;
+      EXPECT_EQ(deferred[i].log_odds, previous[i].log_odds) << frame;
+      EXPECT_EQ(deferred[i].segments, previous[i].segments) << frame;
+    }
+    previous.clear();
+    for (const TrackClass& c : immediate) (void)previous.push_back(c);
+  }
+  EXPECT_FALSE(later.has_deferred());
+  EXPECT_EQ(later.counters().deferred_overflow, 0u);
+  EXPECT_EQ(later.counters().segments_described, now.counters().segments_described);
+}
+
 TEST(TrackClassifier, AModelForOtherDescriptorsIsRefused) {
   const auto small = testing::noisy(100, 6, 0.1, 5);
   auto model = std::make_shared<const TrackClassifierModel>(TrackClassifierModel{

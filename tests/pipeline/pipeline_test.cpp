@@ -3,8 +3,11 @@
 // drive, re-fed many times.
 #include <gtest/gtest.h>
 
+#include <map>
+
 #include <atomic>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <thread>
 #include <vector>
@@ -50,6 +53,7 @@ Fixture decoded_drive(const std::string& name) {
               .classifier = {},
               .model = nullptr,
               .describe = false,
+              .defer_classification = false,
               .trailer = velodyne::traits(f.velodyne.assembler.decoder.model).trailer,
               .clock = StageClock::kMonotonic};
   auto calibration = velodyne::load_calibration(stac::testing::shared_data(kYaml));
@@ -148,7 +152,8 @@ TEST(ScanPipeline, PerceptionLoopWithHandoverMakesNoAllocationOver1000ScansAfter
   Fixture f = decoded_drive("alloc");
   ASSERT_GE(f.scans.size(), 5u);
   const std::unique_ptr<ego::PoseHistory> poses = straight_drive(f, 1020);
-  f.config.model = made_up_model();  // classification on: every stage of the loop
+  f.config.model = made_up_model();  // classification on, after publishing (as stac run)
+  f.config.defer_classification = true;
   ScanPipeline pipeline(f.config);
   rt::SlotExchange<ScanResult> results(4, [&] { return pipeline.make_result(); });
   velodyne::Scan scan(f.scans.front()->points.capacity());
@@ -176,6 +181,7 @@ TEST(ScanPipeline, PerceptionLoopWithHandoverMakesNoAllocationOver1000ScansAfter
     pipeline.process(scan, poses.get(), r);
     deskewed += r.has_pose ? 1 : 0;
     (void)results.publish();
+    pipeline.classify_deferred(scan);
   };
   for (std::size_t i = 0; i < 20; ++i) step(i);  // warm-up: the tracker's pool fills
   rt::testing::AllocationCounter counter;
@@ -194,6 +200,44 @@ TEST(ScanPipeline, PerceptionLoopWithHandoverMakesNoAllocationOver1000ScansAfter
   EXPECT_GT(pipeline.classifier()->counters().holistic_described, 0u);
   EXPECT_GT(pipeline.tracker().counters().spawned, 0u);
   static_assert(noexcept(pipeline.process(scan, nullptr, results.current())));
+}
+
+TEST(ScanPipeline, DeferredClassificationGivesTheImmediateClassesOneScanLater) {
+  STAC_REQUIRE_SHARED_DATA(kYaml);
+  Fixture f = decoded_drive("deferred");
+  ASSERT_GE(f.scans.size(), 5u);
+  f.config.model = made_up_model();
+  PipelineConfig deferred_config = f.config;
+  deferred_config.defer_classification = true;
+  ScanPipeline now(f.config), later(deferred_config);
+  ScanResult a = now.make_result(), b = later.make_result();
+  velodyne::Scan scan(f.scans.front()->points.capacity());
+  std::map<std::uint64_t, classification::TrackClass> before;  // immediate, previous scan
+  std::size_t compared = 0;
+  for (std::size_t i = 0; i < f.scans.size(); ++i) {
+    load_scan(f, i, scan);
+    now.process(scan, nullptr, a);
+    load_scan(f, i, scan);
+    later.process(scan, nullptr, b);
+    later.classify_deferred(scan);
+    ASSERT_EQ(b.classes.size(), b.tracked.tracks.size());
+    for (const classification::TrackClass& c : b.classes) {
+      const auto it = before.find(c.id);
+      if (it == before.end()) {
+        EXPECT_FALSE(c.classified);
+        continue;
+      }
+      EXPECT_EQ(c.log_odds, it->second.log_odds);
+      EXPECT_EQ(c.classified, it->second.classified);
+      ++compared;
+    }
+    if (i > 0) {
+      EXPECT_GT(b.stage_ns[kClassifyDeferred], 0);
+    }
+    before.clear();
+    for (const classification::TrackClass& c : a.classes) before[c.id] = c;
+  }
+  EXPECT_GT(compared, 10u);
 }
 
 TEST(ScanPipeline, ParkedSensorKeepsTheSensorPoseAndFillsEveryStage) {

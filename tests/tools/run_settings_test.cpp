@@ -16,6 +16,7 @@ constexpr const char* kRunKeys[] = {"deadline_ms: 100",
                                     "latency_histogram_max_ms: 1000",
                                     "result_slots: 4",
                                     "lock_memory: false",
+                                    "classify_after_publish: false",
                                     "receiver_priority: 0",
                                     "receiver_cpu: -1",
                                     "perception_priority: 10",
@@ -52,6 +53,7 @@ TEST(RunSettings, ShippedSectionLoadsWithoutRealTimeRequests) {
   EXPECT_EQ(s->deadline.budget_ns, 100'000'000);
   EXPECT_EQ(s->deadline.histogram_bins, 10'000u);  // 0.1 ms bins over 1 s
   EXPECT_EQ(s->result_slots, 4u);
+  EXPECT_TRUE(s->classify_after_publish);
   EXPECT_EQ(s->ins, InsTransport::kTcp);
   EXPECT_EQ(s->perception.fifo_priority, 0);
   EXPECT_EQ(s->perception.cpu, -1);
@@ -61,6 +63,7 @@ TEST(RunSettings, EveryKeyIsReadIntoItsField) {
   auto s = load_run_settings(run_section("all", "none", ""));
   ASSERT_TRUE(s) << s.error().message;
   EXPECT_FALSE(s->lock_memory);
+  EXPECT_FALSE(s->classify_after_publish);
   EXPECT_EQ(s->perception.fifo_priority, 10);
   EXPECT_EQ(s->perception.cpu, 1);
   EXPECT_EQ(s->ins_address, "127.0.0.1");
@@ -69,7 +72,8 @@ TEST(RunSettings, EveryKeyIsReadIntoItsField) {
 
 TEST(RunSettings, MissingOrInvalidKeysAreNamed) {
   for (const std::string key :
-       {"deadline_ms", "result_slots", "pose_cpu", "ins", "velodyne_timeout_s"}) {
+       {"deadline_ms", "result_slots", "classify_after_publish", "pose_cpu", "ins",
+        "velodyne_timeout_s"}) {
     auto missing = load_run_settings(run_section("missing_" + key, key, ""));
     ASSERT_FALSE(missing) << key;
     EXPECT_NE(missing.error().message.find("missing required key 'run." + key + "'"),
