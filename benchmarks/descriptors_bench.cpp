@@ -1,6 +1,8 @@
 // Segment descriptors (29 spaces, 931 values) on every segment the Segmenter finds in the six
 // real KITTI scans, one segment per iteration (round robin) on one core; per-segment wall times
-// give the median, p99 and max (microseconds).
+// give the median, p99 and max (microseconds). BM_ClassifyStage: the whole per-segment work of
+// the pipeline's classify stage (descriptors, accumulated cloud described every 5th update,
+// segment + holistic classification, ADBF) with the shipped model when there is one.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -9,10 +11,13 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "benchmarks/kitti_scans.hpp"
+#include "perception/classification/track_classifier.hpp"
 #include "perception/descriptors/descriptors.hpp"
 #include "perception/segmentation/segmenter.hpp"
 
@@ -78,6 +83,83 @@ void BM_SegmentDescriptors(benchmark::State& state) {
   state.counters["segments"] = static_cast<double>(c.segments.size());
 }
 BENCHMARK(BM_SegmentDescriptors)->Iterations(20000)->Unit(benchmark::kMicrosecond);
+
+// The shipped model (config/models/stac_default.stacmodel), else one with made-up responses over
+// the same layouts: the cost does not depend on the numbers in the table.
+std::shared_ptr<const classification::TrackClassifierModel> bench_model(bool& shipped) {
+  const std::filesystem::path file =
+      std::filesystem::path(STAC_SOURCE_DIR) / "config/models/stac_default.stacmodel";
+  std::ifstream in(file, std::ios::binary);
+  const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)),
+                                        std::istreambuf_iterator<char>());
+  if (auto m = classification::deserialize(bytes); m.has_value()) {
+    shipped = true;
+    return std::make_shared<const classification::TrackClassifierModel>(std::move(*m));
+  }
+  shipped = false;
+  const auto grid = [](classification::Layout layout) {
+    classification::GridModel g;
+    g.layout = std::move(layout);
+    g.resolutions = {10, 100};
+    const std::size_t dims = classification::layout_dimensions(g.layout);
+    g.lower.assign(2 * dims, -1.0f);
+    for (std::size_t k = 0; k < 2 * dims; ++k) g.scale.push_back(k % 2 == 0 ? 5.0f : 50.0f);
+    for (std::size_t c = 0; c < dims * 110 * classification::kClassCount; ++c)
+      g.table.push_back(0.001f * static_cast<float>(static_cast<int>(c % 7) - 3));
+    return std::move(classification::GridClassifier::create(std::move(g))).value();
+  };
+  return std::make_shared<const classification::TrackClassifierModel>(
+      classification::TrackClassifierModel{grid(classification::segment_layout()),
+                                           grid(classification::holistic_layout()), {}});
+}
+
+void BM_ClassifyStage(benchmark::State& state) {
+  const Corpus& c = corpus();
+  bool shipped = false;
+  classification::TrackClassifierConfig config;
+  config.descriptors.intensity_full_scale = 1.0;  // KITTI reflectance
+  config.max_tracks = 64;
+  classification::TrackClassifier stage(config, bench_model(shipped));
+  // One track update per iteration: 64 tracks in 64 pool slots, each fed the corpus's segments
+  // in turn, so accumulated clouds grow and are described every 5th update as in the pipeline.
+  segmentation::Segments segments(1, 40000);
+  tracking::TrackerOutput tracked(1);
+  (void)tracked.tracks.resize(1);
+  rt::FixedVector<classification::TrackClass> out(1);
+  std::vector<double> us;
+  us.reserve(static_cast<std::size_t>(state.max_iterations));
+  std::size_t k = 0;
+  for (auto _ : state) {
+    const auto& [scan, indices] = c.segments[k % c.segments.size()];
+    segments.segments.clear();
+    segmentation::Segment* seg = segments.segments.append();
+    seg->first = 0;
+    seg->count = static_cast<std::uint32_t>(indices.size());
+    (void)segments.point_indices.resize(indices.size());
+    std::copy(indices.begin(), indices.end(), segments.point_indices.data());
+    tracking::Track& t = tracked.tracks[0];
+    t.id = 1 + k % 64;
+    t.slot = static_cast<std::uint32_t>(k % 64);
+    t.segment = 0;
+    ++k;
+    const auto t0 = std::chrono::steady_clock::now();
+    stage.classify(c.scans[scan].data(), 16, segments, tracked, out);
+    us.push_back(
+        std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
+    benchmark::DoNotOptimize(out[0].log_odds.data());
+  }
+  std::sort(us.begin(), us.end());
+  const auto at = [&](double q) {
+    return us[std::min(us.size() - 1, static_cast<std::size_t>(q * static_cast<double>(us.size())))];
+  };
+  state.counters["median_us"] = at(0.5);
+  state.counters["p99_us"] = at(0.99);
+  state.counters["max_us"] = us.back();
+  state.counters["shipped_model"] = shipped ? 1 : 0;
+  state.counters["holistic_share"] = static_cast<double>(stage.counters().holistic_described) /
+                                     static_cast<double>(stage.counters().segments_described);
+}
+BENCHMARK(BM_ClassifyStage)->Iterations(20000)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 
