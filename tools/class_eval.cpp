@@ -139,6 +139,10 @@ int run_class_eval(const ClassEvalOptions& o) {
   std::array<Tally, kFilters> tracks{}, segments{};
   std::array<std::vector<Scored>, classification::kClassCount> scores;
   const std::size_t sd = descriptors::kDimensions, hd = classification::kHolisticDimensions;
+  // One line per track for the report (tracks.csv): where each wrong one came from.
+  std::string per_track =
+      "source,track_id,label,adbf_class,car_log_odds,pedestrian_log_odds,bicyclist_log_odds,"
+      "segments,max_speed_mps,box_length_m,box_width_m,box_height_m\n";
   Progress progress("eval: classifying", static_cast<double>(data.tracks.size()));
   std::size_t done = 0;
   for (const DatasetTrack& t : data.tracks) {
@@ -163,6 +167,17 @@ int run_class_eval(const ClassEvalOptions& o) {
     }
     for (std::size_t f = 0; f < kFilters; ++f)
       tracks[f].add(t.label, classification::predict(out[f]));
+    if (t.segments > 0) {
+      const float* last = t.holistic_rows.data() + (t.segments - 1) * hd;
+      char line[512];
+      std::snprintf(line, sizeof(line), "%u,%llu,%s,%s,%.3f,%.3f,%.3f,%u,%.2f,%.2f,%.2f,%.2f\n",
+                    t.source, static_cast<unsigned long long>(t.id),
+                    classification::class_name(t.label),
+                    classification::class_name(classification::predict(out[kAdbf])),
+                    out[kAdbf][0], out[kAdbf][1], out[kAdbf][2], t.segments, last[0], last[6],
+                    last[7], last[8]);
+      per_track += line;
+    }
     for (std::size_t c = 0; c < classification::kClassCount; ++c) {
       scores[c].push_back({out[kAdbf][c], static_cast<std::size_t>(t.label) == c});
     }
@@ -207,6 +222,10 @@ int run_class_eval(const ClassEvalOptions& o) {
     js << metrics.dump(2) << '\n';
     js.close();
     if (!js) return fail((dir / "metrics.json").string() + ": cannot write");
+    std::ofstream csv(dir / "tracks.csv");
+    csv << per_track;
+    csv.close();
+    if (!csv) return fail((dir / "tracks.csv").string() + ": cannot write");
     if (auto r = save_confusion(tracks[kAdbf], "Track-wise confusion, ADBF", dir / "confusion.png");
         !r) {
       return fail(r.error().message);
@@ -219,7 +238,7 @@ int run_class_eval(const ClassEvalOptions& o) {
       if (!s.x.empty()) chart.series.push_back(std::move(s));
     }
     if (auto r = save_chart(chart, dir / "pr.png"); !r) return fail(r.error().message);
-    std::printf("report: %s/metrics.json, confusion.png, pr.png\n", o.report.c_str());
+    std::printf("report: %s/metrics.json, tracks.csv, confusion.png, pr.png\n", o.report.c_str());
   }
   return 0;
 }

@@ -7,7 +7,9 @@
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
+#include <vector>
 
 #include "stac_cli.hpp"
 #include "tools/dataset_file.hpp"
@@ -87,6 +89,24 @@ TEST_F(ClassifyCli, DatasetTrainEvalBeatsThePriorOnAHeldOutDrive) {
         EXPECT_LE(m[key].get<double>(), 1.0) << key;
       }
     }
+  }
+  // tracks.csv: a header and one line per evaluated track, whose ADBF classes give the accuracy.
+  {
+    std::ifstream csv(at("report") + "/tracks.csv");
+    std::string line;
+    ASSERT_TRUE(std::getline(csv, line));
+    EXPECT_EQ(line.rfind("source,track_id,label,adbf_class,", 0), 0u) << line;
+    int rows = 0, right = 0;
+    while (std::getline(csv, line)) {
+      std::vector<std::string> f;
+      std::stringstream ss(line);
+      for (std::string cell; std::getline(ss, cell, ',');) f.push_back(cell);
+      ASSERT_EQ(f.size(), 12u) << line;
+      ++rows;
+      right += f[2] == f[3] ? 1 : 0;
+    }
+    EXPECT_EQ(rows, m["tracks"].get<int>());
+    EXPECT_NEAR(static_cast<double>(right) / rows, m["track_accuracy"].get<double>(), 1e-9);
   }
   const double adbf = m["track_accuracy"].get<double>(),
                prior = m["track.prior_only.overall"].get<double>();
