@@ -27,36 +27,29 @@ rt::Result<std::unique_ptr<TopicReaders>> TopicReaders::create(const dds::Publis
   }
   const dds_entity_t participant = dds_create_participant(c.domain_id, nullptr, nullptr);
   if (participant < 0) return dds::dds_error("creating a DDS participant", participant);
-  const dds_entity_t waitset = dds_create_waitset(participant);
-  if (waitset < 0) {
-    dds_delete(participant);
-    return dds::dds_error("creating a DDS waitset", waitset);
-  }
-  return std::unique_ptr<TopicReaders>(new TopicReaders(c, participant, waitset));
+  return std::unique_ptr<TopicReaders>(new TopicReaders(c, participant));
 }
 
 TopicReaders::~TopicReaders() {
   dds_delete(participant_);
 }
 
-rt::Result<dds_entity_t> TopicReaders::add(dds::Topic t, int depth) {
+rt::Result<dds_entity_t> TopicReaders::add(dds::Topic t, int depth, std::function<void(dds_entity_t)> take) {
   const std::string name = topic_name(t);
   const dds_topic_descriptor_t* type = config_.ros2_names ? descriptor<true>(t) : descriptor<false>(t);
   const dds_entity_t topic = dds_create_topic(participant_, type, name.c_str(), nullptr, nullptr);
   if (topic < 0) return dds::dds_error("creating DDS topic " + name, topic);
   dds::QosPtr qos = dds::reader_qos(t);
   dds_qset_history(qos.get(), DDS_HISTORY_KEEP_LAST, depth);
-  const dds_entity_t reader = dds_create_reader(participant_, topic, qos.get(), nullptr);
+  takers_.push_back(std::move(take));
+  dds_listener_t* listener = dds_create_listener(&takers_.back());
+  dds_lset_data_available(listener, [](dds_entity_t reader, void* taker) {
+    (*static_cast<std::function<void(dds_entity_t)>*>(taker))(reader);
+  });
+  const dds_entity_t reader = dds_create_reader(participant_, topic, qos.get(), listener);
+  dds_delete_listener(listener);
   if (reader < 0) return dds::dds_error("creating a DDS reader of " + name, reader);
-  const dds_entity_t condition = dds_create_readcondition(reader, DDS_ANY_STATE);
-  if (condition < 0) return dds::dds_error("creating a read condition on " + name, condition);
-  if (const dds_return_t rc = dds_waitset_attach(waitset_, condition, reader); rc < 0)
-    return dds::dds_error("attaching " + name + " to the waitset", rc);
   return reader;
-}
-
-void TopicReaders::wait_until(dds_time_t until) const {
-  (void)dds_waitset_wait_until(waitset_, nullptr, 0, until);
 }
 
 std::uint32_t TopicReaders::matched(dds_entity_t reader) noexcept {

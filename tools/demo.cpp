@@ -17,6 +17,7 @@
 #include <cstring>
 #include <filesystem>
 #include <map>
+#include <mutex>
 #include <optional>
 #include <set>
 #include <regex>
@@ -127,17 +128,25 @@ class DriveWatch {
       return std::hypot(o->kinematics.position.x - ego_x_, o->kinematics.position.y - ego_y_);
     };
     std::sort(shown.begin(), shown.end(), [&](auto* a, auto* b) { return distance(a) < distance(b); });
-    std::printf("scan %4llu  +%5.1f s  tracks %3u (%3u confirmed)",
-                static_cast<unsigned long long>(s.scan_index), t - first_stamp_s_, s.objects._length,
-                confirmed);
-    for (std::size_t i = 0; i < shown.size() && i < 3; ++i) {
+    char text[512];
+    int at = std::snprintf(text, sizeof(text), "scan %4llu  +%5.1f s  tracks %3u (%3u confirmed)",
+                           static_cast<unsigned long long>(s.scan_index), t - first_stamp_s_,
+                           s.objects._length, confirmed);
+    for (std::size_t i = 0; i < shown.size() && i < 3 && at > 0 && at < static_cast<int>(sizeof(text)); ++i) {
       const auto& o = *shown[i];
-      std::printf("  | #%llu %s (%.1f, %.1f) %.1f m/s", static_cast<unsigned long long>(o.object_id),
-                  shown_class(o).name, o.kinematics.position.x, o.kinematics.position.y,
-                  std::hypot(o.kinematics.velocity.x, o.kinematics.velocity.y));
+      at += std::snprintf(text + at, sizeof(text) - static_cast<std::size_t>(at),
+                          "  | #%llu %s (%.1f, %.1f) %.1f m/s", static_cast<unsigned long long>(o.object_id),
+                          shown_class(o).name, o.kinematics.position.x, o.kinematics.position.y,
+                          std::hypot(o.kinematics.velocity.x, o.kinematics.velocity.y));
     }
-    std::printf("\n");
-    std::fflush(stdout);
+    pending_.emplace_back(text);
+  }
+
+  // Prints the lines of the scans that arrived since the last call (not on the receive thread).
+  void print_lines() {
+    for (const std::string& line : pending_) std::printf("%s\n", line.c_str());
+    if (!pending_.empty()) std::fflush(stdout);
+    pending_.clear();
   }
 
   void on_health(const typename T::Health& s, dds_time_t, const dds_sample_info_t&) {
@@ -192,6 +201,7 @@ class DriveWatch {
   std::vector<BoxView> segments_;
   std::vector<cv::Point2f> ego_path_;
   std::map<std::uint64_t, std::vector<cv::Point2f>> paths_;
+  std::vector<std::string> pending_;
 };
 
 // The drive seen live: stac run and stac replay as children, this process reading DDS.
@@ -203,13 +213,25 @@ template <class T>
 int watch_drive(const DemoOptions& o, const std::filesystem::path& dir, const std::string& config,
                 const std::string& loopback_xml, const dds::PublisherConfig& dds_config,
                 const std::string& pcap, DemoPorts ports) {
-  auto readers = TopicReaders::create(dds_config);
+  // Every sample is taken on Cyclone's receive thread as it arrives (the latency measured is the
+  // one of a consumer doing so) and recorded under `mutex`; this thread prints and waits.
+  DriveWatch<T> w;
+  std::mutex mutex;
+  std::uint64_t arrived = 0;  // samples of any topic, under `mutex`
+  const auto record = [&](auto member) {
+    return [&, member](const auto& s, dds_time_t t, const dds_sample_info_t& i) {
+      const std::lock_guard<std::mutex> lock(mutex);
+      (w.*member)(s, t, i);
+      ++arrived;
+    };
+  };
+  auto readers = TopicReaders::create(dds_config);  // after what its callbacks use: deleted first
   if (!readers) return fail(readers.error().message);
   TopicReaders& r = **readers;
-  auto tracked = r.add(dds::Topic::kTrackedObjects, 64);
-  auto health = r.add(dds::Topic::kHealth, 64);
-  auto pose = r.add(dds::Topic::kEgoPose, 64);
-  auto segments = r.add(dds::Topic::kSegments, 4);
+  auto tracked = r.listen<typename T::TrackedObjects>(dds::Topic::kTrackedObjects, 64, record(&DriveWatch<T>::on_tracked));
+  auto health = r.listen<typename T::Health>(dds::Topic::kHealth, 64, record(&DriveWatch<T>::on_health));
+  auto pose = r.listen<typename T::EgoPose>(dds::Topic::kEgoPose, 64, record(&DriveWatch<T>::on_pose));
+  auto segments = r.listen<typename T::ScanSegments>(dds::Topic::kSegments, 4, record(&DriveWatch<T>::on_segments));
   for (const auto* e : {&tracked, &health, &pose, &segments})
     if (!*e) return fail(e->error().message);
 
@@ -245,30 +267,20 @@ int watch_drive(const DemoOptions& o, const std::filesystem::path& dir, const st
                "(another terminal: DDS_TEST_TAG=%s stac echo tracked_objects --domain %u)\n",
                std::getenv("DDS_TEST_TAG"), dds_config.domain_id);
 
-  DriveWatch<T> w;
-  const auto take_all = [&]() -> rt::Result<int> {
-    int n = 0;
-    for (auto [reader, topic] : {std::pair{*tracked, 0}, {*health, 1}, {*pose, 2}, {*segments, 3}}) {
-      rt::Result<int> k = 0;
-      using Info = const dds_sample_info_t&;
-      if (topic == 0) k = r.take<typename T::TrackedObjects>(reader, [&](const auto& s, dds_time_t t, Info i) { w.on_tracked(s, t, i); });
-      if (topic == 1) k = r.take<typename T::Health>(reader, [&](const auto& s, dds_time_t t, Info i) { w.on_health(s, t, i); });
-      if (topic == 2) k = r.take<typename T::EgoPose>(reader, [&](const auto& s, dds_time_t t, Info i) { w.on_pose(s, t, i); });
-      if (topic == 3) k = r.take<typename T::ScanSegments>(reader, [&](const auto& s, dds_time_t t, Info i) { w.on_segments(s, t, i); });
-      if (!k) return k;
-      n += *k;
-    }
-    return n;
-  };
   // Until the replay has ended and nothing more arrived for kQuietS (or a child fails, or Ctrl-C).
   const dds_time_t deadline = dds_time() + DDS_SECS(static_cast<long>(3 * o.seconds + 60));
   dds_time_t last_sample = dds_time();
+  std::uint64_t seen = 0;
   std::optional<int> replay_code;
+  const auto print_lines = [&] {
+    const std::lock_guard<std::mutex> lock(mutex);
+    w.print_lines();
+    return arrived;
+  };
   for (;;) {
-    auto n = take_all();
-    if (!n) return fail(n.error().message);
+    const std::uint64_t n = print_lines();
     const dds_time_t now = dds_time();
-    if (*n > 0) last_sample = now;
+    if (n != seen) seen = n, last_sample = now;
     if (!replay_code) replay_code = replay->poll();
     if (replay_code && *replay_code != 0)
       return fail("stac replay failed:\n" + replay->log_tail(8));
@@ -276,11 +288,13 @@ int watch_drive(const DemoOptions& o, const std::filesystem::path& dir, const st
     if (run->poll()) return run_failed("stac run ended during the drive");
     if (g_interrupted) break;
     if (now > deadline) return run_failed("the drive did not end in time (replay or DDS stuck)");
-    r.wait_until(std::min(now + DDS_MSECS(100), deadline));
+    dds_sleepfor(DDS_MSECS(20));
   }
   const int run_code = run->stop(SIGINT, kStopTimeoutS);
   (void)replay->stop(SIGINT, kStopTimeoutS);
-  if (auto n = take_all(); !n) return fail(n.error().message);  // written before the stop
+  dds_sleepfor(DDS_MSECS(200));  // what stac run wrote just before it stopped
+  readers->reset();              // no callback runs after this
+  w.print_lines();
   const std::string run_log = run->log();
   if (run_code != 0) return run_failed("stac run did not stop cleanly (exit " + std::to_string(run_code) + ")");
 

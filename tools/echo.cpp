@@ -1,5 +1,6 @@
 // stac echo TOPIC: subscribes to one of STAC's DDS topics and prints a one-line summary per
 // sample; exits after --count samples (0) or at --timeout with a message saying what arrived (1).
+#include <atomic>
 #include <cstdio>
 #include <string>
 
@@ -15,7 +16,7 @@ namespace stac::tools {
 namespace {
 
 struct EchoOptions {
-  std::string topic, config;
+  std::string topic, config, dds_config;
   int count = 0;
   double timeout_s = 10;
   int domain = -1;
@@ -75,17 +76,17 @@ void print_sample(const S& s) {
   }
 }
 
-// Takes what `reader` of topic `t` holds now, as the topic's sample type.
+// A reader of topic `t` with the topic's sample type, each sample passed to f.
 template <bool Ros2, class F>
-rt::Result<int> take_samples(const TopicReaders& readers, dds_entity_t reader, dds::Topic t, F&& f) {
+rt::Result<dds_entity_t> listen(TopicReaders& readers, dds::Topic t, int depth, F f) {
   using T = dds::IdlTypes<Ros2>;
   switch (t) {
-    case dds::Topic::kTrackedObjects: return readers.take<typename T::TrackedObjects>(reader, f);
-    case dds::Topic::kSegments: return readers.take<typename T::ScanSegments>(reader, f);
-    case dds::Topic::kEgoPose: return readers.take<typename T::EgoPose>(reader, f);
-    case dds::Topic::kHealth: return readers.take<typename T::Health>(reader, f);
+    case dds::Topic::kTrackedObjects: return readers.listen<typename T::TrackedObjects>(t, depth, f);
+    case dds::Topic::kSegments: return readers.listen<typename T::ScanSegments>(t, depth, f);
+    case dds::Topic::kEgoPose: return readers.listen<typename T::EgoPose>(t, depth, f);
+    case dds::Topic::kHealth: return readers.listen<typename T::Health>(t, depth, f);
   }
-  return 0;
+  return rt::make_error("unknown topic");
 }
 
 int run_echo(const EchoOptions& o) {
@@ -95,43 +96,42 @@ int run_echo(const EchoOptions& o) {
   if (!settings) return fail(settings.error().message);
   dds::PublisherConfig c = *settings;
   if (o.domain >= 0) c.domain_id = static_cast<std::uint32_t>(o.domain);
+  if (!o.dds_config.empty()) c.config_uri = "file://" + std::filesystem::absolute(o.dds_config).string();
   auto readers = TopicReaders::create(c);
   if (!readers) return fail(readers.error().message);
   const std::string name = (*readers)->topic_name(*topic);
-  // The topic's QoS with a deeper history: a diagnostic shows every sample, not only the latest.
-  auto reader = (*readers)->add(*topic, 64);
-  if (!reader) return fail(reader.error().message);
-  std::fprintf(stderr, "stac echo: listening on %s (domain %u)\n", name.c_str(), c.domain_id);
 
+  // Samples are taken and printed on Cyclone's receive thread as they arrive; this thread waits.
   rt::LatencyHistogram latency(1'000'000'000, 100'000);  // publish -> receive, 10 us bins over 1 s
-  int received = 0;
-  const dds_time_t end = dds_time() + static_cast<dds_duration_t>(o.timeout_s * 1e9);
+  std::atomic<int> received = 0;
   const auto on_sample = [&](const auto& sample, dds_time_t now, const dds_sample_info_t& info) {
-    if (o.count > 0 && received >= o.count) return;
+    if (o.count > 0 && received.load(std::memory_order_relaxed) >= o.count) return;
     latency.add(now - info.source_timestamp);
     print_sample(sample);
     std::fflush(stdout);
-    ++received;
+    received.fetch_add(1, std::memory_order_release);
   };
-  while ((o.count == 0 || received < o.count) && dds_time() < end) {
-    const rt::Result<int> n = c.ros2_names ? take_samples<true>(**readers, *reader, *topic, on_sample)
-                                           : take_samples<false>(**readers, *reader, *topic, on_sample);
-    if (!n) return fail(n.error().message);
-    if (*n == 0) (*readers)->wait_until(end);
-  }
+  // The topic's QoS with a deeper history: a diagnostic shows every sample, not only the latest.
+  auto reader = c.ros2_names ? listen<true>(**readers, *topic, 64, on_sample)
+                             : listen<false>(**readers, *topic, 64, on_sample);
+  if (!reader) return fail(reader.error().message);
+  std::fprintf(stderr, "stac echo: listening on %s (domain %u)\n", name.c_str(), c.domain_id);
+  const dds_time_t end = dds_time() + static_cast<dds_duration_t>(o.timeout_s * 1e9);
+  while ((o.count == 0 || received.load(std::memory_order_acquire) < o.count) && dds_time() < end)
+    dds_sleepfor(DDS_MSECS(10));
+  readers->reset();  // no callback runs after this
   if (o.latency && latency.count() > 0) {
     const auto us = [](std::int64_t ns) { return static_cast<double>(ns) * 1e-3; };
     std::fprintf(
         stderr,
         "stac echo: publish -> receive latency over %llu samples: p50 %.0f us, p99 %.0f us, "
-        "max %.0f us (writer's source timestamp to this reader's take, one host clock)\n",
+        "max %.0f us (writer's source timestamp to this reader's take on arrival, one host clock)\n",
         static_cast<unsigned long long>(latency.count()), us(latency.percentile(0.5)),
         us(latency.percentile(0.99)), us(latency.max_ns()));
   }
-  readers->reset();
   if (o.count > 0 && received < o.count) {
     std::fprintf(stderr, "stac echo: timed out after %.1f s with %d of %d samples on %s (is a publisher running "
-                 "on domain %u with the same dds config?)\n", o.timeout_s, received, o.count, name.c_str(), c.domain_id);
+                 "on domain %u with the same dds config?)\n", o.timeout_s, received.load(), o.count, name.c_str(), c.domain_id);
     return 1;
   }
   if (received == 0) {
@@ -139,7 +139,7 @@ int run_echo(const EchoOptions& o) {
                  "the same dds config?)\n", name.c_str(), o.timeout_s, c.domain_id);
     return 1;
   }
-  std::fprintf(stderr, "stac echo: %d samples on %s\n", received, name.c_str());
+  std::fprintf(stderr, "stac echo: %d samples on %s\n", received.load(), name.c_str());
   return 0;
 }
 
@@ -154,6 +154,8 @@ void add_echo_command(CLI::App& app) {
   cmd->add_option("--timeout", o->timeout_s, "give up after this many seconds")->check(CLI::PositiveNumber);
   cmd->add_option("--domain", o->domain, "DDS domain id (default: dds.domain_id of the config)");
   cmd->add_option("--config", o->config, "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
+  cmd->add_option("--dds-config", o->dds_config, "Cyclone DDS XML (default: dds.config_file)")
+      ->check(CLI::ExistingFile);
   cmd->add_flag("--latency", o->latency,
                 "at the end, print the publish -> receive latency (p50, p99, max) of the samples");
   cmd->callback([o] {
