@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "dds/idl_types.hpp"
+#include "tools/capture_scans.hpp"
 #include "tools/child_process.hpp"
 #include "tools/commands.hpp"
 #include "tools/dds_reading.hpp"
@@ -204,6 +205,33 @@ class DriveWatch {
   std::vector<std::string> pending_;
 };
 
+// The points of complete scan `index` of the capture (the scan stac run published as that index
+// when no packet was lost), in the vehicle frame (the sensor's extrinsics; not deskewed).
+rt::Result<std::vector<cv::Point3f>> last_scan_points(const std::string& config, const std::string& pcap,
+                                                      std::uint64_t index) {
+  auto vs = load_velodyne_settings(config);
+  if (!vs) return rt::Unexpected<rt::Error>{vs.error()};
+  auto es = load_ego_settings(config);
+  if (!es) return rt::Unexpected<rt::Error>{es.error()};
+  auto calibration = velodyne::load_calibration(vs->calibration);
+  if (!calibration) return rt::Unexpected<rt::Error>{calibration.error()};
+  const Eigen::Isometry3f vehicle_T_sensor = es->deskew.vehicle_T_sensor.cast<float>();
+  std::vector<cv::Point3f> points;
+  std::uint64_t k = 0;
+  auto n = for_each_complete_scan(pcap, *calibration, *vs, [&](const velodyne::Scan& scan) {
+    if (k++ < index) return true;
+    points.reserve(scan.points.size());
+    for (const velodyne::Point& p : scan.points) {
+      const Eigen::Vector3f v = vehicle_T_sensor * Eigen::Vector3f(p.x, p.y, p.z);
+      points.emplace_back(v.x(), v.y(), v.z());
+    }
+    return false;
+  });
+  if (!n) return rt::Unexpected<rt::Error>{n.error()};
+  if (points.empty()) return rt::make_error(pcap + " holds no complete scan " + std::to_string(index));
+  return points;
+}
+
 // The drive seen live: stac run and stac replay as children, this process reading DDS.
 struct DemoPorts {
   std::uint16_t udp = 0, tcp = 0;  // Velodyne UDP, INS TCP (127.0.0.1)
@@ -323,7 +351,12 @@ int watch_drive(const DemoOptions& o, const std::filesystem::path& dir, const st
       u(w.deadline_misses_), drops.empty() ? " none" : drops.c_str(), percentile(w.end_to_end_ms_, 0.5),
       percentile(w.end_to_end_ms_, 0.99), w.end_to_end_ms_.size(), percentile(w.latency_ms_, 0.5),
       percentile(w.latency_ms_, 0.99), percentile(w.latency_ms_, 1.0));
-  const DriveView view = w.view();
+  DriveView view = w.view();
+  if (auto p = last_scan_points(config, pcap, view.last.scan_index); p) {
+    view.points = std::move(*p);
+  } else {
+    std::fprintf(stderr, "stac demo: warning: no points in the picture: %s\n", p.error().message.c_str());
+  }
   for (auto [name, picture] : {std::pair{"demo_last_scan.png", DrivePicture::kLastScan},
                                {"demo_tracks.png", DrivePicture::kWholeDrive}}) {
     if (auto d = draw_drive(view, picture, dir / name); !d) return fail(d.error().message);

@@ -48,6 +48,8 @@ rt::Result<bool> draw_drive(const DriveView& v, DrivePicture picture, const std:
   o.height_bar = false;
   o.size_px = 1000;
   o.range_m = 40;
+  o.z_min_m = -0.5;  // vehicle frame: the road at about 0
+  o.z_max_m = 3.0;
   double centre_x = 0, centre_y = 0;
   if (picture == DrivePicture::kWholeDrive) {  // the extent of the vehicle's path, with a margin
     float x_min = 0, x_max = 0, y_min = 0, y_max = 0;
@@ -68,6 +70,7 @@ rt::Result<bool> draw_drive(const DriveView& v, DrivePicture picture, const std:
     return out;
   };
   if (picture == DrivePicture::kLastScan) {
+    for (const cv::Point3f& p : v.points) bev.add_point(p.x, p.y, p.z);
     for (const BoxView& b : v.segments) {
       const cv::Point2f c = to(b.x, b.y);
       bev.add_box(c.x, c.y, b.length, b.width, b.yaw - to.yaw, cv::Scalar(90, 90, 90));
@@ -102,7 +105,7 @@ rt::Result<bool> draw_drive(const DriveView& v, DrivePicture picture, const std:
                 static_cast<unsigned long long>(v.last.scan_index), confirmed);
   bev.add_legend(line);
   bev.add_legend(picture == DrivePicture::kLastScan
-                     ? "grey: segments; coloured: tracks, #id (class once classified), paths of moving ones"
+                     ? "points by height (not deskewed); grey: segments; coloured: tracks, #id (class once classified), paths"
                      : "the whole drive: the vehicle's path (white), paths of the tracks that moved");
   bev.add_legend("frame of the vehicle's last pose: x forward = up, y left = left");
   return bev.save(png);

@@ -32,13 +32,14 @@ struct ScanView {
 struct DriveView {
   ScanView last;
   std::vector<BoxView> segments;  // the last segments sample
+  std::vector<cv::Point3f> points;  // the last scan's points, vehicle frame of the last pose (m)
   float ego_x = 0, ego_y = 0, ego_yaw = 0;  // the last pose (world)
   std::vector<cv::Point2f> ego_path;        // world
   std::map<std::uint64_t, std::vector<cv::Point2f>> paths;  // confirmed tracks' positions, world
 };
 
 enum class DrivePicture {
-  kLastScan,    // 50 m around the vehicle: segments (grey), tracks (boxes, ids, class), paths
+  kLastScan,    // 40 m around the vehicle: points by height, segments (grey), tracks (boxes, ids), paths
   kWholeDrive,  // the whole drive's extent: the vehicle's path and every confirmed track's path
 };
 
