@@ -328,8 +328,10 @@ int watch_drive(const DemoOptions& o, const std::filesystem::path& dir, const st
 
   // 4. The summary and the pictures.
   const std::uint64_t published = summary_number(run_log, R"((\d+) published,)").value_or(0);
-  std::uint64_t missing = published > w.scans_.size() ? published - w.scans_.size() : 0;
-  for (std::size_t i = 0; i < w.scans_.size(); ++i) missing += w.scans_[i] != i ? 1 : 0;
+  std::set<std::uint64_t> arrived_indices;  // of 0..published-1
+  for (std::uint64_t i : w.scans_)
+    if (i < published) arrived_indices.insert(i);
+  const std::uint64_t missing = published - arrived_indices.size();
   std::fprintf(stderr, "stac demo: 4/4 the drive is over; stac run's own summary:\n%s",
                run_log.substr(std::min(run_log.size(), run_log.find("stac run: stopped"))).c_str());
   const auto u = [](std::uint64_t v) { return static_cast<unsigned long long>(v); };
