@@ -43,11 +43,27 @@ void BirdsEye::add_point(float x, float y, float z) noexcept {
 }
 
 void BirdsEye::add_point(float x, float y, const cv::Vec3b& bgr) noexcept {
+  const cv::Point p = pixel(x, y);
+  if (p.x < 0 || p.y < 0 || p.x >= options_.size_px || p.y >= options_.size_px) return;
+  image_.at<cv::Vec3b>(p.y, p.x) = bgr;
+}
+
+cv::Point BirdsEye::pixel(double x, double y) const noexcept {
   // x forward is up in the picture, y left is left.
-  const int col = static_cast<int>(std::lround(options_.size_px / 2.0 - y * px_per_m_));
-  const int row = static_cast<int>(std::lround(options_.size_px / 2.0 - x * px_per_m_));
-  if (col < 0 || row < 0 || col >= options_.size_px || row >= options_.size_px) return;
-  image_.at<cv::Vec3b>(row, col) = bgr;
+  return {static_cast<int>(std::lround(options_.size_px / 2.0 - y * px_per_m_)),
+          static_cast<int>(std::lround(options_.size_px / 2.0 - x * px_per_m_))};
+}
+
+void BirdsEye::add_path(std::span<const cv::Point2f> points_m, const cv::Scalar& bgr, int thickness_px) {
+  for (std::size_t i = 1; i < points_m.size(); ++i) {
+    cv::line(image_, pixel(points_m[i - 1].x, points_m[i - 1].y), pixel(points_m[i].x, points_m[i].y),
+             bgr, thickness_px, cv::LINE_AA);
+  }
+}
+
+void BirdsEye::add_label(float x, float y, const std::string& text, const cv::Scalar& bgr) {
+  cv::putText(image_, text, pixel(x, y) + cv::Point(4, -4), cv::FONT_HERSHEY_SIMPLEX, 0.35, bgr, 1,
+              cv::LINE_AA);
 }
 
 void BirdsEye::add_box(float cx, float cy, float length, float width, float yaw, const cv::Scalar& bgr) {
@@ -58,8 +74,7 @@ void BirdsEye::add_box(float cx, float cy, float length, float width, float yaw,
   for (int i = 0; i < 4; ++i) {
     const double x = cx + c * corners[i][0] - s * corners[i][1];
     const double y = cy + s * corners[i][0] + c * corners[i][1];
-    px[i] = cv::Point(static_cast<int>(std::lround(options_.size_px / 2.0 - y * px_per_m_)),
-                      static_cast<int>(std::lround(options_.size_px / 2.0 - x * px_per_m_)));
+    px[i] = pixel(x, y);
   }
   for (int i = 0; i < 4; ++i) cv::line(image_, px[i], px[(i + 1) % 4], bgr, 1, cv::LINE_AA);
 }

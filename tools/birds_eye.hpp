@@ -4,6 +4,7 @@
 #pragma once
 
 #include <filesystem>
+#include <span>
 #include <string>
 
 #include <opencv2/core.hpp>
@@ -30,11 +31,16 @@ class BirdsEye {
   void add_point(float x, float y, const cv::Vec3b& bgr) noexcept;
   // An oriented rectangle: centre (m), length along yaw (rad, from x), width across.
   void add_box(float cx, float cy, float length, float width, float yaw, const cv::Scalar& bgr);
+  // A polyline through points (m), e.g. a track's path.
+  void add_path(std::span<const cv::Point2f> points_m, const cv::Scalar& bgr, int thickness_px = 1);
+  // A short text next to a point (m), e.g. a track id.
+  void add_label(float x, float y, const std::string& text, const cv::Scalar& bgr);
   // A text line in the legend (top left).
   void add_legend(const std::string& line);
   rt::Result<bool> save(const std::filesystem::path& png) const;
 
  private:
+  [[nodiscard]] cv::Point pixel(double x, double y) const noexcept;
   BirdsEyeOptions options_;
   double px_per_m_;
   cv::Mat image_;

@@ -1,19 +1,37 @@
-// stac demo: the main job on a built-in default. A synthetic HDL-64E capture is written to pcap,
-// sent at the sensor's pace over loopback UDP into the live receiver (receiver thread -> slot
-// exchange -> consumer, as on the vehicle), and decoded offline from the pcap; both must agree.
-#include <atomic>
-#include <cstdio>
-#include <filesystem>
-#include <thread>
+// stac demo: the main job on a built-in default, no sensor needed. A simulated urban drive
+// (`stac sim`) is written to a pcap with its truth, replayed over loopback (`stac replay`: the
+// HDL-64E's UDP packets and the Applanix TCP stream at the recorded pace) into the live component
+// (`stac run`, Cyclone on config/dds/loopback.xml), both run as child processes exactly as a user
+// would run them; this process subscribes to the DDS topics, prints a line per scan as the tracks
+// arrive, and at the end a summary and pictures (tools/demo_pictures.hpp).
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
-#include "drivers/io/pcap_writer.hpp"
-#include "drivers/io/udp_receiver.hpp"
-#include "drivers/velodyne/scan_stream.hpp"
-#include "rt/clock.hpp"
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <map>
+#include <mutex>
+#include <optional>
+#include <set>
+#include <regex>
+#include <vector>
+
+#include "dds/idl_types.hpp"
+#include "tools/capture_scans.hpp"
+#include "tools/child_process.hpp"
 #include "tools/commands.hpp"
-#include "tools/decode.hpp"
-#include "tools/demo_capture.hpp"
+#include "tools/dds_reading.hpp"
+#include "tools/dds_settings.hpp"
+#include "tools/demo_pictures.hpp"
 #include "tools/settings.hpp"
+#include "tools/sim.hpp"
 
 namespace stac::tools {
 namespace {
@@ -21,152 +39,384 @@ namespace {
 struct DemoOptions {
   std::string out = "stac-demo";
   std::string config;
-  double seconds = 2.0;
+  double seconds = 12.0;
+  std::uint64_t seed = 2026;
+  int port = 0, ins_port = 0;  // 0: any free port on 127.0.0.1
+  int domain = -1;             // < 0: dds.domain_id
 };
 
-constexpr std::int64_t kDemoStartNs = 1'767'268'800'000'000'000;  // 2026-01-01 12:00:00 UTC
+constexpr double kMatchTimeoutS = 30;  // stac run up and its writers matched
+constexpr double kQuietS = 2;          // after the replay: nothing more for this long ends the drive
+constexpr double kStopTimeoutS = 20;   // stac run's shutdown after SIGINT
 
-struct LiveResult {
-  std::uint64_t scans = 0, complete = 0, points = 0, packets = 0;
-  io::UdpReceiverCounters counters{};
-};
+volatile std::sig_atomic_t g_interrupted = 0;
+extern "C" void on_interrupt(int) {
+  g_interrupted = 1;
+}
 
-// Sends the capture over loopback at its own pace and decodes it as `stac run` will.
-rt::Result<LiveResult> run_live(const velodyne::Calibration& calibration,
-                                const VelodyneSettings& settings,
-                                const std::vector<DemoPacket>& packets) {
-  io::UdpReceiverConfig rc;
-  rc.bind_address = "127.0.0.1";
-  rc.port = 0;  // any free port
-  rc.receive_buffer_bytes = settings.receive_buffer_bytes;
-  auto receiver = io::UdpReceiver::open(rc);
-  if (!receiver) return rt::Unexpected<rt::Error>{receiver.error()};
-  auto sender = io::UdpSender::open("127.0.0.1", receiver->port());
-  if (!sender) return rt::Unexpected<rt::Error>{sender.error()};
-
-  velodyne::ScanStream stream(calibration, settings.assembler,
-                              static_cast<std::size_t>(settings.scan_slots));
-  std::atomic<bool> sending_done{false};
-  std::atomic<bool> receiving_done{false};
-  std::atomic<std::uint64_t> received{0};
-  std::thread receive_thread([&] {  // the receiver thread of the architecture
-    std::array<io::Datagram, 32> batch{};
-    std::int64_t quiet_since = 0;
-    while (true) {
-      const int n = receiver->receive(batch, 20);
-      for (int i = 0; i < n; ++i) {
-        const io::Datagram& d = batch[static_cast<std::size_t>(i)];
-        (void)stream.add_packet(d.payload, d.stamp_ns);
-      }
-      received += static_cast<std::uint64_t>(n > 0 ? n : 0);
-      if (n > 0) {
-        quiet_since = 0;
-      } else if (sending_done) {
-        if (quiet_since == 0) quiet_since = rt::monotonic_ns();
-        if (rt::monotonic_ns() - quiet_since > 200'000'000) break;
-      }
-    }
-    (void)stream.finish();
-    receiving_done = true;
-  });
-
-  LiveResult result;
-  std::thread send_thread([&] {  // paced like the sensor: packet k at its capture time
-    const std::int64_t t0 = rt::monotonic_ns();
-    for (const DemoPacket& p : packets) {
-      const std::int64_t due = t0 + (p.receive_stamp_ns - packets.front().receive_stamp_ns);
-      while (rt::monotonic_ns() < due) std::this_thread::sleep_for(std::chrono::microseconds(50));
-      (void)sender->send(p.bytes);
-    }
-    sending_done = true;
-  });
-  auto consume = [&] {
-    while (const velodyne::Scan* s = stream.take()) {
-      ++result.scans;
-      result.complete += s->header.complete() ? 1 : 0;
-      result.points += s->points.size();
-      stream.release();
-    }
-  };
-  while (!receiving_done) {  // the perception thread's place
-    consume();
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+// A port on 127.0.0.1 for a child to bind: `wanted` once checked free, or (0) one the kernel gives
+// out. The socket is closed again before the child binds (a short race, reported by the child).
+rt::Result<std::uint16_t> loopback_port(int type, int wanted, const char* option) {
+  const char* kind = type == SOCK_DGRAM ? "UDP" : "TCP";
+  const int fd = ::socket(AF_INET, type | SOCK_CLOEXEC, 0);
+  if (fd < 0) return rt::make_error(std::string(kind) + " socket: " + std::strerror(errno));
+  const int on = 1;
+  if (type == SOCK_STREAM) (void)::setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &on, sizeof(on));
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  a.sin_port = htons(static_cast<std::uint16_t>(wanted));
+  socklen_t len = sizeof(a);
+  if (::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof(a)) != 0) {
+    const int e = errno;
+    ::close(fd);
+    return rt::make_error(std::string(kind) + " port " + std::to_string(wanted) +
+                          " on 127.0.0.1 is not free (" + std::strerror(e) +
+                          "): another program uses it; pass " + option +
+                          " with another port, or 0 for any free one");
   }
-  send_thread.join();
-  receive_thread.join();
-  consume();
-  result.packets = received;
-  result.counters = receiver->counters();
-  return result;
+  (void)::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len);
+  ::close(fd);
+  return ntohs(a.sin_port);
+}
+
+// A number of stac run's summary, e.g. "(\d+) published,"; nullopt when absent.
+std::optional<std::uint64_t> summary_number(const std::string& log, const char* pattern) {
+  std::smatch m;
+  if (!std::regex_search(log, m, std::regex(pattern))) return std::nullopt;
+  return std::stoull(m[1].str());
+}
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  const auto k = static_cast<std::size_t>(std::ceil(q * static_cast<double>(v.size()))) - 1;
+  return v[std::min(k, v.size() - 1)];
+}
+
+// What arrives on DDS during the drive, and the line per scan.
+template <class T>
+class DriveWatch {
+ public:
+  void on_tracked(const typename T::TrackedObjects& s, dds_time_t now, const dds_sample_info_t& info) {
+    const double t = seconds(s.stamp);
+    if (scans_.empty()) first_stamp_s_ = t;
+    latency_ms_.push_back(static_cast<double>(now - info.source_timestamp) * 1e-6);
+    scans_.push_back(s.scan_index);
+    last_ = ScanView{};
+    last_.scan_index = s.scan_index;
+    std::uint32_t confirmed = 0;
+    std::vector<const typename T::TrackedObject*> shown;
+    for (std::uint32_t i = 0; i < s.objects._length; ++i) {
+      const auto& o = s.objects._buffer[i];
+      const auto& p = o.kinematics.position;
+      const auto& v = o.kinematics.velocity;
+      const ShownClass c = shown_class(o);
+      last_.tracks.push_back({o.object_id, static_cast<float>(p.x), static_cast<float>(p.y),
+                              static_cast<float>(o.shape.dimensions.x),
+                              static_cast<float>(o.shape.dimensions.y), o.shape.yaw,
+                              static_cast<float>(std::hypot(v.x, v.y)), o.state, c.name});
+      if (o.state == 0) continue;  // tentative
+      ++confirmed;
+      paths_[o.object_id].emplace_back(static_cast<float>(p.x), static_cast<float>(p.y));
+      shown.push_back(&o);
+    }
+    for (std::uint32_t i = 0; i < s.objects._length; ++i) ids_.insert(s.objects._buffer[i].object_id);
+    confirmed_per_scan_.push_back(confirmed);
+    tracks_per_scan_.push_back(s.objects._length);
+    // The three confirmed tracks nearest the vehicle (its last pose), nearest first.
+    const auto distance = [&](const typename T::TrackedObject* o) {
+      return std::hypot(o->kinematics.position.x - ego_x_, o->kinematics.position.y - ego_y_);
+    };
+    std::sort(shown.begin(), shown.end(), [&](auto* a, auto* b) { return distance(a) < distance(b); });
+    char text[512];
+    int at = std::snprintf(text, sizeof(text), "scan %4llu  +%5.1f s  tracks %3u (%3u confirmed)",
+                           static_cast<unsigned long long>(s.scan_index), t - first_stamp_s_,
+                           s.objects._length, confirmed);
+    for (std::size_t i = 0; i < shown.size() && i < 3 && at > 0 && at < static_cast<int>(sizeof(text)); ++i) {
+      const auto& o = *shown[i];
+      at += std::snprintf(text + at, sizeof(text) - static_cast<std::size_t>(at),
+                          "  | #%llu %s (%.1f, %.1f) %.1f m/s", static_cast<unsigned long long>(o.object_id),
+                          shown_class(o).name, o.kinematics.position.x, o.kinematics.position.y,
+                          std::hypot(o.kinematics.velocity.x, o.kinematics.velocity.y));
+    }
+    pending_.emplace_back(text);
+  }
+
+  // Prints the lines of the scans that arrived since the last call (not on the receive thread).
+  void print_lines() {
+    for (const std::string& line : pending_) std::printf("%s\n", line.c_str());
+    if (!pending_.empty()) std::fflush(stdout);
+    pending_.clear();
+  }
+
+  void on_health(const typename T::Health& s, dds_time_t, const dds_sample_info_t&) {
+    end_to_end_ms_.push_back(static_cast<double>(s.end_to_end_latency_us) * 1e-3);
+    deadline_misses_ = s.deadline_misses;
+    drops_.clear();
+    for (std::uint32_t i = 0; i < s.drops._length; ++i)
+      drops_.emplace_back(s.drops._buffer[i].cause, s.drops._buffer[i].count);
+  }
+
+  void on_pose(const typename T::EgoPose& s, dds_time_t, const dds_sample_info_t&) {
+    ego_x_ = s.position.x;
+    ego_y_ = s.position.y;
+    const double* q = s.orientation;  // x, y, z, w
+    ego_yaw_ = std::atan2(2.0 * (q[3] * q[2] + q[0] * q[1]), 1.0 - 2.0 * (q[1] * q[1] + q[2] * q[2]));
+    ego_path_.emplace_back(static_cast<float>(ego_x_), static_cast<float>(ego_y_));
+  }
+
+  void on_segments(const typename T::ScanSegments& s, dds_time_t, const dds_sample_info_t&) {
+    segments_.clear();
+    for (std::uint32_t i = 0; i < s.segments._length; ++i) {
+      const auto& g = s.segments._buffer[i];
+      segments_.push_back({static_cast<float>(g.centroid.x), static_cast<float>(g.centroid.y),
+                           static_cast<float>(g.dimensions.x), static_cast<float>(g.dimensions.y),
+                           g.yaw});
+    }
+  }
+
+  // The last scan's view: its tracks, the segments and the vehicle's pose that came last.
+  [[nodiscard]] DriveView view() const {
+    DriveView v;
+    v.last = last_;
+    v.segments = segments_;
+    v.ego_x = static_cast<float>(ego_x_);
+    v.ego_y = static_cast<float>(ego_y_);
+    v.ego_yaw = static_cast<float>(ego_yaw_);
+    v.ego_path = ego_path_;
+    v.paths = paths_;
+    return v;
+  }
+
+  std::vector<std::uint64_t> scans_;
+  std::vector<std::uint32_t> tracks_per_scan_, confirmed_per_scan_;
+  std::vector<double> latency_ms_, end_to_end_ms_;
+  std::uint64_t deadline_misses_ = 0;
+  std::vector<std::pair<std::string, std::uint64_t>> drops_;
+  std::set<std::uint64_t> ids_;
+
+ private:
+  double first_stamp_s_ = 0, ego_x_ = 0, ego_y_ = 0, ego_yaw_ = 0;
+  ScanView last_;
+  std::vector<BoxView> segments_;
+  std::vector<cv::Point2f> ego_path_;
+  std::map<std::uint64_t, std::vector<cv::Point2f>> paths_;
+  std::vector<std::string> pending_;
+};
+
+// The points of complete scan `index` of the capture (the scan stac run published as that index
+// when no packet was lost), in the vehicle frame (the sensor's extrinsics; not deskewed).
+rt::Result<std::vector<cv::Point3f>> last_scan_points(const std::string& config, const std::string& pcap,
+                                                      std::uint64_t index) {
+  auto vs = load_velodyne_settings(config);
+  if (!vs) return rt::Unexpected<rt::Error>{vs.error()};
+  auto es = load_ego_settings(config);
+  if (!es) return rt::Unexpected<rt::Error>{es.error()};
+  auto calibration = velodyne::load_calibration(vs->calibration);
+  if (!calibration) return rt::Unexpected<rt::Error>{calibration.error()};
+  const Eigen::Isometry3f vehicle_T_sensor = es->deskew.vehicle_T_sensor.cast<float>();
+  std::vector<cv::Point3f> points;
+  std::uint64_t k = 0;
+  auto n = for_each_complete_scan(pcap, *calibration, *vs, [&](const velodyne::Scan& scan) {
+    if (k++ < index) return true;
+    points.reserve(scan.points.size());
+    for (const velodyne::Point& p : scan.points) {
+      const Eigen::Vector3f v = vehicle_T_sensor * Eigen::Vector3f(p.x, p.y, p.z);
+      points.emplace_back(v.x(), v.y(), v.z());
+    }
+    return false;
+  });
+  if (!n) return rt::Unexpected<rt::Error>{n.error()};
+  if (points.empty()) return rt::make_error(pcap + " holds no complete scan " + std::to_string(index));
+  return points;
+}
+
+// The drive seen live: stac run and stac replay as children, this process reading DDS.
+struct DemoPorts {
+  std::uint16_t udp = 0, tcp = 0;  // Velodyne UDP, INS TCP (127.0.0.1)
+};
+
+template <class T>
+int watch_drive(const DemoOptions& o, const std::filesystem::path& dir, const std::string& config,
+                const std::string& loopback_xml, const dds::PublisherConfig& dds_config,
+                const std::string& pcap, DemoPorts ports) {
+  // Every sample is taken on Cyclone's receive thread as it arrives (the latency measured is the
+  // one of a consumer doing so) and recorded under `mutex`; this thread prints and waits.
+  DriveWatch<T> w;
+  std::mutex mutex;
+  std::uint64_t arrived = 0;  // samples of any topic, under `mutex`
+  const auto record = [&](auto member) {
+    return [&, member](const auto& s, dds_time_t t, const dds_sample_info_t& i) {
+      const std::lock_guard<std::mutex> lock(mutex);
+      (w.*member)(s, t, i);
+      ++arrived;
+    };
+  };
+  auto readers = TopicReaders::create(dds_config);  // after what its callbacks use: deleted first
+  if (!readers) return fail(readers.error().message);
+  TopicReaders& r = **readers;
+  auto tracked = r.listen<typename T::TrackedObjects>(dds::Topic::kTrackedObjects, 64, record(&DriveWatch<T>::on_tracked));
+  auto health = r.listen<typename T::Health>(dds::Topic::kHealth, 64, record(&DriveWatch<T>::on_health));
+  auto pose = r.listen<typename T::EgoPose>(dds::Topic::kEgoPose, 64, record(&DriveWatch<T>::on_pose));
+  auto segments = r.listen<typename T::ScanSegments>(dds::Topic::kSegments, 4, record(&DriveWatch<T>::on_segments));
+  for (const auto* e : {&tracked, &health, &pose, &segments})
+    if (!*e) return fail(e->error().message);
+
+  const std::string domain = std::to_string(dds_config.domain_id);
+  auto run = ChildProcess::start({"run", "--config", config, "--dds-config", loopback_xml, "--domain",
+                                  domain, "--bind", "127.0.0.1", "--port", std::to_string(ports.udp),
+                                  "--ins", "tcp", "--ins-address", "127.0.0.1", "--ins-port",
+                                  std::to_string(ports.tcp)},
+                                 dir / "run.log");
+  if (!run) return fail(run.error().message);
+  std::fprintf(stderr,
+               "stac demo: 2/4 stac run on 127.0.0.1 (Velodyne UDP %u, INS TCP %u, DDS domain %u, "
+               "loopback only; log %s)\n",
+               ports.udp, ports.tcp, dds_config.domain_id, run->log_path().c_str());
+  const auto run_failed = [&](const std::string& what) {
+    return fail(what + "; stac run said:\n" + run->log_tail(8));
+  };
+  for (const dds_time_t end = dds_time() + DDS_SECS(static_cast<long>(kMatchTimeoutS));
+       !(TopicReaders::matched(*tracked) > 0 && TopicReaders::matched(*health) > 0);) {
+    if (run->poll()) return run_failed("stac run ended at start-up");
+    if (g_interrupted) return fail("interrupted");
+    if (dds_time() > end) return run_failed("stac run's DDS writers did not match within 30 s");
+    dds_sleepfor(DDS_MSECS(20));
+  }
+
+  auto replay = ChildProcess::start({"replay", "--in", pcap, "--to", "127.0.0.1", "--port",
+                                     std::to_string(ports.udp), "--tcp-port", "5602:" + std::to_string(ports.tcp),
+                                     "--wait-tcp"},
+                                    dir / "replay.log");
+  if (!replay) return fail(replay.error().message);
+  std::fprintf(stderr,
+               "stac demo: 3/4 replaying the drive at its recorded pace; tracks as they arrive on DDS "
+               "(another terminal: DDS_TEST_TAG=%s stac echo tracked_objects --domain %u)\n",
+               std::getenv("DDS_TEST_TAG"), dds_config.domain_id);
+
+  // Until the replay has ended and nothing more arrived for kQuietS (or a child fails, or Ctrl-C).
+  const dds_time_t deadline = dds_time() + DDS_SECS(static_cast<long>(3 * o.seconds + 60));
+  dds_time_t last_sample = dds_time();
+  std::uint64_t seen = 0;
+  std::optional<int> replay_code;
+  const auto print_lines = [&] {
+    const std::lock_guard<std::mutex> lock(mutex);
+    w.print_lines();
+    return arrived;
+  };
+  for (;;) {
+    const std::uint64_t n = print_lines();
+    const dds_time_t now = dds_time();
+    if (n != seen) seen = n, last_sample = now;
+    if (!replay_code) replay_code = replay->poll();
+    if (replay_code && *replay_code != 0)
+      return fail("stac replay failed:\n" + replay->log_tail(8));
+    if (replay_code && now - last_sample > DDS_SECS(static_cast<long>(kQuietS))) break;
+    if (run->poll()) return run_failed("stac run ended during the drive");
+    if (g_interrupted) break;
+    if (now > deadline) return run_failed("the drive did not end in time (replay or DDS stuck)");
+    dds_sleepfor(DDS_MSECS(20));
+  }
+  const int run_code = run->stop(SIGINT, kStopTimeoutS);
+  (void)replay->stop(SIGINT, kStopTimeoutS);
+  dds_sleepfor(DDS_MSECS(200));  // what stac run wrote just before it stopped
+  readers->reset();              // no callback runs after this
+  w.print_lines();
+  const std::string run_log = run->log();
+  if (run_code != 0) return run_failed("stac run did not stop cleanly (exit " + std::to_string(run_code) + ")");
+
+  // 4. The summary and the pictures.
+  const std::uint64_t published = summary_number(run_log, R"((\d+) published,)").value_or(0);
+  std::set<std::uint64_t> arrived_indices;  // of 0..published-1
+  for (std::uint64_t i : w.scans_)
+    if (i < published) arrived_indices.insert(i);
+  const std::uint64_t missing = published - arrived_indices.size();
+  std::fprintf(stderr, "stac demo: 4/4 the drive is over; stac run's own summary:\n%s",
+               run_log.substr(std::min(run_log.size(), run_log.find("stac run: stopped"))).c_str());
+  const auto u = [](std::uint64_t v) { return static_cast<unsigned long long>(v); };
+  std::vector<double> per_scan(w.tracks_per_scan_.begin(), w.tracks_per_scan_.end());
+  std::vector<double> confirmed(w.confirmed_per_scan_.begin(), w.confirmed_per_scan_.end());
+  std::string drops;
+  for (const auto& [cause, count] : w.drops_)
+    if (count > 0) drops += " " + cause + "=" + std::to_string(count);
+  std::printf(
+      "\nSTAC demo: %.0f s simulated urban drive (seed %llu) -> loopback UDP + INS -> stac run -> DDS\n"
+      "  scans       %zu received on tracked_objects of %llu published by stac run (%llu missing)\n"
+      "  tracks      %zu ids; per scan median %.0f (%.0f confirmed), max %.0f\n"
+      "  deadline    %llu misses (run.deadline_ms)\n"
+      "  drops      %s\n"
+      "  end to end  last firing -> published: median %.1f ms, p99 %.1f ms (%zu scans, health)\n"
+      "  DDS         publish -> receive (tracked_objects): median %.2f ms, p99 %.2f ms, max %.2f ms\n",
+      o.seconds, u(o.seed), w.scans_.size(), u(published), u(missing), w.ids_.size(),
+      percentile(per_scan, 0.5), percentile(confirmed, 0.5), percentile(per_scan, 1.0),
+      u(w.deadline_misses_), drops.empty() ? " none" : drops.c_str(), percentile(w.end_to_end_ms_, 0.5),
+      percentile(w.end_to_end_ms_, 0.99), w.end_to_end_ms_.size(), percentile(w.latency_ms_, 0.5),
+      percentile(w.latency_ms_, 0.99), percentile(w.latency_ms_, 1.0));
+  DriveView view = w.view();
+  if (auto p = last_scan_points(config, pcap, view.last.scan_index); p) {
+    view.points = std::move(*p);
+  } else {
+    std::fprintf(stderr, "stac demo: warning: no points in the picture: %s\n", p.error().message.c_str());
+  }
+  for (auto [name, picture] : {std::pair{"demo_last_scan.png", DrivePicture::kLastScan},
+                               {"demo_tracks.png", DrivePicture::kWholeDrive}}) {
+    if (auto d = draw_drive(view, picture, dir / name); !d) return fail(d.error().message);
+    std::printf("  picture     %s\n", (dir / name).c_str());
+  }
+  std::fflush(stdout);
+  if (g_interrupted) return fail("interrupted");
+  if (w.scans_.empty()) return fail("no scan arrived on DDS");
+  if (missing > 0) return fail(std::to_string(missing) + " published scans did not arrive on DDS");
+  return 0;
 }
 
 int run_demo(const DemoOptions& o) {
-  const std::filesystem::path config = config_path(o.config);
-  auto settings = load_velodyne_settings(config);
-  if (!settings) return fail(settings.error().message);
-  if (settings->calibration.empty()) {
-    return fail(config.string() + ": the demo needs a calibration file, not 'stream'");
-  }
-  auto calibration = velodyne::load_calibration(settings->calibration);
-  if (!calibration) return fail(calibration.error().message);
+  const std::filesystem::path config = std::filesystem::absolute(config_path(o.config));
+  auto dds_config = load_dds_settings(config);
+  if (!dds_config) return fail(dds_config.error().message);
   std::error_code ec;
   std::filesystem::create_directories(o.out, ec);
   if (ec) return fail(o.out + ": cannot create the output folder: " + ec.message());
-  const std::filesystem::path dir(o.out);
+  const std::filesystem::path dir = std::filesystem::absolute(o.out);
 
-  // 1. The capture: a synthetic S2.1 at 600 rpm, written as the sensor's packets.
-  std::fprintf(stderr, "stac demo: 1/3 synthesising %.1f s of HDL-64E packets with %s\n", o.seconds,
-               settings->calibration.filename().c_str());
-  const auto packets = make_demo_capture(*calibration, o.seconds, kDemoStartNs);
-  const auto pcap = dir / "demo.pcap";
-  {
-    auto writer = io::PcapWriter::open(pcap);
-    if (!writer) return fail(writer.error().message);
-    for (const DemoPacket& p : packets) {
-      io::Datagram d;
-      d.payload = p.bytes;
-      d.stamp_ns = p.receive_stamp_ns;
-      d.src_ip = 0xC0A8032B;  // 192.168.3.43, the HDL-64E's factory address
-      d.dst_ip = 0xFFFFFFFF;
-      d.src_port = 2368;
-      d.dst_port = 2368;
-      if (auto w = writer->write_udp(d); !w) return fail(w.error().message);
-    }
-    if (auto c = writer->close(); !c) return fail(c.error().message);
-  }
+  // Loopback only, whatever the config's dds.config_file, and a discovery tag of this demo's own
+  // (unless one is set) so that demos and tests running at the same time never see each other.
+  const std::string loopback_xml = std::string(STAC_SOURCE_DIR) + "/config/dds/loopback.xml";
+  dds_config->config_uri = "file://" + loopback_xml;
+  if (o.domain >= 0) dds_config->domain_id = static_cast<std::uint32_t>(o.domain);
+  if (std::getenv("DDS_TEST_TAG") == nullptr || *std::getenv("DDS_TEST_TAG") == '\0')
+    ::setenv("DDS_TEST_TAG", ("stac-demo-" + std::to_string(::getpid())).c_str(), 1);
 
-  // 2. Live: over loopback UDP into the receiver thread, at the sensor's pace.
-  std::fprintf(stderr, "stac demo: 2/3 sending %zu packets over loopback UDP at the sensor's pace\n",
-               packets.size());
-  auto live = run_live(*calibration, *settings, packets);
-  if (!live) return fail(live.error().message);
+  struct sigaction sa {};
+  sa.sa_handler = on_interrupt;
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
 
-  // 3. Offline: the pcap through `stac decode`, with a picture.
-  std::fprintf(stderr, "stac demo: 3/3 decoding %s\n", pcap.c_str());
-  DecodeOptions d;
-  d.config = config.string();
-  d.calib = settings->calibration.string();
-  d.in = pcap.string();
-  d.out = (dir / "demo.csv").string();
-  d.png = (dir / "demo_birds_eye.png").string();
-  if (const int code = run_decode(d); code != 0) return code;
+  // The ports first: a busy one stops the demo before the drive is simulated.
+  auto udp = loopback_port(SOCK_DGRAM, o.port, "--port");
+  if (!udp) return fail(udp.error().message);
+  auto tcp = loopback_port(SOCK_STREAM, o.ins_port, "--ins-port");
+  if (!tcp) return fail(tcp.error().message);
 
-  std::printf(
-      "\nSTAC demo\n"
-      "  capture      %s (%zu packets, %.1f s)\n"
-      "  live UDP     %llu packets received, %llu scans (%llu complete), %llu points;"
-      " kernel drops %llu\n"
-      "  points       %s\n"
-      "  picture      %s\n",
-      pcap.c_str(), packets.size(), o.seconds, static_cast<unsigned long long>(live->packets),
-      static_cast<unsigned long long>(live->scans), static_cast<unsigned long long>(live->complete),
-      static_cast<unsigned long long>(live->points),
-      static_cast<unsigned long long>(live->counters.kernel_drops), d.out.c_str(), d.png.c_str());
-  if (live->packets != packets.size()) {
-    return fail("the live path lost " + std::to_string(packets.size() - live->packets) +
-                " packets on loopback (see the kernel drops above)");
-  }
-  return 0;
+  // 1. The drive: pcap (HDL-64E UDP + the Applanix TCP stream) and its truth.
+  std::fprintf(stderr, "stac demo: 1/4 simulating a %.0f s urban drive (seed %llu)\n", o.seconds,
+               static_cast<unsigned long long>(o.seed));
+  SimOptions sim;
+  sim.scenario = "urban";
+  sim.seed = o.seed;
+  sim.duration_s = o.seconds;
+  sim.out = (dir / "drive.pcap").string();
+  sim.truth = (dir / "drive.truth.jsonl").string();
+  sim.config = config.string();
+  if (const int code = run_sim(sim); code != 0) return code;
+
+  return dds_config->ros2_names
+             ? watch_drive<dds::IdlTypes<true>>(o, dir, config.string(), loopback_xml, *dds_config, sim.out,
+                                                {*udp, *tcp})
+             : watch_drive<dds::IdlTypes<false>>(o, dir, config.string(), loopback_xml, *dds_config, sim.out,
+                                                 {*udp, *tcp});
 }
 
 }  // namespace
@@ -174,15 +424,26 @@ int run_demo(const DemoOptions& o) {
 void add_demo_command(CLI::App& app) {
   auto o = std::make_shared<DemoOptions>();
   CLI::App* cmd = app.add_subcommand(
-      "demo", "Run the driver end to end on a built-in synthetic capture (no sensor needed)");
+      "demo", "The full pipeline on a built-in simulated drive, live over loopback to DDS (no sensor needed)");
   cmd->description(
-      "Run the driver end to end on a built-in synthetic capture (no sensor needed):\n"
-      "writes OUT/demo.pcap, sends it over loopback UDP into the live receiver at the sensor's\n"
-      "pace, decodes the pcap to OUT/demo.csv and draws OUT/demo_birds_eye.png.");
+      "The full pipeline on a built-in default, no sensor needed: simulates an urban drive\n"
+      "(OUT/drive.pcap + OUT/drive.truth.jsonl), replays it over loopback (HDL-64E UDP and the\n"
+      "Applanix TCP stream, at the recorded pace) into `stac run` (Cyclone DDS on loopback only),\n"
+      "prints a line per scan as the tracks arrive on DDS, then a summary (scans, tracks, deadline\n"
+      "misses, drops, end-to-end and DDS latency) and draws OUT/demo_last_scan.png and\n"
+      "OUT/demo_tracks.png. Logs of the children: OUT/run.log, OUT/replay.log.");
   cmd->add_option("--out", o->out, "output folder")->capture_default_str();
-  cmd->add_option("--seconds", o->seconds, "length of the capture")
-      ->check(CLI::Range(0.2, 60.0))
+  cmd->add_option("--seconds", o->seconds, "length of the drive")
+      ->check(CLI::Range(1.0, 600.0))
       ->capture_default_str();
+  cmd->add_option("--seed", o->seed, "the drive's random seed")->capture_default_str();
+  cmd->add_option("--port", o->port, "Velodyne UDP port on 127.0.0.1 (0: any free one)")
+      ->check(CLI::Range(0, 65535))
+      ->capture_default_str();
+  cmd->add_option("--ins-port", o->ins_port, "INS TCP port on 127.0.0.1 (0: any free one)")
+      ->check(CLI::Range(0, 65535))
+      ->capture_default_str();
+  cmd->add_option("--domain", o->domain, "DDS domain (default: dds.domain_id)")->check(CLI::Range(0, 230));
   cmd->add_option("--config", o->config, "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
   cmd->callback([o] {
     if (const int code = run_demo(*o); code != 0) throw CLI::RuntimeError(code);

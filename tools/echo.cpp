@@ -1,5 +1,6 @@
 // stac echo TOPIC: subscribes to one of STAC's DDS topics and prints a one-line summary per
 // sample; exits after --count samples (0) or at --timeout with a message saying what arrived (1).
+#include <atomic>
 #include <cstdio>
 #include <string>
 
@@ -7,6 +8,7 @@
 #include "dds/topics.hpp"
 #include "rt/deadline_monitor.hpp"
 #include "tools/commands.hpp"
+#include "tools/dds_reading.hpp"
 #include "tools/dds_settings.hpp"
 #include "tools/settings.hpp"
 
@@ -14,22 +16,12 @@ namespace stac::tools {
 namespace {
 
 struct EchoOptions {
-  std::string topic, config;
+  std::string topic, config, dds_config;
   int count = 0;
   double timeout_s = 10;
   int domain = -1;
   bool latency = false;
 };
-
-template <class Time>
-double seconds(const Time& t) {
-  return static_cast<double>(t.sec) + 1e-9 * static_cast<double>(t.nanosec);
-}
-
-const char* label_name(unsigned label) {
-  static const char* const names[] = {"unknown", "car", "pedestrian", "bicyclist", "background"};
-  return label < 5 ? names[label] : "?";
-}
 
 template <class S>
 void print_tracked(const S& s) {
@@ -37,9 +29,8 @@ void print_tracked(const S& s) {
               seconds(s.stamp), s.objects._length);
   for (std::uint32_t i = 0; i < s.objects._length && i < 5; ++i) {
     const auto& o = s.objects._buffer[i];
-    const unsigned label = o.classification._length > 0 ? o.classification._buffer[0].label : 0;
     std::printf(" | #%llu %s x=%.2f y=%.2f v=(%.2f,%.2f) age=%u", static_cast<unsigned long long>(o.object_id),
-                label_name(label), o.kinematics.position.x, o.kinematics.position.y, o.kinematics.velocity.x,
+                shown_class(o).name, o.kinematics.position.x, o.kinematics.position.y, o.kinematics.velocity.x,
                 o.kinematics.velocity.y, o.age);
   }
   std::printf("%s\n", s.objects._length > 5 ? " | ..." : "");
@@ -71,27 +62,31 @@ void print_health(const S& s) {
   std::printf("\n");
 }
 
-template <bool Ros2>
-void print_sample(dds::Topic t, const void* sample) {
-  using T = dds::IdlTypes<Ros2>;
-  switch (t) {
-    case dds::Topic::kTrackedObjects: print_tracked(*static_cast<const typename T::TrackedObjects*>(sample)); break;
-    case dds::Topic::kSegments: print_segments(*static_cast<const typename T::ScanSegments*>(sample)); break;
-    case dds::Topic::kEgoPose: print_pose(*static_cast<const typename T::EgoPose*>(sample)); break;
-    case dds::Topic::kHealth: print_health(*static_cast<const typename T::Health*>(sample)); break;
+// One sample of any topic (native or ROS 2 names), told apart by its fields.
+template <class S>
+void print_sample(const S& s) {
+  if constexpr (requires { s.objects; }) {
+    print_tracked(s);
+  } else if constexpr (requires { s.segments; }) {
+    print_segments(s);
+  } else if constexpr (requires { s.stages; }) {
+    print_health(s);
+  } else {
+    print_pose(s);
   }
 }
 
-template <bool Ros2>
-const dds_topic_descriptor_t* descriptor(dds::Topic t) {
+// A reader of topic `t` with the topic's sample type, each sample passed to f.
+template <bool Ros2, class F>
+rt::Result<dds_entity_t> listen(TopicReaders& readers, dds::Topic t, int depth, F f) {
   using T = dds::IdlTypes<Ros2>;
   switch (t) {
-    case dds::Topic::kTrackedObjects: return T::tracked_objects();
-    case dds::Topic::kSegments: return T::segments();
-    case dds::Topic::kEgoPose: return T::ego_pose();
-    case dds::Topic::kHealth: return T::health();
+    case dds::Topic::kTrackedObjects: return readers.listen<typename T::TrackedObjects>(t, depth, f);
+    case dds::Topic::kSegments: return readers.listen<typename T::ScanSegments>(t, depth, f);
+    case dds::Topic::kEgoPose: return readers.listen<typename T::EgoPose>(t, depth, f);
+    case dds::Topic::kHealth: return readers.listen<typename T::Health>(t, depth, f);
   }
-  return nullptr;
+  return rt::make_error("unknown topic");
 }
 
 int run_echo(const EchoOptions& o) {
@@ -101,64 +96,42 @@ int run_echo(const EchoOptions& o) {
   if (!settings) return fail(settings.error().message);
   dds::PublisherConfig c = *settings;
   if (o.domain >= 0) c.domain_id = static_cast<std::uint32_t>(o.domain);
-  if (c.domain_id > 230) return fail("--domain must be 0..230");
-  if (!c.config_uri.empty()) {
-    const dds_entity_t domain = dds_create_domain(c.domain_id, c.config_uri.c_str());
-    if (domain < 0) return fail("creating DDS domain with " + c.config_uri + ": " + dds_strretcode(domain));
-  }
-  const dds_entity_t participant = dds_create_participant(c.domain_id, nullptr, nullptr);
-  if (participant < 0) return fail(std::string("creating a DDS participant: ") + dds_strretcode(participant));
-  const std::string name = dds::topic_name(*topic, c.topic_prefix, c.ros2_names);
-  const dds_topic_descriptor_t* type = c.ros2_names ? descriptor<true>(*topic) : descriptor<false>(*topic);
-  const dds_entity_t t = dds_create_topic(participant, type, name.c_str(), nullptr, nullptr);
-  if (t < 0) return fail("creating DDS topic " + name + ": " + dds_strretcode(t));
-  // The topic's QoS with a deeper history: a diagnostic shows every sample, not only the latest.
-  dds::QosPtr qos = dds::reader_qos(*topic);
-  dds_qset_history(qos.get(), DDS_HISTORY_KEEP_LAST, 64);
-  const dds_entity_t reader = dds_create_reader(participant, t, qos.get(), nullptr);
-  if (reader < 0) return fail("creating a DDS reader of " + name + ": " + dds_strretcode(reader));
-  std::fprintf(stderr, "stac echo: listening on %s (domain %u)\n", name.c_str(), c.domain_id);
+  if (!o.dds_config.empty()) c.config_uri = "file://" + std::filesystem::absolute(o.dds_config).string();
+  auto readers = TopicReaders::create(c);
+  if (!readers) return fail(readers.error().message);
+  const std::string name = (*readers)->topic_name(*topic);
 
-  // Woken by a read condition (no polling), so the receive time is when the sample arrived.
-  const dds_entity_t waitset = dds_create_waitset(participant);
-  const dds_entity_t condition = dds_create_readcondition(reader, DDS_ANY_STATE);
-  if (waitset < 0 || condition < 0 || dds_waitset_attach(waitset, condition, reader) < 0) {
-    return fail("creating a DDS waitset for " + name);
-  }
+  // Samples are taken and printed on Cyclone's receive thread as they arrive; this thread waits.
   rt::LatencyHistogram latency(1'000'000'000, 100'000);  // publish -> receive, 10 us bins over 1 s
-  int received = 0;
+  std::atomic<int> received = 0;
+  const auto on_sample = [&](const auto& sample, dds_time_t now, const dds_sample_info_t& info) {
+    if (o.count > 0 && received.load(std::memory_order_relaxed) >= o.count) return;
+    latency.add(now - info.source_timestamp);
+    print_sample(sample);
+    std::fflush(stdout);
+    received.fetch_add(1, std::memory_order_release);
+  };
+  // The topic's QoS with a deeper history: a diagnostic shows every sample, not only the latest.
+  auto reader = c.ros2_names ? listen<true>(**readers, *topic, 64, on_sample)
+                             : listen<false>(**readers, *topic, 64, on_sample);
+  if (!reader) return fail(reader.error().message);
+  std::fprintf(stderr, "stac echo: listening on %s (domain %u)\n", name.c_str(), c.domain_id);
   const dds_time_t end = dds_time() + static_cast<dds_duration_t>(o.timeout_s * 1e9);
-  while ((o.count == 0 || received < o.count) && dds_time() < end) {
-    void* samples[1] = {nullptr};
-    dds_sample_info_t info{};
-    const dds_return_t n = dds_take(reader, samples, &info, 1, 1);
-    if (n < 0) return fail(std::string("reading DDS: ") + dds_strretcode(n));
-    if (n == 0) {
-      (void)dds_waitset_wait_until(waitset, nullptr, 0, end);
-      continue;
-    }
-    const dds_time_t now = dds_time();
-    if (info.valid_data) {
-      latency.add(now - info.source_timestamp);
-      c.ros2_names ? print_sample<true>(*topic, samples[0]) : print_sample<false>(*topic, samples[0]);
-      std::fflush(stdout);
-      ++received;
-    }
-    dds_return_loan(reader, samples, n);
-  }
+  while ((o.count == 0 || received.load(std::memory_order_acquire) < o.count) && dds_time() < end)
+    dds_sleepfor(DDS_MSECS(10));
+  readers->reset();  // no callback runs after this
   if (o.latency && latency.count() > 0) {
     const auto us = [](std::int64_t ns) { return static_cast<double>(ns) * 1e-3; };
     std::fprintf(
         stderr,
         "stac echo: publish -> receive latency over %llu samples: p50 %.0f us, p99 %.0f us, "
-        "max %.0f us (writer's source timestamp to this reader's take, one host clock)\n",
+        "max %.0f us (writer's source timestamp to this reader's take on arrival, one host clock)\n",
         static_cast<unsigned long long>(latency.count()), us(latency.percentile(0.5)),
         us(latency.percentile(0.99)), us(latency.max_ns()));
   }
-  dds_delete(participant);
   if (o.count > 0 && received < o.count) {
     std::fprintf(stderr, "stac echo: timed out after %.1f s with %d of %d samples on %s (is a publisher running "
-                 "on domain %u with the same dds config?)\n", o.timeout_s, received, o.count, name.c_str(), c.domain_id);
+                 "on domain %u with the same dds config?)\n", o.timeout_s, received.load(), o.count, name.c_str(), c.domain_id);
     return 1;
   }
   if (received == 0) {
@@ -166,7 +139,7 @@ int run_echo(const EchoOptions& o) {
                  "the same dds config?)\n", name.c_str(), o.timeout_s, c.domain_id);
     return 1;
   }
-  std::fprintf(stderr, "stac echo: %d samples on %s\n", received, name.c_str());
+  std::fprintf(stderr, "stac echo: %d samples on %s\n", received.load(), name.c_str());
   return 0;
 }
 
@@ -181,6 +154,8 @@ void add_echo_command(CLI::App& app) {
   cmd->add_option("--timeout", o->timeout_s, "give up after this many seconds")->check(CLI::PositiveNumber);
   cmd->add_option("--domain", o->domain, "DDS domain id (default: dds.domain_id of the config)");
   cmd->add_option("--config", o->config, "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
+  cmd->add_option("--dds-config", o->dds_config, "Cyclone DDS XML (default: dds.config_file)")
+      ->check(CLI::ExistingFile);
   cmd->add_flag("--latency", o->latency,
                 "at the end, print the publish -> receive latency (p50, p99, max) of the samples");
   cmd->callback([o] {

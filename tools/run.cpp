@@ -39,7 +39,7 @@ namespace stac::tools {
 namespace {
 
 struct RunOptions {
-  std::string config, calib, ins, ins_address, bind, model;
+  std::string config, calib, ins, ins_address, bind, model, dds_config;
   double seconds = 0;
   std::uint64_t scans = 0;
   int domain = -1, port = -1, ins_port = -1;
@@ -208,6 +208,7 @@ int run_live(const RunOptions& o) {
   if (o.port >= 0) vs.port = static_cast<std::uint16_t>(o.port);
   if (!o.bind.empty()) vs.bind_address = o.bind;
   if (o.domain >= 0) dds_config->domain_id = static_cast<std::uint32_t>(o.domain);
+  if (!o.dds_config.empty()) dds_config->config_uri = "file://" + std::filesystem::absolute(o.dds_config).string();
   if (!o.ins.empty()) {
     auto t = parse_ins_transport(o.ins);
     if (!t) return fail("--ins: " + t.error().message);
@@ -535,6 +536,8 @@ void add_run_command(CLI::App& app) {
       ->check(CLI::PositiveNumber);
   cmd->add_option("--domain", o->domain, "DDS domain (default: dds.domain_id)")
       ->check(CLI::Range(0, 230));
+  cmd->add_option("--dds-config", o->dds_config, "Cyclone DDS XML (default: dds.config_file)")
+      ->check(CLI::ExistingFile);
   cmd->add_option("--port", o->port, "Velodyne UDP port (default: velodyne.port; 0: any free port)")
       ->check(CLI::Range(0, 65535));
   cmd->add_option("--bind", o->bind,

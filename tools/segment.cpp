@@ -8,14 +8,15 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <optional>
 #include <opencv2/imgproc.hpp>
 #include <string>
 #include <vector>
 
-#include "drivers/io/pcap_reader.hpp"
 #include "drivers/velodyne/scan_stream.hpp"
 #include "perception/segmentation/segmenter.hpp"
 #include "tools/birds_eye.hpp"
+#include "tools/capture_scans.hpp"
 #include "tools/commands.hpp"
 #include "tools/settings.hpp"
 #include "tools/sensor_status.hpp"
@@ -165,26 +166,18 @@ int segment_capture(const SegmentOptions& o, const segmentation::SegmenterConfig
                          ? stream_calibration(o.in, s.port, s.assembler.decoder.model)
                          : velodyne::load_calibration(s.calibration);
   if (!calibration) return fail(calibration.error().message);
-  auto reader =
-      io::PcapReader::open(o.in, io::PcapFilter{.udp_dst_port = s.port, .udp_src_port = {}});
-  if (!reader) return fail(reader.error().message);
-  velodyne::ScanStream stream(*calibration, s.assembler, 2);
-  int complete = 0;
-  io::Datagram d;
-  while (reader->next(d)) {
-    if (!stream.add_packet(d.payload, d.stamp_ns)) continue;
-    while (const velodyne::Scan* scan = stream.take()) {
-      if (scan->header.complete() && complete++ == o.scan) {
-        const segmentation::PointView view{&scan->points.data()->x, scan->points.size(),
-                                           sizeof(velodyne::Point)};
-        return report(o, config, view,
-                      o.in + " scan " + std::to_string(o.scan) + " (sequence " +
-                          std::to_string(scan->header.sequence) + ")");
-      }
-      stream.release();
-    }
-  }
-  return fail(o.in + ": holds " + std::to_string(complete) + " complete scans; --scan " +
+  std::optional<int> code;
+  std::uint64_t n_seen = 0;
+  auto complete = for_each_complete_scan(o.in, *calibration, s, [&](const velodyne::Scan& scan) {
+    if (static_cast<int>(n_seen++) != o.scan) return true;
+    const segmentation::PointView view{&scan.points.data()->x, scan.points.size(), sizeof(velodyne::Point)};
+    code = report(o, config, view,
+                  o.in + " scan " + std::to_string(o.scan) + " (sequence " + std::to_string(scan.header.sequence) + ")");
+    return false;
+  });
+  if (!complete) return fail(complete.error().message);
+  if (code) return *code;
+  return fail(o.in + ": holds " + std::to_string(*complete) + " complete scans; --scan " +
               std::to_string(o.scan) + " is not among them (scans count from 0)");
 }
 

@@ -16,23 +16,10 @@
 #include "tools/commands.hpp"
 #include "tools/progress.hpp"
 #include "tools/settings.hpp"
+#include "tools/sim.hpp"
 
 namespace stac::tools {
 namespace {
-
-struct SimOptions {
-  std::string scenario = "urban";
-  std::uint64_t seed = 1;
-  double duration_s = 10.0;
-  std::string out;
-  std::string truth;
-  std::string calib;
-  std::string config;
-  bool dual_return = false;
-  std::string origin;  // "LAT,LON,ALT"; empty: sim::InsConfig's default
-  bool ins_udp = false;
-  std::string can;     // candump log to write; empty: none
-};
 
 // The POS LV's Real-Time Data stream (port 5602) into the pcap: one TCP connection from the
 // vehicle computer (handshake just before the first message), then each message as one segment
@@ -131,6 +118,8 @@ int write_can_log(CanLog& c, const std::string& path, const sim::RunConfig& rc) 
   std::fprintf(stderr, "\n");
   return 0;
 }
+
+}  // namespace
 
 int run_sim(const SimOptions& o) {
   auto settings = load_velodyne_settings(config_path(o.config));
@@ -246,8 +235,6 @@ int run_sim(const SimOptions& o) {
   if (can_log) return write_can_log(*can_log, o.can, rc);
   return 0;
 }
-
-}  // namespace
 
 void add_sim_command(CLI::App& app) {
   auto o = std::make_shared<SimOptions>();

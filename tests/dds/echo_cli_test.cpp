@@ -3,7 +3,13 @@
 // it times out with a message saying so.
 #include <gtest/gtest.h>
 
+#include <pthread.h>
+#include <sched.h>
+
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <thread>
 #include <string>
 #include <vector>
 
@@ -53,6 +59,54 @@ TEST(StacEcho, ReceivesTrackedObjectsFromAnotherProcess) {
   EXPECT_NE(out.find("tracked_objects scan 4 "), std::string::npos) << out;
   EXPECT_NE(out.find("#77 car x=12.50 y=-4.00"), std::string::npos) << out;
   EXPECT_NE(out.find("5 samples on stac/tracked_objects"), std::string::npos) << out;
+}
+
+// Whether this process may run a thread at SCHED_FIFO 50 (root, CAP_SYS_NICE or RLIMIT_RTPRIO).
+bool may_run_fifo_50() {
+  bool ok = false;
+  std::thread([&] {
+    const sched_param p{50};
+    ok = pthread_setschedparam(pthread_self(), SCHED_FIFO, &p) == 0;
+  }).join();
+  return ok;
+}
+
+// config/dds/loopback-rt.xml: the same loopback path, its one receive thread at SCHED_FIFO 50.
+TEST(StacEcho, RealTimeLoopbackConfigReceivesOnASchedFifoReceiveThread) {
+  if (!may_run_fifo_50()) GTEST_SKIP() << "SCHED_FIFO not permitted here (Cyclone would abort)";
+  (void)testing::loopback_uri();  // the tag
+  const std::string xml = std::string(STAC_SOURCE_DIR) + "/config/dds/loopback-rt.xml";
+  const std::string cmd = std::string(STAC_CLI) + " echo tracked_objects --count 3 --timeout 20 --domain 124 --dds-config " + xml + " 2>&1";
+  FILE* child = popen(cmd.c_str(), "r");
+  ASSERT_NE(child, nullptr);
+  PublisherConfig c;
+  c.domain_id = 124;
+  c.config_uri = "file://" + xml;
+  auto pub = Publisher::create(c);
+  ASSERT_TRUE(pub) << pub.error().message;
+  // This process's Cyclone receive thread ("recv", the only one) runs SCHED_FIFO.
+  int fifo_recv = 0, other_recv = 0;
+  for (const auto& task : std::filesystem::directory_iterator("/proc/self/task")) {
+    std::ifstream comm(task.path() / "comm");
+    std::string name;
+    std::getline(comm, name);
+    if (name.rfind("recv", 0) != 0) continue;
+    (sched_getscheduler(std::stoi(task.path().filename().string())) == SCHED_FIFO ? fifo_recv : other_recv)++;
+  }
+  EXPECT_EQ(fifo_recv, 1);
+  EXPECT_EQ(other_recv, 0);
+  ASSERT_TRUE(testing::TestReader::wait_matched((*pub)->writer(Topic::kTrackedObjects)));
+  TrackedObjectIn o;
+  o.object_id = 9;
+  std::vector<TrackedObjectIn> objects{o};
+  for (std::uint64_t scan = 0; scan < 3; ++scan) {
+    ASSERT_TRUE((*pub)->publish_tracked_objects({static_cast<std::int64_t>(scan) * 100'000'000, scan}, objects));
+    ASSERT_EQ(dds_wait_for_acks((*pub)->writer(Topic::kTrackedObjects), DDS_SECS(10)), 0);
+  }
+  int code = -1;
+  const std::string out = run_to_end(child, &code);
+  EXPECT_EQ(code, 0) << out;
+  EXPECT_NE(out.find("3 samples on stac/tracked_objects"), std::string::npos) << out;
 }
 
 // examples/c_subscriber, built from idl/stac.idl alone, reads what the publisher writes.

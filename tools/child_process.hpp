@@ -1,0 +1,46 @@
+// Another `stac` command run as a child process of this one (the same binary, /proc/self/exe),
+// its stdout and stderr into a log file. Used by `stac demo` to run `stac run` and `stac replay`
+// exactly as a user would. The destructor kills (SIGKILL) and reaps a child still running, so no
+// error path leaves one behind.
+#pragma once
+
+#include <sys/types.h>
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "rt/expected.hpp"
+
+namespace stac::tools {
+
+class ChildProcess {
+ public:
+  // Starts `stac args...`; an error when it cannot be spawned.
+  static rt::Result<ChildProcess> start(const std::vector<std::string>& args,
+                                        const std::filesystem::path& log);
+  ChildProcess(ChildProcess&& other) noexcept;
+  ChildProcess& operator=(ChildProcess&&) = delete;
+  ChildProcess(const ChildProcess&) = delete;
+  ~ChildProcess();
+
+  // Its exit code if it has ended (-1: killed by a signal), nullopt while it runs. Never blocks.
+  std::optional<int> poll();
+  // Waits up to timeout_s for it to end: its exit code, or nullopt if it still runs.
+  std::optional<int> wait_for(double timeout_s);
+  // Sends `sig`, then waits up to timeout_s; if it still runs, SIGKILL. The exit code (-1: killed).
+  int stop(int sig, double timeout_s);
+  // The log's last `lines` lines (what it printed), for error messages.
+  [[nodiscard]] std::string log_tail(int lines) const;
+  [[nodiscard]] std::string log() const;
+  [[nodiscard]] const std::filesystem::path& log_path() const noexcept { return log_; }
+
+ private:
+  ChildProcess(pid_t pid, std::filesystem::path log) : pid_(pid), log_(std::move(log)) {}
+  pid_t pid_;
+  std::optional<int> code_;
+  std::filesystem::path log_;
+};
+
+}  // namespace stac::tools

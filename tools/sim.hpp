@@ -1,0 +1,28 @@
+// The simulate job, shared by `stac sim` and `stac demo`: a simulated drive written as the real
+// devices' bytes (pcap: HDL-64E UDP and the Applanix stream; optionally a candump log) plus its
+// ground truth per scan (docs/simulator.md).
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+namespace stac::tools {
+
+struct SimOptions {
+  std::string scenario = "urban";
+  std::uint64_t seed = 1;
+  double duration_s = 10.0;
+  std::string out;
+  std::string truth;
+  std::string calib;
+  std::string config;
+  bool dual_return = false;
+  std::string origin;  // "LAT,LON,ALT"; empty: sim::InsConfig's default
+  bool ins_udp = false;
+  std::string can;     // candump log to write; empty: none
+};
+
+// Prints a summary on stderr; returns the process exit code (0 ok, 1 with a message printed).
+int run_sim(const SimOptions& options);
+
+}  // namespace stac::tools
