@@ -99,6 +99,8 @@ struct PublisherConfig {
   bool ros2_names = false;            // stac_msgs::msg::dds_::Name_ types, "rt/" topics
   std::string config_uri;             // Cyclone XML ("file://...") or empty: CYCLONEDDS_URI/defaults
   std::string frame_id = "map";       // frame_id of every sample, at most 31 characters
+  bool tentative_tracks = false;      // publish tentative tracks too (not yet confirmed: mostly
+                                      // clutter that lives a scan or two)
 };
 
 class Publisher {

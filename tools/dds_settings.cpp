@@ -18,6 +18,7 @@ rt::Result<dds::PublisherConfig> load_dds_settings(const std::filesystem::path& 
   STAC_CONFIG_GET(d, bool, "ros2_names", c.ros2_names);
   STAC_CONFIG_GET(d, std::string, "config_file", cyclone);
   STAC_CONFIG_GET(d, std::string, "frame_id", c.frame_id);
+  STAC_CONFIG_GET(d, bool, "tentative_tracks", c.tentative_tracks);
   if (domain < 0 || domain > 230) return d.error("domain_id", "must be 0..230");
   c.domain_id = static_cast<std::uint32_t>(domain);
   if (c.topic_prefix.empty() || c.topic_prefix.front() == '/' || c.topic_prefix.back() == '/') {

@@ -51,7 +51,7 @@ rt::Result<ProcessDds> open_dds(const std::filesystem::path& config, const Proce
   auto p = dds::Publisher::create(*settings);
   if (!p) return rt::Unexpected<rt::Error>{p.error()};
   ProcessDds out{std::move(*p), std::nullopt};
-  out.scans.emplace(*out.publisher);
+  out.scans.emplace(*out.publisher, settings->tentative_tracks);
   const dds_entity_t writer = out.publisher->writer(dds::Topic::kTrackedObjects);
   for (double waited = 0; waited < o.dds_wait_s; waited += 0.01) {
     dds_publication_matched_status_t m{};

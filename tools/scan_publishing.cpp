@@ -6,8 +6,11 @@
 
 namespace stac::tools {
 
-ScanPublishing::ScanPublishing(dds::Publisher& publisher)
-    : publisher_(publisher), objects_(dds::kMaxObjects), segments_(dds::kMaxSegments) {}
+ScanPublishing::ScanPublishing(dds::Publisher& publisher, bool tentative_tracks)
+    : publisher_(publisher),
+      tentative_tracks_(tentative_tracks),
+      objects_(dds::kMaxObjects),
+      segments_(dds::kMaxSegments) {}
 
 rt::Result<bool> ScanPublishing::check_capacities(const pipeline::PipelineConfig& config) {
   if (config.tracker.max_tracks > dds::kMaxObjects) {
@@ -26,9 +29,11 @@ rt::Result<bool> ScanPublishing::check_capacities(const pipeline::PipelineConfig
 rt::Result<bool> ScanPublishing::publish(const pipeline::ScanResult& r, std::uint64_t scan_index,
                                          std::uint8_t source) {
   const dds::ScanStamp stamp{r.stamp_ns, scan_index};
-  const std::size_t n_tracks = std::min<std::size_t>(r.tracked.tracks.size(), objects_.size());
-  for (std::size_t i = 0; i < n_tracks; ++i) {
-    dds::TrackedObjectIn& o = objects_[i];
+  std::size_t n_tracks = 0;
+  for (std::size_t i = 0; i < r.tracked.tracks.size() && n_tracks < objects_.size(); ++i) {
+    if (!tentative_tracks_ && r.tracked.tracks[i].state == tracking::TrackState::kTentative)
+      continue;
+    dds::TrackedObjectIn& o = objects_[n_tracks++];
     o = dds::to_tracked_object(r.tracked.tracks[i]);
     if (i < r.classes.size() && r.classes[i].classified) {
       // Background's log odds: minus the largest foreground one, so it is positive exactly

@@ -14,7 +14,8 @@ namespace stac::tools {
 
 class ScanPublishing {
  public:
-  explicit ScanPublishing(dds::Publisher& publisher);
+  // tentative_tracks false: tracked_objects carries confirmed and coasting tracks only.
+  ScanPublishing(dds::Publisher& publisher, bool tentative_tracks);
 
   // Checks at start-up that the pipeline's capacities fit the IDL bounds (errors name the key).
   static rt::Result<bool> check_capacities(const pipeline::PipelineConfig& config);
@@ -26,6 +27,7 @@ class ScanPublishing {
 
  private:
   dds::Publisher& publisher_;
+  bool tentative_tracks_ = false;
   std::vector<dds::TrackedObjectIn> objects_;
   std::vector<dds::SegmentIn> segments_;
 };

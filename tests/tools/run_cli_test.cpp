@@ -331,12 +331,19 @@ TEST(ProcessDds, EveryScanOfTheTracksFileIsPublishedInOrderWithItsTracks) {
   dds_delete(domain);
   std::ifstream in(tracks);
   std::vector<std::size_t> tracks_per_line;
+  std::size_t all_tracks = 0, tentative_tracks = 0;
   for (std::string line; std::getline(in, line);) {
-    std::size_t n = 0;
+    // dds.tentative_tracks is false: confirmed and coasting tracks are published.
+    std::size_t n = 0, tentative = 0;
     for (std::size_t at = line.find("\"state\""); at != std::string::npos;
          at = line.find("\"state\"", at + 1))
       ++n;
-    tracks_per_line.push_back(n);
+    for (std::size_t at = line.find("\"state\":\"tentative\""); at != std::string::npos;
+         at = line.find("\"state\":\"tentative\"", at + 1))
+      ++tentative;
+    tracks_per_line.push_back(n - tentative);
+    all_tracks += n;
+    tentative_tracks += tentative;
   }
   ASSERT_GE(tracks_per_line.size(), 12u);
   ASSERT_EQ(seen.size(), tracks_per_line.size()) << process.output();
@@ -345,6 +352,8 @@ TEST(ProcessDds, EveryScanOfTheTracksFileIsPublishedInOrderWithItsTracks) {
     EXPECT_EQ(seen[i].second, tracks_per_line[i]) << "scan " << i;
   }
   EXPECT_NE(process.output().find("scans published on tracked_objects"), std::string::npos);
+  EXPECT_GT(tentative_tracks, 0u);  // there were some to leave out
+  EXPECT_GT(all_tracks, tentative_tracks);
 }
 
 TEST(RunCli, WithoutSensorItStopsByItselfAndReportsTheLidarStalled) {
