@@ -14,11 +14,9 @@ std::int64_t now_ns(StageClock c) noexcept {
   return static_cast<std::int64_t>(t.tv_sec) * 1'000'000'000 + t.tv_nsec;
 }
 
-double yaw_of(const Eigen::Matrix3d& r) noexcept {
-  return std::atan2(r(1, 0), r(0, 0));
-}
-
 }  // namespace
+
+double yaw_of(const Eigen::Matrix3d& r) noexcept { return std::atan2(r(1, 0), r(0, 0)); }
 
 const char* stage_name(Stage s) noexcept {
   switch (s) {

@@ -46,6 +46,9 @@ struct PipelineConfig {
 enum Stage : std::uint8_t { kDeskew, kSegment, kTrack, kClassify, kClassifyDeferred, kStageCount };
 const char* stage_name(Stage s) noexcept;  // "deskew", ..., "classify", "classify_deferred"
 
+// The heading (rad, about z) of a rotation: atan2(r10, r00).
+double yaw_of(const Eigen::Matrix3d& r) noexcept;
+
 // A box in the world frame (m, rad).
 struct WorldBox {
   double x = 0, y = 0, z = 0, length = 0, width = 0, height = 0, yaw = 0;

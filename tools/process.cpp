@@ -84,8 +84,6 @@ void print_stats(const std::vector<Stage>& stages) {
   }
 }
 
-double yaw_of(const Eigen::Matrix3d& r) { return std::atan2(r(1, 0), r(0, 0)); }
-
 int run_process(const ProcessOptions& o) {
   const std::filesystem::path config = config_path(o.config);
   auto settings = load_pipeline_settings(config);
@@ -167,7 +165,7 @@ int run_process(const ProcessOptions& o) {
     rec.scan = result.sequence;
     rec.stamp_ns = result.stamp_ns;
     rec.ego = {start.translation().x(), start.translation().y(), start.translation().z(),
-               yaw_of(start.linear())};
+               pipeline::yaw_of(start.linear())};
     rec.segments.resize(result.segments.segments.size());
     for (std::size_t i = 0; i < result.segments.segments.size(); ++i) {
       const pipeline::WorldBox b = result.world_box(i);

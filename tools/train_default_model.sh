@@ -52,4 +52,4 @@ for d in "${TEST[@]}"; do test_args+=(--data "$WORK/$d/data"); done
 mkdir -p "$(dirname "$OUT")"
 "$STAC" train "${train_args[@]}" --out "$OUT"
 "$STAC" eval --classes "${test_args[@]}" --model "$OUT" --report "$WORK/eval"
-echo "$0: model $OUT; held-out report $WORK/eval/report.md"
+echo "$0: model $OUT; held-out figures $WORK/eval/metrics.json (tracks.csv, confusion.png, pr.png)"
