@@ -56,6 +56,7 @@ int main(int argc, char** argv) {
   stac::tools::add_run_command(app);
   stac::tools::add_dataset_command(app);
   stac::tools::add_train_command(app);
+  stac::tools::add_kitti_objects_command(app);
   CLI11_PARSE(app, argc, argv);
   return 0;
 }

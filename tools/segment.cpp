@@ -18,6 +18,7 @@
 #include "tools/birds_eye.hpp"
 #include "tools/capture_scans.hpp"
 #include "tools/commands.hpp"
+#include "tools/kitti_files.hpp"
 #include "tools/settings.hpp"
 #include "tools/sensor_status.hpp"
 #include "tools/settings.hpp"
@@ -30,24 +31,6 @@ struct SegmentOptions {
   int scan = 0;
   double view_range_m = 50.0;
 };
-
-// A KITTI velodyne file: float32 x, y, z, reflectance per point.
-rt::Result<std::vector<float>> load_kitti(const std::string& path) {
-  std::error_code ec;
-  const auto bytes = std::filesystem::file_size(path, ec);
-  if (ec) return rt::make_error(path + ": cannot read: " + ec.message());
-  if (bytes == 0 || bytes % 16 != 0) {
-    return rt::make_error(
-        path + ": " + std::to_string(bytes) +
-        " bytes is not a KITTI scan (float32 x,y,z,reflectance: a multiple of 16 bytes)");
-  }
-  std::vector<float> v(bytes / sizeof(float));
-  std::ifstream f(path, std::ios::binary);
-  if (!f.read(reinterpret_cast<char*>(v.data()), static_cast<std::streamsize>(bytes))) {
-    return rt::make_error(path + ": short read");
-  }
-  return v;
-}
 
 double thread_cpu_ms() {
   timespec ts{};
@@ -187,7 +170,7 @@ int run_segment(const SegmentOptions& o) {
   if (o.scan < 0) return fail("--scan must be >= 0");
   if (o.view_range_m <= 0) return fail("--view-range must be > 0");
   if (std::filesystem::path(o.in).extension() != ".bin") return segment_capture(o, *config);
-  auto cloud = load_kitti(o.in);
+  auto cloud = load_kitti_scan(o.in);
   if (!cloud) return fail(cloud.error().message);
   const segmentation::PointView view{cloud->data(), cloud->size() / 4, 4 * sizeof(float)};
   return report(o, *config, view, o.in);
