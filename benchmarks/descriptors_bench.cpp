@@ -49,6 +49,17 @@ const Corpus& corpus() {
   return c;
 }
 
+// Median, p99 and max of per-call times (us) as counters.
+void report_percentiles(benchmark::State& state, std::vector<double>& us) {
+  std::sort(us.begin(), us.end());
+  const auto at = [&](double q) {
+    return us[std::min(us.size() - 1, static_cast<std::size_t>(q * static_cast<double>(us.size())))];
+  };
+  state.counters["median_us"] = at(0.5);
+  state.counters["p99_us"] = at(0.99);
+  state.counters["max_us"] = us.back();
+}
+
 void BM_SegmentDescriptors(benchmark::State& state) {
   const Corpus& c = corpus();
   descriptors::DescriptorConfig config;
@@ -72,13 +83,7 @@ void BM_SegmentDescriptors(benchmark::State& state) {
     benchmark::DoNotOptimize(out.values.data());
     points += static_cast<double>(indices.size());
   }
-  std::sort(us.begin(), us.end());
-  const auto at = [&](double q) {
-    return us[std::min(us.size() - 1, static_cast<std::size_t>(q * static_cast<double>(us.size())))];
-  };
-  state.counters["median_us"] = at(0.5);
-  state.counters["p99_us"] = at(0.99);
-  state.counters["max_us"] = us.back();
+  report_percentiles(state, us);
   state.counters["mean_points"] = points / static_cast<double>(us.size());
   state.counters["segments"] = static_cast<double>(c.segments.size());
 }
@@ -148,13 +153,7 @@ void BM_ClassifyStage(benchmark::State& state) {
         std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
     benchmark::DoNotOptimize(out[0].log_odds.data());
   }
-  std::sort(us.begin(), us.end());
-  const auto at = [&](double q) {
-    return us[std::min(us.size() - 1, static_cast<std::size_t>(q * static_cast<double>(us.size())))];
-  };
-  state.counters["median_us"] = at(0.5);
-  state.counters["p99_us"] = at(0.99);
-  state.counters["max_us"] = us.back();
+  report_percentiles(state, us);
   state.counters["shipped_model"] = shipped ? 1 : 0;
   state.counters["holistic_share"] = static_cast<double>(stage.counters().holistic_described) /
                                      static_cast<double>(stage.counters().segments_described);
