@@ -151,6 +151,9 @@ class Tracker {
   bool spawn(const Detection& d, std::int64_t stamp_ns) noexcept;  // false: not spawned (counted)
   void absorb_fragments(std::span<const Detection> detections) noexcept;
   void merge_overlapping(std::int64_t stamp_ns) noexcept;
+  // Solves the assignment of the gated rows_ x cols_ (pair_cost_, nd detections per track) per
+  // connected component of the allowed pairs into det_match_.
+  void assign(std::size_t nd, std::size_t nrows, std::size_t ncols) noexcept;
 
   TrackerConfig config_;
   TrackerCounters counters_;
@@ -164,6 +167,10 @@ class Tracker {
   std::vector<std::int32_t> det_match_;     // per detection: slot or -1
   std::vector<std::uint32_t> rows_, cols_;  // compact index -> live index / detection index
   std::vector<std::int32_t> col_of_det_;
+  std::vector<Eigen::Vector2d> positions_;        // per detection: its measured x,y
+  std::vector<std::uint32_t> parent_, component_;  // per row, then column: union-find, component
+  std::vector<std::uint32_t> component_start_;     // per component: its rows', columns' start
+  std::vector<std::uint32_t> component_members_;   // rows, columns, grouped by component
   std::vector<float> pair_cost_;            // live x detections: squared Mahalanobis, < 0 gated out
   std::vector<Detection> merged_;           // per detection: its measurement, fragments joined
   std::vector<std::uint8_t> host_;          // per detection: 1 when it absorbed a fragment
