@@ -95,6 +95,8 @@ struct Segmenter::State {
         m(cells_across(c.range_m, c.ground_cell_m)),
         tiles((n + 7) / 8),
         slot_of(std::size_t{tiles} * tiles * 64, kNone),
+        open(std::size_t{tiles} * tiles, 0),
+        high(std::size_t{tiles} * tiles, 0),
         pad(static_cast<std::uint32_t>(std::ceil(c.ground_radius_m / c.ground_cell_m))),
         mp(m + 2 * pad),
         ground_min(std::size_t{mp} * mp, std::numeric_limits<float>::infinity()),
@@ -123,6 +125,24 @@ struct Segmenter::State {
     return ((std::size_t{iy >> 3} * tiles + (ix >> 3)) << 6) | ((iy & 7u) << 3) | (ix & 7u);
   }
   std::vector<std::uint32_t> slot_of;  // fine grid, tiled
+  [[nodiscard]] std::size_t dense_of(std::uint32_t slot) const noexcept {
+    return dense(cell_id[slot] & 0xFFFFu, cell_id[slot] >> 16);
+  }
+  // Cell flags, one bit per fine cell (bit d & 63 of word d >> 6 for dense index d: one word per
+  // tile), tested in the flood fill and the split before slot_of and the per-slot arrays. open:
+  // an obstacle cell (strong or weak) not yet in a component, zeroed with slot_of after the
+  // scan; high: during a split, a high cell of the component not yet in a group, all zero
+  // between splits.
+  std::vector<std::uint64_t> open, high;
+  static bool test(const std::vector<std::uint64_t>& bits, std::size_t d) noexcept {
+    return (bits[d >> 6] >> (d & 63u) & 1u) != 0;
+  }
+  static void set(std::vector<std::uint64_t>& bits, std::size_t d) noexcept {
+    bits[d >> 6] |= std::uint64_t{1} << (d & 63u);
+  }
+  static void unset(std::vector<std::uint64_t>& bits, std::size_t d) noexcept {
+    bits[d >> 6] &= ~(std::uint64_t{1} << (d & 63u));
+  }
   // Coarse grid with a border of `pad` cells (the ground window never leaves it); index
   // (gy + pad) * mp + gx + pad. ground_min is +inf where empty, reset cell by cell after use.
   std::uint32_t pad, mp;
@@ -306,6 +326,7 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
     const bool strong = top - s.ground[s.coarse_id[slot]] > obstacle_height ||
                         top - s.z_min[slot] > obstacle_spread;
     s.label[slot] = strong ? kUnvisited : kWeak;
+    State::set(s.open, s.dense_of(static_cast<std::uint32_t>(slot)));
   }
 
   // 5. Flood fill 8-connected obstacle cells (a fixed queue, no recursion); keep or drop each.
@@ -343,7 +364,8 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
         if (ix >= n || iy >= n) break;
         if ((iy << 16 | ix) == last) continue;
         last = iy << 16 | ix;
-        const std::uint32_t other = s.slot_of[s.dense(ix, iy)];
+        const std::size_t d = s.dense(ix, iy);
+        const std::uint32_t other = s.slot_of[d];
         if (other == kNone) continue;  // nothing seen here: keep walking
         if (s.label[other] == kNone && s.obstacle_count[other] == 0) {
           // Only ground seen here: with overhangs on, walk on (checked at the far end).
@@ -362,6 +384,7 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
             std::fabs(s.band_max[other] - s.band_max[slot]) <=
                 (crossed_ground ? overhang_height : bridge_height)) {
           s.label[other] = comp;
+          State::unset(s.open, d);
           s.depth[other] = 0;
           (void)s.component_cells.push_back(other);
         }
@@ -381,15 +404,25 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
   auto split = [&](std::uint32_t comp) {
     s.parts.clear();
     s.split_queue.clear();
+    std::uint32_t highs = 0;
     for (const std::uint32_t slot : s.component_cells) {
       const bool high = s.band_max[slot] - s.ground[s.coarse_id[slot]] >= split_height;
       s.part[slot] = high ? kUnvisited : kNone;
+      if (!high) continue;
+      ++highs;
+      State::set(s.high, s.dense_of(slot));
     }
+    if (highs == 0) return false;  // no seed
+    // Every high cell's bit is cleared when it joins a group; on an early return the rest are.
+    const auto clear_high = [&] {
+      for (const std::uint32_t slot : s.component_cells) s.high[s.dense_of(slot) >> 6] = 0;
+    };
     std::uint32_t shared = kNone;  // the seed of all groups that are not one person
     std::uint32_t persons = 0;
     for (const std::uint32_t start : s.component_cells) {
       if (s.part[start] != kUnvisited) continue;
       const std::size_t begin = s.split_queue.size();
+      State::unset(s.high, s.dense_of(start));
       s.part[start] = kQueued;
       (void)s.split_queue.push_back(start);  // each cell once: never full
       Part group;
@@ -399,8 +432,10 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
         group.add(cx, cy, s.obstacle_count[s.split_queue[head]]);
         for (std::uint32_t yy = cy < 2 ? 0 : cy - 2; yy <= std::min(cy + 2, n - 1); ++yy) {
           for (std::uint32_t xx = cx < 2 ? 0 : cx - 2; xx <= std::min(cx + 2, n - 1); ++xx) {
-            const std::uint32_t other = s.slot_of[s.dense(xx, yy)];
-            if (other == kNone || s.label[other] != comp || s.part[other] != kUnvisited) continue;
+            const std::size_t d = s.dense(xx, yy);
+            if (!State::test(s.high, d)) continue;  // not a high cell of comp left to group
+            State::unset(s.high, d);
+            const std::uint32_t other = s.slot_of[d];
             s.part[other] = kQueued;
             (void)s.split_queue.push_back(other);
           }
@@ -411,7 +446,10 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
                           group.y1 - group.y0 < person_cells &&
                           s.parts.size() + 1 < s.parts.capacity();  // room left for `shared`
       // More person-sized groups than a group of people has: foliage (bush tops), left whole.
-      if (person && ++persons > kMaxPersons) return false;
+      if (person && ++persons > kMaxPersons) {
+        clear_high();
+        return false;
+      }
       if (!person && shared == kNone) shared = static_cast<std::uint32_t>(s.parts.size());
       const std::uint32_t seed = person ? static_cast<std::uint32_t>(s.parts.size()) : shared;
       if (seed == s.parts.size()) *s.parts.append() = Part{};  // capacity kept above
@@ -481,6 +519,7 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
     // steps from the nearest strong cell; weak cells spread only up to weak_join_cells deep.
     s.component_cells.clear();
     s.label[seed] = component;
+    State::unset(s.open, s.dense_of(static_cast<std::uint32_t>(seed)));
     s.depth[seed] = 0;
     (void)s.component_cells.push_back(static_cast<std::uint32_t>(seed));  // each cell once
     std::uint64_t pts = 0;
@@ -494,15 +533,17 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
       const bool spreads_weak = s.depth[slot] < c.weak_join_cells;
       for (std::uint32_t yy = cy == 0 ? 0 : cy - 1; yy <= std::min(cy + 1, n - 1); ++yy) {
         for (std::uint32_t xx = cx == 0 ? 0 : cx - 1; xx <= std::min(cx + 1, n - 1); ++xx) {
-          const std::uint32_t other = s.slot_of[s.dense(xx, yy)];
-          if (other == kNone) continue;
+          const std::size_t d = s.dense(xx, yy);
+          if (!State::test(s.open, d)) continue;  // empty, ground only, or in a component
+          const std::uint32_t other = s.slot_of[d];
           if (s.label[other] == kUnvisited) {
             s.depth[other] = 0;
-          } else if (s.label[other] == kWeak && spreads_weak) {
+          } else if (spreads_weak) {  // weak
             s.depth[other] = static_cast<std::uint8_t>(s.depth[slot] + 1);
           } else {
             continue;
           }
+          State::unset(s.open, d);
           s.label[other] = component;
           (void)s.component_cells.push_back(other);
         }
@@ -544,8 +585,11 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
     }
   }
 
-  for (const std::uint32_t id : s.cell_id)
-    s.slot_of[s.dense(id & 0xFFFFu, id >> 16)] = kNone;  // empty again
+  for (const std::uint32_t id : s.cell_id) {  // empty again (weak cells no obstacle reached)
+    const std::size_t d = s.dense(id & 0xFFFFu, id >> 16);
+    s.slot_of[d] = kNone;
+    s.open[d >> 6] = 0;
+  }
 
   // 6. Scatter the point indices of kept segments, contiguous per segment.
   (void)out.point_indices.resize(cursor);
