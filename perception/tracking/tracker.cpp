@@ -220,6 +220,7 @@ Tracker::Tracker(const TrackerConfig& c)
   cols_.assign(c.max_detections, 0);
   col_of_det_.assign(c.max_detections, -1);
   positions_.assign(c.max_detections, Eigen::Vector2d::Zero());
+  track_xy_.assign(c.max_tracks, Eigen::Vector2d::Zero());
   parent_.assign(c.max_tracks + c.max_detections, 0);
   component_.assign(c.max_tracks + c.max_detections, 0);
   component_start_.assign(2 * (c.max_tracks + 1), 0);
@@ -418,6 +419,8 @@ void Tracker::merge_overlapping(std::int64_t stamp_ns) noexcept {
   const auto fits = [&](const Track& t) { return fits_one_object(config_, t.length, t.width); };
   const std::size_t n = live_.size();
   std::fill_n(merged_track_.begin(), n, std::uint8_t{0});
+  // The tracks' x,y in one compact array for the pair loop (kept current when a is corrected).
+  for (std::size_t i = 0; i < n; ++i) track_xy_[i] = slots_[live_[i]].x.head<2>();
   for (std::size_t i = 0; i < n; ++i) {
     if (merged_track_[i] != 0) continue;
     Slot& a = slots_[live_[i]];
@@ -431,10 +434,10 @@ void Tracker::merge_overlapping(std::int64_t stamp_ns) noexcept {
     shape();
     for (std::size_t j = 0; j < n; ++j) {
       if (j == i || merged_track_[j] != 0) continue;
-      const Slot& b = slots_[live_[j]];
-      const float dx = static_cast<float>(b.x(0) - a.x(0)),
-                  dy = static_cast<float>(b.x(1) - a.x(1));
+      const float dx = static_cast<float>(track_xy_[j].x() - track_xy_[i].x()),
+                  dy = static_cast<float>(track_xy_[j].y() - track_xy_[i].y());
       if (dx * dx + dy * dy > reach * reach) continue;  // outside the grown box's circle
+      const Slot& b = slots_[live_[j]];
       if (person(b.track) ||
           (narrow ? b.track.height >= config_.absorb_keep_height_m : !older(a.track, b.track))) {
         continue;
@@ -450,6 +453,7 @@ void Tracker::merge_overlapping(std::int64_t stamp_ns) noexcept {
       // measured in this scan, b's measurement corrects a.
       if (a.track.segment < 0 && b.measured >= 0) {
         correct(a, merged_[static_cast<std::size_t>(b.measured)], stamp_ns);
+        track_xy_[i] = a.x.head<2>();
         a.measured = b.measured;
         shape();
       }
