@@ -107,6 +107,7 @@ struct Segmenter::State {
         cell_id(c.max_occupied_cells),
         coarse_id(c.max_occupied_cells),
         z_min(c.max_occupied_cells),
+        ground_at(c.max_occupied_cells),
         band_max(c.max_occupied_cells),
         band_min(c.max_occupied_cells),
         obstacle_count(c.max_occupied_cells),
@@ -157,7 +158,7 @@ struct Segmenter::State {
   // Per slot (occupied fine cell).
   rt::FixedVector<std::uint32_t> cell_id;  // iy << 16 | ix
   rt::FixedVector<std::uint32_t> coarse_id;
-  rt::FixedVector<float> z_min, band_max, band_min;
+  rt::FixedVector<float> z_min, ground_at, band_max, band_min;  // ground_at: its local ground
   rt::FixedVector<std::uint32_t> obstacle_count, label, offset;
   // Flood fill.
   rt::FixedVector<std::uint8_t> depth;
@@ -232,7 +233,7 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
       }
       continue;
     }
-    if (z < lowest - below_slope * std::sqrt(x * x + y * y)) {
+    if (z < lowest && z < lowest - below_slope * std::sqrt(x * x + y * y)) {  // sqrt if needed
       ++k.ignored_below;
       continue;
     }
@@ -290,6 +291,9 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
     s.ground[g] = low;
   }
   for (const std::uint32_t g : s.ground_cells) s.ground_min[g] = inf;  // empty again
+  for (std::size_t slot = 0; slot < slots; ++slot) {
+    s.ground_at[slot] = s.ground[s.coarse_id[slot]];  // one load per use below, not two
+  }
 
   // 3. Points against their local ground: ground, above, or obstacle candidates per cell.
   const float clearance = static_cast<float>(c.ground_clearance_m);
@@ -299,7 +303,7 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
     if (slot == kNone) continue;
     float x, y, z;
     points.read(i, x, y, z);
-    const float h = z - s.ground[s.coarse_id[slot]];
+    const float h = z - s.ground_at[slot];
     if (h <= clearance) {
       ++k.ground_points;
       s.point_slot[i] = kNone;
@@ -323,7 +327,7 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
     s.offset[slot] = kNone;
     if (s.obstacle_count[slot] == 0) continue;
     const float top = s.band_max[slot];
-    const bool strong = top - s.ground[s.coarse_id[slot]] > obstacle_height ||
+    const bool strong = top - s.ground_at[slot] > obstacle_height ||
                         top - s.z_min[slot] > obstacle_spread;
     s.label[slot] = strong ? kUnvisited : kWeak;
     State::set(s.open, s.dense_of(static_cast<std::uint32_t>(slot)));
@@ -378,7 +382,7 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
         // Ground crossed: the nearer of the two cells must be an overhang (its lowest
         // obstacle point at least overhang above the ground), so the ground was seen under it.
         const std::uint32_t nearer = sign > 0 ? slot : other;
-        const float gap = s.band_min[nearer] - s.ground[s.coarse_id[nearer]];
+        const float gap = s.band_min[nearer] - s.ground_at[nearer];
         const bool under = !crossed_ground || (gap >= overhang && gap <= overhang_top);
         if (under && s.label[other] == kUnvisited &&
             std::fabs(s.band_max[other] - s.band_max[slot]) <=
@@ -406,7 +410,7 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
     s.split_queue.clear();
     std::uint32_t highs = 0;
     for (const std::uint32_t slot : s.component_cells) {
-      const bool high = s.band_max[slot] - s.ground[s.coarse_id[slot]] >= split_height;
+      const bool high = s.band_max[slot] - s.ground_at[slot] >= split_height;
       s.part[slot] = high ? kUnvisited : kNone;
       if (!high) continue;
       ++highs;
