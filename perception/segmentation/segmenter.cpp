@@ -68,6 +68,8 @@ const char* validate(const SegmenterConfig& c) noexcept {
     return "overhang_m must be in [0, max_height_m] m";
   if (!(c.overhang_max_m >= c.overhang_m)) return "overhang_max_m must be >= overhang_m";
   if (!(c.overhang_height_m >= 0)) return "overhang_height_m must be >= 0 m";
+  if (!(c.overhead_m == 0 || (c.overhead_m > c.obstacle_height_m && c.overhead_m <= c.max_height_m)))
+    return "overhead_m must be 0 (off) or in (obstacle_height_m, max_height_m] m";
   if (!(c.split_height_m == 0 ||
         (c.split_height_m > c.obstacle_height_m && c.split_height_m <= c.max_height_m)))
     return "split_height_m must be 0 (off) or in (obstacle_height_m, max_height_m] m";
@@ -114,6 +116,7 @@ struct Segmenter::State {
         label(c.max_occupied_cells),
         offset(c.max_occupied_cells),
         depth(c.max_occupied_cells),
+        overhead(c.max_occupied_cells),
         component_cells(c.max_occupied_cells),
         part(c.max_occupied_cells),
         split_queue(c.max_occupied_cells),
@@ -162,6 +165,7 @@ struct Segmenter::State {
   rt::FixedVector<std::uint32_t> obstacle_count, label, offset;
   // Flood fill.
   rt::FixedVector<std::uint8_t> depth;
+  rt::FixedVector<std::uint8_t> overhead;  // 1: an overhead cell (SegmenterConfig::overhead_m)
   rt::FixedVector<std::uint32_t> component_cells;
   // Split: per slot of the component its part (or kNone), the queue of the high groups and then
   // of the nearest-seed fill, and the parts (seeds beyond max_segments join the shared one).
@@ -322,6 +326,8 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
   // bumper, feet, the lower returns of a far car) up to weak_join_cells deep, never start one.
   const float obstacle_height = static_cast<float>(c.obstacle_height_m);
   const float obstacle_spread = static_cast<float>(c.obstacle_spread_m);
+  const bool overhead_on = c.overhead_m > 0;
+  const float overhead_low = static_cast<float>(c.overhead_m);
   for (std::size_t slot = 0; slot < slots; ++slot) {
     s.label[slot] = kNone;
     s.offset[slot] = kNone;
@@ -330,6 +336,7 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
     const bool strong = top - s.ground_at[slot] > obstacle_height ||
                         top - s.z_min[slot] > obstacle_spread;
     s.label[slot] = strong ? kUnvisited : kWeak;
+    s.overhead[slot] = overhead_on && s.band_min[slot] - s.ground_at[slot] >= overhead_low;
     State::set(s.open, s.dense_of(static_cast<std::uint32_t>(slot)));
   }
 
@@ -384,7 +391,7 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
         const std::uint32_t nearer = sign > 0 ? slot : other;
         const float gap = s.band_min[nearer] - s.ground_at[nearer];
         const bool under = !crossed_ground || (gap >= overhang && gap <= overhang_top);
-        if (under && s.label[other] == kUnvisited &&
+        if (under && s.label[other] == kUnvisited && s.overhead[other] == s.overhead[slot] &&
             std::fabs(s.band_max[other] - s.band_max[slot]) <=
                 (crossed_ground ? overhang_height : bridge_height)) {
           s.label[other] = comp;
@@ -540,6 +547,7 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
           const std::size_t d = s.dense(xx, yy);
           if (!State::test(s.open, d)) continue;  // empty, ground only, or in a component
           const std::uint32_t other = s.slot_of[d];
+          if (s.overhead[other] != s.overhead[slot]) continue;  // standing vs overhead: apart
           if (s.label[other] == kUnvisited) {
             s.depth[other] = 0;
           } else if (spreads_weak) {  // weak
