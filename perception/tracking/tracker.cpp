@@ -221,6 +221,9 @@ Tracker::Tracker(const TrackerConfig& c)
   col_of_det_.assign(c.max_detections, -1);
   positions_.assign(c.max_detections, Eigen::Vector2d::Zero());
   track_xy_.assign(c.max_tracks, Eigen::Vector2d::Zero());
+  order_.assign(c.max_tracks, 0);
+  rank_.assign(c.max_tracks, 0);
+  candidate_.assign(c.max_tracks, 0);
   parent_.assign(c.max_tracks + c.max_detections, 0);
   component_.assign(c.max_tracks + c.max_detections, 0);
   component_start_.assign(2 * (c.max_tracks + 1), 0);
@@ -421,10 +424,34 @@ void Tracker::merge_overlapping(std::int64_t stamp_ns) noexcept {
   std::fill_n(merged_track_.begin(), n, std::uint8_t{0});
   // The tracks' x,y in one compact array for the pair loop (kept current when a is corrected).
   for (std::size_t i = 0; i < n; ++i) track_xy_[i] = slots_[live_[i]].x.head<2>();
+  // The tracks sorted by x: the pairs within a's reach lie in a window of that order (a track
+  // corrected below is moved to its new place).
+  const auto before = [&](std::uint32_t p, std::uint32_t q) {
+    return track_xy_[p].x() < track_xy_[q].x() || (track_xy_[p].x() == track_xy_[q].x() && p < q);
+  };
+  for (std::size_t i = 0; i < n; ++i) order_[i] = static_cast<std::uint32_t>(i);
+  std::sort(order_.begin(), order_.begin() + static_cast<std::ptrdiff_t>(n), before);
+  for (std::size_t k = 0; k < n; ++k) rank_[order_[k]] = static_cast<std::uint32_t>(k);
+  const auto move_to_place = [&](std::uint32_t t) {
+    std::size_t k = rank_[t];
+    for (; k > 0 && before(t, order_[k - 1]); --k) {
+      order_[k] = order_[k - 1];
+      rank_[order_[k]] = static_cast<std::uint32_t>(k);
+    }
+    for (; k + 1 < n && before(order_[k + 1], t); ++k) {
+      order_[k] = order_[k + 1];
+      rank_[order_[k]] = static_cast<std::uint32_t>(k);
+    }
+    order_[k] = t;
+    rank_[t] = static_cast<std::uint32_t>(k);
+  };
   for (std::size_t i = 0; i < n; ++i) {
     if (merged_track_[i] != 0) continue;
     Slot& a = slots_[live_[i]];
     const bool narrow = person(a.track);  // takes only low tracks (legs) into its box
+    // Both boxes must fit what one fragmented object's box may (a hedge, a wall or a canopy
+    // beside a parked car does not), and a's changes only when it merges: it never will.
+    if (!narrow && !fits(a.track)) continue;
     const float grow = narrow ? static_cast<float>(config_.absorb_narrow_gap_m) : margin;
     float reach = 0, ca = 1, sa = 0;  // of a's grown box; refreshed when a is corrected
     const auto shape = [&] {
@@ -432,33 +459,56 @@ void Tracker::merge_overlapping(std::int64_t stamp_ns) noexcept {
       ca = std::cos(a.track.yaw), sa = std::sin(a.track.yaw);
     };
     shape();
-    for (std::size_t j = 0; j < n; ++j) {
-      if (j == i || merged_track_[j] != 0) continue;
+    // Tries the pair (a, track j); true when a was corrected (it moved).
+    const auto pair = [&](std::size_t j) {
+      if (j == i || merged_track_[j] != 0) return false;
       const float dx = static_cast<float>(track_xy_[j].x() - track_xy_[i].x()),
                   dy = static_cast<float>(track_xy_[j].y() - track_xy_[i].y());
-      if (dx * dx + dy * dy > reach * reach) continue;  // outside the grown box's circle
+      if (dx * dx + dy * dy > reach * reach) return false;  // outside the grown box's circle
       const Slot& b = slots_[live_[j]];
       if (person(b.track) ||
           (narrow ? b.track.height >= config_.absorb_keep_height_m : !older(a.track, b.track))) {
-        continue;
+        return false;
       }
       if (std::abs(ca * dx + sa * dy) > 0.5f * a.track.length + grow ||
           std::abs(-sa * dx + ca * dy) > 0.5f * a.track.width + grow) {
-        continue;
+        return false;
       }
-      // Both fit what one fragmented object's box may (a hedge, a wall or a canopy beside a parked
-      // car does not).
-      if (!narrow && (!fits(a.track) || !fits(b.track))) continue;
+      if (!narrow && (!fits(a.track) || !fits(b.track))) return false;
       // b is the same object as the older a: a keeps its id (and its velocity); if only b was
       // measured in this scan, b's measurement corrects a.
+      bool moved = false;
       if (a.track.segment < 0 && b.measured >= 0) {
         correct(a, merged_[static_cast<std::size_t>(b.measured)], stamp_ns);
         track_xy_[i] = a.x.head<2>();
         a.measured = b.measured;
         shape();
+        moved = true;
       }
       merged_track_[j] = 1;
       ++counters_.deleted_overlap;
+      return moved;
+    };
+    // The tracks from j = `from` on within reach along x (a margin above rounding: every pair
+    // outside fails the circle test above), tried in the order of j as a scan of all pairs
+    // would; when a moves, its remaining pairs are gathered again around its new place.
+    for (std::size_t from = 0;;) {
+      const double window = static_cast<double>(reach) * (1 + 1e-5), xi = track_xy_[i].x();
+      std::size_t candidates = 0;
+      for (std::size_t k = rank_[i]; k-- > 0 && xi - track_xy_[order_[k]].x() <= window;) {
+        if (order_[k] >= from) candidate_[candidates++] = order_[k];
+      }
+      for (std::size_t k = rank_[i] + 1; k < n && track_xy_[order_[k]].x() - xi <= window; ++k) {
+        if (order_[k] >= from) candidate_[candidates++] = order_[k];
+      }
+      std::sort(candidate_.begin(), candidate_.begin() + static_cast<std::ptrdiff_t>(candidates));
+      bool moved = false;
+      for (std::size_t c = 0; c < candidates && !moved; ++c) {
+        moved = pair(candidate_[c]);
+        from = candidate_[c] + 1;
+      }
+      if (!moved) break;
+      move_to_place(static_cast<std::uint32_t>(i));
     }
   }
   std::size_t kept = 0;

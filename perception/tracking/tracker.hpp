@@ -169,6 +169,8 @@ class Tracker {
   std::vector<std::int32_t> col_of_det_;
   std::vector<Eigen::Vector2d> positions_;        // per detection: its measured x,y
   std::vector<Eigen::Vector2d> track_xy_;         // per live index: its x,y (overlap merge)
+  std::vector<std::uint32_t> order_, rank_;       // live indices sorted by x; each one's rank
+  std::vector<std::uint32_t> candidate_;          // live indices within a track's reach
   std::vector<std::uint32_t> parent_, component_;  // per row, then column: union-find, component
   std::vector<std::uint32_t> component_start_;     // per component: its rows', columns' start
   std::vector<std::uint32_t> component_members_;   // rows, columns, grouped by component
