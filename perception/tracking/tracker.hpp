@@ -108,8 +108,8 @@ struct TrackerCounters {
   std::uint64_t dropped_detections = 0;   // beyond max_detections
   std::uint64_t invalid_detections = 0;   // non-finite centroid: neither matched nor spawned
   std::uint64_t stamp_regressions = 0;    // scan stamp not after the previous one (no predict)
-  std::uint64_t solver_failures = 0;  // scans where the assignment of a component was refused
-                                      // (non-finite costs): no matches in that component
+  std::uint64_t solver_failures = 0;      // scans with a component's assignment refused
+                                          // (non-finite costs): no matches in that component
   std::uint64_t absorbed_detections = 0;  // fragments joined to a matched track's measurement
   std::uint64_t deleted_merged = 0;       // younger tracks of fragments merged into an older one
   std::uint64_t deleted_overlap = 0;      // younger tracks inside an older track's box
