@@ -3,6 +3,7 @@
 // PCL's EuclideanClusterExtraction (tolerance 0.5 m, the approach Autoware's euclidean_cluster
 // wraps) on the SAME obstacle points STAC found, raw or after a 0.1 / 0.2 m voxel grid. Each
 // iteration segments one scan (round robin); per-iteration times give the median, p99 and max.
+// BM_StacSegmentAndTrack: segmentation + tracking per scan as the perception thread runs them.
 #include <benchmark/benchmark.h>
 #include <pcl/filters/voxel_grid.h>
 #include <pcl/point_cloud.h>
@@ -22,6 +23,7 @@
 
 #include "benchmarks/kitti_scans.hpp"
 #include "perception/segmentation/segmenter.hpp"
+#include "pipeline/scan_pipeline.hpp"
 
 namespace {
 
@@ -117,6 +119,51 @@ void BM_StacSegmenter(benchmark::State& state) {
   report(state, t, points / n, segments / n);
 }
 BENCHMARK(BM_StacSegmenter)->Iterations(1200)->Unit(benchmark::kMillisecond);
+
+// Segmentation + tracking of one scan per iteration, as the perception thread runs them:
+// ScanPipeline::process without poses (no deskew, the sensor parked: segment, detections with
+// the end-on completion, track), default settings. The KITTI scans in sequence order and back
+// (0..5, 4..1, 0..5, ...: the scene moves forwards then backwards and never jumps), 100 ms
+// apart; times are of the whole process() call.
+void BM_StacSegmentAndTrack(benchmark::State& state) {
+  namespace velodyne = stac::velodyne;
+  std::vector<velodyne::Scan> driver_scans;
+  for (const auto& xyzi : scans()) {
+    velodyne::Scan& scan = driver_scans.emplace_back(xyzi.size() / 4);
+    for (std::size_t i = 0; i < xyzi.size() / 4; ++i) {
+      velodyne::Point p{};
+      p.x = xyzi[4 * i], p.y = xyzi[4 * i + 1], p.z = xyzi[4 * i + 2], p.intensity = xyzi[4 * i + 3];
+      (void)scan.points.push_back(p);
+    }
+  }
+  stac::pipeline::ScanPipeline pipeline{stac::pipeline::PipelineConfig{}};
+  stac::pipeline::ScanResult result = pipeline.make_result();
+  const std::size_t period = 2 * (driver_scans.size() - 1);  // 0..5, 4..1
+  std::int64_t k = 0;
+  const auto next = [&]() -> velodyne::Scan& {
+    const std::size_t phase = static_cast<std::size_t>(k) % period;
+    velodyne::Scan& scan = driver_scans[phase < driver_scans.size() ? phase : period - phase];
+    scan.header.stamp_ns = scan.header.end_stamp_ns = 1'000'000'000 + k++ * 100'000'000;
+    return scan;
+  };
+  for (int warm = 0; warm < 20; ++warm) pipeline.process(next(), nullptr, result);
+  Times t;
+  double points = 0, segments = 0, tracks = 0;
+  for (auto _ : state) {
+    velodyne::Scan& scan = next();
+    t.start();
+    pipeline.process(scan, nullptr, result);
+    t.stop();
+    benchmark::DoNotOptimize(result.tracked.tracks.data());
+    points += static_cast<double>(scan.points.size());
+    segments += static_cast<double>(result.segments.segments.size());
+    tracks += static_cast<double>(result.tracked.tracks.size());
+  }
+  const auto n = static_cast<double>(t.wall.size());
+  report(state, t, points / n, segments / n);
+  state.counters["tracks"] = tracks / n;
+}
+BENCHMARK(BM_StacSegmentAndTrack)->Iterations(1200)->Unit(benchmark::kMillisecond);
 
 // voxel_cm = 0: the raw obstacle points; else a voxel grid of that leaf size first (timed).
 void BM_PclEuclideanClusters(benchmark::State& state) {

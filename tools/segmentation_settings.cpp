@@ -41,6 +41,7 @@ rt::Result<segmentation::SegmenterConfig> load_segmentation_settings(
                         s.read("obstacle_height_m", c.obstacle_height_m),
                         s.read("obstacle_spread_m", c.obstacle_spread_m),
                         s.read("max_height_m", c.max_height_m),
+                        s.read("overhead_m", c.overhead_m),
                         count("weak_join_cells", 10, c.weak_join_cells, 0),
                         s.read("bridge_m", c.bridge_m),
                         s.read("bridge_height_m", c.bridge_height_m),

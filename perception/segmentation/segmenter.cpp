@@ -68,6 +68,8 @@ const char* validate(const SegmenterConfig& c) noexcept {
     return "overhang_m must be in [0, max_height_m] m";
   if (!(c.overhang_max_m >= c.overhang_m)) return "overhang_max_m must be >= overhang_m";
   if (!(c.overhang_height_m >= 0)) return "overhang_height_m must be >= 0 m";
+  if (!(c.overhead_m == 0 || (c.overhead_m > c.obstacle_height_m && c.overhead_m <= c.max_height_m)))
+    return "overhead_m must be 0 (off) or in (obstacle_height_m, max_height_m] m";
   if (!(c.split_height_m == 0 ||
         (c.split_height_m > c.obstacle_height_m && c.split_height_m <= c.max_height_m)))
     return "split_height_m must be 0 (off) or in (obstacle_height_m, max_height_m] m";
@@ -95,6 +97,8 @@ struct Segmenter::State {
         m(cells_across(c.range_m, c.ground_cell_m)),
         tiles((n + 7) / 8),
         slot_of(std::size_t{tiles} * tiles * 64, kNone),
+        open(std::size_t{tiles} * tiles, 0),
+        high(std::size_t{tiles} * tiles, 0),
         pad(static_cast<std::uint32_t>(std::ceil(c.ground_radius_m / c.ground_cell_m))),
         mp(m + 2 * pad),
         ground_min(std::size_t{mp} * mp, std::numeric_limits<float>::infinity()),
@@ -105,12 +109,14 @@ struct Segmenter::State {
         cell_id(c.max_occupied_cells),
         coarse_id(c.max_occupied_cells),
         z_min(c.max_occupied_cells),
+        ground_at(c.max_occupied_cells),
         band_max(c.max_occupied_cells),
         band_min(c.max_occupied_cells),
         obstacle_count(c.max_occupied_cells),
         label(c.max_occupied_cells),
         offset(c.max_occupied_cells),
         depth(c.max_occupied_cells),
+        overhead(c.max_occupied_cells),
         component_cells(c.max_occupied_cells),
         part(c.max_occupied_cells),
         split_queue(c.max_occupied_cells),
@@ -123,6 +129,24 @@ struct Segmenter::State {
     return ((std::size_t{iy >> 3} * tiles + (ix >> 3)) << 6) | ((iy & 7u) << 3) | (ix & 7u);
   }
   std::vector<std::uint32_t> slot_of;  // fine grid, tiled
+  [[nodiscard]] std::size_t dense_of(std::uint32_t slot) const noexcept {
+    return dense(cell_id[slot] & 0xFFFFu, cell_id[slot] >> 16);
+  }
+  // Cell flags, one bit per fine cell (bit d & 63 of word d >> 6 for dense index d: one word per
+  // tile), tested in the flood fill and the split before slot_of and the per-slot arrays. open:
+  // an obstacle cell (strong or weak) not yet in a component, zeroed with slot_of after the
+  // scan; high: during a split, a high cell of the component not yet in a group, all zero
+  // between splits.
+  std::vector<std::uint64_t> open, high;
+  static bool test(const std::vector<std::uint64_t>& bits, std::size_t d) noexcept {
+    return (bits[d >> 6] >> (d & 63u) & 1u) != 0;
+  }
+  static void set(std::vector<std::uint64_t>& bits, std::size_t d) noexcept {
+    bits[d >> 6] |= std::uint64_t{1} << (d & 63u);
+  }
+  static void unset(std::vector<std::uint64_t>& bits, std::size_t d) noexcept {
+    bits[d >> 6] &= ~(std::uint64_t{1} << (d & 63u));
+  }
   // Coarse grid with a border of `pad` cells (the ground window never leaves it); index
   // (gy + pad) * mp + gx + pad. ground_min is +inf where empty, reset cell by cell after use.
   std::uint32_t pad, mp;
@@ -137,10 +161,11 @@ struct Segmenter::State {
   // Per slot (occupied fine cell).
   rt::FixedVector<std::uint32_t> cell_id;  // iy << 16 | ix
   rt::FixedVector<std::uint32_t> coarse_id;
-  rt::FixedVector<float> z_min, band_max, band_min;
+  rt::FixedVector<float> z_min, ground_at, band_max, band_min;  // ground_at: its local ground
   rt::FixedVector<std::uint32_t> obstacle_count, label, offset;
   // Flood fill.
   rt::FixedVector<std::uint8_t> depth;
+  rt::FixedVector<std::uint8_t> overhead;  // 1: an overhead cell (SegmenterConfig::overhead_m)
   rt::FixedVector<std::uint32_t> component_cells;
   // Split: per slot of the component its part (or kNone), the queue of the high groups and then
   // of the nearest-seed fill, and the parts (seeds beyond max_segments join the shared one).
@@ -212,7 +237,7 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
       }
       continue;
     }
-    if (z < lowest - below_slope * std::sqrt(x * x + y * y)) {
+    if (z < lowest && z < lowest - below_slope * std::sqrt(x * x + y * y)) {  // sqrt if needed
       ++k.ignored_below;
       continue;
     }
@@ -270,6 +295,9 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
     s.ground[g] = low;
   }
   for (const std::uint32_t g : s.ground_cells) s.ground_min[g] = inf;  // empty again
+  for (std::size_t slot = 0; slot < slots; ++slot) {
+    s.ground_at[slot] = s.ground[s.coarse_id[slot]];  // one load per use below, not two
+  }
 
   // 3. Points against their local ground: ground, above, or obstacle candidates per cell.
   const float clearance = static_cast<float>(c.ground_clearance_m);
@@ -279,7 +307,7 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
     if (slot == kNone) continue;
     float x, y, z;
     points.read(i, x, y, z);
-    const float h = z - s.ground[s.coarse_id[slot]];
+    const float h = z - s.ground_at[slot];
     if (h <= clearance) {
       ++k.ground_points;
       s.point_slot[i] = kNone;
@@ -298,14 +326,18 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
   // bumper, feet, the lower returns of a far car) up to weak_join_cells deep, never start one.
   const float obstacle_height = static_cast<float>(c.obstacle_height_m);
   const float obstacle_spread = static_cast<float>(c.obstacle_spread_m);
+  const bool overhead_on = c.overhead_m > 0;
+  const float overhead_low = static_cast<float>(c.overhead_m);
   for (std::size_t slot = 0; slot < slots; ++slot) {
     s.label[slot] = kNone;
     s.offset[slot] = kNone;
     if (s.obstacle_count[slot] == 0) continue;
     const float top = s.band_max[slot];
-    const bool strong = top - s.ground[s.coarse_id[slot]] > obstacle_height ||
+    const bool strong = top - s.ground_at[slot] > obstacle_height ||
                         top - s.z_min[slot] > obstacle_spread;
     s.label[slot] = strong ? kUnvisited : kWeak;
+    s.overhead[slot] = overhead_on && s.band_min[slot] - s.ground_at[slot] >= overhead_low;
+    State::set(s.open, s.dense_of(static_cast<std::uint32_t>(slot)));
   }
 
   // 5. Flood fill 8-connected obstacle cells (a fixed queue, no recursion); keep or drop each.
@@ -343,7 +375,8 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
         if (ix >= n || iy >= n) break;
         if ((iy << 16 | ix) == last) continue;
         last = iy << 16 | ix;
-        const std::uint32_t other = s.slot_of[s.dense(ix, iy)];
+        const std::size_t d = s.dense(ix, iy);
+        const std::uint32_t other = s.slot_of[d];
         if (other == kNone) continue;  // nothing seen here: keep walking
         if (s.label[other] == kNone && s.obstacle_count[other] == 0) {
           // Only ground seen here: with overhangs on, walk on (checked at the far end).
@@ -356,12 +389,13 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
         // Ground crossed: the nearer of the two cells must be an overhang (its lowest
         // obstacle point at least overhang above the ground), so the ground was seen under it.
         const std::uint32_t nearer = sign > 0 ? slot : other;
-        const float gap = s.band_min[nearer] - s.ground[s.coarse_id[nearer]];
+        const float gap = s.band_min[nearer] - s.ground_at[nearer];
         const bool under = !crossed_ground || (gap >= overhang && gap <= overhang_top);
-        if (under && s.label[other] == kUnvisited &&
+        if (under && s.label[other] == kUnvisited && s.overhead[other] == s.overhead[slot] &&
             std::fabs(s.band_max[other] - s.band_max[slot]) <=
                 (crossed_ground ? overhang_height : bridge_height)) {
           s.label[other] = comp;
+          State::unset(s.open, d);
           s.depth[other] = 0;
           (void)s.component_cells.push_back(other);
         }
@@ -381,15 +415,25 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
   auto split = [&](std::uint32_t comp) {
     s.parts.clear();
     s.split_queue.clear();
+    std::uint32_t highs = 0;
     for (const std::uint32_t slot : s.component_cells) {
-      const bool high = s.band_max[slot] - s.ground[s.coarse_id[slot]] >= split_height;
+      const bool high = s.band_max[slot] - s.ground_at[slot] >= split_height;
       s.part[slot] = high ? kUnvisited : kNone;
+      if (!high) continue;
+      ++highs;
+      State::set(s.high, s.dense_of(slot));
     }
+    if (highs == 0) return false;  // no seed
+    // Every high cell's bit is cleared when it joins a group; on an early return the rest are.
+    const auto clear_high = [&] {
+      for (const std::uint32_t slot : s.component_cells) s.high[s.dense_of(slot) >> 6] = 0;
+    };
     std::uint32_t shared = kNone;  // the seed of all groups that are not one person
     std::uint32_t persons = 0;
     for (const std::uint32_t start : s.component_cells) {
       if (s.part[start] != kUnvisited) continue;
       const std::size_t begin = s.split_queue.size();
+      State::unset(s.high, s.dense_of(start));
       s.part[start] = kQueued;
       (void)s.split_queue.push_back(start);  // each cell once: never full
       Part group;
@@ -399,8 +443,10 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
         group.add(cx, cy, s.obstacle_count[s.split_queue[head]]);
         for (std::uint32_t yy = cy < 2 ? 0 : cy - 2; yy <= std::min(cy + 2, n - 1); ++yy) {
           for (std::uint32_t xx = cx < 2 ? 0 : cx - 2; xx <= std::min(cx + 2, n - 1); ++xx) {
-            const std::uint32_t other = s.slot_of[s.dense(xx, yy)];
-            if (other == kNone || s.label[other] != comp || s.part[other] != kUnvisited) continue;
+            const std::size_t d = s.dense(xx, yy);
+            if (!State::test(s.high, d)) continue;  // not a high cell of comp left to group
+            State::unset(s.high, d);
+            const std::uint32_t other = s.slot_of[d];
             s.part[other] = kQueued;
             (void)s.split_queue.push_back(other);
           }
@@ -411,7 +457,10 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
                           group.y1 - group.y0 < person_cells &&
                           s.parts.size() + 1 < s.parts.capacity();  // room left for `shared`
       // More person-sized groups than a group of people has: foliage (bush tops), left whole.
-      if (person && ++persons > kMaxPersons) return false;
+      if (person && ++persons > kMaxPersons) {
+        clear_high();
+        return false;
+      }
       if (!person && shared == kNone) shared = static_cast<std::uint32_t>(s.parts.size());
       const std::uint32_t seed = person ? static_cast<std::uint32_t>(s.parts.size()) : shared;
       if (seed == s.parts.size()) *s.parts.append() = Part{};  // capacity kept above
@@ -481,6 +530,7 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
     // steps from the nearest strong cell; weak cells spread only up to weak_join_cells deep.
     s.component_cells.clear();
     s.label[seed] = component;
+    State::unset(s.open, s.dense_of(static_cast<std::uint32_t>(seed)));
     s.depth[seed] = 0;
     (void)s.component_cells.push_back(static_cast<std::uint32_t>(seed));  // each cell once
     std::uint64_t pts = 0;
@@ -494,15 +544,18 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
       const bool spreads_weak = s.depth[slot] < c.weak_join_cells;
       for (std::uint32_t yy = cy == 0 ? 0 : cy - 1; yy <= std::min(cy + 1, n - 1); ++yy) {
         for (std::uint32_t xx = cx == 0 ? 0 : cx - 1; xx <= std::min(cx + 1, n - 1); ++xx) {
-          const std::uint32_t other = s.slot_of[s.dense(xx, yy)];
-          if (other == kNone) continue;
+          const std::size_t d = s.dense(xx, yy);
+          if (!State::test(s.open, d)) continue;  // empty, ground only, or in a component
+          const std::uint32_t other = s.slot_of[d];
+          if (s.overhead[other] != s.overhead[slot]) continue;  // standing vs overhead: apart
           if (s.label[other] == kUnvisited) {
             s.depth[other] = 0;
-          } else if (s.label[other] == kWeak && spreads_weak) {
+          } else if (spreads_weak) {  // weak
             s.depth[other] = static_cast<std::uint8_t>(s.depth[slot] + 1);
           } else {
             continue;
           }
+          State::unset(s.open, d);
           s.label[other] = component;
           (void)s.component_cells.push_back(other);
         }
@@ -544,8 +597,11 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
     }
   }
 
-  for (const std::uint32_t id : s.cell_id)
-    s.slot_of[s.dense(id & 0xFFFFu, id >> 16)] = kNone;  // empty again
+  for (const std::uint32_t id : s.cell_id) {  // empty again (weak cells no obstacle reached)
+    const std::size_t d = s.dense(id & 0xFFFFu, id >> 16);
+    s.slot_of[d] = kNone;
+    s.open[d >> 6] = 0;
+  }
 
   // 6. Scatter the point indices of kept segments, contiguous per segment.
   (void)out.point_indices.resize(cursor);

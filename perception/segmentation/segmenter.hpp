@@ -70,6 +70,11 @@ struct SegmenterConfig {
   double overhang_max_m = 0.6;
   double overhang_height_m = 0.6;
   double max_height_m = 2.5;  // points higher above the local ground are ignored (canopies)
+  // A cell whose lowest obstacle point is at least overhead_m above the ground (only the lower
+  // edge of a tree crown, a sign's panel) is overhead: it never connects with a cell standing
+  // on the ground (flood fill, ray bridges), so a car or a person under a crown is not joined
+  // to it and through it to the trunk. 0: off.
+  double overhead_m = 0.0;
   // Split a component at its tops: its cells whose top is split_height_m above the ground
   // (shoulders and heads, a car's cabin) form high groups, linking cells up to 2 cells apart. A
   // group with footprint sides of at most split_person_m and at least split_min_points points

@@ -219,6 +219,15 @@ Tracker::Tracker(const TrackerConfig& c)
   rows_.assign(c.max_tracks, 0);
   cols_.assign(c.max_detections, 0);
   col_of_det_.assign(c.max_detections, -1);
+  positions_.assign(c.max_detections, Eigen::Vector2d::Zero());
+  track_xy_.assign(c.max_tracks, Eigen::Vector2d::Zero());
+  order_.assign(c.max_tracks, 0);
+  rank_.assign(c.max_tracks, 0);
+  candidate_.assign(c.max_tracks, 0);
+  parent_.assign(c.max_tracks + c.max_detections, 0);
+  component_.assign(c.max_tracks + c.max_detections, 0);
+  component_start_.assign(2 * (c.max_tracks + 1), 0);
+  component_members_.assign(c.max_tracks + c.max_detections, 0);
 }
 
 Tracker::~Tracker() = default;
@@ -414,10 +423,36 @@ void Tracker::merge_overlapping(std::int64_t stamp_ns) noexcept {
   const auto fits = [&](const Track& t) { return fits_one_object(config_, t.length, t.width); };
   const std::size_t n = live_.size();
   std::fill_n(merged_track_.begin(), n, std::uint8_t{0});
+  // The tracks' x,y in one compact array for the pair loop (kept current when a is corrected).
+  for (std::size_t i = 0; i < n; ++i) track_xy_[i] = slots_[live_[i]].x.head<2>();
+  // The tracks sorted by x: the pairs within a's reach lie in a window of that order (a track
+  // corrected below is moved to its new place).
+  const auto before = [&](std::uint32_t p, std::uint32_t q) {
+    return track_xy_[p].x() < track_xy_[q].x() || (track_xy_[p].x() == track_xy_[q].x() && p < q);
+  };
+  for (std::size_t i = 0; i < n; ++i) order_[i] = static_cast<std::uint32_t>(i);
+  std::sort(order_.begin(), order_.begin() + static_cast<std::ptrdiff_t>(n), before);
+  for (std::size_t k = 0; k < n; ++k) rank_[order_[k]] = static_cast<std::uint32_t>(k);
+  const auto move_to_place = [&](std::uint32_t t) {
+    std::size_t k = rank_[t];
+    for (; k > 0 && before(t, order_[k - 1]); --k) {
+      order_[k] = order_[k - 1];
+      rank_[order_[k]] = static_cast<std::uint32_t>(k);
+    }
+    for (; k + 1 < n && before(order_[k + 1], t); ++k) {
+      order_[k] = order_[k + 1];
+      rank_[order_[k]] = static_cast<std::uint32_t>(k);
+    }
+    order_[k] = t;
+    rank_[t] = static_cast<std::uint32_t>(k);
+  };
   for (std::size_t i = 0; i < n; ++i) {
     if (merged_track_[i] != 0) continue;
     Slot& a = slots_[live_[i]];
     const bool narrow = person(a.track);  // takes only low tracks (legs) into its box
+    // Both boxes must fit what one fragmented object's box may (a hedge, a wall or a canopy
+    // beside a parked car does not), and a's changes only when it merges: it never will.
+    if (!narrow && !fits(a.track)) continue;
     const float grow = narrow ? static_cast<float>(config_.absorb_narrow_gap_m) : margin;
     float reach = 0, ca = 1, sa = 0;  // of a's grown box; refreshed when a is corrected
     const auto shape = [&] {
@@ -425,32 +460,56 @@ void Tracker::merge_overlapping(std::int64_t stamp_ns) noexcept {
       ca = std::cos(a.track.yaw), sa = std::sin(a.track.yaw);
     };
     shape();
-    for (std::size_t j = 0; j < n; ++j) {
-      if (j == i || merged_track_[j] != 0) continue;
+    // Tries the pair (a, track j); true when a was corrected (it moved).
+    const auto pair = [&](std::size_t j) {
+      if (j == i || merged_track_[j] != 0) return false;
+      const float dx = static_cast<float>(track_xy_[j].x() - track_xy_[i].x()),
+                  dy = static_cast<float>(track_xy_[j].y() - track_xy_[i].y());
+      if (dx * dx + dy * dy > reach * reach) return false;  // outside the grown box's circle
       const Slot& b = slots_[live_[j]];
-      const float dx = static_cast<float>(b.x(0) - a.x(0)),
-                  dy = static_cast<float>(b.x(1) - a.x(1));
-      if (dx * dx + dy * dy > reach * reach) continue;  // outside the grown box's circle
       if (person(b.track) ||
           (narrow ? b.track.height >= config_.absorb_keep_height_m : !older(a.track, b.track))) {
-        continue;
+        return false;
       }
       if (std::abs(ca * dx + sa * dy) > 0.5f * a.track.length + grow ||
           std::abs(-sa * dx + ca * dy) > 0.5f * a.track.width + grow) {
-        continue;
+        return false;
       }
-      // Both fit what one fragmented object's box may (a hedge, a wall or a canopy beside a parked
-      // car does not).
-      if (!narrow && (!fits(a.track) || !fits(b.track))) continue;
+      if (!narrow && (!fits(a.track) || !fits(b.track))) return false;
       // b is the same object as the older a: a keeps its id (and its velocity); if only b was
       // measured in this scan, b's measurement corrects a.
+      bool moved = false;
       if (a.track.segment < 0 && b.measured >= 0) {
         correct(a, merged_[static_cast<std::size_t>(b.measured)], stamp_ns);
+        track_xy_[i] = a.x.head<2>();
         a.measured = b.measured;
         shape();
+        moved = true;
       }
       merged_track_[j] = 1;
       ++counters_.deleted_overlap;
+      return moved;
+    };
+    // The tracks from j = `from` on within reach along x (a margin above rounding: every pair
+    // outside fails the circle test above), tried in the order of j as a scan of all pairs
+    // would; when a moves, its remaining pairs are gathered again around its new place.
+    for (std::size_t from = 0;;) {
+      const double window = static_cast<double>(reach) * (1 + 1e-5), xi = track_xy_[i].x();
+      std::size_t candidates = 0;
+      for (std::size_t k = rank_[i]; k-- > 0 && xi - track_xy_[order_[k]].x() <= window;) {
+        if (order_[k] >= from) candidate_[candidates++] = order_[k];
+      }
+      for (std::size_t k = rank_[i] + 1; k < n && track_xy_[order_[k]].x() - xi <= window; ++k) {
+        if (order_[k] >= from) candidate_[candidates++] = order_[k];
+      }
+      std::sort(candidate_.begin(), candidate_.begin() + static_cast<std::ptrdiff_t>(candidates));
+      bool moved = false;
+      for (std::size_t c = 0; c < candidates && !moved; ++c) {
+        moved = pair(candidate_[c]);
+        from = candidate_[c] + 1;
+      }
+      if (!moved) break;
+      move_to_place(static_cast<std::uint32_t>(i));
     }
   }
   std::size_t kept = 0;
@@ -462,6 +521,69 @@ void Tracker::merge_overlapping(std::int64_t stamp_ns) noexcept {
     }
   }
   (void)live_.resize(kept);
+}
+
+void Tracker::assign(std::size_t nd, std::size_t nrows, std::size_t ncols) noexcept {
+  // Union-find over rows [0, nrows) and columns [nrows, nrows + ncols).
+  const std::size_t nodes = nrows + ncols;
+  for (std::size_t i = 0; i < nodes; ++i) parent_[i] = static_cast<std::uint32_t>(i);
+  const auto find = [&](std::uint32_t a) {
+    while (parent_[a] != a) a = parent_[a] = parent_[parent_[a]];
+    return a;
+  };
+  for (std::size_t ri = 0; ri < nrows; ++ri) {
+    const float* costs = &pair_cost_[rows_[ri] * nd];
+    for (std::size_t ci = 0; ci < ncols; ++ci) {
+      if (costs[cols_[ci]] < 0) continue;
+      const std::uint32_t a = find(static_cast<std::uint32_t>(ri)),
+                          b = find(static_cast<std::uint32_t>(nrows + ci));
+      if (a != b) parent_[std::max(a, b)] = std::min(a, b);  // the root is a component's first row
+    }
+  }
+  // Components numbered by their first row; members listed in increasing order, rows of
+  // component k at [start[2k], start[2k + 1]), its columns at [start[2k + 1], start[2k + 2]).
+  std::size_t components = 0;
+  for (std::size_t i = 0; i < nodes; ++i) {
+    const std::uint32_t root = find(static_cast<std::uint32_t>(i));
+    component_[i] = root == i ? static_cast<std::uint32_t>(components++) : component_[root];
+  }
+  std::fill_n(component_start_.begin(), 2 * components + 1, 0u);
+  for (std::size_t i = 0; i < nodes; ++i) ++component_start_[2 * component_[i] + (i < nrows ? 1 : 2)];
+  for (std::size_t k = 1; k <= 2 * components; ++k) component_start_[k] += component_start_[k - 1];
+  for (std::size_t i = 0; i < nodes; ++i) {
+    component_members_[component_start_[2 * component_[i] + (i < nrows ? 0 : 1)]++] =
+        static_cast<std::uint32_t>(i < nrows ? i : i - nrows);
+  }
+  for (std::size_t k = 2 * components; k > 0; --k) component_start_[k] = component_start_[k - 1];
+  component_start_[0] = 0;
+  bool failed = false;
+  for (std::size_t k = 0; k < components; ++k) {
+    const std::uint32_t* rows = &component_members_[component_start_[2 * k]];
+    const std::uint32_t* cols = &component_members_[component_start_[2 * k + 1]];
+    const std::size_t nr = component_start_[2 * k + 1] - component_start_[2 * k];
+    const std::size_t nc = component_start_[2 * k + 2] - component_start_[2 * k + 1];
+    if (nr == 1 && nc == 1) {  // one allowed pair: it is the match
+      det_match_[cols_[cols[0]]] = static_cast<std::int32_t>(rows_[rows[0]]);
+      continue;
+    }
+    for (std::size_t ri = 0; ri < nr; ++ri) {
+      const float* costs = &pair_cost_[rows_[rows[ri]] * nd];
+      for (std::size_t ci = 0; ci < nc; ++ci) {
+        const float c = costs[cols_[cols[ci]]];
+        cost_[ri * nc + ci] = c < 0 ? kForbidden : static_cast<double>(c);
+      }
+    }
+    if (!solver_.solve({cost_.data(), nr * nc}, nr, nc, {row_to_col_.data(), nr})) {
+      failed = true;
+      continue;
+    }
+    for (std::size_t ri = 0; ri < nr; ++ri) {
+      const int ci = row_to_col_[ri];
+      if (ci < 0 || cost_[ri * nc + static_cast<std::size_t>(ci)] >= kForbidden) continue;
+      det_match_[cols_[cols[ci]]] = static_cast<std::int32_t>(rows_[rows[ri]]);
+    }
+  }
+  if (failed) ++counters_.solver_failures;
 }
 
 void Tracker::update(std::int64_t stamp_ns, std::span<const Detection> detections,
@@ -493,19 +615,27 @@ void Tracker::update(std::int64_t stamp_ns, std::span<const Detection> detection
   std::size_t nrows = 0, ncols = 0;
   std::fill_n(col_of_det_.begin(), nd, -1);
   std::fill_n(det_match_.begin(), nd, -1);
+  // A pair farther apart than the distance gate along x or y fails it (cheap test first; the
+  // margin keeps it exact under rounding).
+  const double gate_axis = config_.gate_distance_m * (1 + 1e-9);
+  for (std::size_t di = 0; di < nd; ++di) {
+    positions_[di] = detections[di].position(config_.position_from_box).cast<double>();
+  }
   for (std::size_t ti = 0; ti < nt; ++ti) {
     const Slot& s = slots_[live_[ti]];
     Eigen::Matrix2d sxy = s.p.topLeftCorner<2, 2>();
     sxy.diagonal() += Eigen::Vector2d(r, r);
     const Eigen::Matrix2d sinv = sxy.inverse();
+    const Eigen::Vector2d predicted = s.x.head<2>();
+    float* costs = &pair_cost_[ti * nd];
     bool any = false;
     for (std::size_t di = 0; di < nd; ++di) {
-      const Eigen::Vector2d e =
-          detections[di].position(config_.position_from_box).cast<double>() - s.x.head<2>();
+      const Eigen::Vector2d e = positions_[di] - predicted;
+      costs[di] = -1.0f;
+      if (!(std::abs(e.x()) <= gate_axis && std::abs(e.y()) <= gate_axis)) continue;
       const double m2 = e.dot(sinv * e);
-      const bool ok = m2 <= config_.gate_mahalanobis_sq && e.norm() <= config_.gate_distance_m;
-      pair_cost_[ti * nd + di] = ok ? static_cast<float>(m2) : -1.0f;
-      if (!ok) continue;
+      if (!(m2 <= config_.gate_mahalanobis_sq && e.norm() <= config_.gate_distance_m)) continue;
+      costs[di] = static_cast<float>(m2);
       any = true;
       if (col_of_det_[di] < 0) {
         col_of_det_[di] = static_cast<std::int32_t>(ncols);
@@ -517,23 +647,10 @@ void Tracker::update(std::int64_t stamp_ns, std::span<const Detection> detection
 
   // 3. Global assignment over the gated sub-matrix. Forbidden pairs cost kForbidden, so the
   //    solution keeps as many allowed pairs as possible, then the smallest total distance.
-  if (nrows > 0) {
-    for (std::size_t ri = 0; ri < nrows; ++ri) {
-      for (std::size_t ci = 0; ci < ncols; ++ci) {
-        const float c = pair_cost_[rows_[ri] * nd + cols_[ci]];
-        cost_[ri * ncols + ci] = c < 0 ? kForbidden : static_cast<double>(c);
-      }
-    }
-    if (solver_.solve({cost_.data(), nrows * ncols}, nrows, ncols, {row_to_col_.data(), nrows})) {
-      for (std::size_t ri = 0; ri < nrows; ++ri) {
-        const int ci = row_to_col_[ri];
-        if (ci < 0 || cost_[ri * ncols + static_cast<std::size_t>(ci)] >= kForbidden) continue;
-        det_match_[cols_[static_cast<std::size_t>(ci)]] = static_cast<std::int32_t>(rows_[ri]);
-      }
-    } else {
-      ++counters_.solver_failures;
-    }
-  }
+  //    Tracks and detections that share no chain of allowed pairs never compete: the problem
+  //    is solved per connected component of the allowed pairs (the same optimum, on small
+  //    matrices; most components are one track and one detection).
+  if (nrows > 0) assign(nd, nrows, ncols);
 
   // 4. Fragments join the measurement of a matched track beside them; update matched tracks
   //    (the others are marked missed below).

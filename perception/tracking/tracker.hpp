@@ -108,7 +108,8 @@ struct TrackerCounters {
   std::uint64_t dropped_detections = 0;   // beyond max_detections
   std::uint64_t invalid_detections = 0;   // non-finite centroid: neither matched nor spawned
   std::uint64_t stamp_regressions = 0;    // scan stamp not after the previous one (no predict)
-  std::uint64_t solver_failures = 0;      // assignment refused (non-finite costs): no matches
+  std::uint64_t solver_failures = 0;      // scans with a component's assignment refused
+                                          // (non-finite costs): no matches in that component
   std::uint64_t absorbed_detections = 0;  // fragments joined to a matched track's measurement
   std::uint64_t deleted_merged = 0;       // younger tracks of fragments merged into an older one
   std::uint64_t deleted_overlap = 0;      // younger tracks inside an older track's box
@@ -151,6 +152,9 @@ class Tracker {
   bool spawn(const Detection& d, std::int64_t stamp_ns) noexcept;  // false: not spawned (counted)
   void absorb_fragments(std::span<const Detection> detections) noexcept;
   void merge_overlapping(std::int64_t stamp_ns) noexcept;
+  // Solves the assignment of the gated rows_ x cols_ (pair_cost_, nd detections per track) per
+  // connected component of the allowed pairs into det_match_.
+  void assign(std::size_t nd, std::size_t nrows, std::size_t ncols) noexcept;
 
   TrackerConfig config_;
   TrackerCounters counters_;
@@ -164,6 +168,13 @@ class Tracker {
   std::vector<std::int32_t> det_match_;     // per detection: slot or -1
   std::vector<std::uint32_t> rows_, cols_;  // compact index -> live index / detection index
   std::vector<std::int32_t> col_of_det_;
+  std::vector<Eigen::Vector2d> positions_;        // per detection: its measured x,y
+  std::vector<Eigen::Vector2d> track_xy_;         // per live index: its x,y (overlap merge)
+  std::vector<std::uint32_t> order_, rank_;       // live indices sorted by x; each one's rank
+  std::vector<std::uint32_t> candidate_;          // live indices within a track's reach
+  std::vector<std::uint32_t> parent_, component_;  // per row, then column: union-find, component
+  std::vector<std::uint32_t> component_start_;     // per component: its rows', columns' start
+  std::vector<std::uint32_t> component_members_;   // rows, columns, grouped by component
   std::vector<float> pair_cost_;            // live x detections: squared Mahalanobis, < 0 gated out
   std::vector<Detection> merged_;           // per detection: its measurement, fragments joined
   std::vector<std::uint8_t> host_;          // per detection: 1 when it absorbed a fragment

@@ -239,6 +239,46 @@ TEST(Segmenter, PedestrianUnderATreeCanopyIsNotJoinedToTheTree) {
   for (const Segment& seg : out.segments) EXPECT_LT(seg.box.length, 0.7f);
 }
 
+// A sedan parked beside a tree whose crown reaches down to 2.25 m, below max_height_m, over the
+// car and the trunk: the crown's cells join them into one segment unless, as overhead cells
+// (nothing in them below overhead_m), they are kept apart from cells standing on the ground.
+TEST(Segmenter, CarUnderATreeCrownIsNotJoinedToTheTrunkThroughOverheadCells) {
+  Scene scene;
+  scene.flat_ground();
+  scene.cylinder(10.0f, 0.0f, 0.2f, 2.45f);  // trunk
+  for (float x = 7.5f; x <= 12.5f; x += 0.1f) {
+    for (float y = -2.5f; y <= 2.5f; y += 0.1f) {
+      if (std::hypot(x - 10.0f, y) > 2.5f) continue;
+      for (float z = 2.25f; z <= 2.46f; z += 0.1f) scene.add(x, y, -testing::kSensorHeight + z);
+    }
+  }
+  scene.sedan(10.0f, 2.3f);  // 1.4..3.2 m from the trunk's axis, under the crown
+  const auto joins_trunk_and_car = [&](const Segments& out) {
+    for (const Segment& seg : out.segments) {
+      bool trunk = false, car = false;
+      for (const std::uint32_t i : out.indices(seg)) {
+        const float x = scene.xyzi[4 * i], y = scene.xyzi[4 * i + 1];
+        const float z = scene.xyzi[4 * i + 2] + testing::kSensorHeight;
+        trunk = trunk || (std::hypot(x - 10.0f, y) < 0.3f && z < 2.0f);
+        car = car || (y > 1.5f && z < 1.0f);
+      }
+      if (trunk && car) return true;
+    }
+    return false;
+  };
+  EXPECT_TRUE(joins_trunk_and_car(run(scene)));  // overhead_m 0: off
+  SegmenterConfig c = test_config();
+  c.overhead_m = 2.2;
+  const Segments out = run(scene, c);
+  EXPECT_FALSE(joins_trunk_and_car(out));
+  bool sedan = false;
+  for (const Segment& seg : out.segments) {
+    sedan = sedan || (std::fabs(seg.box.length - 4.5f) < 0.3f && seg.box.width < 2.2f &&
+                      std::fabs(seg.box.cy - 2.3f) < 0.3f);
+  }
+  EXPECT_TRUE(sedan);
+}
+
 SegmenterConfig no_split() {
   SegmenterConfig c = test_config();
   c.split_height_m = 0.0;
@@ -481,6 +521,9 @@ TEST(Segmenter, RejectsInvalidConfiguration) {
   c = SegmenterConfig{};
   c.overhang_m = 0.7;  // above overhang_max_m
   EXPECT_STREQ(validate(c), "overhang_max_m must be >= overhang_m");
+  c = SegmenterConfig{};
+  c.overhead_m = 3.0;  // above max_height_m (0 is off)
+  EXPECT_STREQ(validate(c), "overhead_m must be 0 (off) or in (obstacle_height_m, max_height_m] m");
   c = SegmenterConfig{};
   c.split_height_m = 0.2;  // below obstacle_height_m (0 is off)
   EXPECT_STREQ(validate(c),
