@@ -119,6 +119,7 @@ class DriveWatch {
       if (o.state == 0) continue;  // tentative
       ++confirmed;
       paths_[o.object_id].emplace_back(static_cast<float>(p.x), static_cast<float>(p.y));
+      classes_[o.object_id] = c.name;
       shown.push_back(&o);
     }
     for (std::uint32_t i = 0; i < s.objects._length; ++i) ids_.insert(s.objects._buffer[i].object_id);
@@ -186,6 +187,7 @@ class DriveWatch {
     v.ego_yaw = static_cast<float>(ego_yaw_);
     v.ego_path = ego_path_;
     v.paths = paths_;
+    v.classes = classes_;
     return v;
   }
 
@@ -202,6 +204,7 @@ class DriveWatch {
   std::vector<BoxView> segments_;
   std::vector<cv::Point2f> ego_path_;
   std::map<std::uint64_t, std::vector<cv::Point2f>> paths_;
+  std::map<std::uint64_t, std::string> classes_;  // each confirmed track's latest class
   std::vector<std::string> pending_;
 };
 

@@ -76,11 +76,14 @@ rt::Result<bool> draw_drive(const DriveView& v, DrivePicture picture, const std:
       bev.add_box(c.x, c.y, b.length, b.width, b.yaw - to.yaw, cv::Scalar(90, 90, 90));
     }
   }
-  // Paths of the tracks that moved (more than kMovedM from where they were first confirmed).
+  // Paths of the tracks that moved (more than kMovedM from where they were first confirmed),
+  // but not of those last classified as background (clutter whose tracked position jumps).
   constexpr float kMovedM = 3.0f;
   std::set<std::uint64_t> moved;
   for (const auto& [id, path] : v.paths) {
     if (path.size() < 2 || cv::norm(path.back() - path.front()) < kMovedM) continue;
+    if (const auto c = v.classes.find(id); c != v.classes.end() && c->second == "background")
+      continue;
     moved.insert(id);
     bev.add_path(shifted(path), track_colour(id));
   }
@@ -106,7 +109,7 @@ rt::Result<bool> draw_drive(const DriveView& v, DrivePicture picture, const std:
   bev.add_legend(line);
   bev.add_legend(picture == DrivePicture::kLastScan
                      ? "points by height (not deskewed); grey: segments; coloured: tracks, #id (class once classified), paths"
-                     : "the whole drive: the vehicle's path (white), paths of the tracks that moved");
+                     : "the whole drive: the vehicle's path (white), paths of the tracks that moved (not background)");
   bev.add_legend("frame of the vehicle's last pose: x forward = up, y left = left");
   return bev.save(png);
 }

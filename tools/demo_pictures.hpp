@@ -36,6 +36,7 @@ struct DriveView {
   float ego_x = 0, ego_y = 0, ego_yaw = 0;  // the last pose (world)
   std::vector<cv::Point2f> ego_path;        // world
   std::map<std::uint64_t, std::vector<cv::Point2f>> paths;  // confirmed tracks' positions, world
+  std::map<std::uint64_t, std::string> classes;  // their latest class ("unknown" before one)
 };
 
 enum class DrivePicture {
