@@ -70,8 +70,7 @@ void TrackClassifier::update(const float* xyzi, std::size_t stride_bytes,
       continue;
     }
     Slot& s = slots_[t.slot];
-    if (s.id != t.id) {  // a new track in this pool slot: forget the one before
-      s.id = t.id;
+    if (s.cls.id != t.id) {  // a new track in this pool slot: forget the one before
       s.cloud.clear(t.id + 1);
       s.evidence.reset();
       s.cls = TrackClass{};
@@ -108,7 +107,7 @@ void TrackClassifier::report(const tracking::TrackerOutput& tracked,
   for (const tracking::Track& t : tracked.tracks) {
     TrackClass* c = out.append();
     if (c == nullptr) break;
-    if (t.slot < slots_.size() && slots_[t.slot].id == t.id) {
+    if (t.slot < slots_.size() && slots_[t.slot].cls.id == t.id) {
       *c = slots_[t.slot].cls;
     } else {  // not seen by update() yet (deferred), or out of the pool
       *c = TrackClass{};

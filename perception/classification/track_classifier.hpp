@@ -96,10 +96,9 @@ class TrackClassifier {
 
  private:
   struct Slot {
-    std::uint64_t id = 0;  // the track this slot holds; 0: none yet (track ids start at 1)
     AccumulatedCloud cloud;
     TrackEvidence evidence;
-    TrackClass cls;
+    TrackClass cls;  // cls.id: the track this slot holds; 0: none yet (track ids start at 1)
     std::uint32_t since_holistic = 0;  // segments added since the accumulated cloud was described
     bool accumulated_ok = false;
     descriptors::Descriptors accumulated;  // the accumulated cloud's last descriptors

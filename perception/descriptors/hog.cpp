@@ -25,7 +25,6 @@ GradientCache::GradientCache(std::size_t max_pixels, int bins)
 void GradientCache::reset(const float* pixels, int width, int height, int x0, int y0, int x1,
                           int y1) noexcept {
   width_ = width;
-  height_ = height;
   x0_ = std::clamp(x0, 0, width);
   x1_ = std::clamp(x1, x0_, width);
   y0_ = std::clamp(y0, 0, height);

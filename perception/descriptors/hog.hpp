@@ -53,7 +53,7 @@ class GradientCache {
   [[nodiscard]] int y1() const noexcept { return y1_; }
 
  private:
-  int width_ = 0, height_ = 0, bins_ = 6;
+  int width_ = 0, bins_ = 6;
   int x0_ = 0, y0_ = 0, x1_ = 0, y1_ = 0;
   std::vector<Gradient> gradient_;
 };
