@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "benchmarks/kitti_scans.hpp"
+#include "tests/classification/made_up_model.hpp"
 #include "perception/classification/track_classifier.hpp"
 #include "perception/descriptors/descriptors.hpp"
 #include "perception/segmentation/segmenter.hpp"
@@ -90,7 +91,8 @@ void BM_SegmentDescriptors(benchmark::State& state) {
 BENCHMARK(BM_SegmentDescriptors)->Iterations(20000)->Unit(benchmark::kMicrosecond);
 
 // The shipped model (config/models/stac_default.stacmodel), else one with made-up responses over
-// the same layouts: the cost does not depend on the numbers in the table.
+// the same layouts (tests/classification/made_up_model.hpp). The amount of work is the same; the
+// real model's bins are spread over its tables, so it costs more cache misses.
 std::shared_ptr<const classification::TrackClassifierModel> bench_model(bool& shipped) {
   const std::filesystem::path file =
       std::filesystem::path(STAC_SOURCE_DIR) / "config/models/stac_default.stacmodel";
@@ -102,20 +104,7 @@ std::shared_ptr<const classification::TrackClassifierModel> bench_model(bool& sh
     return std::make_shared<const classification::TrackClassifierModel>(std::move(*m));
   }
   shipped = false;
-  const auto grid = [](classification::Layout layout) {
-    classification::GridModel g;
-    g.layout = std::move(layout);
-    g.resolutions = {10, 100};
-    const std::size_t dims = classification::layout_dimensions(g.layout);
-    g.lower.assign(2 * dims, -1.0f);
-    for (std::size_t k = 0; k < 2 * dims; ++k) g.scale.push_back(k % 2 == 0 ? 5.0f : 50.0f);
-    for (std::size_t c = 0; c < dims * 110 * classification::kClassCount; ++c)
-      g.table.push_back(0.001f * static_cast<float>(static_cast<int>(c % 7) - 3));
-    return std::move(classification::GridClassifier::create(std::move(g))).value();
-  };
-  return std::make_shared<const classification::TrackClassifierModel>(
-      classification::TrackClassifierModel{grid(classification::segment_layout()),
-                                           grid(classification::holistic_layout()), {}});
+  return classification::testing::made_up_model().value();
 }
 
 void BM_ClassifyStage(benchmark::State& state) {

@@ -18,6 +18,7 @@
 #include "pipeline/scan_pipeline.hpp"
 #include "rt/slot_exchange.hpp"
 #include "rt/testing/alloc_counter.hpp"
+#include "classification/made_up_model.hpp"
 #include "shared_data.hpp"
 #include "stac_cli.hpp"
 #include "tools/settings.hpp"
@@ -123,28 +124,12 @@ std::unique_ptr<ego::PoseHistory> straight_drive(const Fixture& f, std::size_t s
   return history;
 }
 
-// A full-size model with made-up responses (the classify stage's work does not depend on them):
-// grids over [-1, 1] of every descriptor element, responses alternating in sign.
+// A model for the classify stage to run with; what it allocates does not depend on the numbers
+// (made_up_model.hpp).
 std::shared_ptr<const classification::TrackClassifierModel> made_up_model() {
-  const auto grid = [](classification::Layout layout) {
-    classification::GridModel m;
-    m.layout = std::move(layout);
-    m.resolutions = {10, 100};
-    m.prior = {-1.0f, -1.5f, -2.0f};
-    const std::size_t grids = classification::layout_dimensions(m.layout) * 2;
-    m.lower.assign(grids, -1.0f);
-    for (std::size_t g = 0; g < grids; ++g) m.scale.push_back(g % 2 == 0 ? 5.0f : 50.0f);
-    const std::size_t cells = classification::layout_dimensions(m.layout) * 110;
-    for (std::size_t c = 0; c < cells * classification::kClassCount; ++c)
-      m.table.push_back(0.001f * static_cast<float>(static_cast<int>(c % 7) - 3));
-    auto classifier = classification::GridClassifier::create(std::move(m));
-    EXPECT_TRUE(classifier.has_value()) << classifier.error().message;
-    return std::move(classifier).value();
-  };
-  return std::make_shared<const classification::TrackClassifierModel>(
-      classification::TrackClassifierModel{grid(classification::segment_layout()),
-                                           grid(classification::holistic_layout()),
-                                           {}});
+  auto m = classification::testing::made_up_model();
+  EXPECT_TRUE(m.has_value()) << m.error().message;
+  return m.has_value() ? *m : nullptr;
 }
 
 TEST(ScanPipeline, PerceptionLoopWithHandoverMakesNoAllocationOver1000ScansAfterWarmUp) {
