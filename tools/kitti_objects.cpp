@@ -14,9 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "perception/classification/holistic.hpp"
-#include "perception/classification/model.hpp"
-#include "perception/descriptors/descriptors.hpp"
+#include "perception/classification/track_classifier.hpp"
 #include "perception/segmentation/segmenter.hpp"
 #include "tools/birds_eye.hpp"
 #include "tools/commands.hpp"
@@ -63,6 +61,18 @@ std::string status_of(const ObjectResult& r) {
   return "segmented";
 }
 
+// The segment classifier's log odds of each segment the classify stage describes.
+struct SegmentClass : classification::TrackClassifier::Observer {
+  explicit SegmentClass(const classification::TrackClassifierModel& m) : model(m) {}
+  void on_update(const tracking::Track&, std::span<const float> segment,
+                 std::span<const float>) noexcept override {
+    valid = model.segment.classify(segment, hs);
+  }
+  const classification::TrackClassifierModel& model;
+  classification::LogOdds hs{};
+  bool valid = false;
+};
+
 int run_kitti_objects(const KittiObjectsOptions& o) {
   const std::filesystem::path dir = o.dir;
   auto seg_config = load_segmentation_settings(config_path(o.config));
@@ -86,11 +96,18 @@ int run_kitti_objects(const KittiObjectsOptions& o) {
 
   segmentation::Segmenter segmenter(*seg_config);
   segmentation::Segments segments = segmenter.make_segments();
-  descriptors::DescriptorConfig dc = classification->classifier.descriptors;
-  dc.intensity_full_scale = 1.0;  // KITTI reflectance is 0..1
-  descriptors::DescriptorPipeline describer(dc);
-  descriptors::Descriptors d;
-  classification::HolisticDescriptor holistic{};
+  // The pipeline's classify stage, one track at a time (a fresh id each: nothing carries over).
+  classification::TrackClassifierConfig cc = classification->classifier;
+  cc.descriptors.intensity_full_scale = 1.0;  // KITTI reflectance is 0..1
+  cc.max_tracks = 1;
+  cc.max_points = seg_config->max_points;
+  classification::TrackClassifier stage(cc, *model);
+  SegmentClass segment_class(**model);  // the segment classifier alone, on the stage's descriptors
+  stage.set_observer(&segment_class);
+  tracking::TrackerOutput tracked(1);
+  (void)tracked.tracks.resize(1);
+  rt::FixedVector<classification::TrackClass> classes(1);
+  std::uint64_t next_id = 1;
   std::vector<ObjectResult> results;
   const std::filesystem::path report = o.report;
   if (!o.report.empty()) {
@@ -148,22 +165,23 @@ int run_kitti_objects(const KittiObjectsOptions& o) {
         const segmentation::Segment& seg = segments.segments[static_cast<std::size_t>(best)];
         r.best_inside = inside[best];
         r.best_size = seg.count;
-        // The segment as a track's first update: its descriptors, the segment classifier, and
-        // the ADBF with a holistic descriptor of one segment and no motion.
-        describer.compute({v.data(), 16, segments.indices(seg), 0}, d);
-        classification::TrackEvidence evidence;
-        classification::LogOdds hs{};
-        tracking::Track t;
+        // The segment as a track's first update (no motion): the segment classifier, and the
+        // ADBF with the holistic descriptor of one segment.
+        tracking::Track& t = tracked.tracks[0];
+        t = tracking::Track{};
+        t.id = next_id++;
+        t.segment = best;
         t.length = seg.box.length;
         t.width = seg.box.width;
         t.height = seg.box.height;
         t.features.add_segment(Eigen::Vector3f(seg.centroid[0], seg.centroid[1], seg.centroid[2]),
                                0, 0.5);
-        classification::holistic_descriptor(t, &d, holistic);
-        if (classification::add_segment(**model, d.values, evidence, hs) &&
-            classification::track_log_odds(**model, evidence, holistic, r.track_log_odds)) {
-          r.segment_class = classification::class_name(classification::predict(hs));
-          r.track_class = classification::class_name(classification::predict(r.track_log_odds));
+        segment_class.valid = false;
+        stage.classify(v.data(), 16, segments, tracked, classes);
+        if (segment_class.valid && classes[0].classified) {
+          r.segment_class = classification::class_name(classification::predict(segment_class.hs));
+          r.track_log_odds = classes[0].log_odds;
+          r.track_class = classification::class_name(classes[0].label);
         }
       }
       r.status = status_of(r);
