@@ -66,29 +66,80 @@ struct Aabb {
 };
 
 // A pause on a path: at the path's own time `at` (s, before any pause) it stands `wait` s.
+// It brakes into the stop and pulls away again at a bounded acceleration: the ramps take
+// `brake` and `pull` s (set by with_pauses), covering half that of the path's own time each.
 struct Pause {
   double at, wait;
+  double brake = 0.0, pull = 0.0;
 };
 
-// `path` with the pauses (sorted, disjoint) inserted.
-Trajectory with_pauses(const Trajectory& path, const std::vector<Pause>& pauses) {
+// Where an actor is over time: the start of its braking, its stop, its start and the end of its
+// pulling away (s of the drive).
+struct PauseTimes {
+  double brake, stop, go, cruise;
+};
+
+// The drive's times of pause k of `pauses` (as sized by with_pauses).
+PauseTimes pause_times(const std::vector<Pause>& pauses, std::size_t k) {
+  double shift = 0.0;
+  for (std::size_t i = 0; i < k; ++i) shift += pauses[i].wait + 0.5 * (pauses[i].brake + pauses[i].pull);
+  const Pause& p = pauses[k];
+  const double brake = p.at - 0.5 * p.brake + shift;
+  return {brake, brake + p.brake, brake + p.brake + p.wait, brake + p.brake + p.wait + p.pull};
+}
+
+// `path` with the pauses (sorted, disjoint) inserted, each braked into and pulled away from at
+// `accel` m/s^2 (linear speed ramps, sampled every 0.05 s; shorter where pauses crowd each other
+// or the path's start): nothing on a path stops dead from speed. `pauses` gets the ramps' lengths.
+Trajectory with_pauses(const Trajectory& path, std::vector<Pause>& pauses, double accel) {
   if (pauses.empty() || path.points.size() < 2) return path;
+  double free_from = path.points.front().t;  // own time where the previous pull-away ended
+  for (std::size_t k = 0; k < pauses.size(); ++k) {
+    Pause& p = pauses[k];
+    const V3 v = path.velocity_at(p.at);
+    const double ramp = std::hypot(v.x, v.y) / accel;
+    p.brake = std::clamp(std::min(ramp, 2.0 * (p.at - free_from)), 0.0, ramp);
+    p.pull = ramp;
+    if (k + 1 < pauses.size()) p.pull = std::clamp(pauses[k + 1].at - p.at, 0.0, ramp);
+    free_from = p.at + 0.5 * p.pull;
+  }
   Trajectory out;
   out.fixed_yaw = path.fixed_yaw;
+  auto ramp = [&](double own0, double t0, double duration, bool braking) {
+    const int n = static_cast<int>(std::ceil(duration / 0.05));
+    for (int i = 1; i <= n; ++i) {
+      const double u = duration * i / n;
+      const double own = braking ? own0 + u - u * u / (2 * duration) : own0 + u * u / (2 * duration);
+      const Pose q = path.pose_at(own);
+      out.points.push_back({q.x, q.y, t0 + u});
+    }
+  };
   double shift = 0.0;
   std::size_t k = 0;
   for (const Trajectory::Waypoint& w : path.points) {
-    while (k < pauses.size() && pauses[k].at < w.t) {
-      const Pose p = path.pose_at(pauses[k].at);
-      if (pauses[k].at > path.points.front().t)
-        out.points.push_back({p.x, p.y, pauses[k].at + shift});
-      shift += pauses[k].wait;
-      out.points.push_back({p.x, p.y, pauses[k].at + shift});
+    while (k < pauses.size() && pauses[k].at - 0.5 * pauses[k].brake < w.t) {
+      const Pause& p = pauses[k];
+      const double from = p.at - 0.5 * p.brake;
+      const Pose q = path.pose_at(from);
+      if (from > path.points.front().t) out.points.push_back({q.x, q.y, from + shift});
+      ramp(from, from + shift, p.brake, true);
+      const Pose stop = path.pose_at(p.at);
+      const double go = from + shift + p.brake + p.wait;
+      out.points.push_back({stop.x, stop.y, go});
+      ramp(p.at, go, p.pull, false);
+      shift += p.wait + 0.5 * (p.brake + p.pull);
       ++k;
     }
+    // Waypoints the ramps passed are in them.
+    if (k > 0 && w.t <= pauses[k - 1].at + 0.5 * pauses[k - 1].pull) continue;
     out.points.push_back({w.x, w.y, w.t + shift});
   }
   return out;
+}
+
+// Speed ramps (m/s^2): cars brake and pull away firmly, bicyclists and pedestrians gently.
+double ramp_accel(ObjectClass c) {
+  return c == ObjectClass::kCar ? 2.5 : c == ObjectClass::kBicyclist ? 1.5 : 1.0;
 }
 
 class Builder {
@@ -118,9 +169,10 @@ class Builder {
     if (!is_foreground(a.cls)) return accept(i, {});
     const Trajectory original = a.path;
     const bool moving = original.points.size() > 1;
-    std::vector<Pause> pauses;
+    std::vector<Pause> pauses = std::move(stops_);
+    stops_.clear();
     for (int attempt = 0; attempt < 200; ++attempt) {
-      a.path = with_pauses(original, pauses);
+      a.path = with_pauses(original, pauses, ramp_accel(a.cls));
       std::vector<Footprint> fp(samples());
       for (std::size_t k = 0; k < fp.size(); ++k) {
         fp[k] = footprint_at(a.path, a.size.x + 2 * kClearLong, a.size.y + 2 * kClearSide,
@@ -129,20 +181,18 @@ class Builder {
       const double tc = first_conflict(a, fp);
       if (tc < 0) return accept(i, std::move(fp));
       if (!moving || tc <= 0.0) break;
-      // Back to the path's own time, and is the conflict during a pause?
-      double shift = 0.0;
+      // Is the conflict while braking for or standing at a pause, or after one?
       int during = -1, before = -1;
       for (std::size_t p = 0; p < pauses.size(); ++p) {
-        const double start = pauses[p].at + shift;
-        if (tc < start) break;
-        if (tc <= start + pauses[p].wait) {
+        const PauseTimes pt = pause_times(pauses, p);
+        if (tc < pt.brake) break;
+        if (tc <= pt.go) {
           during = static_cast<int>(p);
           break;
         }
         before = static_cast<int>(p);
-        shift += pauses[p].wait;
       }
-      if (during >= 0) {  // hit while standing: stand further back
+      if (during >= 0) {  // hit while braking or standing: stop further back
         Pause& p = pauses[static_cast<std::size_t>(during)];
         p.at -= 1.0;
         if (p.at < original.points.front().t - 1e-9 ||
@@ -151,7 +201,13 @@ class Builder {
         }
         continue;
       }
-      const double own = tc - shift;
+      // The path's own time at the conflict: while pulling away, still at the last stop.
+      double own = tc;
+      if (before >= 0) {
+        const PauseTimes pt = pause_times(pauses, static_cast<std::size_t>(before));
+        const Pause& p = pauses[static_cast<std::size_t>(before)];
+        own = tc < pt.cruise ? p.at : p.at + 0.5 * p.pull + (tc - pt.cruise);
+      }
       if (before >= 0 && own - pauses[static_cast<std::size_t>(before)].at < 2.0) {
         Pause& p = pauses[static_cast<std::size_t>(before)];  // resumed too early: wait longer
         p.wait = std::max(1.0, 2.0 * p.wait);
@@ -166,6 +222,7 @@ class Builder {
   Actor& add(ObjectClass cls, Shape shape, V3 size, double reflectivity) {
     commit();
     pending_ = true;
+    stops_.clear();
     Actor a;
     a.id = static_cast<std::uint32_t>(s_.actors.size() + 1);
     a.cls = cls;
@@ -206,48 +263,59 @@ class Builder {
     return place(ObjectClass::kBicyclist, Shape::kCyclist, {1.8, 0.7, 1.8}, rng_.uniform(0.2, 0.6), x, y, 0);
   }
   // Moves `a` from (x0, y0) in direction yaw at speed v, with an optional stop of `stop_s`
-  // seconds at distance `stop_at` along the way.
+  // seconds at distance `stop_at` along the way (a pause, braked into when committed).
   void drive(Actor& a, double x0, double y0, double yaw, double v, double duration,
              double stop_at = -1.0, double stop_s = 0.0) {
     const double c = std::cos(yaw), s = std::sin(yaw);
     a.path.points.clear();
     a.path.points.push_back({x0, y0, 0});
-    double t = 0;
-    if (stop_at > 0 && stop_s > 0) {
-      t = stop_at / v;
-      a.path.points.push_back({x0 + c * stop_at, y0 + s * stop_at, t});
-      t += stop_s;
-      a.path.points.push_back({x0 + c * stop_at, y0 + s * stop_at, t});
-      const double rest = std::max(0.0, duration + 5.0 - t) * v;
-      a.path.points.push_back({x0 + c * (stop_at + rest), y0 + s * (stop_at + rest), duration + 5.0});
-    } else {
-      const double dist = v * (duration + 5.0);
-      a.path.points.push_back({x0 + c * dist, y0 + s * dist, duration + 5.0});
-    }
+    const double dist = v * (duration + 5.0);
+    a.path.points.push_back({x0 + c * dist, y0 + s * dist, duration + 5.0});
+    if (stop_at > 0 && stop_s > 0) stops_ = {{stop_at / v, stop_s}};  // braked into (commit)
     a.path.fixed_yaw = yaw;
   }
-  // A turn: straight to the corner, a quarter circle of radius r, then straight on.
+  // A turn: straight to the corner, a quarter circle of radius r, then straight on. The corner
+  // is taken at most at the speed of 3 m/s^2 sideways, braked into and pulled away from at the
+  // ramp rate of cars (ramp_accel).
   void turn(Actor& a, double x0, double y0, double yaw, double v, double to_corner, double r, int dir,
             double duration) {
+    const double accel = ramp_accel(a.cls), v_arc = std::min(v, std::sqrt(3.0 * r));
     a.path.points.clear();
     double x = x0, y = y0, t = 0;
     a.path.points.push_back({x, y, t});
-    x += std::cos(yaw) * to_corner;
-    y += std::sin(yaw) * to_corner;
-    t += to_corner / v;
-    a.path.points.push_back({x, y, t});
+    // A straight piece of length len along `heading`, the speed going linearly (in time) from
+    // u0 to u1, sampled every 0.05 s.
+    auto straight_piece = [&](double heading, double len, double u0, double u1) {
+      if (len <= 0) return;
+      const double dur = 2.0 * len / (u0 + u1);
+      const int n = u0 == u1 ? 1 : static_cast<int>(std::ceil(dur / 0.05));
+      const double c = std::cos(heading), s = std::sin(heading);
+      for (int i = 1; i <= n; ++i) {
+        const double tau = dur * i / n, d = u0 * tau + (u1 - u0) * tau * tau / (2.0 * dur);
+        a.path.points.push_back({x + c * d, y + s * d, t + tau});
+      }
+      x += c * len;
+      y += s * len;
+      t += dur;
+    };
+    const double ramp_len = (v * v - v_arc * v_arc) / (2.0 * accel);
+    const double braking = std::min(ramp_len, to_corner);
+    const double u_corner = std::sqrt(std::max(v_arc * v_arc, v * v - 2.0 * accel * braking));
+    straight_piece(yaw, to_corner - braking, v, v);
+    straight_piece(yaw, braking, v, u_corner);
     const double cx = x - dir * std::sin(yaw) * r, cy = y + dir * std::cos(yaw) * r;
     for (int i = 1; i <= 8; ++i) {
       const double ang = yaw - dir * std::numbers::pi / 2 + dir * (std::numbers::pi / 2) * i / 8.0;
       const double px = cx + r * std::cos(ang), py = cy + r * std::sin(ang);
-      t += std::hypot(px - x, py - y) / v;
+      t += std::hypot(px - x, py - y) / u_corner;
       x = px;
       y = py;
       a.path.points.push_back({x, y, t});
     }
     const double out = yaw + dir * std::numbers::pi / 2;
-    const double rest = std::max(0.0, duration + 5.0 - t) * v;
-    a.path.points.push_back({x + std::cos(out) * rest, y + std::sin(out) * rest, duration + 5.0});
+    straight_piece(out, (v * v - u_corner * u_corner) / (2.0 * accel), u_corner, v);
+    const double t_end = std::max(duration + 5.0, t + 1.0), rest = (t_end - t) * v;
+    a.path.points.push_back({x + std::cos(out) * rest, y + std::sin(out) * rest, t_end});
     a.path.fixed_yaw = yaw;
   }
 
@@ -310,13 +378,10 @@ class Builder {
   }
   static std::int64_t cell_key(std::int64_t cx, std::int64_t cy) { return cx * 1'000'003 + cy; }
 
-  // Whether actors a and b must be kept clear of each other: cars of everyone, pedestrians of
-  // each other and of bicyclists (bicyclists of each other are not checked).
+  // Whether actors a and b must be kept clear of each other: every pair of road users (a
+  // faster bicyclist queues behind a slower one in the bike lane).
   static bool must_clear(const Actor& a, const Actor& b) {
-    if (a.cls == ObjectClass::kCar || b.cls == ObjectClass::kCar) return true;
-    const bool pa = a.cls == ObjectClass::kPedestrian, pb = b.cls == ObjectClass::kPedestrian;
-    return (pa && (pb || b.cls == ObjectClass::kBicyclist)) ||
-           (pb && a.cls == ObjectClass::kBicyclist);
+    return is_foreground(a.cls) && is_foreground(b.cls);
   }
 
   // First time (s) actor a, with footprints fp (clearance included), meets the ego or an
@@ -388,6 +453,7 @@ class Builder {
   Rng rng_;
   double horizon_;
   bool pending_ = false;
+  std::vector<Pause> stops_;  // the pending actor's planned stops (drive)
   std::vector<Footprint> ego_;
   std::vector<Aabb> ego_windows_;
   std::vector<std::vector<Aabb>> win_;  // per accepted moving actor, per window
@@ -532,12 +598,10 @@ rt::Result<Scenario> make_scenario(const std::string& name, std::uint64_t seed, 
     ego.points = {{-20, -kInner, 0}};
     const double stop_x = cross - g.cross_half_width - 3.0 - 1.5 - kEgoLength / 2;
     const double t_stop = (stop_x + 20) / v;
-    if (t_stop < duration) {
-      ego.points.push_back({stop_x, -kInner, t_stop});
-      ego.points.push_back({stop_x, -kInner, t_stop + 3.0});
-      ego.points.push_back({stop_x + v * (duration + 5), -kInner, t_stop + 3.0 + duration + 5});
-    } else {
-      ego.points.push_back({-20 + v * (duration + 5), -kInner, duration + 5});
+    ego.points.push_back({-20 + v * (duration + 5), -kInner, duration + 5});
+    if (t_stop < duration) {  // braked into at a car's rate, 3 s standing
+      std::vector<Pause> stop = {{t_stop, 3.0}};
+      ego = with_pauses(ego, stop, ramp_accel(ObjectClass::kCar));
     }
     b.set_ego(ego);
     b.street_furniture(-80, x1, g);
