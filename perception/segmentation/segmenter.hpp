@@ -86,7 +86,7 @@ struct SegmenterConfig {
   std::uint32_t split_min_points = 10;
   // Segments.
   std::uint32_t min_segment_points = 8;      // fewer obstacle points: dropped (too small)
-  std::uint32_t max_segment_points = 30000;  // more: dropped (too large)
+  std::uint32_t max_segment_points = 60000;  // more: dropped (too large)
   double max_segment_extent_m = 15.0;        // a longer footprint side (cell bounds): dropped
   // Capacities (allocated at construction).
   std::size_t max_points = 300000;          // points per scan; beyond: counted, ignored
