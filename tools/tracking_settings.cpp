@@ -33,6 +33,8 @@ rt::Result<tracking::TrackerConfig> load_tracking_config(const std::filesystem::
   STAC_GET(double, "absorb_gap_m", c.absorb_gap_m);
   STAC_GET(double, "absorb_max_length_m", c.absorb_max_length_m);
   STAC_GET(double, "absorb_max_width_m", c.absorb_max_width_m);
+  STAC_GET(double, "absorb_tall_height_m", c.absorb_tall_height_m);
+  STAC_GET(double, "absorb_tall_length_m", c.absorb_tall_length_m);
   STAC_GET(double, "absorb_velocity_mps", c.absorb_velocity_mps);
   STAC_GET(double, "absorb_keep_length_m", c.absorb_keep_length_m);
   STAC_GET(double, "absorb_keep_width_m", c.absorb_keep_width_m);

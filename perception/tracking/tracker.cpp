@@ -65,10 +65,17 @@ Extent extent_in(const Detection& d, const Eigen::Vector2f& centre, float h) {
   return extent_in(d.position(true), d.length, d.width, d.yaw, centre, h);
 }
 
-// A box that fits what one fragmented object may span (absorb_max_length_m x _width_m).
-bool fits_one_object(const TrackerConfig& c, float length, float width) {
-  return std::max(length, width) <= c.absorb_max_length_m &&
-         std::min(length, width) <= c.absorb_max_width_m;
+// Whether a box of this height is a tall vehicle's (a truck's: absorb_tall_height_m).
+bool tall(const TrackerConfig& c, float height) {
+  return c.absorb_tall_height_m > 0 && height >= c.absorb_tall_height_m;
+}
+
+// A box that fits what one fragmented object may span (absorb_max_length_m x _width_m, or
+// absorb_tall_length_m long when `tall_object`).
+bool fits_one_object(const TrackerConfig& c, float length, float width, bool tall_object) {
+  const double max_length = tall_object ? std::max(c.absorb_max_length_m, c.absorb_tall_length_m)
+                                        : c.absorb_max_length_m;
+  return std::max(length, width) <= max_length && std::min(length, width) <= c.absorb_max_width_m;
 }
 
 // Which of two tracks is older: more hits, then the lower id (the merges keep the older).
@@ -195,6 +202,8 @@ Tracker::Tracker(const TrackerConfig& c)
   check(c.absorb_max_length_m > 0 && c.absorb_max_width_m > 0 &&
             c.absorb_max_width_m <= c.absorb_max_length_m,
         "absorb_max_length_m >= absorb_max_width_m > 0 required");
+  check(c.absorb_tall_height_m >= 0 && c.absorb_tall_length_m >= 0,
+        "absorb_tall_height_m and absorb_tall_length_m must be >= 0");
   check(c.end_on_min_range_m >= 0, "end_on_min_range_m must be >= 0");
   check(c.end_on_length_m >= 0 && c.end_on_min_width_m <= c.end_on_max_width_m &&
             c.end_on_max_depth_m >= 0 && c.end_on_min_height_m >= 0,
@@ -327,7 +336,9 @@ void Tracker::absorb_fragments(std::span<const Detection> detections) noexcept {
   }
   std::fill_n(merged_track_.begin(), live_.size(), std::uint8_t{0});
   if (config_.absorb_gap_m <= 0) return;
-  const auto max_len = static_cast<float>(config_.absorb_max_length_m);
+  const auto max_len = static_cast<float>(
+      config_.absorb_tall_height_m > 0 ? std::max(config_.absorb_max_length_m, config_.absorb_tall_length_m)
+                                       : config_.absorb_max_length_m);
   const auto max_wid = static_cast<float>(config_.absorb_max_width_m);
   const auto max_gap = static_cast<float>(config_.absorb_gap_m);
   const float reach_sq = max_len * max_len + max_wid * max_wid;
@@ -378,7 +389,7 @@ void Tracker::absorb_fragments(std::span<const Detection> detections) noexcept {
         const Extent u{std::min(a.u0, b.u0), std::max(a.u1, b.u1), std::min(a.v0, b.v0),
                        std::max(a.v1, b.v1)};
         const float lu = u.u1 - u.u0, lv = u.v1 - u.v0;
-        if (!fits_one_object(config_, lu, lv)) continue;
+        if (!fits_one_object(config_, lu, lv, tall(config_, h.height) && tall(config_, f.height))) continue;
         if (narrow_host && !narrow_and_tall(config_, lu, lv, merged_[hi].height)) continue;
         if (best == hi && lu * lv >= best_area) continue;
         best = hi, best_gap = gap, best_union = u, best_heading = heading, best_area = lu * lv;
@@ -420,7 +431,9 @@ void Tracker::merge_overlapping(std::int64_t stamp_ns) noexcept {
   const auto person = [&](const Track& t) {
     return narrow_and_tall(config_, t.length, t.width, t.height);
   };
-  const auto fits = [&](const Track& t) { return fits_one_object(config_, t.length, t.width); };
+  const auto fits = [&](const Track& t) {
+    return fits_one_object(config_, t.length, t.width, tall(config_, t.height));
+  };
   const std::size_t n = live_.size();
   std::fill_n(merged_track_.begin(), n, std::uint8_t{0});
   // The tracks' x,y in one compact array for the pair loop (kept current when a is corrected).

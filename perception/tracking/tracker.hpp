@@ -63,9 +63,13 @@ struct TrackerConfig {
   // tall: people pushing a bike, taller than a sedan's pieces) are never joined to another object;
   // they take only low pieces (under absorb_keep_height_m: legs, a wheel) at most
   // absorb_narrow_gap_m away and stay within those bounds. absorb_gap_m 0: off.
+  // Tall pieces (both at least absorb_tall_height_m high: a truck's cargo box and cab, clipped
+  // at the segmenter's max_height_m) may make a union up to absorb_tall_length_m long.
   double absorb_gap_m = 2.0;               // m, box to box
   double absorb_max_length_m = 6.0;        // m
   double absorb_max_width_m = 2.6;         // m
+  double absorb_tall_height_m = 2.1;       // m; 0: no longer unions
+  double absorb_tall_length_m = 16.5;      // m
   double absorb_velocity_mps = 1.5;        // m/s
   double absorb_keep_length_m = 2.2;       // m
   double absorb_keep_width_m = 1.0;        // m
@@ -76,7 +80,8 @@ struct TrackerConfig {
   // Overlapping tracks: a track whose position lies inside an older track's box grown by
   // overlap_margin_m (neither a person nor a bicyclist, as above, who take only low tracks
   // within absorb_narrow_gap_m) is the same object when both boxes fit in
-  // absorb_max_length_m x absorb_max_width_m: it is merged into the older one, which keeps its
+  // absorb_max_length_m x absorb_max_width_m (absorb_tall_length_m for tall ones, as above): it
+  // is merged into the older one, which keeps its
   // id and, when only the younger was measured in this scan, is corrected with the younger's
   // measurement. overlap_margin_m < 0: off.
   double overlap_margin_m = 1.0;  // m
