@@ -415,7 +415,9 @@ TEST(RunCli, GsUsbWithoutAnAdapterStopsStartUpNamingTheAdapterLsusbAndUdev) {
             std::string::npos)
       << r.output;
   EXPECT_NE(r.output.find("lsusb -d 1d50:606f"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("udev rule"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("udev rule granting access (deploy/60-stac-gs-usb.rules"),
+            std::string::npos)
+      << r.output;
   EXPECT_EQ(r.output.find("reads socketcan only"), std::string::npos) << r.output;
   EXPECT_EQ(r.output.find("Ctrl-C stops"), std::string::npos) << r.output;  // nothing started
 }
