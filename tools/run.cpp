@@ -594,12 +594,12 @@ void add_run_command(CLI::App& app) {
   CLI::App* cmd =
       app.add_subcommand("run", "The live component: sensor UDP -> perception -> DDS topics");
   cmd->description(
-      "Receives the HDL-64E's UDP packets, the Applanix INS (TCP or UDP) and optionally the "
-      "vehicle\n"
-      "CAN bus, runs every complete scan through deskew -> segment -> track on its own thread and\n"
-      "publishes tracked_objects, segments, ego_pose and health on DDS, watching the deadline\n"
-      "(run.deadline_ms) and the inputs. Stops on Ctrl-C/SIGTERM, --seconds or --scans and prints\n"
-      "a summary: scans, drops by cause, deadline misses, latencies (docs/run.md).");
+      "Receives the HDL-64E's UDP packets, the Applanix INS (TCP or UDP) and optionally the\n"
+      "vehicle CAN bus (SocketCAN or a gs_usb adapter: can.transport), runs every complete scan\n"
+      "through deskew -> segment -> track on its own thread and publishes tracked_objects,\n"
+      "segments, ego_pose and health on DDS, watching the deadline (run.deadline_ms) and the\n"
+      "inputs. Stops on Ctrl-C/SIGTERM, --seconds or --scans and prints a summary: scans, drops\n"
+      "by cause, deadline misses, latencies (docs/run.md).");
   cmd->add_option("--config", o->config,
                   "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
   cmd->add_option("--seconds", o->seconds, "stop after this many seconds")
