@@ -26,6 +26,7 @@ struct CanInputCounters {
   std::uint64_t malformed = 0;      // SocketCAN records of another size, gs_usb short transfers
   std::uint64_t other_channel = 0;  // gs_usb: frames of another adapter channel, dropped
   std::uint64_t read_errors = 0;    // failed reads that did not end the input (retried)
+  bool operator==(const CanInputCounters&) const = default;
 };
 
 enum class InputEvent : std::uint8_t {

@@ -12,21 +12,17 @@
 namespace stac::can {
 namespace {
 
-using stac::testing::kSpeedId;
-using stac::testing::kTenMetresPerSecond;
-using stac::testing::kYawRateId;
-using stac::testing::send_frame;
-
 // A reader over a socketpair has no kernel filter: like a gs_usb adapter it hands over the whole
 // bus, so the user-space filter of the signal map is what keeps the other ids out.
 TEST(OdometryInput, MappedFramesBecomeUpdatesAndTheOtherIdsAreDroppedAndCounted) {
-  auto p = stac::testing::make_socketcan_pair();
-  OdometryInput<SocketCanReader> in(std::move(p.reader), stac::testing::shipped_decoder());
-  send_frame(p.peer, kSpeedId, kTenMetresPerSecond);
-  send_frame(p.peer, 0x123, {1, 2, 3});                              // not in the DBC
-  send_frame(p.peer, 0x18FEF1FE | CAN_EFF_FLAG, {0, 0, 0, 0});       // in the DBC, not mapped
-  send_frame(p.peer, kSpeedId | CAN_EFF_FLAG, kTenMetresPerSecond);  // 29-bit: another message
-  send_frame(p.peer, kYawRateId, {0xFF, 0xFE});                      // -2.57 deg/s
+  auto p = testing::make_socketcan_pair();
+  OdometryInput<SocketCanReader> in(std::move(p.reader), testing::shipped_decoder());
+  testing::send_frame(p.peer, testing::kSpeedId, testing::kTenMetresPerSecond);
+  testing::send_frame(p.peer, 0x123, {1, 2, 3});                         // not in the DBC
+  testing::send_frame(p.peer, 0x18FEF1FE | CAN_EFF_FLAG, {0, 0, 0, 0});  // in the DBC, not mapped
+  testing::send_frame(p.peer, testing::kSpeedId | CAN_EFF_FLAG,
+                      testing::kTenMetresPerSecond);               // 29-bit: another message
+  testing::send_frame(p.peer, testing::kYawRateId, {0xFF, 0xFE});  // -2.57 deg/s
   std::vector<OdometryUpdate> got;
   for (int tries = 0; tries < 5 && in.counters().frames < 5; ++tries) {
     ASSERT_EQ(in.read(1000, [&](const OdometryUpdate& u) { got.push_back(u); }), InputEvent::kRead);
@@ -46,8 +42,8 @@ TEST(OdometryInput, MappedFramesBecomeUpdatesAndTheOtherIdsAreDroppedAndCounted)
 }
 
 TEST(OdometryInput, TimeoutStopAndPeerCloseAreTheirOwnEvents) {
-  auto p = stac::testing::make_socketcan_pair();
-  OdometryInput<SocketCanReader> in(std::move(p.reader), stac::testing::shipped_decoder());
+  auto p = testing::make_socketcan_pair();
+  OdometryInput<SocketCanReader> in(std::move(p.reader), testing::shipped_decoder());
   int updates = 0;
   const auto count = [&](const OdometryUpdate&) { ++updates; };
   EXPECT_EQ(in.read(10, count), InputEvent::kRead);  // nothing there: a timeout is a read
@@ -57,8 +53,8 @@ TEST(OdometryInput, TimeoutStopAndPeerCloseAreTheirOwnEvents) {
   });
   EXPECT_EQ(in.read(-1, count), InputEvent::kStopped);  // would block forever otherwise
   stopper.join();
-  auto q = stac::testing::make_socketcan_pair();
-  OdometryInput<SocketCanReader> closed(std::move(q.reader), stac::testing::shipped_decoder());
+  auto q = testing::make_socketcan_pair();
+  OdometryInput<SocketCanReader> closed(std::move(q.reader), testing::shipped_decoder());
   ::close(q.peer);  // what the kernel reports as ENETDOWN/ENODEV when the interface goes away
   EXPECT_EQ(closed.read(1000, count), InputEvent::kGone);
   EXPECT_EQ(updates, 0);
@@ -66,10 +62,11 @@ TEST(OdometryInput, TimeoutStopAndPeerCloseAreTheirOwnEvents) {
 }
 
 TEST(OdometryInput, ReadingAndDecodingAllocateNothing) {
-  auto p = stac::testing::make_socketcan_pair();
-  OdometryInput<SocketCanReader> in(std::move(p.reader), stac::testing::shipped_decoder(), 16);
+  auto p = testing::make_socketcan_pair();
+  OdometryInput<SocketCanReader> in(std::move(p.reader), testing::shipped_decoder(), 16);
   for (int i = 0; i < 50; ++i)
-    send_frame(p.peer, i % 2 == 0 ? kSpeedId : 0x321, kTenMetresPerSecond);
+    testing::send_frame(p.peer, i % 2 == 0 ? testing::kSpeedId : 0x321,
+                        testing::kTenMetresPerSecond);
   double sum = 0;
   rt::testing::AllocationCounter counter;
   while (in.counters().frames < 50) {
@@ -93,20 +90,12 @@ TEST(TransportTraits, EachDriversEndAndDropCountersMapToTheCommonCauses) {
   TransportTraits<GsUsbDevice>::count(
       {.frames = 10, .echoes = 1, .truncated = 2, .can_fd = 3, .other_channel = 4, .overflows = 5},
       g);
-  EXPECT_EQ(g.frames, 10u);
-  EXPECT_EQ(g.malformed, 2u);
-  EXPECT_EQ(g.can_fd, 3u);
-  EXPECT_EQ(g.other_channel, 4u);
-  EXPECT_EQ(g.overflows, 5u);
-  EXPECT_EQ(g.kernel_drops, 0u);
+  EXPECT_EQ(g, (CanInputCounters{
+                   .frames = 10, .overflows = 5, .can_fd = 3, .malformed = 2, .other_channel = 4}));
   CanInputCounters s;
   TransportTraits<SocketCanReader>::count(
       {.frames = 20, .can_fd = 6, .bad_size = 7, .kernel_drops = 8, .no_kernel_stamp = 9}, s);
-  EXPECT_EQ(s.frames, 20u);
-  EXPECT_EQ(s.can_fd, 6u);
-  EXPECT_EQ(s.malformed, 7u);
-  EXPECT_EQ(s.kernel_drops, 8u);
-  EXPECT_EQ(s.overflows + s.other_channel, 0u);
+  EXPECT_EQ(s, (CanInputCounters{.frames = 20, .kernel_drops = 8, .can_fd = 6, .malformed = 7}));
 }
 
 }  // namespace
