@@ -16,6 +16,7 @@
 #include <thread>
 #include <vector>
 
+#include "dds/idl_types.hpp"
 #include "drivers/applanix/tcp_client.hpp"
 #include "drivers/applanix/udp_listener.hpp"
 #include "drivers/can/dbc.hpp"
@@ -440,6 +441,7 @@ int run_live(const RunOptions& o) {
     std::array<std::int64_t, kHealthStages> stage_ns{};
     std::array<dds::StageLatencyIn, kHealthStages> stages{};
     std::array<dds::DropCountIn, 16> drops{};
+    static_assert(std::tuple_size_v<decltype(drops)> <= dds::kMaxDrops, "idl/stac.idl's bound");
     std::array<dds::SensorStatusIn, 3> sensors{};
     bool reported = false;
     for (;;) {

@@ -249,6 +249,12 @@ TEST(RunCli, ReplayedDriveGivesOneTrackedObjectsSamplePerScanAndHealthThatAgrees
             summary_number(out, R"((\d+) scans without a pose)"));
   EXPECT_LE(last.sensors.at("lidar"), 1u);  // ok, or stale if the last scan waited past the timeout
   EXPECT_EQ(last.sensors.at("can"), 3u);    // not configured
+  // CAN's drop causes are there, at 0 without CAN.
+  for (const char* cause :
+       {"can.not_mapped", "can.overflow", "can.fd", "can.malformed", "can.other_channel"}) {
+    ASSERT_TRUE(last.drops.count(cause)) << cause;
+    EXPECT_EQ(last.drops.at(cause), 0u) << cause;
+  }
   EXPECT_TRUE(last.sensors.count("ins"));
   for (std::size_t i = 1; i < healths.size(); ++i)
     EXPECT_GE(healths[i].deadline_misses, healths[i - 1].deadline_misses);
