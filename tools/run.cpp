@@ -1,6 +1,8 @@
 // stac run: the live component (docs/run.md). Threads:
 //   receiver   UdpReceiver (Velodyne) -> ScanStream slots
-//   pose       Applanix (TCP client or UDP) and CAN -> EgoEstimator -> PoseHistory
+//   pose       Applanix (TCP client or UDP) and SocketCAN (or the can thread's ring) ->
+//              EgoEstimator -> PoseHistory
+//   can        gs_usb only: GsUsbDevice (blocking libusb reads) -> odometry ring -> pose
 //   perception ScanStream -> ScanPipeline -> result slots (full: the newest result is dropped)
 //   publisher  result slots -> DDS tracked_objects, segments, ego_pose, health; deadline monitor
 // Everything is allocated before the threads start. SIGINT/SIGTERM (or --seconds/--scans) stop
@@ -14,10 +16,11 @@
 #include <thread>
 #include <vector>
 
+#include "dds/idl_types.hpp"
 #include "drivers/applanix/tcp_client.hpp"
 #include "drivers/applanix/udp_listener.hpp"
 #include "drivers/can/dbc.hpp"
-#include "drivers/can/socketcan.hpp"
+#include "drivers/can/odometry_input.hpp"
 #include "drivers/io/udp_receiver.hpp"
 #include "drivers/velodyne/calibration.hpp"
 #include "drivers/velodyne/scan_stream.hpp"
@@ -27,7 +30,9 @@
 #include "rt/deadline_monitor.hpp"
 #include "rt/scheduling.hpp"
 #include "rt/slot_exchange.hpp"
+#include "rt/spsc_ring.hpp"
 #include "rt/watchdog.hpp"
+#include "tools/can_input.hpp"
 #include "tools/commands.hpp"
 #include "tools/dds_settings.hpp"
 #include "tools/model_file.hpp"
@@ -88,6 +93,7 @@ struct Shared {
   std::atomic<std::uint64_t> packets{0}, kernel_drops{0}, receive_errors{0};
   std::atomic<std::uint64_t> scans{0}, incomplete{0}, published{0}, publish_errors{0};
   std::atomic<std::uint8_t> ego_source{0};  // 0 none, 1 INS, 2 CAN dead reckoning
+  CanCounterCells can;                      // written by the thread that reads CAN
 };
 
 void idle() {
@@ -106,6 +112,8 @@ std::uint8_t sensor_status(const rt::InputStatus& s) {
       return 0;
     case rt::InputState::kStalled:
       return 1;
+    case rt::InputState::kLost:
+      return 2;
     case rt::InputState::kNotConfigured:
       return 3;
   }
@@ -116,28 +124,45 @@ std::uint32_t to_us(std::int64_t ns) {
   return static_cast<std::uint32_t>(std::clamp<std::int64_t>(ns / 1000, 0, UINT32_MAX));
 }
 
-// The pose thread's inputs, opened at start-up.
+// Odometry updates in flight from the can thread to the pose thread, which drains them every
+// 5 ms or sooner: 1024 are 50 ms of a 1 Mbit/s bus full of the shortest frames (about 20,000/s),
+// ten drain periods. Full: the newest update is dropped and counted (can.overflow).
+constexpr std::size_t kOdometryRing = 1024;
+
+// The pose thread's inputs (and the can thread's), opened at start-up.
 struct PoseInputs {
   std::optional<applanix::TcpClient> tcp;
   std::optional<applanix::UdpListener> udp;
-  std::optional<can::SocketCanReader> can_reader;
-  std::optional<can::OdometryDecoder> odometry;
+  // can.transport: socketcan, polled by the pose thread between its INS reads.
+  std::optional<can::OdometryInput<can::SocketCanReader>> socketcan;
+  // can.transport: gs_usb, read by the can thread into `odometry`, which the pose thread drains.
+  std::optional<can::OdometryInput<can::GsUsbDevice>> gs_usb;
+  std::optional<rt::SpscRing<can::OdometryUpdate>> odometry;
+  std::atomic<bool> can_done{false};  // the can thread ended (stopped, or the adapter is gone)
+  [[nodiscard]] bool ins() const { return tcp || udp; }
+  [[nodiscard]] bool can() const { return socketcan || gs_usb; }
+  [[nodiscard]] can::CanInputCounters can_counters() const {  // once the readers ended
+    return socketcan ? socketcan->counters()
+           : gs_usb  ? gs_usb->counters()
+                     : can::CanInputCounters{};
+  }
   void stop() {
     if (tcp) tcp->stop();
     if (udp) udp->stop();
-    if (can_reader) can_reader->stop();
+    if (socketcan) socketcan->stop();
+    if (gs_usb) gs_usb->stop();
   }
 };
 
 void pose_loop(PoseInputs& in, ego::EgoEstimator& estimator, const ego::PoseHistory& history,
-               rt::Watchdog& watchdog, Shared& shared) {
+               rt::Watchdog& watchdog, CanReport& can_report, Shared& shared) {
   applanix::StreamParser parser;
   std::vector<std::uint8_t> bytes(16384);
-  std::vector<can::Frame> frames(64);
   std::uint64_t session = 0;
   bool can_closed = false;
   applanix::Parsed m;
-  const int timeout_ms = in.can_reader ? 5 : 50;  // both inputs polled in turn when CAN is read
+  const int timeout_ms = in.can() ? 5 : 50;  // the INS and CAN handled in turn when CAN is read
+  const auto add_odometry = [&](const can::OdometryUpdate& u) { estimator.add_odometry(u); };
   for (;;) {
     bool stopped = false;
     auto take = [&](const applanix::StreamParser& p) {
@@ -161,19 +186,21 @@ void pose_loop(PoseInputs& in, ego::EgoEstimator& estimator, const ego::PoseHist
       if (n == io::UdpReceiver::kStopped) stopped = true;
       while (n > 0 && in.udp->next(m)) take(in.udp->parser());
     }
-    if (in.can_reader && !can_closed) {
-      const int n = in.can_reader->read(frames, in.tcp || in.udp ? 0 : timeout_ms);
-      if (n == can::SocketCanReader::kStopped) stopped = true;
-      if (n == can::SocketCanReader::kClosed) {  // the interface went away: the INS goes on
-        std::fprintf(stderr, "stac run: warning: the CAN interface closed; no more odometry\n");
+    if (in.socketcan && !can_closed) {
+      const can::InputEvent e =
+          read_can(*in.socketcan, in.ins() ? 0 : timeout_ms, add_odometry, can_report);
+      if (e == can::InputEvent::kStopped) stopped = true;
+      if (e == can::InputEvent::kGone) {  // marked lost; the INS goes on
         can_closed = true;
-        if (!in.tcp && !in.udp) return;
+        if (!in.ins()) return;
       }
-      for (int i = 0; i < n; ++i) {
-        const can::OdometryUpdate u = in.odometry->decode(frames[static_cast<std::size_t>(i)]);
-        if (!u.has_speed && !u.has_yaw_rate) continue;
-        estimator.add_odometry(u);
-        watchdog.beat(kCan, rt::monotonic_ns());
+    }
+    if (in.odometry) {  // gs_usb: what the can thread read
+      const bool can_done = in.can_done.load(std::memory_order_acquire);
+      for (can::OdometryUpdate u; in.odometry->try_pop(u);) add_odometry(u);
+      if (!in.ins()) {  // nothing else to wait on
+        if (can_done) return;
+        std::this_thread::sleep_for(std::chrono::milliseconds(timeout_ms));
       }
     }
     const ego::EgoSource s = estimator.source(history.newest_stamp_ns());
@@ -183,6 +210,35 @@ void pose_loop(PoseInputs& in, ego::EgoEstimator& estimator, const ego::PoseHist
                             std::memory_order_relaxed);
     if (stopped) return;
   }
+}
+
+// The CAN input as the start-up line and the summary name it.
+std::string can_description(const can::CanConfig& c) {
+  if (c.transport == can::Transport::kSocketCan) return c.socketcan.interface;
+  return "gs_usb channel " + std::to_string(c.gs_usb.channel) + " at " +
+         std::to_string(c.gs_usb.bitrate_bps) + " bit/s" +
+         (c.gs_usb.listen_only ? " (listen-only)" : "");
+}
+
+// Opens the configured CAN transport with the DBC signal map's decoder. SocketCAN gets the mapped
+// ids as its kernel filter; a gs_usb adapter delivers the whole bus and the decoder drops the rest.
+rt::Result<bool> open_can(can::CanConfig& c, PoseInputs& inputs) {
+  auto db = can::load_dbc(c.dbc);
+  if (!db) return rt::Unexpected<rt::Error>{db.error()};
+  auto decoder = can::OdometryDecoder::create(*db, c.signals);
+  if (!decoder) return rt::Unexpected<rt::Error>{decoder.error()};
+  if (c.transport == can::Transport::kSocketCan) {
+    c.socketcan.filters = decoder->filters();
+    auto reader = can::SocketCanReader::open(c.socketcan);
+    if (!reader) return rt::Unexpected<rt::Error>{reader.error()};
+    inputs.socketcan.emplace(std::move(*reader), std::move(*decoder));
+  } else {
+    auto device = can::GsUsbDevice::open(c.gs_usb);
+    if (!device) return rt::Unexpected<rt::Error>{device.error()};
+    inputs.gs_usb.emplace(std::move(*device), std::move(*decoder));
+    inputs.odometry.emplace(kOdometryRing);
+  }
+  return true;
 }
 
 int run_live(const RunOptions& o) {
@@ -199,8 +255,6 @@ int run_live(const RunOptions& o) {
   if (rs->can) {
     auto c = load_can_settings(config);
     if (!c) return fail(c.error().message);
-    if (c->transport != can::Transport::kSocketCan)
-      return fail("'can.transport': stac run reads socketcan only");
     can_config = *c;
   }
   // Command-line overrides.
@@ -264,17 +318,9 @@ int run_live(const RunOptions& o) {
     inputs.udp.emplace(std::move(*l));
   }
   if (can_config) {
-    auto db = can::load_dbc(can_config->dbc);
-    if (!db) return fail(db.error().message);
-    auto decoder = can::OdometryDecoder::create(*db, can_config->signals);
-    if (!decoder) return fail(decoder.error().message);
-    can_config->socketcan.filters = decoder->filters();
-    auto reader = can::SocketCanReader::open(can_config->socketcan);
-    if (!reader) return fail(reader.error().message);
-    inputs.odometry.emplace(std::move(*decoder));
-    inputs.can_reader.emplace(std::move(*reader));
+    if (auto r = open_can(*can_config, inputs); !r) return fail(r.error().message);
   }
-  const bool have_pose_thread = inputs.tcp || inputs.udp || inputs.can_reader;
+  const bool have_pose_thread = inputs.ins() || inputs.can();
   ego::LocalFrame frame(es.origin);
   if (can_config) es.estimator.odometry = can_config->dead_reckoning;
   ego::PoseHistory history(es.history);
@@ -287,12 +333,12 @@ int run_live(const RunOptions& o) {
   rt::DeadlineMonitor monitor(rs->deadline, kHealthStages);
   rt::Watchdog watchdog;
   watchdog.start(
-      {rs->velodyne_timeout_ns,
-       inputs.tcp || inputs.udp ? es.estimator.ins_timeout_ns : std::int64_t{0},
+      {rs->velodyne_timeout_ns, inputs.ins() ? es.estimator.ins_timeout_ns : std::int64_t{0},
        can_config ? can_config->dead_reckoning.stale_timeout_ns : std::int64_t{0}, std::int64_t{0}},
       rt::monotonic_ns());
   Shared shared;
-  const ego::PoseHistory* poses = inputs.tcp || inputs.udp ? &history : nullptr;
+  CanReport can_report{watchdog, kCan, shared.can};
+  const ego::PoseHistory* poses = inputs.ins() ? &history : nullptr;
 
   struct sigaction sa {};
   sa.sa_handler = on_signal;
@@ -305,14 +351,14 @@ int run_live(const RunOptions& o) {
   sigaddset(&stop_signals, SIGINT);
   sigaddset(&stop_signals, SIGTERM);
   pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
-  std::fprintf(
-      stderr, "stac run: Velodyne UDP %s:%u, INS %s, CAN %s, DDS domain %u; Ctrl-C stops\n",
-      vs.bind_address.c_str(), receiver->port(),
-      rs->ins == InsTransport::kTcp
-          ? (rs->ins_address + ":" + std::to_string(es.ins_port) + " (tcp)").c_str()
-      : rs->ins == InsTransport::kUdp ? ("udp port " + std::to_string(es.ins_port)).c_str()
-                                      : "none (parked sensor)",
-      can_config ? can_config->socketcan.interface.c_str() : "none", dds_config->domain_id);
+  std::fprintf(stderr,
+               "stac run: Velodyne UDP %s:%u, INS %s, CAN %s, DDS domain %u; Ctrl-C stops\n",
+               vs.bind_address.c_str(), receiver->port(),
+               rs->ins == InsTransport::kTcp
+                   ? (rs->ins_address + ":" + std::to_string(es.ins_port) + " (tcp)").c_str()
+               : rs->ins == InsTransport::kUdp ? ("udp port " + std::to_string(es.ins_port)).c_str()
+                                               : "none (parked sensor)",
+               can_config ? can_description(*can_config).c_str() : "none", dds_config->domain_id);
 
   std::thread receiver_thread([&] {
     start_thread("receiver", rs->receiver);
@@ -339,11 +385,19 @@ int run_live(const RunOptions& o) {
     }
     shared.receiver_done.store(true, std::memory_order_release);
   });
+  std::thread can_thread;
+  if (inputs.gs_usb) {
+    can_thread = std::thread([&] {
+      start_thread("can", rs->pose);  // the pose thread's priority and CPU
+      (void)read_can_until_end(*inputs.gs_usb, *inputs.odometry, can_report);
+      inputs.can_done.store(true, std::memory_order_release);
+    });
+  }
   std::thread pose_thread;
   if (have_pose_thread) {
     pose_thread = std::thread([&] {
       start_thread("pose", rs->pose);
-      pose_loop(inputs, estimator, history, watchdog, shared);
+      pose_loop(inputs, estimator, history, watchdog, can_report, shared);
     });
   }
   std::thread perception_thread([&] {
@@ -386,7 +440,8 @@ int run_live(const RunOptions& o) {
     start_thread("publisher", rs->publisher);
     std::array<std::int64_t, kHealthStages> stage_ns{};
     std::array<dds::StageLatencyIn, kHealthStages> stages{};
-    std::array<dds::DropCountIn, 11> drops{};
+    std::array<dds::DropCountIn, 16> drops{};
+    static_assert(std::tuple_size_v<decltype(drops)> <= dds::kMaxDrops, "idl/stac.idl's bound");
     std::array<dds::SensorStatusIn, 3> sensors{};
     bool reported = false;
     for (;;) {
@@ -418,6 +473,7 @@ int run_live(const RunOptions& o) {
       for (std::size_t i = 0; i < kHealthStages; ++i)
         stages[i] = {kStageNames[i], to_us(stage_ns[i])};
       const tracking::TrackerCounters& tc = f->result.tracked.counters;
+      const can::CanInputCounters cc = shared.can.load();
       drops = {
           dds::DropCountIn{"velodyne.kernel", shared.kernel_drops.load(std::memory_order_relaxed)},
           {"velodyne.scan_slots_full", stream.scans_dropped()},
@@ -429,7 +485,13 @@ int run_live(const RunOptions& o) {
           {"tracking.detections", tc.dropped_detections},
           {"dds.errors", shared.publish_errors.load(std::memory_order_relaxed)},
           {"pose.rejected", history.rejected()},
-          {"ego.scans_without_pose", f->without_pose}};
+          {"ego.scans_without_pose", f->without_pose},
+          {"can.not_mapped", cc.not_mapped},
+          {"can.overflow",
+           cc.kernel_drops + cc.overflows + shared.can.ring_full.load(std::memory_order_relaxed)},
+          {"can.fd", cc.can_fd},
+          {"can.malformed", cc.malformed},
+          {"can.other_channel", cc.other_channel}};
       for (std::size_t i = 0; i < sensors.size(); ++i) {
         const rt::InputStatus s = watchdog.status(i, now);
         sensors[i] = {kInputNames[i], sensor_status(s),
@@ -464,6 +526,7 @@ int run_live(const RunOptions& o) {
   shared.stopping.store(true, std::memory_order_release);
   inputs.stop();
   receiver_thread.join();
+  if (can_thread.joinable()) can_thread.join();
   if (pose_thread.joinable()) pose_thread.join();
   perception_thread.join();
   publisher_thread.join();
@@ -496,6 +559,17 @@ int run_live(const RunOptions& o) {
       stderr, "  ego         %llu INS fixes, %llu dead-reckoned poses, %llu scans without a pose\n",
       u(estimator.counters().ins_fixes), u(estimator.counters().dead_reckoned),
       u(pipeline.scans_without_pose()));
+  if (can_config) {
+    const can::CanInputCounters cc = inputs.can_counters();
+    std::fprintf(stderr,
+                 "  can         %s: %llu frames, %llu with odometry, %llu not in the signal map; "
+                 "drops: kernel %llu, adapter overflows %llu, ring full %llu, CAN FD %llu, "
+                 "malformed %llu, other channel %llu; read errors %llu\n",
+                 can_description(*can_config).c_str(), u(cc.frames), u(cc.updates),
+                 u(cc.not_mapped), u(cc.kernel_drops), u(cc.overflows),
+                 u(shared.can.ring_full.load()), u(cc.can_fd), u(cc.malformed), u(cc.other_channel),
+                 u(cc.read_errors));
+  }
   std::fprintf(stderr, "  inputs     ");
   for (std::size_t i = 0; i < 3; ++i) {
     std::fprintf(stderr, " %s %s (%llu stalls)", kInputNames[i],
@@ -522,12 +596,12 @@ void add_run_command(CLI::App& app) {
   CLI::App* cmd =
       app.add_subcommand("run", "The live component: sensor UDP -> perception -> DDS topics");
   cmd->description(
-      "Receives the HDL-64E's UDP packets, the Applanix INS (TCP or UDP) and optionally the "
-      "vehicle\n"
-      "CAN bus, runs every complete scan through deskew -> segment -> track on its own thread and\n"
-      "publishes tracked_objects, segments, ego_pose and health on DDS, watching the deadline\n"
-      "(run.deadline_ms) and the inputs. Stops on Ctrl-C/SIGTERM, --seconds or --scans and prints\n"
-      "a summary: scans, drops by cause, deadline misses, latencies (docs/run.md).");
+      "Receives the HDL-64E's UDP packets, the Applanix INS (TCP or UDP) and optionally the\n"
+      "vehicle CAN bus (SocketCAN or a gs_usb adapter: can.transport), runs every complete scan\n"
+      "through deskew -> segment -> track on its own thread and publishes tracked_objects,\n"
+      "segments, ego_pose and health on DDS, watching the deadline (run.deadline_ms) and the\n"
+      "inputs. Stops on Ctrl-C/SIGTERM, --seconds or --scans and prints a summary: scans, drops\n"
+      "by cause, deadline misses, latencies (docs/run.md).");
   cmd->add_option("--config", o->config,
                   "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
   cmd->add_option("--seconds", o->seconds, "stop after this many seconds")

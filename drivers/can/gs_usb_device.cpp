@@ -49,7 +49,8 @@ rt::Result<GsUsbDevice> GsUsbDevice::open(const GsUsbConfig& config) {
   d.handle_ = libusb_open_device_with_vid_pid(d.context_, gs_usb::kVendorId, gs_usb::kProductId);
   if (d.handle_ == nullptr) {
     return rt::make_error(what + "no gs_usb/candleLight adapter found, or no permission to open it: "
-                                 "check `lsusb -d " + id_text() + "` and a udev rule granting access");
+                                 "check `lsusb -d " + id_text() + "` and a udev rule granting access "
+                                 "(deploy/60-stac-gs-usb.rules, docs/can.md)");
   }
   libusb_set_auto_detach_kernel_driver(d.handle_, 1);  // unbind the kernel gs_usb driver if bound
   if (const int rc = libusb_claim_interface(d.handle_, kInterface); rc != 0) {

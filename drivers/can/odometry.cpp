@@ -67,7 +67,10 @@ OdometryUpdate OdometryDecoder::decode(const Frame& frame) noexcept {
   const auto matches = [&frame](const Channel& c) { return c.id == frame.id && c.extended == frame.extended; };
   const bool is_speed = matches(speed_);
   const bool is_yaw = matches(yaw_rate_);
-  if (!is_speed && !is_yaw) return u;
+  if (!is_speed && !is_yaw) {
+    ++counters_.not_mapped;
+    return u;
+  }
   if (frame.remote || frame.error) {
     ++counters_.remote_or_error;
     return u;

@@ -47,6 +47,7 @@ TEST(OdometryDecoder, DecodesHandMadeFramesOfTheShippedDbc) {
   EXPECT_FALSE(d->decode(ext).has_speed);
   EXPECT_EQ(d->counters().frames, 4u);
   EXPECT_EQ(d->counters().decoded, 2u);
+  EXPECT_EQ(d->counters().not_mapped, 2u);  // 0x123 and the 29-bit 0x1A0: dropped, counted
   const auto filters = d->filters();  // what a SocketCAN reader lets through
   ASSERT_EQ(filters.size(), 2u);
   EXPECT_EQ(filters[0].id, 0x1A0u);
@@ -64,6 +65,7 @@ TEST(OdometryDecoder, ShortAndRemoteFramesAreCountedNotDecoded) {
   EXPECT_FALSE(d->decode(rtr).has_yaw_rate);
   EXPECT_EQ(d->counters().short_frames, 1u);
   EXPECT_EQ(d->counters().remote_or_error, 1u);
+  EXPECT_EQ(d->counters().not_mapped, 0u);  // mapped ids, however bad the frames
 }
 
 TEST(OdometryDecoder, SignAndUnitConversionsFromTheMap) {

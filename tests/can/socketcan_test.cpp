@@ -11,32 +11,16 @@
 #include <cstring>
 #include <thread>
 
+#include "can/socketcan_pair.hpp"
 #include "rt/testing/alloc_counter.hpp"
 
 namespace stac::can {
 namespace {
 
-// A SOCK_SEQPACKET socketpair keeps each 16-byte struct can_frame a record, as a raw CAN socket
-// does: the reader under test gets one end, the test writes hand-made records into the other.
-struct Pair {
-  SocketCanReader reader;
-  int peer;
-};
-
-Pair make_pair() {
-  int fds[2];
-  EXPECT_EQ(socketpair(AF_UNIX, SOCK_SEQPACKET | SOCK_CLOEXEC, 0, fds), 0) << std::strerror(errno);
-  auto r = SocketCanReader::adopt(fds[0]);
-  EXPECT_TRUE(r);
-  return {std::move(r).value(), fds[1]};
-}
-
-void send_record(int fd, const void* bytes, std::size_t size) {
-  ASSERT_EQ(::send(fd, bytes, size, 0), static_cast<ssize_t>(size)) << std::strerror(errno);
-}
+using stac::testing::send_record;
 
 TEST(SocketCanReader, ReadsHandMadeCanFrameRecordsWithStamps) {
-  Pair p = make_pair();
+  auto p = stac::testing::make_socketcan_pair();
   can_frame a{};
   a.can_id = 0x1A0;
   a.len = 2;
@@ -72,7 +56,7 @@ TEST(SocketCanReader, ReadsHandMadeCanFrameRecordsWithStamps) {
 }
 
 TEST(SocketCanReader, CanFdAndOddSizedRecordsAreCountedAndSkipped) {
-  Pair p = make_pair();
+  auto p = stac::testing::make_socketcan_pair();
   canfd_frame fd{};
   fd.can_id = 0x100;
   fd.len = 12;
@@ -96,7 +80,7 @@ TEST(SocketCanReader, CanFdAndOddSizedRecordsAreCountedAndSkipped) {
 }
 
 TEST(SocketCanReader, TimeoutStopAndPeerClose) {
-  Pair p = make_pair();
+  auto p = stac::testing::make_socketcan_pair();
   std::array<Frame, 4> out;
   EXPECT_EQ(p.reader.read(out, 10), 0);  // nothing there: timeout
   std::thread stopper([&p] {
@@ -106,14 +90,14 @@ TEST(SocketCanReader, TimeoutStopAndPeerClose) {
   EXPECT_EQ(p.reader.read(out, -1), SocketCanReader::kStopped);  // would block forever otherwise
   stopper.join();
   EXPECT_EQ(p.reader.read(out, 0), SocketCanReader::kStopped);  // and stays stopped
-  Pair q = make_pair();
+  auto q = stac::testing::make_socketcan_pair();
   ::close(q.peer);
   EXPECT_EQ(q.reader.read(out, 1000), SocketCanReader::kClosed);
 }
 
 TEST(SocketCanReader, WriteSendsOneRecordAndReadAllocatesNothing) {
   static_assert(noexcept(std::declval<SocketCanReader&>().read(std::span<Frame>{}, 0)));
-  Pair p = make_pair();
+  auto p = stac::testing::make_socketcan_pair();
   Frame f;
   f.id = 0x123;
   f.dlc = 3;

@@ -1,6 +1,8 @@
 // deploy/stac.service: parsed as systemd reads it (sections, Key=Value) with the settings
 // docs/run.md promises, and verified by `systemd-analyze verify` where that is installed (with
 // ExecStart pointed at the stac just built, since verify checks that the command exists).
+// deploy/60-stac-gs-usb.rules: the udev rule for the gs_usb adapter the driver opens.
+#include <gtest/gtest-spi.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -11,12 +13,15 @@
 #include <regex>
 #include <sstream>
 #include <string>
+#include <vector>
 
+#include "drivers/can/gs_usb.hpp"
 #include "stac_cli.hpp"
 
 namespace {
 
 const std::string kUnit = std::string(STAC_SOURCE_DIR) + "/deploy/stac.service";
+const std::string kUdevRule = std::string(STAC_SOURCE_DIR) + "/deploy/60-stac-gs-usb.rules";
 
 std::string read(const std::string& path) {
   std::ifstream f(path);
@@ -86,8 +91,48 @@ TEST(SystemdUnit, SystemdAnalyzeVerifiesItAndWouldNameAnError) {
   text = std::regex_replace(text, std::regex("/usr/local/bin/stac"), std::string(STAC_CLI));
   EXPECT_EQ(verify(text), "");
   // The check can fail: a restart policy systemd does not know is named.
-  const std::string broken = std::regex_replace(text, std::regex("Restart=on-failure"), "Restart=sometimes");
+  const std::string broken =
+      std::regex_replace(text, std::regex("Restart=on-failure"), "Restart=sometimes");
   EXPECT_NE(verify(broken).find("sometimes"), std::string::npos);
+}
+
+// Every rule line's KEY=="match" and KEY="assignment" pairs (comments and blank lines skipped);
+// fails the test on a line with anything else.
+std::vector<std::map<std::string, std::string>> parse_udev_rules(const std::string& text) {
+  std::vector<std::map<std::string, std::string>> rules;
+  std::istringstream in(text);
+  const std::regex pair(R"re(\s*([A-Z]+(?:\{\w+\})?)\s*(==|\+=|=)\s*"([^"]*)"\s*(,|$))re");
+  for (std::string line; std::getline(in, line);) {
+    if (line.empty() || line[0] == '#') continue;
+    std::map<std::string, std::string> rule;
+    std::size_t at = 0;
+    for (std::smatch m;
+         at < line.size() &&
+         std::regex_search(line.cbegin() + static_cast<std::ptrdiff_t>(at), line.cend(), m, pair,
+                           std::regex_constants::match_continuous);
+         at += static_cast<std::size_t>(m.length(0))) {
+      rule[m[1].str() + m[2].str()] = m[3];
+    }
+    EXPECT_EQ(at, line.size()) << "not a udev rule from column " << at << ": " << line;
+    rules.push_back(rule);
+  }
+  return rules;
+}
+
+TEST(UdevRule, GivesTheServiceGroupTheAdapterTheGsUsbDriverOpens) {
+  const auto rules = parse_udev_rules(read(kUdevRule));
+  ASSERT_EQ(rules.size(), 1u);
+  const auto& r = rules[0];
+  char vid[8], pid[8];
+  std::snprintf(vid, sizeof vid, "%04x", stac::can::gs_usb::kVendorId);
+  std::snprintf(pid, sizeof pid, "%04x", stac::can::gs_usb::kProductId);
+  EXPECT_EQ(r.at("SUBSYSTEM=="), "usb");
+  EXPECT_EQ(r.at("ATTR{idVendor}=="), vid);
+  EXPECT_EQ(r.at("ATTR{idProduct}=="), pid);
+  EXPECT_EQ(r.at("GROUP="), parse_unit(read(kUnit)).at("Service.Group"));  // the service's group
+  EXPECT_EQ(r.at("MODE="), "0660");
+  // The parser can fail: a rule with a broken assignment is named.
+  EXPECT_NONFATAL_FAILURE(parse_udev_rules("SUBSYSTEM==\"usb\", GROUP stac\n"), "not a udev rule");
 }
 
 }  // namespace

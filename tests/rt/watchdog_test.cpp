@@ -58,5 +58,30 @@ TEST(Watchdog, UpdateCountsEachTransitionIntoAStallOnce) {
   static_assert(noexcept(w.beat(0, 0)));
 }
 
+TEST(Watchdog, LostInputStaysLostWhateverBeatsFollowCountsOneStallAndStartClearsIt) {
+  Watchdog w;
+  w.start({100 * kMs, 100 * kMs, 0, 0}, 0);
+  w.beat(0, 10 * kMs);
+  w.beat(1, 10 * kMs);
+  w.update(20 * kMs);
+  w.lose(0);
+  const InputStatus lost = w.status(0, 20 * kMs);  // within its timeout, but gone
+  EXPECT_EQ(lost.state, InputState::kLost);
+  EXPECT_TRUE(lost.seen);
+  EXPECT_EQ(lost.age_ns, 10 * kMs);
+  EXPECT_EQ(w.status(1, 20 * kMs).state, InputState::kOk);  // the others are untouched
+  w.beat(0, 30 * kMs);                                      // a late beat does not bring it back
+  EXPECT_EQ(w.status(0, 40 * kMs).state, InputState::kLost);
+  w.update(40 * kMs);
+  w.update(500 * kMs);  // lost and now also past its timeout: still the one transition
+  EXPECT_EQ(w.stalls(0), 1u);
+  EXPECT_STREQ(to_string(InputState::kLost), "lost");
+  w.lose(2);  // not configured: stays so
+  EXPECT_EQ(w.status(2, 40 * kMs).state, InputState::kNotConfigured);
+  w.start({100 * kMs, 100 * kMs, 0, 0}, 1000 * kMs);
+  EXPECT_EQ(w.status(0, 1010 * kMs).state, InputState::kOk);
+  static_assert(noexcept(w.lose(0)));
+}
+
 }  // namespace
 }  // namespace stac::rt

@@ -21,6 +21,7 @@
 
 #include "dds/dds_test_support.hpp"
 #include "dds/idl_types.hpp"
+#include "drivers/can/gs_usb_device.hpp"
 #include "shared_data.hpp"
 #include "stac_cli.hpp"
 
@@ -248,6 +249,12 @@ TEST(RunCli, ReplayedDriveGivesOneTrackedObjectsSamplePerScanAndHealthThatAgrees
             summary_number(out, R"((\d+) scans without a pose)"));
   EXPECT_LE(last.sensors.at("lidar"), 1u);  // ok, or stale if the last scan waited past the timeout
   EXPECT_EQ(last.sensors.at("can"), 3u);    // not configured
+  // CAN's drop causes are there, at 0 without CAN.
+  for (const char* cause :
+       {"can.not_mapped", "can.overflow", "can.fd", "can.malformed", "can.other_channel"}) {
+    ASSERT_TRUE(last.drops.count(cause)) << cause;
+    EXPECT_EQ(last.drops.at(cause), 0u) << cause;
+  }
   EXPECT_TRUE(last.sensors.count("ins"));
   for (std::size_t i = 1; i < healths.size(); ++i)
     EXPECT_GE(healths[i].deadline_misses, healths[i - 1].deadline_misses);
@@ -367,6 +374,68 @@ TEST(RunCli, WithoutSensorItStopsByItselfAndReportsTheLidarStalled) {
   EXPECT_NE(out.find("0 received (complete), 0 published"), std::string::npos) << out;
   EXPECT_NE(out.find("lidar stalled"), std::string::npos) << out;
   EXPECT_NE(out.find("ins not configured"), std::string::npos) << out;
+}
+
+// The shipped config with the CAN bus read (run.can: true) through `transport` on `interface`;
+// its relative paths made absolute, since the copy lives in a temp folder.
+std::filesystem::path can_config(const std::filesystem::path& dir, const std::string& transport,
+                                 const std::string& interface) {
+  const std::filesystem::path source(STAC_SOURCE_DIR);
+  std::ifstream in(source / "config/stac.yaml");
+  std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  const std::pair<std::string, std::string> edits[] = {
+      {"can", "true"},
+      {"transport", transport},
+      {"interface", interface},
+      {"dbc", (source / "config/can/vehicle.dbc").string()},
+      {"calibration", stac::testing::shared_data(kYaml).string()},
+      {"config_file", (source / "config/dds/loopback.xml").string()}};
+  for (const auto& [key, value] : edits) {
+    const std::regex line("\n  " + key + ":[^\n]*");
+    EXPECT_TRUE(std::regex_search(text, line)) << key;
+    text = std::regex_replace(text, line, "\n  " + key + ": " + value);
+  }
+  const auto file = dir / "stac.yaml";
+  std::ofstream(file) << text;
+  return file;
+}
+
+std::string run_briefly(const std::filesystem::path& config, int domain) {
+  (void)stac::testing::loopback_uri();
+  return "run --config " + config.string() + " --model none --ins none --bind 127.0.0.1 --port 0 " +
+         "--seconds 1 --domain " + std::to_string(domain);
+}
+
+// No adapter on this machine: start-up stops with the driver's message, exit code 1, before any
+// thread starts, as it does for a missing SocketCAN interface (below).
+TEST(RunCli, GsUsbWithoutAnAdapterStopsStartUpNamingTheAdapterLsusbAndUdev) {
+  STAC_REQUIRE_SHARED_DATA(kYaml);
+  const auto probe = can::GsUsbDevice::open({});
+  if (probe)
+    GTEST_SKIP() << "SKIPPED: a gs_usb adapter is attached; this test checks start-up without one";
+  const auto dir = fresh_dir("gs_usb_absent");
+  const auto r = stac::testing::stac(run_briefly(can_config(dir, "gs_usb", "can0"), 147));
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("stac: " + probe.error().message + "\n"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("gs_usb (1d50:606f): no gs_usb/candleLight adapter found"),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("lsusb -d 1d50:606f"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("udev rule granting access (deploy/60-stac-gs-usb.rules"),
+            std::string::npos)
+      << r.output;
+  EXPECT_EQ(r.output.find("reads socketcan only"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("Ctrl-C stops"), std::string::npos) << r.output;  // nothing started
+}
+
+TEST(RunCli, SocketCanWithoutItsInterfaceStopsStartUpNamingIt) {
+  STAC_REQUIRE_SHARED_DATA(kYaml);
+  const auto dir = fresh_dir("socketcan_absent");
+  const auto r = stac::testing::stac(run_briefly(can_config(dir, "socketcan", "stacnocan0"), 148));
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("stac: SocketCAN: no network interface 'stacnocan0'"), std::string::npos)
+      << r.output;
+  EXPECT_EQ(r.output.find("Ctrl-C stops"), std::string::npos) << r.output;
 }
 
 TEST(RunCli, BadOptionsAreNamed) {
