@@ -66,73 +66,153 @@ struct Aabb {
 };
 
 // A pause on a path: at the path's own time `at` (s, before any pause) it stands `wait` s.
-// It brakes into the stop and pulls away again at a bounded acceleration: the ramps take
-// `brake` and `pull` s (set by with_pauses), covering half that of the path's own time each.
 struct Pause {
   double at, wait;
-  double brake = 0.0, pull = 0.0;
 };
 
-// Where an actor is over time: the start of its braking, its stop, its start and the end of its
-// pulling away (s of the drive).
-struct PauseTimes {
-  double brake, stop, go, cruise;
-};
-
-// The drive's times of pause k of `pauses` (as sized by with_pauses).
-PauseTimes pause_times(const std::vector<Pause>& pauses, std::size_t k) {
-  double shift = 0.0;
-  for (std::size_t i = 0; i < k; ++i) shift += pauses[i].wait + 0.5 * (pauses[i].brake + pauses[i].pull);
-  const Pause& p = pauses[k];
-  const double brake = p.at - 0.5 * p.brake + shift;
-  return {brake, brake + p.brake, brake + p.brake + p.wait, brake + p.brake + p.wait + p.pull};
-}
-
-// `path` with the pauses (sorted, disjoint) inserted, each braked into and pulled away from at
-// `accel` m/s^2 (linear speed ramps, sampled every 0.05 s; shorter where pauses crowd each other
-// or the path's start): nothing on a path stops dead from speed. `pauses` gets the ramps' lengths.
-Trajectory with_pauses(const Trajectory& path, std::vector<Pause>& pauses, double accel) {
-  if (pauses.empty() || path.points.size() < 2) return path;
-  double free_from = path.points.front().t;  // own time where the previous pull-away ended
-  for (std::size_t k = 0; k < pauses.size(); ++k) {
-    Pause& p = pauses[k];
-    const V3 v = path.velocity_at(p.at);
-    const double ramp = std::hypot(v.x, v.y) / accel;
-    p.brake = std::clamp(std::min(ramp, 2.0 * (p.at - free_from)), 0.0, ramp);
-    p.pull = ramp;
-    if (k + 1 < pauses.size()) p.pull = std::clamp(pauses[k + 1].at - p.at, 0.0, ramp);
-    free_from = p.at + 0.5 * p.pull;
-  }
-  Trajectory out;
-  out.fixed_yaw = path.fixed_yaw;
-  auto ramp = [&](double own0, double t0, double duration, bool braking) {
-    const int n = static_cast<int>(std::ceil(duration / 0.05));
-    for (int i = 1; i <= n; ++i) {
-      const double u = duration * i / n;
-      const double own = braking ? own0 + u - u * u / (2 * duration) : own0 + u * u / (2 * duration);
-      const Pose q = path.pose_at(own);
-      out.points.push_back({q.x, q.y, t0 + u});
+// A path as driven: the trajectory, the path's own time at each of its waypoints, and per pause
+// (in order) the drive's times when it comes to a stand and when it moves off again.
+struct TimedPath {
+  Trajectory path;
+  std::vector<double> own;
+  std::vector<std::pair<double, double>> stands;
+  // The path's own time at drive time t.
+  double own_at(double t) const {
+    const auto& p = path.points;
+    if (p.empty()) return t;
+    if (t <= p.front().t) return own.front();
+    for (std::size_t i = 1; i < p.size(); ++i) {
+      if (t <= p[i].t) {
+        const double dt = p[i].t - p[i - 1].t;
+        return dt <= 0 ? own[i] : own[i - 1] + (own[i] - own[i - 1]) * (t - p[i - 1].t) / dt;
+      }
     }
-  };
+    return own.back() + (t - p.back().t);
+  }
+};
+
+// `path` with the pauses (sorted, disjoint) inserted, then driven with its speed changing at
+// most at `accel` m/s^2: every stop is braked into and pulled away from, a stop soon after the
+// start or after another is reached more slowly (the speed at each waypoint is bounded by a
+// backward and a forward pass, then each straight piece between waypoints is driven as
+// accelerate - cruise - brake, sampled every 0.05 s while the speed changes). Nothing on a path
+// stops dead from speed; a feasible path keeps its timing.
+TimedPath with_pauses(const Trajectory& path, const std::vector<Pause>& pauses, double accel) {
+  TimedPath out;
+  out.path.fixed_yaw = path.fixed_yaw;
+  if (path.points.size() < 2) {
+    out.path = path;
+    for (const auto& w : path.points) out.own.push_back(w.t);
+    return out;
+  }
+  // 1. The pauses as instant stops (x, y, t; own time).
+  std::vector<Trajectory::Waypoint> in;
+  std::vector<double> own;
   double shift = 0.0;
   std::size_t k = 0;
   for (const Trajectory::Waypoint& w : path.points) {
-    while (k < pauses.size() && pauses[k].at - 0.5 * pauses[k].brake < w.t) {
-      const Pause& p = pauses[k];
-      const double from = p.at - 0.5 * p.brake;
-      const Pose q = path.pose_at(from);
-      if (from > path.points.front().t) out.points.push_back({q.x, q.y, from + shift});
-      ramp(from, from + shift, p.brake, true);
-      const Pose stop = path.pose_at(p.at);
-      const double go = from + shift + p.brake + p.wait;
-      out.points.push_back({stop.x, stop.y, go});
-      ramp(p.at, go, p.pull, false);
-      shift += p.wait + 0.5 * (p.brake + p.pull);
+    while (k < pauses.size() && pauses[k].at < w.t) {
+      const Pose p = path.pose_at(pauses[k].at);
+      if (pauses[k].at > path.points.front().t) {
+        in.push_back({p.x, p.y, pauses[k].at + shift});
+        own.push_back(pauses[k].at);
+      }
+      shift += pauses[k].wait;
+      in.push_back({p.x, p.y, pauses[k].at + shift});
+      own.push_back(pauses[k].at);
       ++k;
     }
-    // Waypoints the ramps passed are in them.
-    if (k > 0 && w.t <= pauses[k - 1].at + 0.5 * pauses[k - 1].pull) continue;
-    out.points.push_back({w.x, w.y, w.t + shift});
+    in.push_back({w.x, w.y, w.t + shift});
+    own.push_back(w.t);
+  }
+  // (A waypoint at the previous one's place and time adds nothing: dropped.)
+  std::size_t kept = 1;
+  for (std::size_t i = 1; i < in.size(); ++i) {
+    const auto& q = in[kept - 1];
+    if (in[i].t - q.t < 1e-9 && std::hypot(in[i].x - q.x, in[i].y - q.y) < 1e-9) continue;
+    in[kept] = in[i];
+    own[kept++] = own[i];
+  }
+  in.resize(kept);
+  own.resize(kept);
+  if (kept < 2) {
+    out.path.points = in;
+    out.own = own;
+    return out;
+  }
+  // 2. Speeds at the waypoints: 0 next to a stand, else the lower of the two pieces'; then
+  // bounded by what braking (backward) and accelerating (forward) over each piece allow.
+  const std::size_t n = in.size();
+  std::vector<double> len(n - 1), speed(n - 1), u(n);
+  std::vector<bool> stand(n - 1);
+  for (std::size_t i = 0; i + 1 < n; ++i) {
+    len[i] = std::hypot(in[i + 1].x - in[i].x, in[i + 1].y - in[i].y);
+    const double dt = in[i + 1].t - in[i].t;
+    stand[i] = len[i] < 1e-9;
+    speed[i] = stand[i] || dt <= 0 ? 0.0 : len[i] / dt;
+  }
+  for (std::size_t j = 0; j < n; ++j) {
+    const bool left = j > 0, right = j + 1 < n;
+    if ((left && stand[j - 1]) || (right && stand[j])) {
+      u[j] = 0.0;
+    } else {
+      u[j] = std::min(left ? speed[j - 1] : speed[j], right ? speed[j] : speed[j - 1]);
+    }
+  }
+  for (std::size_t i = n - 1; i-- > 0;) {
+    if (!stand[i]) u[i] = std::min(u[i], std::sqrt(u[i + 1] * u[i + 1] + 2 * accel * len[i]));
+  }
+  for (std::size_t i = 0; i + 1 < n; ++i) {
+    if (!stand[i]) u[i + 1] = std::min(u[i + 1], std::sqrt(u[i] * u[i] + 2 * accel * len[i]));
+  }
+  // 3. Each piece driven: a stand keeps its duration; a moving piece accelerates from u[i],
+  // cruises at most at its own speed and brakes to u[i + 1].
+  double t = in.front().t;
+  out.path.points.push_back(in.front());
+  out.own.push_back(own.front());
+  auto emit = [&](std::size_t i, double d, double at) {
+    const double f = len[i] > 0 ? d / len[i] : 1.0;
+    out.path.points.push_back({in[i].x + (in[i + 1].x - in[i].x) * f,
+                               in[i].y + (in[i + 1].y - in[i].y) * f, at});
+    out.own.push_back(own[i] + (own[i + 1] - own[i]) * f);
+  };
+  for (std::size_t i = 0; i + 1 < n; ++i) {
+    if (stand[i]) {
+      const double dt = in[i + 1].t - in[i].t;
+      if (dt <= 0) continue;
+      out.stands.push_back({t, t + dt});
+      t += dt;
+      out.path.points.push_back({in[i + 1].x, in[i + 1].y, t});
+      out.own.push_back(own[i + 1]);
+      continue;
+    }
+    const double u0 = u[i], u1 = u[i + 1], v = speed[i];
+    if (v <= 0) {  // no time to cover it (not made by the builders): kept as it is
+      out.path.points.push_back({in[i + 1].x, in[i + 1].y, t});
+      out.own.push_back(own[i + 1]);
+      continue;
+    }
+    const double peak = std::min(v, std::sqrt(0.5 * (2 * accel * len[i] + u0 * u0 + u1 * u1)));
+    const double d_up = (peak * peak - u0 * u0) / (2 * accel), d_down = (peak * peak - u1 * u1) / (2 * accel);
+    // (Phases shorter than a microsecond are rounding: none.)
+    const double t_up = peak - u0 > 1e-6 ? (peak - u0) / accel : 0.0;
+    const double t_down = peak - u1 > 1e-6 ? (peak - u1) / accel : 0.0;
+    const double d_cruise = std::max(0.0, len[i] - d_up - d_down);
+    const int n_up = static_cast<int>(std::ceil(t_up / 0.05)), n_down = static_cast<int>(std::ceil(t_down / 0.05));
+    for (int q = 1; q <= n_up; ++q) {
+      const double tau = t_up * q / n_up;
+      emit(i, u0 * tau + 0.5 * accel * tau * tau, t + tau);
+    }
+    t += t_up;
+    if (d_cruise > 1e-6) {  // (shorter: rounding)
+      t += d_cruise / peak;
+      emit(i, d_up + d_cruise, t);
+    }
+    for (int q = 1; q <= n_down; ++q) {
+      const double tau = t_down * q / n_down;
+      emit(i, std::min(len[i], d_up + d_cruise + peak * tau - 0.5 * accel * tau * tau), t + tau);
+    }
+    t += t_down;
   }
   return out;
 }
@@ -171,8 +251,10 @@ class Builder {
     const bool moving = original.points.size() > 1;
     std::vector<Pause> pauses = std::move(stops_);
     stops_.clear();
+    const double accel = ramp_accel(a.cls);
     for (int attempt = 0; attempt < 200; ++attempt) {
-      a.path = with_pauses(original, pauses, ramp_accel(a.cls));
+      const TimedPath timed = with_pauses(original, pauses, accel);
+      a.path = timed.path;
       std::vector<Footprint> fp(samples());
       for (std::size_t k = 0; k < fp.size(); ++k) {
         fp[k] = footprint_at(a.path, a.size.x + 2 * kClearLong, a.size.y + 2 * kClearSide,
@@ -183,10 +265,11 @@ class Builder {
       if (!moving || tc <= 0.0) break;
       // Is the conflict while braking for or standing at a pause, or after one?
       int during = -1, before = -1;
-      for (std::size_t p = 0; p < pauses.size(); ++p) {
-        const PauseTimes pt = pause_times(pauses, p);
-        if (tc < pt.brake) break;
-        if (tc <= pt.go) {
+      for (std::size_t p = 0; p < pauses.size() && p < timed.stands.size(); ++p) {
+        const V3 v = original.velocity_at(pauses[p].at);
+        const double braking = std::hypot(v.x, v.y) / accel;
+        if (tc < timed.stands[p].first - braking) break;
+        if (tc <= timed.stands[p].second) {
           during = static_cast<int>(p);
           break;
         }
@@ -201,13 +284,7 @@ class Builder {
         }
         continue;
       }
-      // The path's own time at the conflict: while pulling away, still at the last stop.
-      double own = tc;
-      if (before >= 0) {
-        const PauseTimes pt = pause_times(pauses, static_cast<std::size_t>(before));
-        const Pause& p = pauses[static_cast<std::size_t>(before)];
-        own = tc < pt.cruise ? p.at : p.at + 0.5 * p.pull + (tc - pt.cruise);
-      }
+      const double own = timed.own_at(tc);  // the path's own time at the conflict
       if (before >= 0 && own - pauses[static_cast<std::size_t>(before)].at < 2.0) {
         Pause& p = pauses[static_cast<std::size_t>(before)];  // resumed too early: wait longer
         p.wait = std::max(1.0, 2.0 * p.wait);
@@ -600,8 +677,7 @@ rt::Result<Scenario> make_scenario(const std::string& name, std::uint64_t seed, 
     const double t_stop = (stop_x + 20) / v;
     ego.points.push_back({-20 + v * (duration + 5), -kInner, duration + 5});
     if (t_stop < duration) {  // braked into at a car's rate, 3 s standing
-      std::vector<Pause> stop = {{t_stop, 3.0}};
-      ego = with_pauses(ego, stop, ramp_accel(ObjectClass::kCar));
+      ego = with_pauses(ego, {{t_stop, 3.0}}, ramp_accel(ObjectClass::kCar)).path;
     }
     b.set_ego(ego);
     b.street_furniture(-80, x1, g);
