@@ -429,6 +429,40 @@ TEST(Tracker, PeopleAndWholeCarsAreNeverJoined) {
   EXPECT_EQ(tracker.counters().absorbed_detections, 0u);
 }
 
+// A 9 m truck seen as its cab and its cargo box (both tall, the segmenter clips them at 2.5 m)
+// with road between them: one track, as absorb_tall_length_m allows; the same two pieces as
+// low as a van's (two vans queueing, union 9 m > absorb_max_length_m) stay two tracks, and so
+// do the truck's pieces with absorb_tall_height_m 0.
+TEST(Tracker, TallPiecesOfATruckMakeOneTrackUpToTheTallLength) {
+  struct Case {
+    double height, tall_height;
+    std::size_t tracks;
+  };
+  for (const Case& k : {Case{2.3, 2.1, 1}, Case{1.9, 2.1, 2}, Case{2.3, 0.0, 2}}) {
+    TrackerConfig c;
+    c.absorb_tall_height_m = k.tall_height;
+    Tracker tracker(c);
+    TrackerOutput out(c.max_tracks);
+    for (int s = 0; s < 5; ++s)
+      tracker.update(s * kScanNs, std::vector<Detection>{box(30, 0, 6.0, 2.4, k.height, 0, 0)}, out);
+    for (int s = 5; s < 10; ++s) {
+      tracker.update(s * kScanNs,
+                     std::vector<Detection>{box(30, 0, 6.0, 2.4, k.height, 0, 0),
+                                            box(34.4, 0, 1.8, 2.4, k.height, 0, 1)},
+                     out);
+      if (k.tracks == 1) {
+        ASSERT_EQ(out.tracks.size(), 1u) << "scan " << s;
+      }
+    }
+    EXPECT_EQ(out.tracks.size(), k.tracks) << "height " << k.height << " tall " << k.tall_height;
+    if (k.tracks == 1) {
+      EXPECT_GE(tracker.counters().absorbed_detections, 1u);
+      // Longer than either piece: the union 27.0 .. 35.3 m (8.3 m) enters the smoothed box.
+      EXPECT_GT(out.tracks[0].length, 6.5f);
+    }
+  }
+}
+
 TEST(Tracker, AbsorbingIsOffWithAZeroGap) {
   TrackerConfig c;
   c.absorb_gap_m = 0;
