@@ -29,11 +29,12 @@ struct Scenario {
 inline constexpr double kEgoLength = 4.6, kEgoWidth = 1.9;
 
 // Traffic is physically consistent with the ego: when a scenario is built, every car,
-// pedestrian and bicyclist is checked every 0.05 s of the drive against the ego's footprint and,
-// for cars, against every other road user (pedestrians and bicyclists against every car), with
-// 0.3 m of clearance along and 0.05 m across. An actor in the way waits (pauses on its path,
-// repeatedly, as long as needed: it yields, queues behind the ego, lets it pass); one that cannot
-// be cleared by waiting (standing in the ego's way, started inside another) is left out.
+// pedestrian and bicyclist is checked every 0.05 s of the drive against the ego's footprint and
+// against every other road user accepted before it, with 0.3 m of clearance along and 0.05 m
+// across. An actor in the way waits (pauses on its path, repeatedly, as long as needed: it
+// yields, queues behind the ego, lets it pass); one that cannot be cleared by waiting (standing
+// in the ego's way, started inside another) is left out. Every path is driven with bounded
+// acceleration (cars 2.5 m/s^2, bicyclists 1.5, pedestrians 1.0): stops are braked into.
 
 const std::vector<std::string>& scenario_names();
 rt::Result<Scenario> make_scenario(const std::string& name, std::uint64_t seed, double duration_s);
