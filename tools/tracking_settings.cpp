@@ -26,6 +26,8 @@ rt::Result<tracking::TrackerConfig> load_tracking_config(const std::filesystem::
   STAC_GET(double, "gate_mahalanobis_sq", c.gate_mahalanobis_sq);
   STAC_GET(double, "gate_distance_m", c.gate_distance_m);
   STAC_GET(std::uint32_t, "confirm_hits", c.confirm_hits);
+  STAC_GET(std::uint32_t, "confirm_large_points", c.confirm_large_points);
+  STAC_GET(std::uint32_t, "confirm_large_hits", c.confirm_large_hits);
   STAC_GET(std::uint32_t, "tentative_max_misses", c.tentative_max_misses);
   STAC_GET(std::uint32_t, "max_coast_scans", c.max_coast_scans);
   STAC_GET(double, "max_position_std_m", c.max_position_std_m);

@@ -283,7 +283,9 @@ void Tracker::correct(Slot& s, const Detection& d, std::int64_t stamp_ns) noexce
   t.segment = static_cast<std::int32_t>(d.segment);
   ++t.hits;
   t.misses = 0;
-  if (t.state == TrackState::kCoasting || t.hits >= config_.confirm_hits)
+  if (t.state == TrackState::kCoasting || t.hits >= config_.confirm_hits ||
+      (config_.confirm_large_points > 0 && d.points >= config_.confirm_large_points &&
+       t.hits >= config_.confirm_large_hits))
     t.state = TrackState::kConfirmed;
   t.features.add_segment(Eigen::Vector3f(xy.x(), xy.y(), d.centroid.z()), stamp_ns,
                          config_.min_heading_speed_mps);

@@ -47,6 +47,8 @@ struct TrackerConfig {
   double gate_distance_m = 3.0;       // Euclidean x,y distance to the prediction (m)
   // Life cycle.
   std::uint32_t confirm_hits = 3;          // hits that make a tentative track confirmed
+  std::uint32_t confirm_large_points = 50;  // a hit with a segment this large (points; 0: off)...
+  std::uint32_t confirm_large_hits = 2;    // ...confirms after this many hits
   std::uint32_t tentative_max_misses = 1;  // consecutive misses that delete a tentative track
   std::uint32_t max_coast_scans = 20;      // consecutive misses that delete a coasting track
   double max_position_std_m = 1.5;         // sqrt(max eigenvalue of the x,y covariance) (m)

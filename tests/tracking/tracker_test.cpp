@@ -72,7 +72,8 @@ TEST(Tracker, ConstantVelocityTargetsKeepStableIdsAndVelocities) {
       ASSERT_NE(tr, nullptr) << "target " << i << " scan " << k;
       if (ids[i] == 0) ids[i] = tr->id;
       EXPECT_EQ(tr->id, ids[i]) << "target " << i << " changed id at scan " << k;
-      if (k >= 2)
+      // 100-point detections: confirmed at the second hit (confirm_large_points).
+      if (k >= 1)
         EXPECT_EQ(tr->state, TrackState::kConfirmed);
       else
         EXPECT_EQ(tr->state, TrackState::kTentative);
@@ -224,6 +225,29 @@ TEST(Tracker, CoastingTooLongDeletesTheTrack) {
   EXPECT_EQ(tracker.counters().deleted_coasting, 1u);
 }
 
+// A track is confirmed at its confirm_hits-th hit, or at its confirm_large_hits-th when that
+// hit's segment has at least confirm_large_points points (near, well-seen objects).
+TEST(Tracker, LargeSegmentsConfirmAfterFewerHits) {
+  struct Case {
+    std::uint32_t points, large_points;
+    int confirmed_at;  // scan index of the first confirmed state
+  };
+  for (const Case& k : {Case{60, 50, 1}, Case{49, 50, 2}, Case{500, 0, 2}}) {
+    TrackerConfig c;
+    c.confirm_large_points = k.large_points;
+    Tracker tracker(c);
+    TrackerOutput out(c.max_tracks);
+    for (int s = 0; s < 4; ++s) {
+      Detection d = det(10 + 0.1 * s, 5, 0);
+      d.points = k.points;
+      tracker.update(s * kScanNs, std::vector<Detection>{d}, out);
+      ASSERT_EQ(out.tracks.size(), 1u);
+      EXPECT_EQ(out.tracks[0].state, s >= k.confirmed_at ? TrackState::kConfirmed : TrackState::kTentative)
+          << k.points << " points, confirm_large_points " << k.large_points << ", scan " << s;
+    }
+  }
+}
+
 TEST(Tracker, ClutterSpawnsTentativeTracksThatNeverConfirm) {
   Tracker tracker(TrackerConfig{});
   TrackerOutput out(tracker.config().max_tracks);
@@ -233,7 +257,10 @@ TEST(Tracker, ClutterSpawnsTentativeTracksThatNeverConfirm) {
   std::uint64_t max_id = 0;
   for (int k = 0; k < 200; ++k) {
     std::vector<Detection> dets;
-    for (std::uint32_t i = 0; i < 10; ++i) dets.push_back(det(where(rng), where(rng), i));
+    for (std::uint32_t i = 0; i < 10; ++i) {
+      dets.push_back(det(where(rng), where(rng), i));
+      dets.back().points = 12;  // noise blobs: below confirm_large_points
+    }
     tracker.update(k * kScanNs, dets, out);
     for (const Track& t : out.tracks) {
       EXPECT_EQ(t.state, TrackState::kTentative) << "clutter confirmed at scan " << k;
