@@ -70,12 +70,16 @@ bool tall(const TrackerConfig& c, float height) {
   return c.absorb_tall_height_m > 0 && height >= c.absorb_tall_height_m;
 }
 
-// A box that fits what one fragmented object may span (absorb_max_length_m x _width_m, or
-// absorb_tall_length_m long when `tall_object`).
+// The longest box one fragmented object may span: absorb_max_length_m, or absorb_tall_length_m
+// (if longer) for a tall one.
+double longest_object(const TrackerConfig& c, bool tall_object) {
+  return tall_object ? std::max(c.absorb_max_length_m, c.absorb_tall_length_m) : c.absorb_max_length_m;
+}
+
+// A box that fits what one fragmented object may span (longest_object x absorb_max_width_m).
 bool fits_one_object(const TrackerConfig& c, float length, float width, bool tall_object) {
-  const double max_length = tall_object ? std::max(c.absorb_max_length_m, c.absorb_tall_length_m)
-                                        : c.absorb_max_length_m;
-  return std::max(length, width) <= max_length && std::min(length, width) <= c.absorb_max_width_m;
+  return std::max(length, width) <= longest_object(c, tall_object) &&
+         std::min(length, width) <= c.absorb_max_width_m;
 }
 
 // Which of two tracks is older: more hits, then the lower id (the merges keep the older).
@@ -338,9 +342,7 @@ void Tracker::absorb_fragments(std::span<const Detection> detections) noexcept {
   }
   std::fill_n(merged_track_.begin(), live_.size(), std::uint8_t{0});
   if (config_.absorb_gap_m <= 0) return;
-  const auto max_len = static_cast<float>(
-      config_.absorb_tall_height_m > 0 ? std::max(config_.absorb_max_length_m, config_.absorb_tall_length_m)
-                                       : config_.absorb_max_length_m);
+  const auto max_len = static_cast<float>(longest_object(config_, config_.absorb_tall_height_m > 0));
   const auto max_wid = static_cast<float>(config_.absorb_max_width_m);
   const auto max_gap = static_cast<float>(config_.absorb_gap_m);
   const float reach_sq = max_len * max_len + max_wid * max_wid;
