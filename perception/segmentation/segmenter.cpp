@@ -398,6 +398,9 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
         last = iy << 16 | ix;
         const std::size_t d = s.dense(ix, iy);
         if (!State::test(s.seen, d)) continue;  // nothing seen here: keep walking
+        // Not open: only ground seen, or already in a component. Only ground may be walked
+        // over (overhangs on); else the walk ends here without the cell's slot (a cache miss).
+        if (overhang <= 0 && !State::test(s.open, d)) break;
         const std::uint32_t other = s.slot_of[d];
         if (s.label[other] == kNone && s.obstacle_count[other] == 0) {
           // Only ground seen here: with overhangs on, walk on (checked at the far end).
