@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "perception/descriptors/fast_math.hpp"
 #include "perception/descriptors/hog.hpp"
 
 namespace stac::descriptors {
@@ -329,8 +330,8 @@ void DescriptorPipeline::compute(const SegmentView& segment, Descriptors& out) n
     float* img = out.values.data() + sp[1 + k].offset;
     const float half = static_cast<float>(s.rows) / (2.0f * s.px_per_m);
     for (std::size_t i = 0; i < n; ++i) {
-      const float col = std::floor(std::sqrt(st.x[i] * st.x[i] + st.y[i] * st.y[i]) * s.px_per_m);
-      const float row = std::floor((half - st.z[i]) * s.px_per_m);
+      const float col = floor_exact(std::sqrt(st.x[i] * st.x[i] + st.y[i] * st.y[i]) * s.px_per_m);
+      const float row = floor_exact((half - st.z[i]) * s.px_per_m);
       if (col < 0 || col >= static_cast<float>(s.cols) || row < 0 ||
           row >= static_cast<float>(s.rows))
         continue;
@@ -371,8 +372,8 @@ void DescriptorPipeline::compute(const SegmentView& segment, Descriptors& out) n
     // smoothing's and the gradient's 1 px each) is exactly zero, so only that part is worked on.
     Rect occupied{w, h, -1, -1};  // x0, y0, x1, y1 (inclusive); empty when x1 < x0
     for (std::size_t i = 0; i < n; ++i) {
-      const float col = std::floor(us[i] * ppm - min_u + pad_w);
-      const float row = std::floor(max_v - vs[i] * ppm + pad_h);
+      const float col = floor_exact(us[i] * ppm - min_u + pad_w);
+      const float row = floor_exact(max_v - vs[i] * ppm + pad_h);
       if (!(col >= 0 && col < static_cast<float>(w) && row >= 0 && row < static_cast<float>(h))) {
         ++out.pixels_cropped;
         st.pixel[i] = -1;

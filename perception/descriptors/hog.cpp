@@ -4,10 +4,10 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "perception/descriptors/fast_math.hpp"
+
 namespace stac::descriptors {
 namespace {
-
-constexpr float kPi = 3.14159265358979323846f;
 
 // Reflect-101 index (OpenCV BORDER_REFLECT_101) for one step outside [0, n).
 int reflect(int i, int n) noexcept {
@@ -50,10 +50,9 @@ void GradientCache::reset(const float* pixels, int width, int height, int x0, in
         g = Gradient{{0.0f, 0.0f}, {0, 0}};
         continue;
       }
-      float angle = std::atan2(dy, dx);  // (-pi, pi]
-      if (angle < 0) angle += 2 * kPi;   // [0, 2 pi) as cv::cartToPolar
+      const float angle = angle_of(dy, dx);  // [0, 2 pi)
       const float position = angle * (bins / kPi) - 0.5f;
-      int bin = static_cast<int>(std::floor(position));
+      int bin = static_cast<int>(floor_exact(position));
       const float fraction = position - static_cast<float>(bin);
       // position is in [-0.5, 2 bins): one or two wraps at most, no integer division.
       if (bin < 0) bin += bins_;
@@ -84,7 +83,7 @@ HogWindow::HogWindow(const HogShape& shape) : shape_(shape) {
       // Bilinear between cell centres; shares of cells outside the block are dropped.
       const float cx = (static_cast<float>(x) + 0.5f) / static_cast<float>(shape.cell) - 0.5f;
       const float cy = (static_cast<float>(y) + 0.5f) / static_cast<float>(shape.cell) - 0.5f;
-      const int x0 = static_cast<int>(std::floor(cx)), y0 = static_cast<int>(std::floor(cy));
+      const int x0 = static_cast<int>(floor_exact(cx)), y0 = static_cast<int>(floor_exact(cy));
       const float fx = cx - static_cast<float>(x0), fy = cy - static_cast<float>(y0);
       Share& s = shares_[static_cast<std::size_t>(y * shape.width + x)];
       int n = 0;
