@@ -107,6 +107,7 @@ struct Segmenter::State {
         ground(std::size_t{mp} * mp, 0.0f),
         ground_cells(std::size_t{mp} * mp),
         point_slot(c.max_points),
+        point_z(c.max_points),
         cell_id(c.max_occupied_cells),
         coarse_id(c.max_occupied_cells),
         z_min(c.max_occupied_cells),
@@ -162,6 +163,7 @@ struct Segmenter::State {
   std::vector<Neighbour> window;                // the coarse cells within ground_radius_m
   rt::FixedVector<std::uint32_t> ground_cells;  // coarse cells hit this scan
   rt::FixedVector<std::uint32_t> point_slot;    // per point: its slot, or kNone
+  rt::FixedVector<float> point_z;  // per binned point: its z, for the passes after the first
   // Per slot (occupied fine cell).
   rt::FixedVector<std::uint32_t> cell_id;  // iy << 16 | ix
   rt::FixedVector<std::uint32_t> coarse_id;
@@ -221,6 +223,7 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
   s.ground_cells.clear();
   s.cell_id.clear();
   (void)s.point_slot.resize(count);
+  (void)s.point_z.resize(count);
   std::size_t slots = 0;
   const std::size_t max_slots = s.cell_id.capacity();
 
@@ -250,6 +253,7 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
     const auto ix = std::min(static_cast<std::uint32_t>((x + range) * inv_cell), s.n - 1);
     const auto iy = std::min(static_cast<std::uint32_t>((y + range) * inv_cell), s.n - 1);
     s.point_slot[i] = static_cast<std::uint32_t>(s.dense(ix, iy));  // < 2^32: n <= 20000
+    s.point_z[i] = z;  // the later passes read 4 bytes a point instead of the whole record
   }
   constexpr std::size_t kAhead = 16;
   for (std::size_t i = 0; i < count; ++i) {
@@ -258,8 +262,7 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
     }
     const std::uint32_t d = s.point_slot[i];
     if (d == kNone) continue;
-    float x, y, z;
-    points.read(i, x, y, z);
+    const float z = s.point_z[i];
     std::uint32_t& cell = s.slot_of[d];
     if (cell != kNone) {
       s.z_min[cell] = std::min(s.z_min[cell], z);
@@ -270,6 +273,8 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
         continue;
       }
       cell = static_cast<std::uint32_t>(slots++);
+      float x, y, z_again;
+      points.read(i, x, y, z_again);
       const auto ix = std::min(static_cast<std::uint32_t>((x + range) * inv_cell), s.n - 1);
       const auto iy = std::min(static_cast<std::uint32_t>((y + range) * inv_cell), s.n - 1);
       s.cell_id[cell] = iy << 16 | ix;
@@ -326,8 +331,7 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
   for (std::size_t i = 0; i < count; ++i) {
     const std::uint32_t slot = s.point_slot[i];
     if (slot == kNone) continue;
-    float x, y, z;
-    points.read(i, x, y, z);
+    const float z = s.point_z[i];
     const float h = z - s.ground_at[slot];
     if (h <= clearance) {
       ++k.ground_points;
