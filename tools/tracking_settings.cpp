@@ -43,6 +43,8 @@ rt::Result<tracking::TrackerConfig> load_tracking_config(const std::filesystem::
   STAC_GET(double, "absorb_keep_height_m", c.absorb_keep_height_m);
   STAC_GET(double, "absorb_keep_wide_m", c.absorb_keep_wide_m);
   STAC_GET(double, "absorb_keep_wide_height_m", c.absorb_keep_wide_height_m);
+  STAC_GET(double, "absorb_strip_length_m", c.absorb_strip_length_m);
+  STAC_GET(double, "absorb_strip_width_m", c.absorb_strip_width_m);
   STAC_GET(double, "absorb_narrow_gap_m", c.absorb_narrow_gap_m);
   STAC_GET(double, "overlap_margin_m", c.overlap_margin_m);
   STAC_GET(double, "end_on_length_m", c.end_on_length_m);

@@ -89,8 +89,12 @@ bool older(const Track& a, const Track& b) {
 
 // People and bicyclists: never joined to other objects (TrackerConfig::absorb_keep_*).
 bool narrow_and_tall(const TrackerConfig& c, float length, float width, float height) {
-  const float wide = std::min(length, width);
-  return std::max(length, width) <= c.absorb_keep_length_m &&
+  const float wide = std::min(length, width), longest = std::max(length, width);
+  if (c.absorb_strip_width_m > 0 && wide <= c.absorb_strip_width_m &&
+      longest >= c.absorb_strip_length_m) {
+    return false;  // a flat strip: a car's side or a wall seen edge-on, not a person
+  }
+  return longest <= c.absorb_keep_length_m &&
          ((wide <= c.absorb_keep_width_m && height >= c.absorb_keep_height_m) ||
           (wide <= c.absorb_keep_wide_m && height >= c.absorb_keep_wide_height_m));
 }
@@ -216,6 +220,8 @@ Tracker::Tracker(const TrackerConfig& c)
   check(c.absorb_narrow_gap_m >= 0, "absorb_narrow_gap_m must be >= 0");
   check(c.absorb_keep_wide_m >= 0 && c.absorb_keep_wide_height_m >= 0,
         "absorb_keep_wide_m and absorb_keep_wide_height_m must be >= 0");
+  check(c.absorb_strip_length_m >= 0 && c.absorb_strip_width_m >= 0,
+        "absorb_strip_length_m and absorb_strip_width_m must be >= 0");
   check(c.overlap_margin_m <= 5, "overlap_margin_m must be at most 5 (< 0: off)");
   check(c.absorb_velocity_mps >= 0 && c.absorb_keep_length_m >= 0 && c.absorb_keep_width_m >= 0 &&
             c.absorb_keep_height_m >= 0,

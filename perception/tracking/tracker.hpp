@@ -64,7 +64,9 @@ struct TrackerConfig {
   // absorb_keep_height_m tall, or absorb_keep_wide_m wide and at least absorb_keep_wide_height_m
   // tall: people pushing a bike, taller than a sedan's pieces) are never joined to another object;
   // they take only low pieces (under absorb_keep_height_m: legs, a wheel) at most
-  // absorb_narrow_gap_m away and stay within those bounds. absorb_gap_m 0: off.
+  // absorb_narrow_gap_m away and stay within those bounds. absorb_gap_m 0: off. A box at least
+  // absorb_strip_length_m long and at most absorb_strip_width_m wide is a flat surface (a car's
+  // side seen along its length, a wall), never a person (absorb_strip_width_m 0: off).
   // Tall pieces (both at least absorb_tall_height_m high: a truck's cargo box and cab, clipped
   // at the segmenter's max_height_m) may make a union up to absorb_tall_length_m long.
   double absorb_gap_m = 2.0;               // m, box to box
@@ -79,6 +81,8 @@ struct TrackerConfig {
   double absorb_narrow_gap_m = 0.3;        // m
   double absorb_keep_wide_m = 1.4;         // m
   double absorb_keep_wide_height_m = 1.6;  // m
+  double absorb_strip_length_m = 1.0;      // m
+  double absorb_strip_width_m = 0.1;       // m; 0: off
   // Overlapping tracks: a track whose position lies inside an older track's box grown by
   // overlap_margin_m (neither a person nor a bicyclist, as above, who take only low tracks
   // within absorb_narrow_gap_m) is the same object when both boxes fit in
