@@ -19,7 +19,13 @@ namespace stac::tools {
 
 rt::Result<ChildProcess> ChildProcess::start(const std::vector<std::string>& args,
                                              const std::filesystem::path& log) {
-  std::vector<std::string> words{"/proc/self/exe"};
+  return start_program("/proc/self/exe", args, log);
+}
+
+rt::Result<ChildProcess> ChildProcess::start_program(const std::filesystem::path& program,
+                                                     const std::vector<std::string>& args,
+                                                     const std::filesystem::path& log) {
+  std::vector<std::string> words{program.string()};
   words.insert(words.end(), args.begin(), args.end());
   std::vector<char*> argv;
   for (std::string& w : words) argv.push_back(w.data());
@@ -31,7 +37,11 @@ rt::Result<ChildProcess> ChildProcess::start(const std::vector<std::string>& arg
   pid_t pid = -1;
   const int rc = posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), environ);
   posix_spawn_file_actions_destroy(&fa);
-  if (rc != 0) return rt::make_error("starting stac " + args.front() + ": " + std::strerror(rc));
+  if (rc != 0) {
+    const std::string name = program == "/proc/self/exe" ? "stac" : program.string();
+    return rt::make_error("starting " + name + (args.empty() ? "" : " " + args.front()) + ": " +
+                          std::strerror(rc));
+  }
   return ChildProcess(pid, log);
 }
 

@@ -17,9 +17,13 @@ namespace stac::tools {
 
 class ChildProcess {
  public:
-  // Starts `stac args...`; an error when it cannot be spawned.
+  // Starts `stac args...` (this binary); an error when it cannot be spawned.
   static rt::Result<ChildProcess> start(const std::vector<std::string>& args,
                                         const std::filesystem::path& log);
+  // Starts `program args...` (tests: the stac binary from outside it).
+  static rt::Result<ChildProcess> start_program(const std::filesystem::path& program,
+                                                const std::vector<std::string>& args,
+                                                const std::filesystem::path& log);
   ChildProcess(ChildProcess&& other) noexcept;
   ChildProcess& operator=(ChildProcess&&) = delete;
   ChildProcess(const ChildProcess&) = delete;

@@ -2,18 +2,16 @@
 // and the INS as a TCP server on 127.0.0.1) -> `stac run` (Cyclone on config/dds/loopback.xml,
 // a domain of its own) -> DDS readers in this test.
 #include <arpa/inet.h>
-#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <netinet/in.h>
 #include <signal.h>
-#include <spawn.h>
 #include <sys/socket.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <regex>
 #include <sstream>
 #include <string>
@@ -24,8 +22,7 @@
 #include "drivers/can/gs_usb_device.hpp"
 #include "shared_data.hpp"
 #include "stac_cli.hpp"
-
-extern char** environ;
+#include "tools/child_process.hpp"
 
 namespace stac::tools {
 namespace {
@@ -53,52 +50,26 @@ std::uint16_t free_port(int type) {
   return ntohs(a.sin_port);
 }
 
-// `stac ARGS` in the background, its stdout and stderr into `log`.
+// `stac ARGS` in the background (tools::ChildProcess, as `stac demo` runs its children), its
+// stdout and stderr into `log`; killed and reaped if the test ends first.
 class Child {
  public:
-  Child(const std::string& args, const std::filesystem::path& log) : log_(log) {
-    std::vector<std::string> words{STAC_CLI};
+  Child(const std::string& args, const std::filesystem::path& log) {
+    std::vector<std::string> words;
     std::istringstream in(args);
     for (std::string w; in >> w;) words.push_back(w);
-    std::vector<char*> argv;
-    for (std::string& w : words) argv.push_back(w.data());
-    argv.push_back(nullptr);
-    posix_spawn_file_actions_t fa;
-    posix_spawn_file_actions_init(&fa);
-    posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    posix_spawn_file_actions_adddup2(&fa, 1, 2);
-    if (posix_spawn(&pid_, argv[0], &fa, nullptr, argv.data(), environ) != 0) pid_ = -1;
-    posix_spawn_file_actions_destroy(&fa);
+    auto child = tools::ChildProcess::start_program(STAC_CLI, words, log);
+    if (child) child_.emplace(std::move(*child));
   }
-  ~Child() {
-    if (pid_ > 0) {
-      kill(pid_, SIGKILL);
-      waitpid(pid_, nullptr, 0);
-    }
-  }
-  [[nodiscard]] bool started() const { return pid_ > 0; }
-  // Sends `sig` and waits: the exit code (-1 when it did not exit normally).
-  int stop(int sig) {
-    kill(pid_, sig);
-    int status = 0;
-    waitpid(pid_, &status, 0);
-    pid_ = -1;
-    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  }
-  int wait() {
-    int status = 0;
-    waitpid(pid_, &status, 0);
-    pid_ = -1;
-    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  }
-  [[nodiscard]] std::string output() const {
-    std::ifstream f(log_);
-    return {std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
-  }
+  [[nodiscard]] bool started() const { return child_.has_value(); }
+  // Sends `sig` and waits (60 s at most, then SIGKILL): the exit code, -1 when killed.
+  int stop(int sig) { return child_ ? child_->stop(sig, 60) : -1; }
+  // Waits for it to end (10 minutes at most): the exit code, -1 when it did not end.
+  int wait() { return child_ ? child_->wait_for(600).value_or(-1) : -1; }
+  [[nodiscard]] std::string output() const { return child_ ? child_->log() : ""; }
 
  private:
-  std::filesystem::path log_;
-  pid_t pid_ = -1;
+  std::optional<tools::ChildProcess> child_;
 };
 
 // A keep-all reader of one topic in this process.
