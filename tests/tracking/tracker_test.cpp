@@ -370,13 +370,17 @@ Detection box(double x, double y, double length, double width, double height, do
   return d;
 }
 
-// Five scans of `piece` alone (its track confirms), then five of `piece` and `fragment`.
-void piece_then_fragment(Tracker& tracker, TrackerOutput& out, const Detection& piece,
-                         const Detection& fragment) {
+// Five scans of `piece` alone (its track confirms), then five of `piece` and `fragment`. Returns
+// the ids of the tracks after the first five.
+std::vector<std::uint64_t> piece_then_fragment(Tracker& tracker, TrackerOutput& out,
+                                               const Detection& piece, const Detection& fragment) {
   for (int k = 0; k < 5; ++k) tracker.update(k * kScanNs, std::vector<Detection>{piece}, out);
+  std::vector<std::uint64_t> ids;
+  for (const Track& t : out.tracks) ids.push_back(t.id);
   for (int k = 5; k < 10; ++k) {
     tracker.update(k * kScanNs, std::vector<Detection>{piece, fragment}, out);
   }
+  return ids;
 }
 
 TEST(Tracker, MeasuresTheBoxCentreOrTheCentroidAsConfigured) {
@@ -399,9 +403,11 @@ TEST(Tracker, FragmentBesideAMatchedTrackJoinsItsMeasurement) {
   TrackerConfig c;
   Tracker tracker(c);
   TrackerOutput out(c.max_tracks);
-  piece_then_fragment(tracker, out, box(30.5, 0, 1.0, 1.8, 0.6, 0, 0),
-                      box(32.6, 0, 1.6, 1.8, 1.2, 0, 1));
+  const std::vector<std::uint64_t> before = piece_then_fragment(
+      tracker, out, box(30.5, 0, 1.0, 1.8, 0.6, 0, 0), box(32.6, 0, 1.6, 1.8, 1.2, 0, 1));
+  ASSERT_EQ(before.size(), 1u);
   ASSERT_EQ(out.tracks.size(), 1u);  // the cabin never spawned a track
+  EXPECT_EQ(out.tracks[0].id, before[0]);
   EXPECT_EQ(tracker.counters().absorbed_detections, 5u);
   EXPECT_EQ(tracker.counters().spawned, 1u);
   // The measurement is the union 30.0..33.4 m: the filter moves towards its centre 31.7 m.
