@@ -38,8 +38,7 @@ rt::Result<ChildProcess> ChildProcess::start_program(const std::filesystem::path
   const int rc = posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), environ);
   posix_spawn_file_actions_destroy(&fa);
   if (rc != 0) {
-    const std::string name = program == "/proc/self/exe" ? "stac" : program.string();
-    return rt::make_error("starting " + name + (args.empty() ? "" : " " + args.front()) + ": " +
+    return rt::make_error("starting stac" + (args.empty() ? "" : " " + args.front()) + ": " +
                           std::strerror(rc));
   }
   return ChildProcess(pid, log);

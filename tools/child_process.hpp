@@ -20,7 +20,8 @@ class ChildProcess {
   // Starts `stac args...` (this binary); an error when it cannot be spawned.
   static rt::Result<ChildProcess> start(const std::vector<std::string>& args,
                                         const std::filesystem::path& log);
-  // Starts `program args...` (tests: the stac binary from outside it).
+  // Starts `program args...`, where program is a stac binary named by its path (tests, which
+  // are not stac themselves).
   static rt::Result<ChildProcess> start_program(const std::filesystem::path& program,
                                                 const std::vector<std::string>& args,
                                                 const std::filesystem::path& log);
