@@ -274,6 +274,8 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
         continue;
       }
       cell = static_cast<std::uint32_t>(slots++);
+      // A new cell: its ix, iy and coarse cell from the point again (a cell's first point only;
+      // cheaper than keeping two more per-point arrays from the first pass).
       float x, y, z_again;
       points.read(i, x, y, z_again);
       const auto ix = std::min(static_cast<std::uint32_t>((x + range) * inv_cell), s.n - 1);
