@@ -440,7 +440,7 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
   // split a person; each person-sized group is a seed, all other groups one seed together (a car
   // cabin, a wall). A breadth-first fill from all seeds at once gives every cell its nearest
   // seed over 8-connected cells of the component; cells it does not reach (joined by a ray
-  // bridge) go to the seed whose cells' centre is nearest.
+  // bridge) go to the part whose reached cells' bounds are nearest.
   const float split_height = static_cast<float>(c.split_height_m);
   const auto person_cells = static_cast<std::uint32_t>(c.split_person_m / c.cell_m + 1e-9);
   auto split = [&](std::uint32_t comp) {
@@ -516,18 +516,51 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
         }
       }
     }
+    // The cells the fill reached first; the others (each once: after the reached ones in
+    // split_queue, which holds every cell of the component at most once) wait for the bounds.
+    const std::size_t reached = s.split_queue.size();
     for (const std::uint32_t slot : s.component_cells) {
+      if (s.part[slot] == kNone) {
+        (void)s.split_queue.push_back(slot);
+        continue;
+      }
+      const std::uint32_t id = s.cell_id[slot];
+      s.parts[s.part[slot]].add(id & 0xFFFFu, id >> 16, s.obstacle_count[slot]);
+    }
+    // A cell not 8-connected to any seed goes to the part whose reached cells' bounds are
+    // nearest, ties to the nearest seed centre. A person's part takes such a cell only within
+    // kPersonReach cells of its bounds when there is a shared part: a bicyclist passing a
+    // parked car shadows the car's side, and the pieces of the side left between the shadows,
+    // bridged to the rider's wheels along their rays, are nearer the rider than the car's
+    // cabin. The bounds are those of the reached cells, so the order of these cells does not
+    // matter.
+    constexpr std::uint64_t kPersonReach = 2;
+    const std::size_t parts_n = s.parts.size();
+    for (std::size_t q = reached; q < s.split_queue.size(); ++q) {
+      const std::uint32_t slot = s.split_queue[q];
       const std::uint32_t id = s.cell_id[slot];
       const std::uint32_t cx = id & 0xFFFFu, cy = id >> 16;
-      if (s.part[slot] == kNone) {  // not 8-connected to any seed
-        double best = std::numeric_limits<double>::infinity();
-        for (std::uint32_t i = 0; i < s.parts.size(); ++i) {
-          const Part& p = s.parts[i];
-          const double dx = p.seed_x / p.seed_cells - cx, dy = p.seed_y / p.seed_cells - cy;
-          if (dx * dx + dy * dy < best) best = dx * dx + dy * dy, s.part[slot] = i;
+      std::uint64_t best_box = std::numeric_limits<std::uint64_t>::max();
+      double best_centre = std::numeric_limits<double>::infinity();
+      std::uint32_t best = 0;
+      for (std::uint32_t i = 0; i < parts_n; ++i) {
+        const Part& p = s.parts[i];
+        const std::uint64_t gx = cx < p.x0 ? p.x0 - cx : (cx > p.x1 ? cx - p.x1 : 0);
+        const std::uint64_t gy = cy < p.y0 ? p.y0 - cy : (cy > p.y1 ? cy - p.y1 : 0);
+        const std::uint64_t box = gx * gx + gy * gy;  // an empty part: x0 = kNone, far
+        if (i != shared && shared != kNone && box > kPersonReach * kPersonReach) continue;
+        const double dx = p.seed_x / p.seed_cells - cx, dy = p.seed_y / p.seed_cells - cy;
+        const double centre = dx * dx + dy * dy;
+        if (box < best_box || (box == best_box && centre < best_centre)) {
+          best_box = box, best_centre = centre, best = i;
         }
       }
-      s.parts[s.part[slot]].add(cx, cy, s.obstacle_count[slot]);
+      s.part[slot] = best;
+    }
+    for (std::size_t q = reached; q < s.split_queue.size(); ++q) {
+      const std::uint32_t slot = s.split_queue[q];
+      const std::uint32_t id = s.cell_id[slot];
+      s.parts[s.part[slot]].add(id & 0xFFFFu, id >> 16, s.obstacle_count[slot]);
     }
     return true;
   };

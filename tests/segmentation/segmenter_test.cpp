@@ -320,6 +320,45 @@ TEST(Segmenter, PersonBesideACarIsSplitFromIt) {
   EXPECT_NEAR(person.centroid[1], 1.4f, 0.1f);
 }
 
+// A bicyclist passing a parked car, as in simulated urban drives: the rider shadows the car's
+// side, which is seen in two pieces, and the road between them is hidden. The piece left of
+// the shadow is joined only by ray bridges from the bike's wheels (tops 0.7 and 0.9 m), and it
+// is nearer the rider's head and shoulders than the car's cabin: it stays with the car.
+TEST(Segmenter, CarSideCutByABicyclistsShadowStaysWithTheCar) {
+  Scene ground;
+  ground.ground(15.0f, 0.1f, [](float, float) { return 0.0f; });
+  Scene scene;
+  for (std::size_t i = 0; i < ground.size(); ++i) {
+    const float x = ground.xyzi[4 * i], y = ground.xyzi[4 * i + 1];
+    if (y > 7.9f && x > -12.3f && x < -7.3f) continue;  // under the bike and the car, shadows
+    scene.add(x, y, ground.xyzi[4 * i + 2]);
+  }
+  const float g = -testing::kSensorHeight;
+  auto side = [&](float x0, float x1) {  // the car's near side, 0.3-0.9 m up, at y = 9.05
+    for (float x = x0; x <= x1; x += 0.05f) {
+      for (float z = 0.3f; z <= 0.9f; z += 0.1f) scene.add(x, 9.05f, g + z);
+    }
+  };
+  side(-12.0f, -11.0f);                                  // left of the rider's shadow
+  side(-10.2f, -7.5f);                                   // right of it
+  scene.box(-9.0f, 9.95f, 2.0f, 1.5f, 1.4f, 0.05f, 0.9f);  // the cabin
+  scene.box(-9.5f, 8.3f, 1.6f, 0.1f, 0.7f);                // wheels and frame
+  scene.box(-8.9f, 8.3f, 0.1f, 0.5f, 1.0f, 0.05f, 0.9f);   // handlebar
+  scene.cylinder(-9.6f, 8.3f, 0.2f, 1.5f, 0.05f, 0.8f);    // rider's legs and torso
+  scene.cylinder(-9.5f, 8.3f, 0.1f, 1.75f, 0.05f, 1.5f);   // head
+  ASSERT_EQ(run(scene, no_split()).segments.size(), 1u);  // the bridges join them
+  const Segments out = run(scene);
+  ASSERT_EQ(out.segments.size(), 2u);
+  EXPECT_EQ(out.counters.split_segments, 1u);
+  const bool first_is_car = out.segments[0].box.length > out.segments[1].box.length;
+  const Segment& car = out.segments[first_is_car ? 0 : 1];
+  const Segment& bike = out.segments[first_is_car ? 1 : 0];
+  EXPECT_NEAR(car.box.length, 4.5f, 0.15f);  // both pieces of the side
+  EXPECT_LT(bike.box.length, 1.8f);
+  EXPECT_NEAR(bike.centroid[1], 8.3f, 0.1f);
+  EXPECT_EQ(car.count + bike.count, out.counters.obstacle_points);
+}
+
 // One high group each (a person's shoulders and head, a rider, a cabin): never split.
 TEST(Segmenter, SplitLeavesALonePersonABicyclistAndCarsWhole) {
   Scene person;
