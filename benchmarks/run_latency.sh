@@ -7,8 +7,10 @@
 #
 # default: config/stac.yaml as shipped (no real-time scheduling; Cyclone loopback.xml for both).
 # rt: the same with run.*_priority/_cpu set (receiver 80, pose 75, publisher 70 on CPU 0;
-#     perception 60 on CPU 1) and the subscriber on config/dds/loopback-rt.xml (its receive
-#     thread at real-time priority). Needs the right to SCHED_FIFO (root or RLIMIT_RTPRIO).
+#     perception 60 on CPU 1), run.cpu_wake_latency_us 0 (idle cores poll: no halted core to
+#     wake) and the subscriber on config/dds/loopback-rt.xml (its receive thread at real-time
+#     priority). Needs the right to SCHED_FIFO (root or RLIMIT_RTPRIO) and root for the PM QoS
+#     request (else `stac run` warns and runs without it).
 # Environment: STAC (default build/tools/stac), SEED (2026), DURATION (20 s), DOMAIN (160).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -27,6 +29,7 @@ if [[ "$MODE" == rt ]]; then
       -e 's/^  perception_priority: 0$/  perception_priority: 60/' -e 's/^  perception_cpu: -1$/  perception_cpu: 1/' \
       -e 's/^  publisher_priority: 0$/  publisher_priority: 70/' -e 's/^  publisher_cpu: -1$/  publisher_cpu: 0/' \
       -e 's/^  pose_priority: 0 /  pose_priority: 75 /' -e 's/^  pose_cpu: -1$/  pose_cpu: 0/' \
+      -e 's/^  cpu_wake_latency_us: -1 /  cpu_wake_latency_us: 0 /' \
       config/stac.yaml > "$CONFIG"
   trap 'rm -f config/run-latency-rt.yaml' EXIT
   ECHO_DDS=config/dds/loopback-rt.xml

@@ -28,6 +28,31 @@ Result<bool> lock_memory() noexcept;
 // `thread` for the first part refused (the other part is still tried); nothing to do is true.
 Result<bool> apply_schedule(const std::string& thread, const ThreadSchedule& s);
 
+// A PM QoS request on the CPUs' wake-up latency (Linux /dev/cpu_dma_latency), held while the
+// object lives: idle CPUs only enter states that wake within max_us microseconds. 0 keeps the
+// idle loop polling, so that no core halts: a halted core (or a virtual machine's halted vCPU,
+// which the host must schedule again) can take milliseconds to run a thread woken by a packet
+// or a timer. What cyclictest and real-time tuning guides do; it costs power (cores never
+// sleep). The device takes the value as a binary 32-bit integer; closing it ends the request.
+class CpuLatencyRequest {
+ public:
+  static constexpr const char* kDevice = "/dev/cpu_dma_latency";
+  // Opens `device` and writes max_us (>= 0). Errors say what to fix (root or CAP_SYS_ADMIN...).
+  static Result<CpuLatencyRequest> hold(int max_us, const char* device = kDevice);
+  // The current aggregate request of all holders (us), read from `device`.
+  static Result<int> current(const char* device = kDevice);
+
+  CpuLatencyRequest(CpuLatencyRequest&& o) noexcept;
+  CpuLatencyRequest& operator=(CpuLatencyRequest&& o) noexcept;
+  CpuLatencyRequest(const CpuLatencyRequest&) = delete;
+  CpuLatencyRequest& operator=(const CpuLatencyRequest&) = delete;
+  ~CpuLatencyRequest();
+
+ private:
+  explicit CpuLatencyRequest(int fd) noexcept : fd_(fd) {}
+  int fd_ = -1;
+};
+
 // Names the calling thread (at most 15 characters shown in top/ps); best effort.
 void name_thread(const char* name) noexcept;
 

@@ -280,6 +280,14 @@ int run_live(const RunOptions& o) {
     if (auto r = rt::lock_memory(); !r)
       std::fprintf(stderr, "stac run: warning: %s\n", r.error().message.c_str());
   }
+  std::optional<rt::CpuLatencyRequest> cpu_latency;  // held until the run returns
+  if (rs->cpu_wake_latency_us >= 0) {
+    if (auto r = rt::CpuLatencyRequest::hold(rs->cpu_wake_latency_us); r) {
+      cpu_latency.emplace(std::move(*r));
+    } else {
+      std::fprintf(stderr, "stac run: warning: %s\n", r.error().message.c_str());
+    }
+  }
   auto model = job_model(o.model, settings->classification.model);
   if (!model) return fail(model.error().message);
   const pipeline::PipelineConfig pc{.deskew = es.deskew,

@@ -41,6 +41,7 @@ rt::Result<RunSettings> load_run_settings(const std::filesystem::path& config_fi
   STAC_CONFIG_GET(r, double, "latency_histogram_max_ms", histogram_ms);
   STAC_CONFIG_GET(r, int, "result_slots", slots);
   STAC_CONFIG_GET(r, bool, "lock_memory", s.lock_memory);
+  STAC_CONFIG_GET(r, int, "cpu_wake_latency_us", s.cpu_wake_latency_us);
   STAC_CONFIG_GET(r, bool, "classify_after_publish", s.classify_after_publish);
   STAC_CONFIG_GET(r, std::string, "ins", ins);
   STAC_CONFIG_GET(r, std::string, "ins_address", s.ins_address);
@@ -59,6 +60,8 @@ rt::Result<RunSettings> load_run_settings(const std::filesystem::path& config_fi
                    "must be at least run.deadline_ms and at most 60000 ms");
   }
   if (slots < 2 || slots > 64) return r.error("result_slots", "must be 2..64");
+  if (s.cpu_wake_latency_us < -1 || s.cpu_wake_latency_us > 1'000'000)
+    return r.error("cpu_wake_latency_us", "must be -1 (no request) or 0..1000000 us");
   if (!(velodyne_timeout_s > 0 && velodyne_timeout_s <= 10))
     return r.error("velodyne_timeout_s", "must be in (0, 10] s");
   auto transport = parse_ins_transport(ins);

@@ -18,6 +18,7 @@ struct RunSettings {
   rt::DeadlineConfig deadline;   // budget and histogram range
   std::size_t result_slots = 4;  // perception -> publisher results in flight
   bool lock_memory = true;       // mlockall at start-up
+  int cpu_wake_latency_us = -1;  // >= 0: a PM QoS request held while running (rt::CpuLatencyRequest)
   bool classify_after_publish = true;  // a scan's tracks are published before its segments are
                                        // classified (classes one scan later, docs/run.md)
   rt::ThreadSchedule receiver, perception, publisher, pose;

@@ -1,7 +1,8 @@
 // deploy/stac.service: parsed as systemd reads it (sections, Key=Value) with the settings
 // docs/run.md promises, and verified by `systemd-analyze verify` where that is installed (with
 // ExecStart pointed at the stac just built, since verify checks that the command exists).
-// deploy/60-stac-gs-usb.rules: the udev rule for the gs_usb adapter the driver opens.
+// deploy/60-stac-gs-usb.rules: the udev rule for the gs_usb adapter the driver opens;
+// deploy/60-stac-cpu-latency.rules: the one for the PM QoS device of run.cpu_wake_latency_us.
 #include <gtest/gtest-spi.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -16,12 +17,15 @@
 #include <vector>
 
 #include "drivers/can/gs_usb.hpp"
+#include "rt/scheduling.hpp"
 #include "stac_cli.hpp"
 
 namespace {
 
 const std::string kUnit = std::string(STAC_SOURCE_DIR) + "/deploy/stac.service";
 const std::string kUdevRule = std::string(STAC_SOURCE_DIR) + "/deploy/60-stac-gs-usb.rules";
+const std::string kLatencyRule =
+    std::string(STAC_SOURCE_DIR) + "/deploy/60-stac-cpu-latency.rules";
 
 std::string read(const std::string& path) {
   std::ifstream f(path);
@@ -133,6 +137,17 @@ TEST(UdevRule, GivesTheServiceGroupTheAdapterTheGsUsbDriverOpens) {
   EXPECT_EQ(r.at("MODE="), "0660");
   // The parser can fail: a rule with a broken assignment is named.
   EXPECT_NONFATAL_FAILURE(parse_udev_rules("SUBSYSTEM==\"usb\", GROUP stac\n"), "not a udev rule");
+}
+
+// deploy/60-stac-cpu-latency.rules: the PM QoS device that run.cpu_wake_latency_us opens.
+TEST(UdevRule, GivesTheServiceGroupThePmQosDeviceTheRunHolds) {
+  const auto rules = parse_udev_rules(read(kLatencyRule));
+  ASSERT_EQ(rules.size(), 1u);
+  const auto& r = rules[0];
+  EXPECT_EQ("/dev/" + r.at("KERNEL=="), std::string(stac::rt::CpuLatencyRequest::kDevice));
+  EXPECT_EQ(r.at("SUBSYSTEM=="), "misc");
+  EXPECT_EQ(r.at("GROUP="), parse_unit(read(kUnit)).at("Service.Group"));
+  EXPECT_EQ(r.at("MODE="), "0660");
 }
 
 }  // namespace

@@ -12,6 +12,7 @@
 
 #include <cstdio>
 #include <thread>
+#include <utility>
 
 namespace stac::rt {
 namespace {
@@ -98,6 +99,52 @@ TEST(Scheduling, LockMemoryIsEitherAppliedOrRefusedWithWhatToChange) {
   }
 }
 
+// The request's encoding, on a regular file standing in for the device: one binary int32.
+TEST(Scheduling, CpuLatencyRequestWritesTheValueAsABinaryInt32) {
+  char path[] = "/tmp/stac_cpu_latency_XXXXXX";
+  const int fd = mkstemp(path);
+  ASSERT_GE(fd, 0);
+  close(fd);
+  {
+    auto r = CpuLatencyRequest::hold(25, path);
+    ASSERT_TRUE(r) << r.error().message;
+    auto v = CpuLatencyRequest::current(path);
+    ASSERT_TRUE(v) << v.error().message;
+    EXPECT_EQ(*v, 25);
+  }
+  EXPECT_FALSE(CpuLatencyRequest::hold(-1, path));
+  std::remove(path);
+  auto missing = CpuLatencyRequest::hold(0, "/nonexistent/cpu_dma_latency");
+  ASSERT_FALSE(missing);
+  EXPECT_NE(missing.error().message.find("/nonexistent/cpu_dma_latency"), std::string::npos);
+  EXPECT_NE(missing.error().message.find("root"), std::string::npos);
+}
+
+// The kernel's device: held, the aggregate request is at most ours; released, it is back.
+TEST(Scheduling, CpuLatencyRequestIsEitherHeldOrRefusedTruthfully) {
+  auto before = CpuLatencyRequest::current();
+  if (!before) GTEST_SKIP() << "no PM QoS device here: " << before.error().message;
+  {
+    auto r = CpuLatencyRequest::hold(3);
+    if (!r) {
+      EXPECT_NE(r.error().message.find("cannot open"), std::string::npos) << r.error().message;
+      std::printf("this process may not hold a CPU latency request: %s\n",
+                  r.error().message.c_str());
+      return;
+    }
+    auto held = CpuLatencyRequest::current();
+    ASSERT_TRUE(held);
+    EXPECT_LE(*held, 3);
+    CpuLatencyRequest moved = std::move(*r);  // the request moves with the descriptor
+    held = CpuLatencyRequest::current();
+    ASSERT_TRUE(held);
+    EXPECT_LE(*held, 3);
+  }
+  auto after = CpuLatencyRequest::current();
+  ASSERT_TRUE(after);
+  EXPECT_EQ(*after, *before);  // closed: the request is gone
+}
+
 #if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
 constexpr bool kSanitized = true;
 #else
@@ -112,6 +159,7 @@ void refused_without_privileges() {
   if (geteuid() == 0 && setuid(65534) != 0) std::_Exit(2);  // nobody: no capabilities left
   auto m = lock_memory();
   auto s = apply_schedule("perception", {.fifo_priority = 10, .cpu = -1});
+  if (CpuLatencyRequest::hold(0)) std::_Exit(4);  // the device is root's: nobody may not
   const bool named =
       !s && s.error().message.find("perception thread: SCHED_FIFO") != std::string::npos;
   int policy = -1;

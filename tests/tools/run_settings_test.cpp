@@ -16,6 +16,7 @@ constexpr const char* kRunKeys[] = {"deadline_ms: 100",
                                     "latency_histogram_max_ms: 1000",
                                     "result_slots: 4",
                                     "lock_memory: false",
+                                    "cpu_wake_latency_us: 0",
                                     "classify_after_publish: false",
                                     "receiver_priority: 0",
                                     "receiver_cpu: -1",
@@ -54,6 +55,7 @@ TEST(RunSettings, ShippedSectionLoadsWithoutRealTimeRequests) {
   EXPECT_EQ(s->deadline.histogram_bins, 10'000u);  // 0.1 ms bins over 1 s
   EXPECT_EQ(s->result_slots, 4u);
   EXPECT_TRUE(s->classify_after_publish);
+  EXPECT_EQ(s->cpu_wake_latency_us, -1);  // no PM QoS request unless asked
   EXPECT_EQ(s->ins, InsTransport::kTcp);
   EXPECT_EQ(s->perception.fifo_priority, 0);
   EXPECT_EQ(s->perception.cpu, -1);
@@ -63,6 +65,7 @@ TEST(RunSettings, EveryKeyIsReadIntoItsField) {
   auto s = load_run_settings(run_section("all", "none", ""));
   ASSERT_TRUE(s) << s.error().message;
   EXPECT_FALSE(s->lock_memory);
+  EXPECT_EQ(s->cpu_wake_latency_us, 0);
   EXPECT_FALSE(s->classify_after_publish);
   EXPECT_EQ(s->perception.fifo_priority, 10);
   EXPECT_EQ(s->perception.cpu, 1);
@@ -72,7 +75,7 @@ TEST(RunSettings, EveryKeyIsReadIntoItsField) {
 
 TEST(RunSettings, MissingOrInvalidKeysAreNamed) {
   for (const std::string key :
-       {"deadline_ms", "result_slots", "classify_after_publish", "pose_cpu", "ins",
+       {"deadline_ms", "result_slots", "cpu_wake_latency_us", "classify_after_publish", "pose_cpu", "ins",
         "velodyne_timeout_s"}) {
     auto missing = load_run_settings(run_section("missing_" + key, key, ""));
     ASSERT_FALSE(missing) << key;
@@ -84,6 +87,7 @@ TEST(RunSettings, MissingOrInvalidKeysAreNamed) {
       {"deadline_ms", "deadline_ms: 0"},
       {"latency_histogram_max_ms", "latency_histogram_max_ms: 50"},
       {"result_slots", "result_slots: 1"},
+      {"cpu_wake_latency_us", "cpu_wake_latency_us: -2"},
       {"perception_priority", "perception_priority: 100"},
       {"receiver_cpu", "receiver_cpu: -2"},
       {"ins", "ins: serial"},
