@@ -16,6 +16,7 @@ inline constexpr unsigned kMaxSegments = 2048;
 inline constexpr unsigned kMaxStages = 12;
 inline constexpr unsigned kMaxDrops = 16;
 inline constexpr unsigned kMaxSensors = 4;
+inline constexpr unsigned kMaxCloudPoints = 131072;
 
 template <bool Ros2>
 struct IdlTypes;
@@ -33,10 +34,13 @@ struct IdlTypes<false> {
   using StageLatency = stac_msgs_msg_StageLatency;
   using DropCount = stac_msgs_msg_DropCount;
   using SensorStatus = stac_msgs_msg_SensorStatus;
+  using LabeledPointCloud = stac_msgs_msg_LabeledPointCloud;
+  using LabeledPoint = stac_msgs_msg_LabeledPoint;
   static const dds_topic_descriptor_t* tracked_objects() { return &stac_msgs_msg_TrackedObjects_desc; }
   static const dds_topic_descriptor_t* segments() { return &stac_msgs_msg_ScanSegments_desc; }
   static const dds_topic_descriptor_t* ego_pose() { return &stac_msgs_msg_EgoPose_desc; }
   static const dds_topic_descriptor_t* health() { return &stac_msgs_msg_Health_desc; }
+  static const dds_topic_descriptor_t* point_cloud() { return &stac_msgs_msg_LabeledPointCloud_desc; }
 };
 
 template <>
@@ -52,10 +56,13 @@ struct IdlTypes<true> {
   using StageLatency = stac_msgs_msg_dds__StageLatency_;
   using DropCount = stac_msgs_msg_dds__DropCount_;
   using SensorStatus = stac_msgs_msg_dds__SensorStatus_;
+  using LabeledPointCloud = stac_msgs_msg_dds__LabeledPointCloud_;
+  using LabeledPoint = stac_msgs_msg_dds__LabeledPoint_;
   static const dds_topic_descriptor_t* tracked_objects() { return &stac_msgs_msg_dds__TrackedObjects__desc; }
   static const dds_topic_descriptor_t* segments() { return &stac_msgs_msg_dds__ScanSegments__desc; }
   static const dds_topic_descriptor_t* ego_pose() { return &stac_msgs_msg_dds__EgoPose__desc; }
   static const dds_topic_descriptor_t* health() { return &stac_msgs_msg_dds__Health__desc; }
+  static const dds_topic_descriptor_t* point_cloud() { return &stac_msgs_msg_dds__LabeledPointCloud__desc; }
 };
 
 }  // namespace stac::dds

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstring>
 #include <vector>
 
@@ -21,6 +22,11 @@ static_assert(sizeof(stac_msgs_msg_SensorStatus::name) == 16);
 static_assert(sizeof(stac_msgs_msg_TrackedObject::class_log_odds) == 4 * sizeof(float));
 static_assert(sizeof(stac_msgs_msg_TrackedObjects) == sizeof(stac_msgs_msg_dds__TrackedObjects_));
 static_assert(sizeof(stac_msgs_msg_Health) == sizeof(stac_msgs_msg_dds__Health_));
+// A point cloud is copied as it is: the input's layout is the IDL's.
+static_assert(sizeof(LabeledPointIn) == sizeof(stac_msgs_msg_LabeledPoint) &&
+              offsetof(LabeledPointIn, intensity) == offsetof(stac_msgs_msg_LabeledPoint, intensity) &&
+              offsetof(LabeledPointIn, label) == offsetof(stac_msgs_msg_LabeledPoint, label));
+static_assert(sizeof(stac_msgs_msg_LabeledPoint) == sizeof(stac_msgs_msg_dds__LabeledPoint_));
 
 template <class Seq, class T>
 void attach(Seq& seq, std::vector<T>& storage, std::size_t offset, std::uint32_t bound) {
@@ -82,7 +88,7 @@ class TypedPublisher final : public Publisher {
       : config_(config), domain_(domain), participant_(participant),
         objects_(kMaxObjects), classifications_(kMaxObjects * kMaxClassifications),
         footprints_(kMaxObjects * kMaxFootprint), segment_items_(kMaxSegments),
-        stages_(kMaxStages), drops_(kMaxDrops), sensors_(kMaxSensors) {
+        stages_(kMaxStages), drops_(kMaxDrops), sensors_(kMaxSensors), cloud_points_(kMaxCloudPoints) {
     attach(tracked_.objects, objects_, 0, kMaxObjects);
     for (std::size_t i = 0; i < kMaxObjects; ++i) {
       attach(objects_[i].classification, classifications_, i * kMaxClassifications, kMaxClassifications);
@@ -92,6 +98,7 @@ class TypedPublisher final : public Publisher {
     attach(health_.stages, stages_, 0, kMaxStages);
     attach(health_.drops, drops_, 0, kMaxDrops);
     attach(health_.sensors, sensors_, 0, kMaxSensors);
+    attach(cloud_.points, cloud_points_, 0, kMaxCloudPoints);
   }
   ~TypedPublisher() override {
     dds_delete(participant_);
@@ -102,8 +109,10 @@ class TypedPublisher final : public Publisher {
     if (auto s = copy_string(tracked_.frame_id, config_.frame_id.c_str(), "dds frame_id"); !s) return s;
     std::memcpy(segments_.frame_id, tracked_.frame_id, sizeof(tracked_.frame_id));
     std::memcpy(pose_.frame_id, tracked_.frame_id, sizeof(tracked_.frame_id));
+    std::memcpy(cloud_.frame_id, tracked_.frame_id, sizeof(tracked_.frame_id));
     const dds_topic_descriptor_t* descriptors[] = {T::tracked_objects(), T::segments(), T::ego_pose(),
-                                                   T::health()};
+                                                   T::health(), T::point_cloud()};
+    static_assert(std::size(descriptors) == std::size(kAllTopics));
     for (Topic t : kAllTopics) {
       const auto i = static_cast<std::size_t>(t);
       const std::string name = topic_name(t, config_.topic_prefix, config_.ros2_names);
@@ -180,6 +189,18 @@ class TypedPublisher final : public Publisher {
     return write(Topic::kHealth, &health_);
   }
 
+  Status publish_point_cloud(const PointCloudIn& in) override {
+    if (auto s = check_bound(in.points.size(), kMaxCloudPoints, "point cloud points"); !s) return s;
+    if (auto s = to_time(in.scan.stamp_ns, cloud_.stamp); !s) return s;
+    cloud_.scan_index = in.scan.scan_index;
+    set(cloud_.origin, in.origin);
+    cloud_.resolution = in.resolution;
+    if (!in.points.empty())
+      std::memcpy(cloud_points_.data(), in.points.data(), in.points.size() * sizeof(LabeledPointIn));
+    cloud_.points._length = static_cast<std::uint32_t>(in.points.size());
+    return write(Topic::kPointCloud, &cloud_);
+  }
+
   dds_entity_t writer(Topic t) const noexcept override { return writers_[static_cast<std::size_t>(t)]; }
   dds_entity_t participant() const noexcept override { return participant_; }
 
@@ -242,7 +263,7 @@ class TypedPublisher final : public Publisher {
 
   PublisherConfig config_;
   dds_entity_t domain_, participant_;
-  std::array<dds_entity_t, 4> writers_{};
+  std::array<dds_entity_t, std::size(kAllTopics)> writers_{};
   typename T::TrackedObjects tracked_{};
   std::vector<typename T::TrackedObject> objects_;
   std::vector<typename T::ObjectClassification> classifications_;
@@ -254,6 +275,8 @@ class TypedPublisher final : public Publisher {
   std::vector<typename T::StageLatency> stages_;
   std::vector<typename T::DropCount> drops_;
   std::vector<typename T::SensorStatus> sensors_;
+  typename T::LabeledPointCloud cloud_{};
+  std::vector<typename T::LabeledPoint> cloud_points_;
 };
 
 template <bool Ros2>

@@ -62,6 +62,19 @@ struct SegmentIn {
   std::uint32_t point_count = 0;
 };
 
+// One return of the compact labeled point cloud (idl/stac.idl LabeledPoint, the same layout).
+struct LabeledPointIn {
+  std::int16_t x = 0, y = 0, z = 0;  // from the origin, in units of the resolution
+  std::uint8_t intensity = 0;
+  std::uint8_t label = 0;  // 0 no object, 1 car, 2 pedestrian, 3 bicyclist, 4 background, 5 unclassified
+};
+struct PointCloudIn {
+  ScanStamp scan;
+  Vec3 origin;              // world (m)
+  float resolution = 0.01f;  // m per unit
+  std::span<const LabeledPointIn> points;
+};
+
 struct EgoPoseIn {
   std::int64_t stamp_ns = 0;
   Vec3 position;                            // world (m)
@@ -101,6 +114,8 @@ struct PublisherConfig {
   std::string frame_id = "map";       // frame_id of every sample, at most 31 characters
   bool tentative_tracks = false;      // publish tentative tracks too (not yet confirmed: mostly
                                       // clutter that lives a scan or two)
+  std::uint32_t point_cloud_stride = 8;  // point_cloud: every return in a segment and every Nth
+                                         // other one; 0: the topic is not published
 };
 
 class Publisher {
@@ -115,6 +130,7 @@ class Publisher {
                                             std::span<const SegmentIn> segments) = 0;
   virtual rt::Result<bool> publish_ego_pose(const EgoPoseIn& pose) = 0;
   virtual rt::Result<bool> publish_health(const HealthIn& health) = 0;
+  virtual rt::Result<bool> publish_point_cloud(const PointCloudIn& cloud) = 0;
 
   // The writer of a topic (for status queries: matched readers, deadline misses).
   [[nodiscard]] virtual dds_entity_t writer(Topic t) const noexcept = 0;

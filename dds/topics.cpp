@@ -8,6 +8,7 @@ const char* topic_suffix(Topic t) noexcept {
     case Topic::kSegments: return "segments";
     case Topic::kEgoPose: return "ego_pose";
     case Topic::kHealth: return "health";
+    case Topic::kPointCloud: return "point_cloud";
   }
   return "?";
 }
@@ -37,6 +38,7 @@ QosPtr base_qos(Topic t) {
       dds_qset_history(q.get(), DDS_HISTORY_KEEP_LAST, 1);
       break;
     case Topic::kSegments:
+    case Topic::kPointCloud:
       dds_qset_reliability(q.get(), DDS_RELIABILITY_BEST_EFFORT, 0);
       dds_qset_history(q.get(), DDS_HISTORY_KEEP_LAST, 1);
       break;

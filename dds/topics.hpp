@@ -11,11 +11,12 @@
 
 namespace stac::dds {
 
-enum class Topic { kTrackedObjects, kSegments, kEgoPose, kHealth };
+enum class Topic { kTrackedObjects, kSegments, kEgoPose, kHealth, kPointCloud };
 inline constexpr Topic kAllTopics[] = {Topic::kTrackedObjects, Topic::kSegments, Topic::kEgoPose,
-                                       Topic::kHealth};
+                                       Topic::kHealth, Topic::kPointCloud};
 
-const char* topic_suffix(Topic t) noexcept;  // "tracked_objects", "segments", "ego_pose", "health"
+// "tracked_objects", "segments", "ego_pose", "health", "point_cloud"
+const char* topic_suffix(Topic t) noexcept;
 // The suffix back to the topic; an error listing the valid ones.
 rt::Result<Topic> topic_from_suffix(std::string_view suffix);
 
@@ -23,7 +24,8 @@ rt::Result<Topic> topic_from_suffix(std::string_view suffix);
 std::string topic_name(Topic t, const std::string& prefix, bool ros2_names);
 
 // The QoS of a topic (docs/dds.md): tracked objects and ego pose reliable keep-last 1 with a
-// 100 ms deadline; segments best effort keep-last 1; health reliable keep-last 10. Readers
+// 100 ms deadline; segments and the point cloud best effort keep-last 1; health reliable
+// keep-last 10. Readers
 // use the same QoS without the deadline.
 struct QosDeleter {
   void operator()(dds_qos_t* q) const noexcept { dds_delete_qos(q); }

@@ -2,6 +2,7 @@
 
 #include <time.h>
 
+#include <algorithm>
 #include <cmath>
 #include <optional>
 
@@ -64,11 +65,47 @@ ScanPipeline::ScanPipeline(const PipelineConfig& config)
                             config.model)
                       : nullptr),
       detections_(config.segmenter.max_segments),
+      point_segment_(config.cloud_stride > 0 ? config.segmenter.max_points : 0),
       sensor_T_vehicle_(config.deskew.vehicle_T_sensor.inverse()) {}
 
 ScanResult ScanPipeline::make_result() const {
   return ScanResult(config_.segmenter.max_segments, config_.segmenter.max_points,
-                    config_.tracker.max_tracks);
+                    config_.tracker.max_tracks,
+                    config_.cloud_stride > 0 ? config_.cloud_max_points : 0);
+}
+
+void ScanPipeline::fill_cloud(const velodyne::Scan& scan, ScanResult& out) noexcept {
+  out.cloud.clear();
+  out.cloud_dropped = 0;
+  out.cloud_origin = out.world_T_sensor.translation();
+  if (config_.cloud_stride == 0) return;
+  const std::size_t n = std::min(scan.points.size(), point_segment_.capacity());
+  (void)point_segment_.resize(n);
+  std::fill_n(point_segment_.begin(), n, kNoSegment);
+  const std::size_t segments = std::min<std::size_t>(out.segments.segments.size(), kNoSegment);
+  for (std::size_t s = 0; s < segments; ++s) {
+    for (const std::uint32_t i : out.segments.indices(out.segments.segments[s])) {
+      if (i < n) point_segment_[i] = static_cast<std::uint16_t>(s);
+    }
+  }
+  const Eigen::Matrix3f r = out.world_T_sensor.linear().cast<float>();
+  constexpr float kScale = 1.0f / kCloudResolution;
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint16_t seg = point_segment_[i];
+    if (seg == kNoSegment && i % config_.cloud_stride != 0) continue;
+    const velodyne::Point& p = scan.points[i];
+    const Eigen::Vector3f w = r * Eigen::Vector3f(p.x, p.y, p.z) * kScale;  // from the sensor
+    CloudPoint* c = w.cwiseAbs().maxCoeff() < 32767.0f ? out.cloud.append() : nullptr;  // NaN: no
+    if (c == nullptr) {  // beyond +-327 m, not finite, or the cloud is full
+      ++out.cloud_dropped;
+      continue;
+    }
+    c->x = static_cast<std::int16_t>(std::lround(w.x()));
+    c->y = static_cast<std::int16_t>(std::lround(w.y()));
+    c->z = static_cast<std::int16_t>(std::lround(w.z()));
+    c->intensity = static_cast<std::uint8_t>(std::clamp(std::lround(p.intensity), 0L, 255L));
+    c->segment = seg;
+  }
 }
 
 void ScanPipeline::process(velodyne::Scan& scan, const ego::PoseHistory* poses,
@@ -133,6 +170,7 @@ void ScanPipeline::process(velodyne::Scan& scan, const ego::PoseHistory* poses,
                           out.tracked, out.classes);
   }
   const std::int64_t t4 = classifier_ != nullptr ? now_ns(config_.clock) : t3;
+  fill_cloud(scan, out);  // before the handover: the scan's points are the receiver's again after
   out.stage_ns[kDeskew] = t1 - t0;
   out.stage_ns[kSegment] = t2 - t1;
   out.stage_ns[kTrack] = t3 - t2;

@@ -39,6 +39,10 @@ struct PipelineConfig {
   // latency does not wait for classification; classes come one scan later, docs/run.md).
   bool defer_classification = false;
   velodyne::TrailerKind trailer = velodyne::TrailerKind::kGpsStatus;  // the model's (scan clock)
+  // The compact cloud for viewers (ScanResult::cloud): every return in a kept segment and every
+  // cloud_stride-th other one, at most cloud_max_points; cloud_stride 0: none.
+  std::uint32_t cloud_stride = 0;
+  std::size_t cloud_max_points = 131072;
   StageClock clock = StageClock::kThreadCpu;
 };
 
@@ -49,14 +53,26 @@ const char* stage_name(Stage s) noexcept;  // "deskew", ..., "classify", "classi
 // The heading (rad, about z) of a rotation: atan2(r10, r00).
 double yaw_of(const Eigen::Matrix3d& r) noexcept;
 
+// One return of ScanResult::cloud: world-frame offset from the cloud's origin (the sensor) in
+// units of kCloudResolution, intensity 0..255, the index of its segment (kNoSegment: none).
+inline constexpr float kCloudResolution = 0.01f;  // m: +-327 m in int16
+inline constexpr std::uint16_t kNoSegment = 0xFFFF;
+struct CloudPoint {
+  std::int16_t x = 0, y = 0, z = 0;
+  std::uint8_t intensity = 0;
+  std::uint16_t segment = kNoSegment;
+};
+
 // A box in the world frame (m, rad).
 struct WorldBox {
   double x = 0, y = 0, z = 0, length = 0, width = 0, height = 0, yaw = 0;
 };
 
 struct ScanResult {
-  ScanResult(std::size_t max_segments, std::size_t max_points, std::size_t max_tracks)
-      : segments(max_segments, max_points), tracked(max_tracks), classes(max_tracks) {}
+  ScanResult(std::size_t max_segments, std::size_t max_points, std::size_t max_tracks,
+             std::size_t max_cloud = 0)
+      : segments(max_segments, max_points), tracked(max_tracks), classes(max_tracks),
+        cloud(max_cloud) {}
 
   std::uint64_t sequence = 0;         // the scan's sequence number (ScanHeader)
   std::int64_t receive_stamp_ns = 0;  // the scan's stamp on the receive clock (ScanHeader)
@@ -71,6 +87,9 @@ struct ScanResult {
   rt::FixedVector<classification::TrackClass> classes;  // classes[i]: tracked.tracks[i]'s class
                                                         // (empty when the stage does not run)
   std::int64_t stage_ns[kStageCount] = {};  // on PipelineConfig::clock
+  rt::FixedVector<CloudPoint> cloud;        // PipelineConfig::cloud_stride > 0; origin below
+  Eigen::Vector3d cloud_origin = Eigen::Vector3d::Zero();  // world (m): world_T_sensor's
+  std::uint64_t cloud_dropped = 0;  // returns for the cloud beyond its capacity or +-327 m
 
   // Segment i's box in the world frame.
   [[nodiscard]] WorldBox world_box(std::size_t i) const noexcept;
@@ -102,6 +121,8 @@ class ScanPipeline {
   tracking::Tracker tracker_;
   std::unique_ptr<classification::TrackClassifier> classifier_;
   rt::FixedVector<tracking::Detection> detections_;
+  rt::FixedVector<std::uint16_t> point_segment_;  // per point: its segment (cloud_stride > 0)
+  void fill_cloud(const velodyne::Scan& scan, ScanResult& out) noexcept;
   Eigen::Isometry3d sensor_T_vehicle_;
   std::uint64_t without_pose_ = 0;
   std::int64_t deferred_classify_ns_ = 0;  // the last classify_deferred()'s time

@@ -13,6 +13,7 @@ const dds_topic_descriptor_t* descriptor(dds::Topic t) {
     case dds::Topic::kSegments: return T::segments();
     case dds::Topic::kEgoPose: return T::ego_pose();
     case dds::Topic::kHealth: return T::health();
+    case dds::Topic::kPointCloud: return T::point_cloud();
   }
   return nullptr;
 }

@@ -19,6 +19,10 @@ rt::Result<dds::PublisherConfig> load_dds_settings(const std::filesystem::path& 
   STAC_CONFIG_GET(d, std::string, "config_file", cyclone);
   STAC_CONFIG_GET(d, std::string, "frame_id", c.frame_id);
   STAC_CONFIG_GET(d, bool, "tentative_tracks", c.tentative_tracks);
+  int stride = 0;
+  STAC_CONFIG_GET(d, int, "point_cloud_stride", stride);
+  if (stride < 0 || stride > 1000) return d.error("point_cloud_stride", "must be 0 (no point cloud) .. 1000");
+  c.point_cloud_stride = static_cast<std::uint32_t>(stride);
   if (domain < 0 || domain > 230) return d.error("domain_id", "must be 0..230");
   c.domain_id = static_cast<std::uint32_t>(domain);
   if (c.topic_prefix.empty() || c.topic_prefix.front() == '/' || c.topic_prefix.back() == '/') {

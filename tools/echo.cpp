@@ -1,5 +1,6 @@
 // stac echo TOPIC: subscribes to one of STAC's DDS topics and prints a one-line summary per
 // sample; exits after --count samples (0) or at --timeout with a message saying what arrived (1).
+#include <algorithm>
 #include <atomic>
 #include <cstdio>
 #include <string>
@@ -62,6 +63,18 @@ void print_health(const S& s) {
   std::printf("\n");
 }
 
+// The cloud's size and its points per label (0 no object ... 5 unclassified).
+template <class S>
+void print_cloud(const S& s) {
+  unsigned by_label[6] = {};
+  for (std::uint32_t i = 0; i < s.points._length; ++i) ++by_label[std::min<unsigned>(s.points._buffer[i].label, 5)];
+  std::printf("point_cloud scan %llu t=%.6f points=%u origin=(%.2f,%.2f,%.2f) resolution=%.3f none=%u car=%u "
+              "pedestrian=%u bicyclist=%u background=%u unclassified=%u\n",
+              static_cast<unsigned long long>(s.scan_index), seconds(s.stamp), s.points._length, s.origin.x,
+              s.origin.y, s.origin.z, static_cast<double>(s.resolution), by_label[0], by_label[1], by_label[2],
+              by_label[3], by_label[4], by_label[5]);
+}
+
 // One sample of any topic (native or ROS 2 names), told apart by its fields.
 template <class S>
 void print_sample(const S& s) {
@@ -69,6 +82,8 @@ void print_sample(const S& s) {
     print_tracked(s);
   } else if constexpr (requires { s.segments; }) {
     print_segments(s);
+  } else if constexpr (requires { s.points; }) {
+    print_cloud(s);
   } else if constexpr (requires { s.stages; }) {
     print_health(s);
   } else {
@@ -85,6 +100,7 @@ rt::Result<dds_entity_t> listen(TopicReaders& readers, dds::Topic t, int depth, 
     case dds::Topic::kSegments: return readers.listen<typename T::ScanSegments>(t, depth, f);
     case dds::Topic::kEgoPose: return readers.listen<typename T::EgoPose>(t, depth, f);
     case dds::Topic::kHealth: return readers.listen<typename T::Health>(t, depth, f);
+    case dds::Topic::kPointCloud: return readers.listen<typename T::LabeledPointCloud>(t, depth, f);
   }
   return rt::make_error("unknown topic");
 }
@@ -148,7 +164,7 @@ int run_echo(const EchoOptions& o) {
 void add_echo_command(CLI::App& app) {
   auto o = std::make_shared<EchoOptions>();
   auto* cmd = app.add_subcommand("echo", "Print the samples arriving on one of STAC's DDS topics");
-  cmd->add_option("topic", o->topic, "tracked_objects, segments, ego_pose or health")->required();
+  cmd->add_option("topic", o->topic, "tracked_objects, segments, ego_pose, health or point_cloud")->required();
   cmd->add_option("--count", o->count, "exit after this many samples (0: run until the timeout)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--timeout", o->timeout_s, "give up after this many seconds")->check(CLI::PositiveNumber);

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "drivers/io/pcap_reader.hpp"
+#include "dds/idl_types.hpp"
 #include "drivers/velodyne/scan_stream.hpp"
 #include "pipeline/scan_pipeline.hpp"
 #include "tools/capture_poses.hpp"
@@ -33,6 +34,7 @@ struct ProcessOptions {
   bool no_deskew = false;
   bool dds = false;
   int domain = -1;
+  int point_cloud_stride = -1;
   double dds_wait_s = 0;
 };
 
@@ -126,7 +128,14 @@ int run_process(const ProcessOptions& o) {
 
   // Everything the per-scan loop uses is allocated here.
   velodyne::ScanStream stream(*calibration, vs.assembler, 2);
-  const pipeline::PipelineConfig pc = offline_pipeline_config(*settings, *model);
+  pipeline::PipelineConfig pc = offline_pipeline_config(*settings, *model);
+  if (o.dds) {  // the point_cloud topic's returns, as stac run publishes them
+    auto ds = load_dds_settings(config);
+    if (!ds) return fail(ds.error().message);
+    pc.cloud_stride = o.point_cloud_stride >= 0 ? static_cast<std::uint32_t>(o.point_cloud_stride)
+                                                : ds->point_cloud_stride;
+    pc.cloud_max_points = dds::kMaxCloudPoints;
+  }
   pipeline::ScanPipeline pipeline(pc);
   pipeline::ScanResult result = pipeline.make_result();
   std::optional<ProcessDds> dds_out;
@@ -206,6 +215,7 @@ int run_process(const ProcessOptions& o) {
     out << line;
     if (dds_out) {
       auto st = dds_out->scans->publish(result, scans, result.has_pose ? 1 : 0);
+      if (auto c = dds_out->scans->publish_cloud(result, scans); !c && st) st = c;
       if (!st && dds_errors++ == 0)
         std::fprintf(stderr, "stac process: DDS: %s\n", st.error().message.c_str());
     }
@@ -298,10 +308,14 @@ void add_process_command(CLI::App& app) {
                   "track classifier model (`stac train`) or 'none' (default: the config's "
                   "classification.model): every track gets a class and log odds (ADBF)");
   cmd->add_flag("--dds", o->dds,
-                "also publish every scan's tracked_objects, segments and ego_pose on DDS (the "
-                "config's dds:)");
+                "also publish every scan's tracked_objects, segments, ego_pose (and point_cloud) on "
+                "DDS (the config's dds:)");
   cmd->add_option("--domain", o->domain, "DDS domain with --dds (default: dds.domain_id)")
       ->check(CLI::Range(0, 230));
+  cmd->add_option("--point-cloud-stride", o->point_cloud_stride,
+                  "with --dds, publish point_cloud: every segment return and every Nth other one; "
+                  "0: none (default: dds.point_cloud_stride)")
+      ->check(CLI::Range(0, 1000));
   cmd->add_option(
          "--dds-wait", o->dds_wait_s,
          "with --dds: wait up to S seconds for a tracked_objects reader before the first scan")

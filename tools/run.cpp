@@ -4,7 +4,7 @@
 //              EgoEstimator -> PoseHistory
 //   can        gs_usb only: GsUsbDevice (blocking libusb reads) -> odometry ring -> pose
 //   perception ScanStream -> ScanPipeline -> result slots (full: the newest result is dropped)
-//   publisher  result slots -> DDS tracked_objects, segments, ego_pose, health; deadline monitor
+//   publisher  result slots -> DDS tracked_objects, segments, ego_pose, point_cloud, health; deadline monitor
 // Everything is allocated before the threads start. SIGINT/SIGTERM (or --seconds/--scans) stop
 // the receivers; perception and the publisher drain what was received, then a summary is printed.
 #include <pthread.h>
@@ -47,7 +47,7 @@ struct RunOptions {
   std::string config, calib, ins, ins_address, bind, model, dds_config;
   double seconds = 0;
   std::uint64_t scans = 0;
-  int domain = -1, port = -1, ins_port = -1;
+  int domain = -1, port = -1, ins_port = -1, point_cloud_stride = -1;
 };
 
 volatile std::sig_atomic_t g_signal = 0;
@@ -262,6 +262,8 @@ int run_live(const RunOptions& o) {
   if (o.port >= 0) vs.port = static_cast<std::uint16_t>(o.port);
   if (!o.bind.empty()) vs.bind_address = o.bind;
   if (o.domain >= 0) dds_config->domain_id = static_cast<std::uint32_t>(o.domain);
+  if (o.point_cloud_stride >= 0)
+    dds_config->point_cloud_stride = static_cast<std::uint32_t>(o.point_cloud_stride);
   if (!o.dds_config.empty()) dds_config->config_uri = "file://" + std::filesystem::absolute(o.dds_config).string();
   if (!o.ins.empty()) {
     auto t = parse_ins_transport(o.ins);
@@ -298,6 +300,8 @@ int run_live(const RunOptions& o) {
                                     .describe = false,
                                     .defer_classification = rs->classify_after_publish,
                                     .trailer = velodyne::traits(vs.assembler.decoder.model).trailer,
+                                    .cloud_stride = dds_config->point_cloud_stride,
+                                    .cloud_max_points = dds::kMaxCloudPoints,
                                     .clock = pipeline::StageClock::kMonotonic};
   if (auto r = ScanPublishing::check_capacities(pc); !r) return fail(r.error().message);
   auto publisher = dds::Publisher::create(*dds_config);
@@ -512,6 +516,8 @@ int run_live(const RunOptions& o) {
                                  .drops = drops,
                                  .sensors = sensors};
       if (auto h = (*publisher)->publish_health(health); !h && status) status = h;
+      // The viewers' cloud last, outside the scan's end-to-end latency (it is the largest sample).
+      if (auto c = scan_publishing.publish_cloud(f->result, index); !c && status) status = c;
       results.release();
       if (status) {
         shared.published.fetch_add(1, std::memory_order_relaxed);
@@ -618,6 +624,10 @@ void add_run_command(CLI::App& app) {
       ->check(CLI::PositiveNumber);
   cmd->add_option("--domain", o->domain, "DDS domain (default: dds.domain_id)")
       ->check(CLI::Range(0, 230));
+  cmd->add_option("--point-cloud-stride", o->point_cloud_stride,
+                  "publish point_cloud: every segment return and every Nth other one; 0: none "
+                  "(default: dds.point_cloud_stride)")
+      ->check(CLI::Range(0, 1000));
   cmd->add_option("--dds-config", o->dds_config, "Cyclone DDS XML (default: dds.config_file)")
       ->check(CLI::ExistingFile);
   cmd->add_option("--port", o->port, "Velodyne UDP port (default: velodyne.port; 0: any free port)")

@@ -10,7 +10,23 @@ ScanPublishing::ScanPublishing(dds::Publisher& publisher, bool tentative_tracks)
     : publisher_(publisher),
       tentative_tracks_(tentative_tracks),
       objects_(dds::kMaxObjects),
-      segments_(dds::kMaxSegments) {}
+      segments_(dds::kMaxSegments),
+      segment_labels_(dds::kMaxSegments),
+      cloud_(dds::kMaxCloudPoints) {}
+
+void ScanPublishing::segment_labels(const pipeline::ScanResult& r,
+                                    std::span<std::uint8_t> labels) noexcept {
+  const std::size_t n = std::min(r.segments.segments.size(), labels.size());
+  std::fill_n(labels.begin(), n, std::uint8_t{5});
+  for (std::size_t i = 0; i < r.tracked.tracks.size() && i < r.classes.size(); ++i) {
+    const tracking::Track& t = r.tracked.tracks[i];
+    if (t.segment < 0 || static_cast<std::size_t>(t.segment) >= n || !r.classes[i].classified)
+      continue;
+    // ObjectClass car 0 .. background 3 -> labels 1 .. 4 (the track's prediction).
+    labels[static_cast<std::size_t>(t.segment)] =
+        static_cast<std::uint8_t>(static_cast<unsigned>(r.classes[i].label) + 1);
+  }
+}
 
 rt::Result<bool> ScanPublishing::check_capacities(const pipeline::PipelineConfig& config) {
   if (config.tracker.max_tracks > dds::kMaxObjects) {
@@ -76,7 +92,27 @@ rt::Result<bool> ScanPublishing::publish(const pipeline::ScanResult& r, std::uin
     pose.source = 0;
   }
   if (auto s = publisher_.publish_ego_pose(pose); !s && status) status = s;
+
   return status;
+}
+
+rt::Result<bool> ScanPublishing::publish_cloud(const pipeline::ScanResult& r,
+                                               std::uint64_t scan_index) {
+  if (r.cloud.capacity() == 0) return true;  // no cloud asked (dds.point_cloud_stride 0)
+  const dds::ScanStamp stamp{r.stamp_ns, scan_index};
+  const std::size_t n_segments = std::min<std::size_t>(r.segments.segments.size(), segment_labels_.size());
+  segment_labels(r, segment_labels_);
+  const std::size_t n = std::min(r.cloud.size(), cloud_.size());
+  for (std::size_t i = 0; i < n; ++i) {
+    const pipeline::CloudPoint& c = r.cloud[i];
+    cloud_[i] = {c.x, c.y, c.z, c.intensity,
+                 c.segment < n_segments ? segment_labels_[c.segment] : std::uint8_t{0}};
+  }
+  const dds::PointCloudIn cloud{stamp,
+                                {r.cloud_origin.x(), r.cloud_origin.y(), r.cloud_origin.z()},
+                                pipeline::kCloudResolution,
+                                {cloud_.data(), n}};
+  return publisher_.publish_point_cloud(cloud);
 }
 
 }  // namespace stac::tools

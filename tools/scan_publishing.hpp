@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "dds/publisher.hpp"
@@ -17,19 +18,30 @@ class ScanPublishing {
   // tentative_tracks false: tracked_objects carries confirmed and coasting tracks only.
   ScanPublishing(dds::Publisher& publisher, bool tentative_tracks);
 
+  // The point cloud's label of each segment of a result: the class of the track it updated
+  // (1 car .. 4 background, its TrackClass label), 5 when that track is not
+  // classified or no track took it. Fills labels[0, segments).
+  static void segment_labels(const pipeline::ScanResult& result, std::span<std::uint8_t> labels) noexcept;
+
   // Checks at start-up that the pipeline's capacities fit the IDL bounds (errors name the key).
   static rt::Result<bool> check_capacities(const pipeline::PipelineConfig& config);
 
-  // Publishes the three per-scan topics; `source` is the ego pose's (0 none, 1 INS, 2 CAN).
+  // Publishes tracked_objects, segments and ego_pose; `source` is the ego pose's (0 none, 1 INS,
+  // 2 CAN).
   // The first failed write is returned (the others are still tried).
   rt::Result<bool> publish(const pipeline::ScanResult& result, std::uint64_t scan_index,
                            std::uint8_t source);
+  // Publishes point_cloud when the result has one (PipelineConfig::cloud_stride > 0), its
+  // returns labelled with their segments' classes. Separate, so that it can go out last.
+  rt::Result<bool> publish_cloud(const pipeline::ScanResult& result, std::uint64_t scan_index);
 
  private:
   dds::Publisher& publisher_;
   bool tentative_tracks_ = false;
   std::vector<dds::TrackedObjectIn> objects_;
   std::vector<dds::SegmentIn> segments_;
+  std::vector<std::uint8_t> segment_labels_;
+  std::vector<dds::LabeledPointIn> cloud_;
 };
 
 }  // namespace stac::tools

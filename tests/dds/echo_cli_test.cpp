@@ -154,7 +154,7 @@ TEST(StacEcho, UnknownTopicListsTheTopics) {
   int code = -1;
   const std::string out = run_to_end(child, &code);
   EXPECT_EQ(code, 1);
-  EXPECT_NE(out.find("unknown topic 'tracks' (topics: tracked_objects, segments, ego_pose, health)"),
+  EXPECT_NE(out.find("unknown topic 'tracks' (topics: tracked_objects, segments, ego_pose, health, point_cloud)"),
             std::string::npos) << out;
 }
 

@@ -141,6 +141,71 @@ TEST(DdsPublisher, OverBoundInputIsRefusedWithAClearError) {
   EXPECT_NE(r.error().message.find("longer than its bound of 23 characters"), std::string::npos)
       << r.error().message;
 
+  std::vector<LabeledPointIn> points(kMaxCloudPoints + 1);
+  r = pub->publish_point_cloud({{0, 1}, {}, 0.01f, points});
+  ASSERT_FALSE(r);
+  EXPECT_NE(r.error().message.find("point cloud points: 131073 elements exceed the bound of 131072"),
+            std::string::npos)
+      << r.error().message;
+}
+
+// Both naming modes: a full cloud, every field of a point, and an empty one.
+TEST(DdsPublisher, PointCloudRoundTripsEveryFieldAtItsBoundInBothNamingModes) {
+  for (const bool ros2 : {false, true}) {
+    const std::uint32_t domain = ros2 ? 110 : 109;
+    auto pub = make_publisher(domain, ros2);
+    ASSERT_NE(pub, nullptr);
+    const std::string name = std::string(ros2 ? "rt/" : "") + "stac_test/point_cloud";
+    const auto* descriptor = ros2 ? IdlTypes<true>::point_cloud() : IdlTypes<false>::point_cloud();
+    TestReader reader(domain, descriptor, name.c_str(), Topic::kPointCloud);
+    ASSERT_TRUE(reader.ok());
+    ASSERT_TRUE(TestReader::wait_matched(pub->writer(Topic::kPointCloud)));
+    std::vector<LabeledPointIn> points(kMaxCloudPoints);
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      const auto v = static_cast<std::int16_t>(static_cast<int>(i % 65536) - 32768);
+      points[i] = {v, static_cast<std::int16_t>(-1 - v), static_cast<std::int16_t>(i % 1000),
+                   static_cast<std::uint8_t>(i % 256), static_cast<std::uint8_t>(i % 6)};
+    }
+    const PointCloudIn cloud{{2'000'000'000'000'000'001, 9}, {100.5, -20.25, 1.75}, 0.01f, points};
+    auto ok = pub->publish_point_cloud(cloud);
+    ASSERT_TRUE(ok) << ok.error().message;
+    auto check = [&](const auto* s) {
+      ASSERT_NE(s, nullptr);
+      EXPECT_EQ(s->stamp.sec, 2'000'000'000);
+      EXPECT_EQ(s->stamp.nanosec, 1u);
+      EXPECT_STREQ(s->frame_id, "map");
+      EXPECT_EQ(s->scan_index, 9u);
+      EXPECT_DOUBLE_EQ(s->origin.x, 100.5);
+      EXPECT_DOUBLE_EQ(s->origin.y, -20.25);
+      EXPECT_DOUBLE_EQ(s->origin.z, 1.75);
+      EXPECT_FLOAT_EQ(s->resolution, 0.01f);
+      ASSERT_EQ(s->points._length, kMaxCloudPoints);
+      for (const std::size_t i : {std::size_t{0}, std::size_t{1}, std::size_t{32768}, std::size_t{70001},
+                                  std::size_t{kMaxCloudPoints - 1}}) {
+        const auto& p = s->points._buffer[i];
+        EXPECT_EQ(p.x, points[i].x) << i;
+        EXPECT_EQ(p.y, points[i].y) << i;
+        EXPECT_EQ(p.z, points[i].z) << i;
+        EXPECT_EQ(p.intensity, points[i].intensity) << i;
+        EXPECT_EQ(p.label, points[i].label) << i;
+      }
+    };
+    if (ros2) {
+      check(reader.take<IdlTypes<true>::LabeledPointCloud>());
+    } else {
+      check(reader.take<IdlTypes<false>::LabeledPointCloud>());
+    }
+    ASSERT_TRUE(pub->publish_point_cloud({{5, 10}, {}, 0.01f, {}}));
+    if (ros2) {
+      const auto* e = reader.take<IdlTypes<true>::LabeledPointCloud>();
+      ASSERT_NE(e, nullptr);
+      EXPECT_EQ(e->points._length, 0u);
+    } else {
+      const auto* e = reader.take<IdlTypes<false>::LabeledPointCloud>();
+      ASSERT_NE(e, nullptr);
+      EXPECT_EQ(e->points._length, 0u);
+    }
+  }
 }
 
 TEST(DdsPublisher, SegmentsEgoPoseAndHealthRoundTripInRos2NamingMode) {

@@ -27,6 +27,7 @@ TEST(DdsSettings, ShippedConfigUsesTheLoopbackXml) {
   EXPECT_FALSE(s->ros2_names);
   EXPECT_EQ(s->frame_id, "map");
   EXPECT_FALSE(s->tentative_tracks);
+  EXPECT_EQ(s->point_cloud_stride, 0u);  // no point cloud unless asked
   EXPECT_EQ(s->config_uri.rfind("file:///", 0), 0u);
   EXPECT_NE(s->config_uri.find("config/dds/loopback.xml"), std::string::npos);
 }
@@ -38,16 +39,24 @@ TEST(DdsSettings, MissingAndInvalidKeysAreNamed) {
   ASSERT_FALSE(s);
   EXPECT_NE(s.error().message.find("missing required key 'dds.frame_id'"), std::string::npos) << s.error().message;
   p = write_yaml("dds_domain", "dds:\n  domain_id: 300\n  topic_prefix: stac\n  ros2_names: true\n"
-                               "  config_file: \"\"\n  frame_id: map\n  tentative_tracks: false\n");
+                               "  config_file: \"\"\n  frame_id: map\n  tentative_tracks: false\n"
+                               "  point_cloud_stride: 8\n");
   s = load_dds_settings(p);
   ASSERT_FALSE(s);
   EXPECT_NE(s.error().message.find("'dds.domain_id' must be 0..230"), std::string::npos) << s.error().message;
   p = write_yaml("dds_file", "dds:\n  domain_id: 1\n  topic_prefix: stac\n  ros2_names: true\n"
-                             "  config_file: nowhere.xml\n  frame_id: map\n  tentative_tracks: false\n");
+                             "  config_file: nowhere.xml\n  frame_id: map\n  tentative_tracks: false\n"
+                               "  point_cloud_stride: 8\n");
   s = load_dds_settings(p);
   ASSERT_FALSE(s);
   EXPECT_NE(s.error().message.find("'dds.config_file'"), std::string::npos) << s.error().message;
   EXPECT_NE(s.error().message.find("is not a file"), std::string::npos);
+  p = write_yaml("dds_stride", "dds:\n  domain_id: 1\n  topic_prefix: stac\n  ros2_names: true\n"
+                               "  config_file: \"\"\n  frame_id: map\n  tentative_tracks: false\n"
+                               "  point_cloud_stride: -1\n");
+  s = load_dds_settings(p);
+  ASSERT_FALSE(s);
+  EXPECT_NE(s.error().message.find("'dds.point_cloud_stride'"), std::string::npos) << s.error().message;
 }
 
 }  // namespace

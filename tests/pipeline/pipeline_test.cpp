@@ -5,7 +5,9 @@
 
 #include <map>
 
+#include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -139,17 +141,19 @@ TEST(ScanPipeline, PerceptionLoopWithHandoverMakesNoAllocationOver1000ScansAfter
   const std::unique_ptr<ego::PoseHistory> poses = straight_drive(f, 1020);
   f.config.model = made_up_model();  // classification on, after publishing (as stac run)
   f.config.defer_classification = true;
+  f.config.cloud_stride = 8;  // and the point cloud for viewers, as stac run makes it
   ScanPipeline pipeline(f.config);
   rt::SlotExchange<ScanResult> results(4, [&] { return pipeline.make_result(); });
   velodyne::Scan scan(f.scans.front()->points.capacity());
 
   // A consumer thread stands for the publisher: takes each result, reads it, gives it back.
   std::atomic<bool> stop{false};
-  std::atomic<std::uint64_t> consumed{0}, tracks_seen{0}, classified{0};
+  std::atomic<std::uint64_t> consumed{0}, tracks_seen{0}, classified{0}, cloud_points{0};
   std::thread consumer([&] {
     while (!stop.load(std::memory_order_acquire)) {
       if (ScanResult* r = results.take()) {
         tracks_seen.fetch_add(r->tracked.tracks.size(), std::memory_order_relaxed);
+        cloud_points.fetch_add(r->cloud.size(), std::memory_order_relaxed);
         for (const classification::TrackClass& c : r->classes)
           classified.fetch_add(c.classified ? 1 : 0, std::memory_order_relaxed);
         results.release();
@@ -182,6 +186,7 @@ TEST(ScanPipeline, PerceptionLoopWithHandoverMakesNoAllocationOver1000ScansAfter
   EXPECT_EQ(results.published() + results.dropped(), 1020u);  // every result handed over or counted
   EXPECT_GT(tracks_seen.load(), 0u);
   EXPECT_GT(classified.load(), 0u);
+  EXPECT_GT(cloud_points.load(), 0u);
   EXPECT_GT(pipeline.classifier()->counters().holistic_described, 0u);
   EXPECT_GT(pipeline.tracker().counters().spawned, 0u);
   static_assert(noexcept(pipeline.process(scan, nullptr, results.current())));
@@ -249,6 +254,63 @@ TEST(ScanPipeline, ParkedSensorKeepsTheSensorPoseAndFillsEveryStage) {
   const WorldBox b = r.world_box(0);
   EXPECT_NEAR(b.z, s.box.cz + f.config.deskew.vehicle_T_sensor.translation().z(), 1e-4);
   EXPECT_FLOAT_EQ(static_cast<float>(b.length), s.box.length);
+}
+
+// The cloud for viewers: every return of a kept segment with its segment's index, every 4th
+// other return, in input order, from the sensor's position in the world frame's axes, to 1 cm;
+// beyond its capacity the rest is counted, not lost silently.
+TEST(ScanPipeline, CloudHoldsEverySegmentReturnAndEveryNthOtherOneFromTheSensor) {
+  STAC_REQUIRE_SHARED_DATA(kYaml);
+  Fixture f = decoded_drive("cloud");
+  ASSERT_FALSE(f.scans.empty());
+  f.config.cloud_stride = 4;
+  ScanPipeline pipeline(f.config);
+  ScanResult r = pipeline.make_result();
+  velodyne::Scan scan(f.scans.front()->points.capacity());
+  load_scan(f, 0, scan);
+  pipeline.process(scan, nullptr, r);
+  std::vector<int> segment_of(scan.points.size(), -1);
+  for (std::size_t s = 0; s < r.segments.segments.size(); ++s) {
+    for (const std::uint32_t i : r.segments.indices(r.segments.segments[s])) segment_of[i] = static_cast<int>(s);
+  }
+  std::vector<std::size_t> expected;
+  for (std::size_t i = 0; i < scan.points.size(); ++i) {
+    if (segment_of[i] >= 0 || i % 4 == 0) expected.push_back(i);
+  }
+  ASSERT_EQ(r.cloud.size(), expected.size());
+  EXPECT_EQ(r.cloud_dropped, 0u);
+  EXPECT_TRUE(r.cloud_origin.isApprox(r.world_T_sensor.translation()));
+  const Eigen::Matrix3d rot = r.world_T_sensor.linear();
+  std::size_t in_segments = 0;
+  for (std::size_t k = 0; k < expected.size(); ++k) {
+    const velodyne::Point& p = scan.points[expected[k]];
+    const CloudPoint& c = r.cloud[k];
+    const Eigen::Vector3d w = rot * Eigen::Vector3d(p.x, p.y, p.z);
+    ASSERT_NEAR(c.x * kCloudResolution, w.x(), 0.006) << k;
+    ASSERT_NEAR(c.y * kCloudResolution, w.y(), 0.006) << k;
+    ASSERT_NEAR(c.z * kCloudResolution, w.z(), 0.006) << k;
+    ASSERT_EQ(c.intensity, std::clamp<long>(std::lround(p.intensity), 0, 255)) << k;
+    const int s = segment_of[expected[k]];
+    ASSERT_EQ(c.segment, s < 0 ? kNoSegment : static_cast<std::uint16_t>(s)) << k;
+    in_segments += s >= 0 ? 1 : 0;
+  }
+  EXPECT_EQ(in_segments, r.segments.point_indices.size());  // every segment return is there
+
+  f.config.cloud_max_points = 1000;  // full: the rest is counted
+  ScanPipeline small(f.config);
+  ScanResult rs = small.make_result();
+  load_scan(f, 0, scan);
+  small.process(scan, nullptr, rs);
+  EXPECT_EQ(rs.cloud.size(), 1000u);
+  EXPECT_EQ(rs.cloud_dropped, expected.size() - 1000);
+
+  f.config.cloud_stride = 0;  // off: no cloud, no storage
+  ScanPipeline none(f.config);
+  ScanResult rn = none.make_result();
+  load_scan(f, 0, scan);
+  none.process(scan, nullptr, rn);
+  EXPECT_EQ(rn.cloud.capacity(), 0u);
+  EXPECT_TRUE(rn.cloud.empty());
 }
 
 }  // namespace

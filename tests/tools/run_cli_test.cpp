@@ -140,18 +140,19 @@ TEST(RunCli, ReplayedDriveGivesOneTrackedObjectsSamplePerScanAndHealthThatAgrees
   Reader tracked(participant, Types::tracked_objects(), "stac/tracked_objects",
                  dds::Topic::kTrackedObjects);
   Reader health(participant, Types::health(), "stac/health", dds::Topic::kHealth);
-  ASSERT_TRUE(tracked.ok() && health.ok());
+  Reader cloud(participant, Types::point_cloud(), "stac/point_cloud", dds::Topic::kPointCloud);
+  ASSERT_TRUE(tracked.ok() && health.ok() && cloud.ok());
 
   const std::uint16_t udp = free_port(SOCK_DGRAM), tcp = free_port(SOCK_STREAM);
   ASSERT_TRUE(udp != 0 && tcp != 0);
-  Child run("run --domain " + std::to_string(kDomain) + " --bind 127.0.0.1 --port " +
+  Child run("run --point-cloud-stride 8 --domain " + std::to_string(kDomain) + " --bind 127.0.0.1 --port " +
                 std::to_string(udp) + " --ins tcp --ins-address 127.0.0.1 --ins-port " +
                 std::to_string(tcp),
             dir / "run.log");
   ASSERT_TRUE(run.started());
-  for (int i = 0; i < 2000 && !(tracked.matched() && health.matched()); ++i)
+  for (int i = 0; i < 2000 && !(tracked.matched() && health.matched() && cloud.matched()); ++i)
     dds_sleepfor(DDS_MSECS(10));
-  ASSERT_TRUE(tracked.matched() && health.matched()) << run.output();
+  ASSERT_TRUE(tracked.matched() && health.matched() && cloud.matched()) << run.output();
 
   const auto replay =
       stac::testing::stac("replay --in " + pcap + " --to 127.0.0.1 --port " + std::to_string(udp) +
@@ -161,6 +162,13 @@ TEST(RunCli, ReplayedDriveGivesOneTrackedObjectsSamplePerScanAndHealthThatAgrees
   // Everything published arrives; stop once nothing came for 2 s.
   std::vector<std::uint64_t> indices;
   std::vector<HealthSeen> healths;
+  struct CloudSeen {
+    std::uint64_t scan_index = 0;
+    std::uint32_t points = 0, objects = 0, classified = 0, unclassified = 0;
+    double origin_z = 0;
+    float resolution = 0;
+  };
+  std::vector<CloudSeen> clouds;
   for (int quiet = 0; quiet < 200;) {
     const int n = tracked.drain<Types::TrackedObjects>([&](const Types::TrackedObjects& s) {
       indices.push_back(s.scan_index);
@@ -173,6 +181,15 @@ TEST(RunCli, ReplayedDriveGivesOneTrackedObjectsSamplePerScanAndHealthThatAgrees
       for (std::uint32_t i = 0; i < s.sensors._length; ++i)
         h.sensors[s.sensors._buffer[i].name] = s.sensors._buffer[i].status;
       healths.push_back(std::move(h));
+    }) + cloud.drain<Types::LabeledPointCloud>([&](const Types::LabeledPointCloud& s) {
+      CloudSeen c{s.scan_index, s.points._length, 0, 0, 0, s.origin.z, s.resolution};
+      for (std::uint32_t i = 0; i < s.points._length; ++i) {
+        const std::uint8_t label = s.points._buffer[i].label;
+        c.objects += label != 0 ? 1 : 0;
+        c.classified += label >= 1 && label <= 4 ? 1 : 0;
+        c.unclassified += label == 5 ? 1 : 0;
+      }
+      clouds.push_back(c);
     });
     quiet = n > 0 ? 0 : quiet + 1;
     dds_sleepfor(DDS_MSECS(10));
@@ -229,6 +246,21 @@ TEST(RunCli, ReplayedDriveGivesOneTrackedObjectsSamplePerScanAndHealthThatAgrees
   EXPECT_TRUE(last.sensors.count("ins"));
   for (std::size_t i = 1; i < healths.size(); ++i)
     EXPECT_GE(healths[i].deadline_misses, healths[i - 1].deadline_misses);
+
+  // point_cloud (best effort: on loopback nearly every scan's arrives): each holds the scan's
+  // object returns, labelled, and a share of the others, from the sensor's position.
+  EXPECT_GE(clouds.size(), published / 2) << out;
+  std::uint64_t classified = 0;
+  for (const CloudSeen& c : clouds) {
+    EXPECT_LT(c.scan_index, published);
+    EXPECT_GT(c.objects, 0u);
+    EXPECT_LT(c.objects, c.points);  // ground and dropped returns too (every 8th)
+    EXPECT_EQ(c.objects, c.classified + c.unclassified);
+    EXPECT_FLOAT_EQ(c.resolution, 0.01f);
+    EXPECT_GT(c.origin_z, 1.0);  // the sensor, about 1.9 m above the road
+    classified += c.classified;
+  }
+  EXPECT_GT(classified, 0u);  // the shipped model classifies tracks: their returns carry classes
 }
 
 TEST(RunCli, InsOverUdpDeskewsTheScansAndSigtermStopsAfterPublishingWhatWasReceived) {
