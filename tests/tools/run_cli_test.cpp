@@ -221,6 +221,9 @@ TEST(RunCli, ReplayedDriveGivesOneTrackedObjectsSamplePerScanAndHealthThatAgrees
   const HealthSeen& last = healths.back();
   EXPECT_EQ(last.scan_index, published - 1);
   EXPECT_EQ(last.deadline_misses, misses);
+#if !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
+  EXPECT_EQ(misses, 0u) << out;  // 100 ms per scan (a sanitizer build may be slower than that)
+#endif
   EXPECT_GT(last.end_to_end_us, 0u);
   for (const char* stage : {"wait", "deskew", "segment", "track", "handover", "publish"}) {
     EXPECT_TRUE(last.stages.count(stage)) << stage;
