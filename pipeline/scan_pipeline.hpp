@@ -7,6 +7,7 @@
 //   pipeline.process(scan, poses, r);   // poses: nullptr for a parked sensor (world = vehicle)
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <memory>
 
@@ -113,6 +114,9 @@ class ScanPipeline {
   // Null when the classify stage does not run (no model, describe off).
   [[nodiscard]] classification::TrackClassifier* classifier() noexcept { return classifier_.get(); }
   [[nodiscard]] std::uint64_t scans_without_pose() const noexcept { return without_pose_; }
+  // Whether process() builds the cloud (with cloud_stride > 0; true at start): the publisher
+  // says whether a viewer reads it, so that nobody pays for it otherwise. Any thread.
+  void want_cloud(bool wanted) noexcept { cloud_wanted_.store(wanted, std::memory_order_relaxed); }
 
  private:
   PipelineConfig config_;
@@ -126,6 +130,7 @@ class ScanPipeline {
   Eigen::Isometry3d sensor_T_vehicle_;
   std::uint64_t without_pose_ = 0;
   std::int64_t deferred_classify_ns_ = 0;  // the last classify_deferred()'s time
+  std::atomic<bool> cloud_wanted_{true};
 };
 
 }  // namespace stac::pipeline

@@ -216,6 +216,7 @@ int run_process(const ProcessOptions& o) {
     if (dds_out) {
       auto st = dds_out->scans->publish(result, scans, result.has_pose ? 1 : 0);
       if (auto c = dds_out->scans->publish_cloud(result, scans); !c && st) st = c;
+      pipeline.want_cloud(dds_out->scans->cloud_reader());
       if (!st && dds_errors++ == 0)
         std::fprintf(stderr, "stac process: DDS: %s\n", st.error().message.c_str());
     }

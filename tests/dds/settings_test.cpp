@@ -27,7 +27,7 @@ TEST(DdsSettings, ShippedConfigUsesTheLoopbackXml) {
   EXPECT_FALSE(s->ros2_names);
   EXPECT_EQ(s->frame_id, "map");
   EXPECT_FALSE(s->tentative_tracks);
-  EXPECT_EQ(s->point_cloud_stride, 0u);  // no point cloud unless asked
+  EXPECT_EQ(s->point_cloud_stride, 8u);  // built and written while a viewer reads it
   EXPECT_EQ(s->config_uri.rfind("file:///", 0), 0u);
   EXPECT_NE(s->config_uri.find("config/dds/loopback.xml"), std::string::npos);
 }

@@ -258,7 +258,7 @@ TEST(ScanPipeline, ParkedSensorKeepsTheSensorPoseAndFillsEveryStage) {
 
 // The cloud for viewers: every return of a kept segment with its segment's index, every 4th
 // other return, in input order, from the sensor's position in the world frame's axes, to 1 cm;
-// beyond its capacity the rest is counted, not lost silently.
+// beyond its capacity the rest is counted, not lost silently; not built while nobody wants it.
 TEST(ScanPipeline, CloudHoldsEverySegmentReturnAndEveryNthOtherOneFromTheSensor) {
   STAC_REQUIRE_SHARED_DATA(kYaml);
   Fixture f = decoded_drive("cloud");
@@ -303,6 +303,16 @@ TEST(ScanPipeline, CloudHoldsEverySegmentReturnAndEveryNthOtherOneFromTheSensor)
   small.process(scan, nullptr, rs);
   EXPECT_EQ(rs.cloud.size(), 1000u);
   EXPECT_EQ(rs.cloud_dropped, expected.size() - 1000);
+
+  small.want_cloud(false);  // nobody reads it: not built
+  load_scan(f, 0, scan);
+  small.process(scan, nullptr, rs);
+  EXPECT_TRUE(rs.cloud.empty());
+  EXPECT_EQ(rs.cloud_dropped, 0u);
+  small.want_cloud(true);
+  load_scan(f, 0, scan);
+  small.process(scan, nullptr, rs);
+  EXPECT_EQ(rs.cloud.size(), 1000u);
 
   f.config.cloud_stride = 0;  // off: no cloud, no storage
   ScanPipeline none(f.config);

@@ -5,6 +5,9 @@
 
 #include <array>
 
+#include "dds/dds_test_support.hpp"
+#include "dds/idl_types.hpp"
+
 namespace stac::tools {
 namespace {
 
@@ -40,6 +43,63 @@ TEST(ScanPublishing, SegmentLabelsAreTheClassesOfTheTracksTheyUpdated) {
   r.classes.clear();
   ScanPublishing::segment_labels(r, labels);
   for (std::size_t i = 0; i < 5; ++i) EXPECT_EQ(labels[i], 5) << i;
+}
+
+// The cloud goes out only to a reader (nobody reading: not even serialized), labelled by
+// segment; a result without a cloud writes nothing.
+TEST(ScanPublishing, PointCloudIsWrittenForAReaderOnlyWithItsSegmentsLabels) {
+  dds::PublisherConfig c;
+  c.domain_id = 112;
+  c.topic_prefix = "stac_test";
+  c.config_uri = stac::testing::loopback_uri();
+  auto publisher = dds::Publisher::create(c);
+  ASSERT_TRUE(publisher) << publisher.error().message;
+  ScanPublishing scans(**publisher, false);
+
+  pipeline::ScanResult r(8, 100, 8, 16);
+  for (int i = 0; i < 2; ++i) *r.segments.segments.append() = segmentation::Segment{};
+  tracking::Track* t = r.tracked.tracks.append();
+  *t = tracking::Track{};
+  t->segment = 1;
+  classification::TrackClass* k = r.classes.append();
+  *k = classification::TrackClass{};
+  k->classified = true;
+  k->label = classification::ObjectClass::kPedestrian;
+  *r.cloud.append() = {100, -200, 150, 7, pipeline::kNoSegment};  // ground
+  *r.cloud.append() = {1, 2, 3, 40, 0};  // segment 0: no track
+  *r.cloud.append() = {-5, 6, -7, 255, 1};  // segment 1: a pedestrian
+  r.cloud_origin = {10, 20, 1.9};
+  r.stamp_ns = 3'000'000'000;
+
+  auto skipped = scans.publish_cloud(r, 4);  // no reader yet
+  ASSERT_TRUE(skipped) << skipped.error().message;
+  EXPECT_FALSE(*skipped);
+
+  using T = dds::IdlTypes<false>;
+  stac::testing::TestReader reader(112, T::point_cloud(), "stac_test/point_cloud", dds::Topic::kPointCloud);
+  ASSERT_TRUE(reader.ok());
+  ASSERT_TRUE(stac::testing::TestReader::wait_matched((*publisher)->writer(dds::Topic::kPointCloud)));
+  auto written = scans.publish_cloud(r, 5);
+  ASSERT_TRUE(written) << written.error().message;
+  EXPECT_TRUE(*written);
+  const auto* s = reader.take<T::LabeledPointCloud>();
+  ASSERT_NE(s, nullptr);
+  EXPECT_EQ(s->scan_index, 5u);  // the one written, not the skipped one
+  EXPECT_EQ(s->stamp.sec, 3);
+  EXPECT_DOUBLE_EQ(s->origin.z, 1.9);
+  ASSERT_EQ(s->points._length, 3u);
+  EXPECT_EQ(s->points._buffer[0].x, 100);
+  EXPECT_EQ(s->points._buffer[0].y, -200);
+  EXPECT_EQ(s->points._buffer[0].label, 0);  // no object
+  EXPECT_EQ(s->points._buffer[1].label, 5);  // an object no track classified
+  EXPECT_EQ(s->points._buffer[2].label, 2);  // the pedestrian's
+  EXPECT_EQ(s->points._buffer[2].z, -7);
+  EXPECT_EQ(s->points._buffer[2].intensity, 255);
+
+  pipeline::ScanResult none(8, 100, 8);  // no cloud capacity: cloud_stride 0
+  auto nothing = scans.publish_cloud(none, 6);
+  ASSERT_TRUE(nothing);
+  EXPECT_FALSE(*nothing);
 }
 
 }  // namespace
