@@ -78,7 +78,8 @@ void ScanPipeline::fill_cloud(const velodyne::Scan& scan, ScanResult& out) noexc
   out.cloud.clear();
   out.cloud_dropped = 0;
   out.cloud_origin = out.world_T_sensor.translation();
-  if (config_.cloud_stride == 0 || !cloud_wanted_.load(std::memory_order_relaxed)) return;
+  out.has_cloud = config_.cloud_stride > 0 && cloud_wanted_.load(std::memory_order_relaxed);
+  if (!out.has_cloud) return;
   const std::size_t n = std::min(scan.points.size(), point_segment_.capacity());
   (void)point_segment_.resize(n);
   std::fill_n(point_segment_.begin(), n, kNoSegment);

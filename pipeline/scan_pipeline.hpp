@@ -89,6 +89,7 @@ struct ScanResult {
                                                         // (empty when the stage does not run)
   std::int64_t stage_ns[kStageCount] = {};  // on PipelineConfig::clock
   rt::FixedVector<CloudPoint> cloud;        // PipelineConfig::cloud_stride > 0; origin below
+  bool has_cloud = false;  // the cloud was built for this scan (cloud_stride > 0 and wanted)
   Eigen::Vector3d cloud_origin = Eigen::Vector3d::Zero();  // world (m): world_T_sensor's
   std::uint64_t cloud_dropped = 0;  // returns for the cloud beyond its capacity or +-327 m
 

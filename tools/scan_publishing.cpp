@@ -92,7 +92,6 @@ rt::Result<bool> ScanPublishing::publish(const pipeline::ScanResult& r, std::uin
     pose.source = 0;
   }
   if (auto s = publisher_.publish_ego_pose(pose); !s && status) status = s;
-
   return status;
 }
 
@@ -104,7 +103,9 @@ bool ScanPublishing::cloud_reader() const noexcept {
 
 rt::Result<bool> ScanPublishing::publish_cloud(const pipeline::ScanResult& r,
                                                std::uint64_t scan_index) {
-  if (r.cloud.capacity() == 0) return false;  // no cloud asked (dds.point_cloud_stride 0)
+  // Not built for this scan (dds.point_cloud_stride 0, or nobody read the last one): nothing
+  // to send, not an empty cloud.
+  if (!r.has_cloud) return false;
   // Only for a reader: Cyclone serializes a sample even when nobody reads it (about 1 ms for a
   // 40k-point cloud), and this topic's readers are viewers, which come and go.
   if (!cloud_reader()) return false;

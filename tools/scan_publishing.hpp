@@ -33,7 +33,8 @@ class ScanPublishing {
                            std::uint8_t source);
   // Publishes point_cloud when the result has one (PipelineConfig::cloud_stride > 0) and a
   // reader is matched, its returns labelled with their segments' classes: true when written,
-  // false when skipped (no cloud, or nobody reading). Separate, so that it can go out last.
+  // false when skipped (no cloud built for this scan, or nobody reading). Separate, so that it
+  // can go out last.
   rt::Result<bool> publish_cloud(const pipeline::ScanResult& result, std::uint64_t scan_index);
   // Whether a reader of point_cloud is matched now (the pipeline builds the cloud only then:
   // ScanPipeline::want_cloud).

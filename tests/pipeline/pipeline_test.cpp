@@ -304,14 +304,17 @@ TEST(ScanPipeline, CloudHoldsEverySegmentReturnAndEveryNthOtherOneFromTheSensor)
   EXPECT_EQ(rs.cloud.size(), 1000u);
   EXPECT_EQ(rs.cloud_dropped, expected.size() - 1000);
 
+  EXPECT_TRUE(rs.has_cloud);
   small.want_cloud(false);  // nobody reads it: not built
   load_scan(f, 0, scan);
   small.process(scan, nullptr, rs);
+  EXPECT_FALSE(rs.has_cloud);
   EXPECT_TRUE(rs.cloud.empty());
   EXPECT_EQ(rs.cloud_dropped, 0u);
   small.want_cloud(true);
   load_scan(f, 0, scan);
   small.process(scan, nullptr, rs);
+  EXPECT_TRUE(rs.has_cloud);
   EXPECT_EQ(rs.cloud.size(), 1000u);
 
   f.config.cloud_stride = 0;  // off: no cloud, no storage
@@ -321,6 +324,7 @@ TEST(ScanPipeline, CloudHoldsEverySegmentReturnAndEveryNthOtherOneFromTheSensor)
   none.process(scan, nullptr, rn);
   EXPECT_EQ(rn.cloud.capacity(), 0u);
   EXPECT_TRUE(rn.cloud.empty());
+  EXPECT_FALSE(rn.has_cloud);
 }
 
 }  // namespace

@@ -69,6 +69,7 @@ TEST(ScanPublishing, PointCloudIsWrittenForAReaderOnlyWithItsSegmentsLabels) {
   *r.cloud.append() = {1, 2, 3, 40, 0};  // segment 0: no track
   *r.cloud.append() = {-5, 6, -7, 255, 1};  // segment 1: a pedestrian
   r.cloud_origin = {10, 20, 1.9};
+  r.has_cloud = true;
   r.stamp_ns = 3'000'000'000;
 
   auto skipped = scans.publish_cloud(r, 4);  // no reader yet
@@ -100,6 +101,18 @@ TEST(ScanPublishing, PointCloudIsWrittenForAReaderOnlyWithItsSegmentsLabels) {
   auto nothing = scans.publish_cloud(none, 6);
   ASSERT_TRUE(nothing);
   EXPECT_FALSE(*nothing);
+  // A scan whose cloud was not built (nobody read the one before) sends no empty cloud to the
+  // reader that has just come: the next sample it sees is a full one.
+  r.has_cloud = false;
+  auto unbuilt = scans.publish_cloud(r, 7);
+  ASSERT_TRUE(unbuilt);
+  EXPECT_FALSE(*unbuilt);
+  r.has_cloud = true;
+  ASSERT_TRUE(scans.publish_cloud(r, 8));
+  const auto* next = reader.take<T::LabeledPointCloud>();
+  ASSERT_NE(next, nullptr);
+  EXPECT_EQ(next->scan_index, 8u);
+  EXPECT_EQ(next->points._length, 3u);
 }
 
 }  // namespace
