@@ -43,17 +43,14 @@ struct ProcessDds {
   std::unique_ptr<dds::Publisher> publisher;
   std::optional<ScanPublishing> scans;
 };
-rt::Result<ProcessDds> open_dds(const std::filesystem::path& config, const ProcessOptions& o,
+rt::Result<ProcessDds> open_dds(const dds::PublisherConfig& settings, const ProcessOptions& o,
                                 const pipeline::PipelineConfig& pc) {
   if (auto r = ScanPublishing::check_capacities(pc); !r)
     return rt::Unexpected<rt::Error>{r.error()};
-  auto settings = load_dds_settings(config);
-  if (!settings) return rt::Unexpected<rt::Error>{settings.error()};
-  if (o.domain >= 0) settings->domain_id = static_cast<std::uint32_t>(o.domain);
-  auto p = dds::Publisher::create(*settings);
+  auto p = dds::Publisher::create(settings);
   if (!p) return rt::Unexpected<rt::Error>{p.error()};
   ProcessDds out{std::move(*p), std::nullopt};
-  out.scans.emplace(*out.publisher, settings->tentative_tracks);
+  out.scans.emplace(*out.publisher, settings.tentative_tracks);
   const dds_entity_t writer = out.publisher->writer(dds::Topic::kTrackedObjects);
   for (double waited = 0; waited < o.dds_wait_s; waited += 0.01) {
     dds_publication_matched_status_t m{};
@@ -129,18 +126,21 @@ int run_process(const ProcessOptions& o) {
   // Everything the per-scan loop uses is allocated here.
   velodyne::ScanStream stream(*calibration, vs.assembler, 2);
   pipeline::PipelineConfig pc = offline_pipeline_config(*settings, *model);
-  if (o.dds) {  // the point_cloud topic's returns, as stac run publishes them
+  std::optional<dds::PublisherConfig> dds_settings;  // --dds: the config's dds:, with the options
+  if (o.dds) {
     auto ds = load_dds_settings(config);
     if (!ds) return fail(ds.error().message);
-    pc.cloud_stride = o.point_cloud_stride >= 0 ? static_cast<std::uint32_t>(o.point_cloud_stride)
-                                                : ds->point_cloud_stride;
+    if (o.domain >= 0) ds->domain_id = static_cast<std::uint32_t>(o.domain);
+    if (o.point_cloud_stride >= 0) ds->point_cloud_stride = static_cast<std::uint32_t>(o.point_cloud_stride);
+    dds_settings = std::move(*ds);
+    pc.cloud_stride = dds_settings->point_cloud_stride;  // as stac run publishes the cloud
     pc.cloud_max_points = dds::kMaxCloudPoints;
   }
   pipeline::ScanPipeline pipeline(pc);
   pipeline::ScanResult result = pipeline.make_result();
   std::optional<ProcessDds> dds_out;
-  if (o.dds) {
-    auto d = open_dds(config, o, pc);
+  if (dds_settings) {
+    auto d = open_dds(*dds_settings, o, pc);
     if (!d) return fail(d.error().message);
     dds_out.emplace(std::move(*d));
   }

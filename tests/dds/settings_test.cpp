@@ -32,31 +32,31 @@ TEST(DdsSettings, ShippedConfigUsesTheLoopbackXml) {
   EXPECT_NE(s->config_uri.find("config/dds/loopback.xml"), std::string::npos);
 }
 
+// A whole dds: section with these three values: the error it is refused with ("" if loaded).
+std::string refusal(const std::string& name, const std::string& domain, const std::string& config_file,
+                    const std::string& stride) {
+  auto s = load_dds_settings(write_yaml(name, "dds:\n  domain_id: " + domain +
+                                                  "\n  topic_prefix: stac\n  ros2_names: true\n"
+                                                  "  config_file: " + config_file +
+                                                  "\n  frame_id: map\n  tentative_tracks: false\n"
+                                                  "  point_cloud_stride: " + stride + "\n"));
+  EXPECT_FALSE(s) << name << " loaded";
+  return s ? "" : s.error().message;
+}
+
 TEST(DdsSettings, MissingAndInvalidKeysAreNamed) {
   auto p = write_yaml("dds_missing", "dds:\n  domain_id: 3\n  topic_prefix: stac\n  ros2_names: true\n"
                                      "  config_file: \"\"\n");
   auto s = load_dds_settings(p);
   ASSERT_FALSE(s);
   EXPECT_NE(s.error().message.find("missing required key 'dds.frame_id'"), std::string::npos) << s.error().message;
-  p = write_yaml("dds_domain", "dds:\n  domain_id: 300\n  topic_prefix: stac\n  ros2_names: true\n"
-                               "  config_file: \"\"\n  frame_id: map\n  tentative_tracks: false\n"
-                               "  point_cloud_stride: 8\n");
-  s = load_dds_settings(p);
-  ASSERT_FALSE(s);
-  EXPECT_NE(s.error().message.find("'dds.domain_id' must be 0..230"), std::string::npos) << s.error().message;
-  p = write_yaml("dds_file", "dds:\n  domain_id: 1\n  topic_prefix: stac\n  ros2_names: true\n"
-                             "  config_file: nowhere.xml\n  frame_id: map\n  tentative_tracks: false\n"
-                               "  point_cloud_stride: 8\n");
-  s = load_dds_settings(p);
-  ASSERT_FALSE(s);
-  EXPECT_NE(s.error().message.find("'dds.config_file'"), std::string::npos) << s.error().message;
-  EXPECT_NE(s.error().message.find("is not a file"), std::string::npos);
-  p = write_yaml("dds_stride", "dds:\n  domain_id: 1\n  topic_prefix: stac\n  ros2_names: true\n"
-                               "  config_file: \"\"\n  frame_id: map\n  tentative_tracks: false\n"
-                               "  point_cloud_stride: -1\n");
-  s = load_dds_settings(p);
-  ASSERT_FALSE(s);
-  EXPECT_NE(s.error().message.find("'dds.point_cloud_stride'"), std::string::npos) << s.error().message;
+  const std::string domain = refusal("dds_domain", "300", "\"\"", "8");
+  EXPECT_NE(domain.find("'dds.domain_id' must be 0..230"), std::string::npos) << domain;
+  const std::string file = refusal("dds_file", "1", "nowhere.xml", "8");
+  EXPECT_NE(file.find("'dds.config_file'"), std::string::npos) << file;
+  EXPECT_NE(file.find("is not a file"), std::string::npos);
+  const std::string stride = refusal("dds_stride", "1", "\"\"", "-1");
+  EXPECT_NE(stride.find("'dds.point_cloud_stride'"), std::string::npos) << stride;
 }
 
 }  // namespace
