@@ -189,4 +189,24 @@ rt::Result<GridClassifier> train_boosting(const TrainingSet& data,
   return trainer.classifier();
 }
 
+rt::Result<GridClassifier> average_classifiers(std::span<const GridClassifier> members) {
+  if (members.empty()) return rt::make_error("no classifier to average");
+  const classification::GridModel& first = members.front().model();
+  classification::GridModel mean = first;
+  for (std::size_t k = 1; k < members.size(); ++k) {
+    const classification::GridModel& m = members[k].model();
+    if (m.layout != first.layout || m.resolutions != first.resolutions || m.lower != first.lower ||
+        m.scale != first.scale || m.prior != first.prior || m.table.size() != first.table.size())
+      return rt::make_error("classifier " + std::to_string(k) +
+                            " has other grids or priors than the first: not averageable");
+  }
+  const double inv = 1.0 / static_cast<double>(members.size());
+  for (std::size_t i = 0; i < mean.table.size(); ++i) {
+    double sum = 0.0;
+    for (const GridClassifier& m : members) sum += m.model().table[i];
+    mean.table[i] = static_cast<float>(sum * inv);
+  }
+  return GridClassifier::create(std::move(mean));
+}
+
 }  // namespace stac::learning

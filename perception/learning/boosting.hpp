@@ -92,4 +92,9 @@ rt::Result<GridClassifier> train_boosting(const TrainingSet& data,
                                           const BoostingConfig& config,
                                           const std::function<void(std::size_t)>& on_rounds = {});
 
+// The mean of classifiers on the same grids (train_boosting runs on the same data and
+// resolutions with different seeds): responses averaged cell by cell, so the mean classifies at
+// the cost of one. Fails when there is none, or their layouts, grids or priors differ.
+rt::Result<GridClassifier> average_classifiers(std::span<const GridClassifier> members);
+
 }  // namespace stac::learning

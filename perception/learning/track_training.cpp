@@ -39,17 +39,32 @@ rt::Result<classification::TrackClassifierModel> train_track_classifier(
     return rt::make_error("the split left no training or no held-out track (" +
                           std::to_string(tracks.size()) + " tracks)");
 
+  if (config.ensemble < 1 || config.ensemble > 64)
+    return rt::make_error("ensemble must be in [1, 64]");
   classification::TrackClassifierModel model;
-  const double total = static_cast<double>(config.segment.rounds + config.holistic.rounds);
+  const std::size_t per_member = config.segment.rounds + config.holistic.rounds;
+  const double total = static_cast<double>(per_member * config.ensemble);
   const auto report = [&](std::size_t before) {
     return [&config, before, total](std::size_t done) {
       if (config.progress) config.progress(static_cast<double>(before + done) / total);
     };
   };
-  auto seg = train_boosting(segments, layouts.segment, config.segment, report(0));
+  std::vector<GridClassifier> seg_members, hol_members;
+  for (std::size_t k = 0; k < config.ensemble; ++k) {
+    BoostingConfig seg_config = config.segment, hol_config = config.holistic;
+    seg_config.seed += 2 * k;
+    hol_config.seed += 2 * k;
+    auto seg = train_boosting(segments, layouts.segment, seg_config, report(k * per_member));
+    if (!seg) return rt::make_error("segment classifier: " + seg.error().message);
+    auto hol = train_boosting(holistic, layouts.holistic, hol_config,
+                              report(k * per_member + config.segment.rounds));
+    if (!hol) return rt::make_error("holistic classifier: " + hol.error().message);
+    seg_members.push_back(std::move(seg).value());
+    hol_members.push_back(std::move(hol).value());
+  }
+  auto seg = average_classifiers(seg_members);
   if (!seg) return rt::make_error("segment classifier: " + seg.error().message);
-  auto hol =
-      train_boosting(holistic, layouts.holistic, config.holistic, report(config.segment.rounds));
+  auto hol = average_classifiers(hol_members);
   if (!hol) return rt::make_error("holistic classifier: " + hol.error().message);
   model.segment = std::move(seg).value();
   model.holistic = std::move(hol).value();

@@ -28,6 +28,9 @@ struct TrackTrainingConfig {
   LogisticConfig filter;
   double held_out_fraction = 0.3;  // tracks kept for the filter fit, drawn with split_seed
   std::uint64_t split_seed = 1;
+  // Boosting runs per classifier (seeds segment.seed + 2k, holistic.seed + 2k), averaged into
+  // one table (average_classifiers): the runtime cost is that of one.
+  std::size_t ensemble = 1;
   // Optional: told the fraction of the boosting rounds (segment, then holistic) done, in [0, 1].
   std::function<void(double)> progress;
 };

@@ -190,5 +190,49 @@ TEST(Boosting, RefusesEmptyOrMismatchedTrainingSetsAndBadConfigurations) {
   EXPECT_STREQ(validate(BoostingConfig{}), "");
 }
 
+TEST(AverageClassifiers, ClassifiesAsTheMeanOfItsMembersAtTheCostOfOne) {
+  const auto train = classification::testing::noisy(800, 12, 0.1, 6);
+  const auto test = classification::testing::noisy(200, 12, 0.1, 7);
+  std::vector<GridClassifier> members;
+  for (std::uint64_t seed : {7u, 9u, 11u}) {
+    auto c = train_boosting(train, flat_layout(12), {.rounds = 100, .seed = seed});
+    ASSERT_TRUE(c.has_value());
+    members.push_back(std::move(c).value());
+  }
+  auto mean = average_classifiers(members);
+  ASSERT_TRUE(mean.has_value()) << mean.error().message;
+  EXPECT_EQ(mean->cell_count(), members[0].cell_count());  // one table: the cost of one member
+  EXPECT_EQ(mean->model().prior, members[0].model().prior);
+  for (std::size_t i = 0; i < test.size(); ++i) {
+    LogOdds got{}, each{};
+    ASSERT_TRUE(mean->classify(test.row(i), got));
+    LogOdds want{};
+    for (const GridClassifier& m : members) {
+      ASSERT_TRUE(m.classify(test.row(i), each));
+      for (std::size_t k = 0; k < kClassCount; ++k) want[k] += each[k] - m.model().prior[k];
+    }
+    for (std::size_t k = 0; k < kClassCount; ++k)
+      EXPECT_NEAR(got[k], mean->model().prior[k] + want[k] / 3.0f, 1e-4f) << "example " << i;
+  }
+  // The members differ (other seeds), so the mean is none of them.
+  EXPECT_NE(mean->model().table, members[0].model().table);
+  auto one = average_classifiers(std::span(members).first(1));
+  ASSERT_TRUE(one.has_value());
+  EXPECT_EQ(one->model().table, members[0].model().table);
+}
+
+TEST(AverageClassifiers, RefusesNoMemberAndMembersOnOtherGrids) {
+  EXPECT_FALSE(average_classifiers({}).has_value());
+  const auto a = train_boosting(classification::testing::noisy(400, 12, 0.1, 1), flat_layout(12),
+                                {.rounds = 20});
+  const auto b = train_boosting(classification::testing::noisy(400, 12, 0.1, 2), flat_layout(12),
+                                {.rounds = 20});  // other data: other grid ranges and priors
+  ASSERT_TRUE(a.has_value() && b.has_value());
+  const std::vector<GridClassifier> both{*a, *b};
+  const auto r = average_classifiers(both);
+  ASSERT_FALSE(r.has_value());
+  EXPECT_NE(r.error().message.find("classifier 1"), std::string::npos) << r.error().message;
+}
+
 }  // namespace
 }  // namespace stac::learning

@@ -115,6 +115,34 @@ TEST(TrackTraining, ProgressRisesToOneAndDoesNotChangeTheModel) {
   EXPECT_DOUBLE_EQ(seen.back(), 1.0);
 }
 
+TEST(TrackTraining, AnEnsembleIsTheMeanOfItsMembersSeeds) {
+  const auto train = synthetic_tracks(300, 3);
+  TrackTrainingConfig c = config();
+  c.ensemble = 3;
+  auto ensemble = train_track_classifier(train, layouts(), c);
+  ASSERT_TRUE(ensemble.has_value()) << ensemble.error().message;
+  auto single = train_track_classifier(train, layouts(), config());
+  ASSERT_TRUE(single.has_value());
+  // Same tables' size and layout (same classification cost), other responses.
+  EXPECT_EQ(ensemble->segment.model().table.size(), single->segment.model().table.size());
+  EXPECT_NE(ensemble->segment.model().table, single->segment.model().table);
+  // Member k has seeds segment.seed + 2k and holistic.seed + 2k; their mean is the model's table.
+  std::vector<GridClassifier> members;
+  for (std::uint64_t k = 0; k < 3; ++k) {
+    TrackTrainingConfig m = config();
+    m.segment.seed += 2 * k;
+    m.holistic.seed += 2 * k;
+    auto one = train_track_classifier(train, layouts(), m);
+    ASSERT_TRUE(one.has_value());
+    members.push_back(one->segment);
+  }
+  auto mean = average_classifiers(members);
+  ASSERT_TRUE(mean.has_value());
+  EXPECT_EQ(mean->model().table, ensemble->segment.model().table);
+  c.ensemble = 0;
+  EXPECT_FALSE(train_track_classifier(train, layouts(), c).has_value());
+}
+
 TEST(TrackTraining, RefusesWrongSizesAndEmptySplits) {
   auto tracks = synthetic_tracks(50, 4);
   tracks[7].holistic.push_back(1.0f);
