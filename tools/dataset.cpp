@@ -6,9 +6,9 @@
 // descriptor at that time. A track's label is the majority truth class of its segments' points.
 #include <cstdio>
 #include <map>
-#include <set>
 #include <memory>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -49,10 +49,11 @@ struct TrackBuild {
   DatasetTrack track;
   std::uint32_t largest = 0;
   std::array<std::uint64_t, 4> class_points{};  // per ObjectClass, truth points
+  std::vector<SegmentTruth> segment_truth;      // per segment, in order (consistency rule)
 };
 
 struct RunCounts {
-  std::uint64_t scans = 0, tracks = 0, kept = 0, truth_matched = 0;
+  std::uint64_t scans = 0, tracks = 0, kept = 0, truth_matched = 0, inconsistent = 0;
 };
 
 class Builder : public classification::TrackClassifier::Observer {
@@ -156,13 +157,27 @@ class Builder : public classification::TrackClassifier::Observer {
       const auto si = static_cast<std::size_t>(track.segment);
       TrackBuild& b = live_.at(track.id);
       b.largest = std::max(b.largest, result.segments.segments[si].count);
+      std::uint64_t total = 0, most = 0;
+      std::int64_t object = -1;
+      ObjectClass object_class = ObjectClass::kBackground;
       for (const auto& [truth_id, n] : records_[si].truth) {
         ObjectClass c = ObjectClass::kBackground;
         for (const TruthObjectRecord& obj : ts->objects) {
           if (static_cast<std::int64_t>(obj.id) == truth_id) c = class_of(obj.cls);
         }
         b.class_points[static_cast<std::size_t>(c)] += n;
+        total += n;
+        if (c != ObjectClass::kBackground && n > most) {
+          most = n;
+          object = truth_id;
+          object_class = c;
+        }
       }
+      if (2 * most <= total) {
+        object = -1;
+        object_class = ObjectClass::kBackground;
+      }
+      b.segment_truth.push_back({object, object_class});
     }
     updated_.clear();
     // Tracks the tracker no longer reports are complete.
@@ -183,7 +198,9 @@ class Builder : public classification::TrackClassifier::Observer {
       if (b.class_points[c] > b.class_points[best]) best = c;
     }
     b.track.label = static_cast<ObjectClass>(best);
+    b.track.off_label_segments = off_label_segments(b.track.label, b.segment_truth);
     b.track.source = source_;
+    if (!consistent(b.track)) ++counts_.inconsistent;
     out_.tracks.push_back(std::move(b.track));
     ++counts_.kept;
   }
@@ -210,16 +227,24 @@ int run_dataset(const DatasetOptions& o) {
     if (!r) return fail(r.error().message);
     std::fprintf(stderr,
                  "stac dataset: %s: %llu scans, %llu tracks, %llu kept (>= %u segments, one over "
-                 "%u points)\n",
+                 "%u points), %llu of them inconsistent (over 10%% of segments tracking or "
+                 "under-segmentation errors)\n",
                  o.in[k].c_str(), static_cast<unsigned long long>(r->scans),
                  static_cast<unsigned long long>(r->tracks),
-                 static_cast<unsigned long long>(r->kept), kMinSegments, kMinLargestSegment);
+                 static_cast<unsigned long long>(r->kept), kMinSegments, kMinLargestSegment,
+                 static_cast<unsigned long long>(r->inconsistent));
   }
   if (auto w = write_dataset(o.out, data); !w) return fail(w.error().message);
   std::array<std::size_t, 4> per{};
-  for (const DatasetTrack& t : data.tracks) ++per[static_cast<std::size_t>(t.label)];
-  std::printf("%s: %zu tracks (car %zu, pedestrian %zu, bicyclist %zu, background %zu)\n",
-              o.out.c_str(), data.tracks.size(), per[0], per[1], per[2], per[3]);
+  std::size_t inconsistent = 0;
+  for (const DatasetTrack& t : data.tracks) {
+    ++per[static_cast<std::size_t>(t.label)];
+    inconsistent += consistent(t) ? 0 : 1;
+  }
+  std::printf(
+      "%s: %zu tracks (car %zu, pedestrian %zu, bicyclist %zu, background %zu; %zu "
+      "inconsistent)\n",
+      o.out.c_str(), data.tracks.size(), per[0], per[1], per[2], per[3], inconsistent);
   return 0;
 }
 

@@ -5,6 +5,7 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <map>
 #include <nlohmann/json.hpp>
 
 #include "perception/classification/holistic.hpp"
@@ -79,10 +80,12 @@ rt::Result<bool> write_dataset(const std::filesystem::path& dir, const Dataset& 
     put(b, static_cast<std::uint32_t>(s.size()));
     put_bytes(b, s.data(), s.size());
   }
-  nlohmann::json classes = nlohmann::json::object(), segments = nlohmann::json::object();
+  nlohmann::json classes = nlohmann::json::object(), segments = nlohmann::json::object(),
+                 inconsistent = nlohmann::json::object();
   for (int c = 0; c <= 3; ++c) {
     classes[classification::class_name(static_cast<ObjectClass>(c))] = 0;
     segments[classification::class_name(static_cast<ObjectClass>(c))] = 0;
+    inconsistent[classification::class_name(static_cast<ObjectClass>(c))] = 0;
   }
   std::uint64_t total_segments = 0;
   for (const DatasetTrack& t : data.tracks) {
@@ -90,10 +93,12 @@ rt::Result<bool> write_dataset(const std::filesystem::path& dir, const Dataset& 
     put(b, t.source);
     put(b, static_cast<std::uint32_t>(t.label));
     put(b, t.segments);
+    put(b, t.off_label_segments);
     put_floats(b, t.segment_rows);
     put_floats(b, t.holistic_rows);
     const char* name = classification::class_name(t.label);
     classes[name] = classes[name].get<std::uint64_t>() + 1;
+    if (!consistent(t)) inconsistent[name] = inconsistent[name].get<std::uint64_t>() + 1;
     segments[name] = segments[name].get<std::uint64_t>() + t.segments;
     total_segments += t.segments;
   }
@@ -112,6 +117,7 @@ rt::Result<bool> write_dataset(const std::filesystem::path& dir, const Dataset& 
                                    {"segments", total_segments},
                                    {"tracks_per_class", classes},
                                    {"segments_per_class", segments},
+                                   {"inconsistent_tracks_per_class", inconsistent},
                                    {"segment_dimensions", segment_dims()},
                                    {"holistic_dimensions", holistic_dims()}};
   std::ofstream m(dir / "manifest.json");
@@ -168,9 +174,11 @@ rt::Result<Dataset> read_dataset(const std::filesystem::path& dir) {
   for (std::uint64_t i = 0; i < ntracks; ++i) {
     DatasetTrack t;
     std::uint32_t label = 0;
-    if (!r.get(t.id) || !r.get(t.source) || !r.get(label) || !r.get(t.segments))
+    if (!r.get(t.id) || !r.get(t.source) || !r.get(label) || !r.get(t.segments) ||
+        !r.get(t.off_label_segments))
       return bad("truncated track");
-    if (label > 3 || t.source >= nsources || t.segments == 0) return bad("bad track record");
+    if (label > 3 || t.source >= nsources || t.segments == 0 || t.off_label_segments > t.segments)
+      return bad("bad track record");
     t.label = static_cast<ObjectClass>(label);
     if (!r.get_floats(t.segment_rows, std::size_t{t.segments} * sd) ||
         !r.get_floats(t.holistic_rows, std::size_t{t.segments} * hd)) {
@@ -189,6 +197,27 @@ void append_dataset(Dataset& into, Dataset&& more) {
     t.source += offset;
     into.tracks.push_back(std::move(t));
   }
+}
+
+std::uint32_t off_label_segments(ObjectClass label, std::span<const SegmentTruth> segments) {
+  std::uint32_t off = 0;
+  if (label == ObjectClass::kBackground) {
+    for (const SegmentTruth& s : segments) off += s.object >= 0 ? 1u : 0u;
+    return off;
+  }
+  std::map<std::int64_t, std::uint32_t> votes;  // offline: a track's few objects
+  for (const SegmentTruth& s : segments)
+    if (s.object >= 0 && s.cls == label) ++votes[s.object];
+  std::int64_t own = -1;
+  std::uint32_t most = 0;
+  for (const auto& [id, v] : votes) {
+    if (v > most) {
+      most = v;
+      own = id;
+    }
+  }
+  for (const SegmentTruth& s : segments) off += own < 0 || s.object != own ? 1u : 0u;
+  return off;
 }
 
 }  // namespace stac::tools

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -20,6 +21,9 @@ struct DatasetTrack {
   std::uint32_t source = 0;  // index into Dataset::sources
   classification::ObjectClass label = classification::ObjectClass::kBackground;
   std::uint32_t segments = 0;
+  // Segments whose own majority truth class (of their points) is not `label`: tracking or
+  // under-segmentation errors. Over-segmentation (a piece of a car) is not one.
+  std::uint32_t off_label_segments = 0;
   std::vector<float> segment_rows;   // segments * segment dimensions, row-major
   std::vector<float> holistic_rows;  // segments * holistic dimensions, row-major
 };
@@ -29,7 +33,29 @@ struct Dataset {
   std::vector<DatasetTrack> tracks;
 };
 
-inline constexpr std::uint32_t kDatasetFormatVersion = 1;
+inline constexpr std::uint32_t kDatasetFormatVersion = 2;
+
+// The thesis's rule (ch. 1, the Stanford Track Collection): a track in which more than 10% of
+// the segments are tracking or under-segmentation errors is inconsistent, and is left out of
+// training and of the accuracy (`stac train`, `stac eval --classes`, which also reports it with
+// every track counted). The thesis applies it to foreground tracks: here a track labelled
+// background is inconsistent when more than 10% of its segments are mostly one foreground object.
+inline constexpr double kMaxOffLabelFraction = 0.1;
+// One segment's truth for that rule: the foreground truth object holding more than half of the
+// segment's points (-1: none; background, or several objects under-segmented) and its class.
+struct SegmentTruth {
+  std::int64_t object = -1;
+  classification::ObjectClass cls = classification::ObjectClass::kBackground;
+};
+// DatasetTrack::off_label_segments of a track labelled `label`: for a foreground label, the
+// segments that are not mostly its own object (the one most of its segments of that class are
+// mostly of); for background, the segments that are mostly one foreground object.
+std::uint32_t off_label_segments(classification::ObjectClass label,
+                                 std::span<const SegmentTruth> segments);
+[[nodiscard]] inline bool consistent(const DatasetTrack& t) noexcept {
+  return static_cast<double>(t.off_label_segments) <=
+         kMaxOffLabelFraction * static_cast<double>(t.segments);
+}
 
 // Creates DIR when missing; overwrites tracks.bin and manifest.json.
 rt::Result<bool> write_dataset(const std::filesystem::path& dir, const Dataset& data);

@@ -22,6 +22,8 @@ struct TrainOptions {
   std::uint64_t seed = 1;
   std::size_t rounds = 1000;
   double held_out = 0.3;
+  std::size_t ensemble = 1;
+  bool keep_inconsistent = false;
 };
 
 int run_train(const TrainOptions& o) {
@@ -39,7 +41,12 @@ int run_train(const TrainOptions& o) {
   std::vector<learning::TrackExample> examples;
   examples.reserve(all.tracks.size());
   std::array<std::size_t, 4> per{};
+  std::size_t inconsistent = 0;
   for (DatasetTrack& t : all.tracks) {
+    if (!o.keep_inconsistent && !consistent(t)) {
+      ++inconsistent;
+      continue;
+    }
     learning::TrackExample e;
     e.label = t.label;
     e.segments = std::move(t.segment_rows);
@@ -49,6 +56,10 @@ int run_train(const TrainOptions& o) {
     examples.push_back(std::move(e));
     ++per[static_cast<std::size_t>(t.label)];
   }
+  if (examples.empty())
+    return fail(
+        "every track of the datasets is inconsistent: nothing to train on "
+        "(--keep-inconsistent trains on them)");
   learning::TrackTrainingConfig config;
   config.segment.rounds = o.rounds;
   config.holistic.rounds = o.rounds;
@@ -56,10 +67,12 @@ int run_train(const TrainOptions& o) {
   config.holistic.seed = o.seed + 1;
   config.split_seed = o.seed;
   config.held_out_fraction = o.held_out;
+  config.ensemble = o.ensemble;
   std::fprintf(stderr,
-               "stac train: %zu tracks (car %zu, pedestrian %zu, bicyclist %zu, background %zu), "
-               "%zu rounds...\n",
-               examples.size(), per[0], per[1], per[2], per[3], o.rounds);
+               "stac train: %zu tracks (car %zu, pedestrian %zu, bicyclist %zu, background %zu; "
+               "%zu inconsistent left out), %zu rounds%s...\n",
+               examples.size(), per[0], per[1], per[2], per[3], inconsistent, o.rounds,
+               o.ensemble > 1 ? (" x " + std::to_string(o.ensemble) + " seeds").c_str() : "");
   const auto t0 = std::chrono::steady_clock::now();
   Progress progress("train: boosting", 1.0);
   config.progress = [&progress](double f) { progress.update(f); };
@@ -103,6 +116,14 @@ void add_train_command(CLI::App& app) {
   cmd->add_option("--held-out", o->held_out, "fraction of tracks kept for the ADBF weights")
       ->capture_default_str()
       ->check(CLI::Range(0.05, 0.95));
+  cmd->add_option("--ensemble", o->ensemble,
+                  "boosting runs per classifier with different seeds, averaged into one table "
+                  "(training takes N times as long; classifying costs the same)")
+      ->capture_default_str()
+      ->check(CLI::Range(std::size_t{1}, std::size_t{64}));
+  cmd->add_flag("--keep-inconsistent", o->keep_inconsistent,
+                "train on the inconsistent tracks too (more than 10% of their segments tracking "
+                "or under-segmentation errors; the thesis leaves them out)");
   cmd->callback([o] {
     if (const int code = run_train(*o); code != 0) throw CLI::RuntimeError(code);
   });

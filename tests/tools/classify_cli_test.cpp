@@ -61,6 +61,7 @@ TEST_F(ClassifyCli, DatasetTrainEvalBeatsThePriorOnAHeldOutDrive) {
   for (const char* c : {"car", "pedestrian", "background"}) {
     EXPECT_GT(manifest["tracks_per_class"][c].get<int>(), 0) << c << "\n" << manifest.dump(2);
   }
+  ASSERT_TRUE(manifest.contains("inconsistent_tracks_per_class")) << manifest.dump(2);
   const CliResult test_data = stac("dataset --in " + at("test.pcap") + " --truth " +
                                    at("test.jsonl") + " --out " + at("test_data"));
   ASSERT_EQ(test_data.code, 0) << test_data.output;
@@ -70,6 +71,7 @@ TEST_F(ClassifyCli, DatasetTrainEvalBeatsThePriorOnAHeldOutDrive) {
   ASSERT_EQ(train.code, 0) << train.output;
   EXPECT_TRUE(std::filesystem::is_regular_file(at("model.stac")));
   EXPECT_NE(train.output.find("trained on"), std::string::npos) << train.output;
+  EXPECT_NE(train.output.find("inconsistent left out"), std::string::npos) << train.output;
 
   const CliResult eval = stac("eval --classes --data " + at("test_data") + " --model " +
                               at("model.stac") + " --report " + at("report"));
@@ -90,23 +92,34 @@ TEST_F(ClassifyCli, DatasetTrainEvalBeatsThePriorOnAHeldOutDrive) {
       }
     }
   }
-  // tracks.csv: a header and one line per evaluated track, whose ADBF classes give the accuracy.
+  // tracks.csv: a header and one line per track, inconsistent ones too (last column 0), whose
+  // ADBF classes give both accuracies.
   {
     std::ifstream csv(at("report") + "/tracks.csv");
     std::string line;
     ASSERT_TRUE(std::getline(csv, line));
     EXPECT_EQ(line.rfind("source,track_id,label,adbf_class,", 0), 0u) << line;
-    int rows = 0, right = 0;
+    EXPECT_NE(line.find(",consistent"), std::string::npos) << line;
+    int rows = 0, right = 0, counted = 0, counted_right = 0;
     while (std::getline(csv, line)) {
       std::vector<std::string> f;
       std::stringstream ss(line);
       for (std::string cell; std::getline(ss, cell, ',');) f.push_back(cell);
-      ASSERT_EQ(f.size(), 12u) << line;
+      ASSERT_EQ(f.size(), 13u) << line;
+      ASSERT_TRUE(f[12] == "0" || f[12] == "1") << line;
       ++rows;
       right += f[2] == f[3] ? 1 : 0;
+      if (f[12] == "1") {
+        ++counted;
+        counted_right += f[2] == f[3] ? 1 : 0;
+      }
     }
-    EXPECT_EQ(rows, m["tracks"].get<int>());
-    EXPECT_NEAR(static_cast<double>(right) / rows, m["track_accuracy"].get<double>(), 1e-9);
+    EXPECT_EQ(counted, m["tracks"].get<int>());
+    EXPECT_EQ(rows - counted, m["inconsistent_tracks"].get<int>());
+    EXPECT_NEAR(static_cast<double>(counted_right) / counted, m["track_accuracy"].get<double>(),
+                1e-9);
+    EXPECT_NEAR(static_cast<double>(right) / rows, m["all_tracks.track_accuracy"].get<double>(),
+                1e-9);
   }
   const double adbf = m["track_accuracy"].get<double>(),
                prior = m["track.prior_only.overall"].get<double>();
@@ -143,11 +156,18 @@ TEST_F(ClassifyCli, DatasetTrainEvalBeatsThePriorOnAHeldOutDrive) {
   }
   auto test_set = stac::tools::read_dataset(at("test_data"));
   ASSERT_TRUE(test_set) << test_set.error().message;
-  std::size_t agree = 0;
+  std::size_t agree = 0, consistent = 0, agree_consistent = 0;
   for (const stac::tools::DatasetTrack& t : test_set->tracks) {
-    agree += last[t.id] == stac::classification::class_name(t.label) ? 1 : 0;
+    const bool right = last[t.id] == stac::classification::class_name(t.label);
+    agree += right ? 1 : 0;
+    if (stac::tools::consistent(t)) {
+      ++consistent;
+      agree_consistent += right ? 1 : 0;
+    }
   }
-  EXPECT_DOUBLE_EQ(static_cast<double>(agree) / static_cast<double>(test_set->tracks.size()), adbf);
+  EXPECT_DOUBLE_EQ(static_cast<double>(agree_consistent) / static_cast<double>(consistent), adbf);
+  EXPECT_DOUBLE_EQ(static_cast<double>(agree) / static_cast<double>(test_set->tracks.size()),
+                   m["all_tracks.track_accuracy"].get<double>());
   EXPECT_GT(classes["car"], 0);
   EXPECT_GT(classes["pedestrian"], 0);
   EXPECT_GT(classes["background"], 0);

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -117,7 +118,8 @@ TEST(ModelFile, RoundTripsAndRefusesMissingTruncatedCorruptAndFolders) {
 
 TEST(DatasetFile, RoundTripsAppendsAndRefusesMissingTruncatedAndCorrupt) {
   const auto dir = fresh_dir("stac_dataset_file");
-  const Dataset d = synthetic_dataset(6);
+  Dataset d = synthetic_dataset(6);
+  d.tracks[2].off_label_segments = 1;  // of 3: inconsistent
   ASSERT_TRUE(write_dataset(dir / "a", d));
   EXPECT_TRUE(std::filesystem::exists(dir / "a" / "manifest.json"));
   auto back = read_dataset(dir / "a");
@@ -126,6 +128,7 @@ TEST(DatasetFile, RoundTripsAppendsAndRefusesMissingTruncatedAndCorrupt) {
   for (std::size_t i = 0; i < d.tracks.size(); ++i) {
     EXPECT_EQ(back->tracks[i].id, d.tracks[i].id);
     EXPECT_EQ(back->tracks[i].label, d.tracks[i].label);
+    EXPECT_EQ(back->tracks[i].off_label_segments, d.tracks[i].off_label_segments);
     EXPECT_EQ(back->tracks[i].segment_rows, d.tracks[i].segment_rows);
     EXPECT_EQ(back->tracks[i].holistic_rows, d.tracks[i].holistic_rows);
   }
@@ -141,6 +144,22 @@ TEST(DatasetFile, RoundTripsAppendsAndRefusesMissingTruncatedAndCorrupt) {
   ASSERT_FALSE(missing);
   EXPECT_NE(missing.error().message.find("stac dataset"), std::string::npos);
 
+  // The manifest counts the inconsistent tracks; a record with more off-label segments than
+  // segments is refused.
+  std::ifstream manifest_file(dir / "a" / "manifest.json");
+  const nlohmann::json manifest = nlohmann::json::parse(manifest_file);
+  const nlohmann::json& inconsistent = manifest.at("inconsistent_tracks_per_class");
+  EXPECT_EQ(inconsistent.at("bicyclist"), 1);  // track 2 (labels are i % 4)
+  EXPECT_EQ(inconsistent.at("car"), 0);
+  EXPECT_EQ(inconsistent.at("background"), 0);
+  Dataset bad = synthetic_dataset(2);
+  bad.tracks[1].off_label_segments = 4;
+  ASSERT_TRUE(write_dataset(dir / "bad", bad));
+  auto refused = read_dataset(dir / "bad");
+  ASSERT_FALSE(refused);
+  EXPECT_NE(refused.error().message.find("bad track record"), std::string::npos)
+      << refused.error().message;
+
   const std::vector<std::uint8_t> bytes = read_bytes(dir / "a" / "tracks.bin");
   std::filesystem::create_directories(dir / "half");
   write_bytes(dir / "half" / "tracks.bin",
@@ -155,6 +174,40 @@ TEST(DatasetFile, RoundTripsAppendsAndRefusesMissingTruncatedAndCorrupt) {
     EXPECT_NE(r.error().message.find((dir / name / "tracks.bin").string()), std::string::npos)
         << r.error().message;
   }
+}
+
+TEST(DatasetConsistency, OffLabelSegmentsFollowTheThesisRule) {
+  using S = SegmentTruth;
+  const S car5{5, ObjectClass::kCar}, car6{6, ObjectClass::kCar}, none{};
+  const S ped7{7, ObjectClass::kPedestrian};
+  // A car track on one car: nothing off; over-segmentation (pieces of car 5) is not an error.
+  std::vector<S> seg(20, car5);
+  EXPECT_EQ(off_label_segments(ObjectClass::kCar, seg), 0u);
+  // Two segments lost in the background (or under-segmented: no object over half the points)
+  // and one on another car (an identity switch): 3 of 20, over 10%.
+  seg[3] = none;
+  seg[4] = none;
+  seg[9] = car6;
+  EXPECT_EQ(off_label_segments(ObjectClass::kCar, seg), 3u);
+  DatasetTrack t;
+  t.segments = 20;
+  t.off_label_segments = 3;
+  EXPECT_FALSE(consistent(t));
+  t.off_label_segments = 2;  // exactly 10%: kept
+  EXPECT_TRUE(consistent(t));
+  // Its own object is the one most segments are on, whichever comes first.
+  std::vector<S> switched(10, car6);
+  for (int i = 0; i < 4; ++i) switched[static_cast<std::size_t>(i)] = car5;
+  EXPECT_EQ(off_label_segments(ObjectClass::kCar, switched), 4u);
+  // A background track: only segments that are mostly one foreground object are off.
+  std::vector<S> bg(10, none);
+  bg[0] = ped7;
+  EXPECT_EQ(off_label_segments(ObjectClass::kBackground, bg), 1u);
+  bg[1] = car5;
+  EXPECT_EQ(off_label_segments(ObjectClass::kBackground, bg), 2u);
+  // A pedestrian track whose segments are all of a car has no own object: all off.
+  EXPECT_EQ(off_label_segments(ObjectClass::kPedestrian, std::vector<S>(5, car5)), 5u);
+  EXPECT_EQ(off_label_segments(ObjectClass::kCar, {}), 0u);
 }
 
 }  // namespace
