@@ -50,6 +50,6 @@ train_args=() test_args=()
 for d in "${TRAIN[@]}"; do train_args+=(--data "$WORK/$d/data"); done
 for d in "${TEST[@]}"; do test_args+=(--data "$WORK/$d/data"); done
 mkdir -p "$(dirname "$OUT")"
-"$STAC" train "${train_args[@]}" --rounds 6000 --out "$OUT"
+"$STAC" train "${train_args[@]}" --rounds 10000 --ensemble 4 --out "$OUT"
 "$STAC" eval --classes "${test_args[@]}" --model "$OUT" --report "$WORK/eval"
 echo "$0: model $OUT; held-out figures $WORK/eval/metrics.json (tracks.csv, confusion.png, pr.png)"
