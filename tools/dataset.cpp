@@ -259,7 +259,9 @@ void add_dataset_command(CLI::App& app) {
       "segment each track is updated with and the track's holistic descriptor after it, labels\n"
       "each track by the majority truth class of its segments' points (car, pedestrian,\n"
       "bicyclist, else background), keeps tracks of at least 10 segments with one over 75\n"
-      "points, and writes DIR/tracks.bin and DIR/manifest.json (docs/classification.md).");
+      "points, counts per track the segments that are tracking or under-segmentation errors\n"
+      "(over 10%: inconsistent, left out by `stac train` and `stac eval --classes`, as in the\n"
+      "thesis), and writes DIR/tracks.bin and DIR/manifest.json (docs/classification.md).");
   cmd->add_option("--in", o->in, "pcap capture of a `stac sim` drive (repeatable)")
       ->required()
       ->check(CLI::ExistingFile);
