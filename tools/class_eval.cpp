@@ -194,18 +194,19 @@ int run_class_eval(const ClassEvalOptions& o) {
   }
   progress.finish();
 
+  const std::uint64_t inconsistent = all_tracks.total() - tracks[kAdbf].total();
   nlohmann::json metrics = {{"track_accuracy", tracks[kAdbf].accuracy()},
                             {"segment_accuracy", segments[kAdbf].accuracy()},
                             {"tracks", tracks[kAdbf].total()},
                             {"segments", segments[kAdbf].total()},
-                            {"inconsistent_tracks", all_tracks.total() - tracks[kAdbf].total()},
+                            {"inconsistent_tracks", inconsistent},
                             {"all_tracks.track_accuracy", all_tracks.accuracy()}};
   std::printf(
       "stac eval --classes: %llu tracks, %llu segments (%llu inconsistent tracks left out); "
       "model %s\n",
       static_cast<unsigned long long>(tracks[kAdbf].total()),
       static_cast<unsigned long long>(segments[kAdbf].total()),
-      static_cast<unsigned long long>(all_tracks.total() - tracks[kAdbf].total()), o.model.c_str());
+      static_cast<unsigned long long>(inconsistent), o.model.c_str());
   std::printf("%-8s %-15s %9s %11s %10s %8s\n", "", "filter", "car", "pedestrian", "bicyclist",
               "overall");
   for (int wise = 0; wise < 2; ++wise) {

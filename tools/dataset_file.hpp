@@ -21,8 +21,8 @@ struct DatasetTrack {
   std::uint32_t source = 0;  // index into Dataset::sources
   classification::ObjectClass label = classification::ObjectClass::kBackground;
   std::uint32_t segments = 0;
-  // Segments whose own majority truth class (of their points) is not `label`: tracking or
-  // under-segmentation errors. Over-segmentation (a piece of a car) is not one.
+  // Segments that are tracking or under-segmentation errors (off_label_segments() below: not
+  // mostly the track's own object). Over-segmentation (a piece of a car) is not one.
   std::uint32_t off_label_segments = 0;
   std::vector<float> segment_rows;   // segments * segment dimensions, row-major
   std::vector<float> holistic_rows;  // segments * holistic dimensions, row-major

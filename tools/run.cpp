@@ -518,7 +518,7 @@ int run_live(const RunOptions& o) {
       if (auto h = (*publisher)->publish_health(health); !h && status) status = h;
       // The viewers' cloud last, outside the scan's end-to-end latency (it is the largest sample).
       if (auto c = scan_publishing.publish_cloud(f->result, index); !c && status) status = c;
-      pipeline.want_cloud(scan_publishing.cloud_reader());  // from the next scans on
+      pipeline.want_cloud(scan_publishing.cloud_reader());  // as publish_cloud found it
       results.release();
       if (status) {
         shared.published.fetch_add(1, std::memory_order_relaxed);

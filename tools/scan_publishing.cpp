@@ -95,22 +95,23 @@ rt::Result<bool> ScanPublishing::publish(const pipeline::ScanResult& r, std::uin
   return status;
 }
 
-bool ScanPublishing::cloud_reader() const noexcept {
-  dds_publication_matched_status_t matched{};
-  return dds_get_publication_matched_status(publisher_.writer(dds::Topic::kPointCloud), &matched) != 0 ||
-         matched.current_count > 0;  // unknown: as if there were one
-}
-
 rt::Result<bool> ScanPublishing::publish_cloud(const pipeline::ScanResult& r,
                                                std::uint64_t scan_index) {
+  // Asked once a scan, whether or not this scan has a cloud: the pipeline builds the next ones
+  // from what is found here (cloud_reader()).
+  dds_publication_matched_status_t matched{};
+  cloud_reader_ = dds_get_publication_matched_status(publisher_.writer(dds::Topic::kPointCloud),
+                                                     &matched) != 0 ||
+                  matched.current_count > 0;  // unknown: as if there were one
   // Not built for this scan (dds.point_cloud_stride 0, or nobody read the last one): nothing
   // to send, not an empty cloud.
   if (!r.has_cloud) return false;
   // Only for a reader: Cyclone serializes a sample even when nobody reads it (about 1 ms for a
   // 40k-point cloud), and this topic's readers are viewers, which come and go.
-  if (!cloud_reader()) return false;
+  if (!cloud_reader_) return false;
   const dds::ScanStamp stamp{r.stamp_ns, scan_index};
-  const std::size_t n_segments = std::min<std::size_t>(r.segments.segments.size(), segment_labels_.size());
+  const std::size_t n_segments =
+      std::min<std::size_t>(r.segments.segments.size(), segment_labels_.size());
   segment_labels(r, segment_labels_);
   const std::size_t n = std::min(r.cloud.size(), cloud_.size());
   for (std::size_t i = 0; i < n; ++i) {

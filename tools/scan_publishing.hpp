@@ -36,9 +36,9 @@ class ScanPublishing {
   // false when skipped (no cloud built for this scan, or nobody reading). Separate, so that it
   // can go out last.
   rt::Result<bool> publish_cloud(const pipeline::ScanResult& result, std::uint64_t scan_index);
-  // Whether a reader of point_cloud is matched now (the pipeline builds the cloud only then:
-  // ScanPipeline::want_cloud).
-  [[nodiscard]] bool cloud_reader() const noexcept;
+  // Whether a reader of point_cloud was matched at the last publish_cloud() (true before the
+  // first): the pipeline builds the cloud only then (ScanPipeline::want_cloud).
+  [[nodiscard]] bool cloud_reader() const noexcept { return cloud_reader_; }
 
  private:
   dds::Publisher& publisher_;
@@ -47,6 +47,7 @@ class ScanPublishing {
   std::vector<dds::SegmentIn> segments_;
   std::vector<std::uint8_t> segment_labels_;
   std::vector<dds::LabeledPointIn> cloud_;
+  bool cloud_reader_ = true;
 };
 
 }  // namespace stac::tools

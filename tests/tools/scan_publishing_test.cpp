@@ -75,6 +75,7 @@ TEST(ScanPublishing, PointCloudIsWrittenForAReaderOnlyWithItsSegmentsLabels) {
   auto skipped = scans.publish_cloud(r, 4);  // no reader yet
   ASSERT_TRUE(skipped) << skipped.error().message;
   EXPECT_FALSE(*skipped);
+  EXPECT_FALSE(scans.cloud_reader());  // the pipeline stops building it
 
   using T = dds::IdlTypes<false>;
   stac::testing::TestReader reader(112, T::point_cloud(), "stac_test/point_cloud", dds::Topic::kPointCloud);
@@ -83,6 +84,7 @@ TEST(ScanPublishing, PointCloudIsWrittenForAReaderOnlyWithItsSegmentsLabels) {
   auto written = scans.publish_cloud(r, 5);
   ASSERT_TRUE(written) << written.error().message;
   EXPECT_TRUE(*written);
+  EXPECT_TRUE(scans.cloud_reader());
   const auto* s = reader.take<T::LabeledPointCloud>();
   ASSERT_NE(s, nullptr);
   EXPECT_EQ(s->scan_index, 5u);  // the one written, not the skipped one
@@ -107,6 +109,7 @@ TEST(ScanPublishing, PointCloudIsWrittenForAReaderOnlyWithItsSegmentsLabels) {
   auto unbuilt = scans.publish_cloud(r, 7);
   ASSERT_TRUE(unbuilt);
   EXPECT_FALSE(*unbuilt);
+  EXPECT_TRUE(scans.cloud_reader());  // a reader is there: the pipeline builds the next one
   r.has_cloud = true;
   ASSERT_TRUE(scans.publish_cloud(r, 8));
   const auto* next = reader.take<T::LabeledPointCloud>();
