@@ -164,4 +164,36 @@ bool GridClassifier::partial(std::span<const float> x, std::size_t begin, std::s
   return true;
 }
 
+bool GridClassifier::partial_batch(std::span<const float* const> rows, std::size_t begin,
+                                   std::size_t end, std::span<LogOdds> sums) const noexcept {
+  if (begin > end || end > dimensions_ || rows.size() != sums.size()) return false;
+  const std::size_t resolutions = model_.resolutions.size();
+  const float* table = model_.table.data();
+  const float* lower = model_.lower.data();
+  const float* scale = model_.scale.data();
+  for (std::size_t first = 0; first < rows.size(); first += kBatch) {
+    const std::size_t n = std::min(kBatch, rows.size() - first);
+    float acc[kBatch][2][kClassCount] = {};
+    for (std::size_t e = begin; e < end; ++e) {
+      const float* element = table + e * cells_per_element_ * kClassCount;
+      for (std::size_t j = 0; j < n; ++j) {
+        const float v = rows[first + j][e - begin];
+        if (std::isnan(v)) continue;
+        float* a = acc[j][e & 1];
+        for (std::size_t r = 0; r < resolutions; ++r) {
+          const std::size_t g = e * resolutions + r;
+          const float t = std::min(std::max((v - lower[g]) * scale[g], 0.0f), last_bin_[r]);
+          const float* cell =
+              element + (bin_offset_[r] + static_cast<std::uint32_t>(t)) * kClassCount;
+          for (std::size_t k = 0; k < kClassCount; ++k) a[k] += cell[k];
+        }
+      }
+    }
+    for (std::size_t j = 0; j < n; ++j)
+      for (std::size_t k = 0; k < kClassCount; ++k)
+        sums[first + j][k] += acc[j][0][k] + acc[j][1][k];
+  }
+  return true;
+}
+
 }  // namespace stac::classification

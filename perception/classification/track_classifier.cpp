@@ -36,41 +36,80 @@ TrackClassifier::TrackClassifier(const TrackClassifierConfig& config,
   }
   deferred_tracks_ = rt::FixedVector<tracking::Track>(config.max_tracks);
   deferred_ = segmentation::Segments(config.max_tracks, config.max_points);
+  batch_.resize(config.max_tracks);
+  pending_ = rt::FixedVector<Pending>(config.max_tracks);
+  rows_.resize(config.max_tracks);
+  sums_.resize(config.max_tracks);
+  segment_log_odds_.resize(config.max_tracks);
   slots_.reserve(config.max_tracks);
-  for (std::size_t i = 0; i < config.max_tracks; ++i) slots_.emplace_back(config.accumulated_points);
+  for (std::size_t i = 0; i < config.max_tracks; ++i)
+    slots_.emplace_back(config.accumulated_points);
 }
 
-void TrackClassifier::classify_update(Slot& s, bool refresh) noexcept {
+void TrackClassifier::classify_pending() noexcept {
+  const std::size_t n = pending_.size();
+  if (n == 0) return;
+  const GridClassifier& segment = model_->segment;
   const GridClassifier& holistic = model_->holistic;
-  const std::span<const float> h(holistic_);
   constexpr std::size_t kMotion = kHolisticMotionDimensions;
-  if (refresh) {
-    s.accumulated_sum = {};
-    if (!holistic.partial(h.subspan(kMotion), kMotion, h.size(), s.accumulated_sum)) return;
+  // H_S(z_t) of every pending segment: prior + the sum over its elements, as classify().
+  for (std::size_t j = 0; j < n; ++j) {
+    rows_[j] = batch_[j].values.data();
+    sums_[j] = LogOdds{};
   }
-  LogOdds hh = s.accumulated_sum;
-  LogOdds hs{};
-  if (!holistic.partial(h.first(kMotion), 0, kMotion, hh) ||
-      !add_segment(*model_, segment_.values, s.evidence, hs))
-    return;
-  for (std::size_t k = 0; k < kClassCount; ++k) hh[k] += holistic.model().prior[k];
-  const LogOdds track = track_log_odds(*model_, s.evidence, hh);
-  s.cls.classified = true;
-  s.cls.log_odds = track;
-  s.cls.label = predict(track);
-  s.cls.segments = s.evidence.segments;
+  (void)segment.partial_batch({rows_.data(), n}, 0, segment.dimensions(), {sums_.data(), n});
+  for (std::size_t j = 0; j < n; ++j) {
+    segment_log_odds_[j] = segment.model().prior;
+    for (std::size_t k = 0; k < kClassCount; ++k) segment_log_odds_[j][k] += sums_[j][k];
+  }
+  // The accumulated clouds described in this scan: their part of the holistic sum. A cloud with
+  // no descriptors has NaN elements there, which add nothing: its part stays zero.
+  std::size_t refreshed = 0;
+  for (std::size_t j = 0; j < n; ++j) {
+    Slot& s = *pending_[j].slot;
+    if (!pending_[j].refresh) continue;
+    s.accumulated_sum = LogOdds{};
+    if (s.accumulated.status != descriptors::Status::kOk) continue;
+    rows_[refreshed] = s.accumulated.values.data();
+    sums_[refreshed] = LogOdds{};
+    ++refreshed;
+  }
+  (void)holistic.partial_batch({rows_.data(), refreshed}, kMotion, holistic.dimensions(),
+                               {sums_.data(), refreshed});
+  refreshed = 0;
+  for (std::size_t j = 0; j < n; ++j) {
+    Slot& s = *pending_[j].slot;
+    if (pending_[j].refresh && s.accumulated.status == descriptors::Status::kOk)
+      s.accumulated_sum = sums_[refreshed++];
+  }
+  for (std::size_t j = 0; j < n; ++j) {
+    Slot& s = *pending_[j].slot;
+    LogOdds hh = s.accumulated_sum;
+    (void)holistic.partial(pending_[j].motion, 0, kMotion, hh);
+    s.evidence.add_segment(segment_log_odds_[j], segment.model().prior);
+    for (std::size_t k = 0; k < kClassCount; ++k) hh[k] += holistic.model().prior[k];
+    const LogOdds track = track_log_odds(*model_, s.evidence, hh);
+    s.cls.classified = true;
+    s.cls.log_odds = track;
+    s.cls.label = predict(track);
+    s.cls.segments = s.evidence.segments;
+    s.pending = false;
+  }
+  pending_.clear();
 }
 
 void TrackClassifier::update(const float* xyzi, std::size_t stride_bytes,
                              const segmentation::Segments& segments,
                              std::span<const tracking::Track> tracks) noexcept {
+  pending_.clear();
   for (const tracking::Track& t : tracks) {
     if (t.slot >= slots_.size()) {
       ++counters_.slot_mismatch;
       continue;
     }
     Slot& s = slots_[t.slot];
-    if (s.cls.id != t.id) {  // a new track in this pool slot: forget the one before
+    if (s.pending) classify_pending();  // a slot twice in one scan (never expected): in order
+    if (s.cls.id != t.id) {             // a new track in this pool slot: forget the one before
       s.cloud.clear(t.id + 1);
       s.evidence.reset();
       s.cls = TrackClass{};
@@ -81,9 +120,10 @@ void TrackClassifier::update(const float* xyzi, std::size_t stride_bytes,
     if (t.segment < 0 || static_cast<std::size_t>(t.segment) >= segments.segments.size()) continue;
     const segmentation::Segment& seg = segments.segments[static_cast<std::size_t>(t.segment)];
     const descriptors::SegmentView view{xyzi, stride_bytes, segments.indices(seg), 0};
-    describer_.compute(view, segment_);
+    descriptors::Descriptors& described = batch_[pending_.size()];
+    describer_.compute(view, described);
     ++counters_.segments_described;
-    if (segment_.status != descriptors::Status::kOk) {
+    if (described.status != descriptors::Status::kOk) {
       ++counters_.segments_empty;
       continue;
     }
@@ -96,9 +136,16 @@ void TrackClassifier::update(const float* xyzi, std::size_t stride_bytes,
       s.since_holistic = 0;
     }
     holistic_descriptor(t, &s.accumulated, holistic_);
-    if (observer_ != nullptr) observer_->on_update(t, segment_.values, holistic_);
-    if (model_ != nullptr) classify_update(s, refresh);
+    if (observer_ != nullptr) observer_->on_update(t, described.values, holistic_);
+    if (model_ == nullptr) continue;
+    Pending* p = pending_.append();  // room: pending_ and batch_ hold max_tracks
+    p->slot = &s;
+    p->refresh = refresh;
+    std::copy(holistic_.begin(), holistic_.begin() + kHolisticMotionDimensions, p->motion.begin());
+    s.pending = true;
+    if (pending_.size() == pending_.capacity()) classify_pending();
   }
+  if (model_ != nullptr) classify_pending();
 }
 
 void TrackClassifier::report(const tracking::TrackerOutput& tracked,

@@ -14,6 +14,7 @@
 // elements is kept with them, so an update costs the segment classifier and 9 holistic elements.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -31,7 +32,7 @@
 namespace stac::classification {
 
 struct TrackClassifierConfig {
-  std::size_t max_tracks = 512;          // = the tracker's max_tracks (one slot per pool slot)
+  std::size_t max_tracks = 512;           // = the tracker's max_tracks (one slot per pool slot)
   std::size_t accumulated_points = 4096;  // points kept per track's accumulated cloud
   std::uint32_t holistic_every = 5;  // accumulated cloud described every N segments (1: always)
   std::size_t max_points = 300'000;  // = the segmenter's max_points (defer()'s copy of indices)
@@ -46,7 +47,7 @@ struct TrackClass {
   std::uint64_t id = 0;
   bool classified = false;  // a model is loaded and the track has had a segment
   ObjectClass label = ObjectClass::kBackground;
-  LogOdds log_odds{};         // augmented DBF, per foreground class (natural log odds)
+  LogOdds log_odds{};          // augmented DBF, per foreground class (natural log odds)
   std::uint32_t segments = 0;  // segments classified so far
 };
 
@@ -86,8 +87,10 @@ class TrackClassifier {
   // before left them (a track new in this scan: unclassified), defer() keeps a copy of what the
   // update needs (tracks, their segments' point indices), and update_deferred() classifies them
   // later, with the scan's points still valid. Same classes one scan later than classify().
-  void report(const tracking::TrackerOutput& tracked, rt::FixedVector<TrackClass>& out) const noexcept;
-  void defer(const segmentation::Segments& segments, const tracking::TrackerOutput& tracked) noexcept;
+  void report(const tracking::TrackerOutput& tracked,
+              rt::FixedVector<TrackClass>& out) const noexcept;
+  void defer(const segmentation::Segments& segments,
+             const tracking::TrackerOutput& tracked) noexcept;
   void update_deferred(const float* xyzi, std::size_t stride_bytes) noexcept;
   [[nodiscard]] bool has_deferred() const noexcept { return !deferred_tracks_.empty(); }
 
@@ -103,22 +106,36 @@ class TrackClassifier {
     bool accumulated_ok = false;
     descriptors::Descriptors accumulated;  // the accumulated cloud's last descriptors
     LogOdds accumulated_sum{};  // their part of the holistic log odds (GridClassifier::partial)
+    bool pending = false;       // described in this scan, waiting for classify_pending()
     explicit Slot(std::size_t points) : cloud(points) {}
+  };
+  // A described update waiting for the model (its segment's descriptors: batch_[index]). No
+  // member initialisers: FixedVector checks default construction inside this class, where they
+  // are not usable yet; append() callers set every member.
+  struct Pending {
+    Slot* slot;
+    bool refresh;  // the accumulated part of the holistic descriptor is new
+    std::array<float, kHolisticMotionDimensions> motion;
   };
 
   void update(const float* xyzi, std::size_t stride_bytes, const segmentation::Segments& segments,
               std::span<const tracking::Track> tracks) noexcept;
-  // The model's update of one slot from segment_ and holistic_ (refresh: the accumulated part of
-  // holistic_ is new).
-  void classify_update(Slot& s, bool refresh) noexcept;
+  // The model's update of every pending slot. The classifiers' tables are walked once for all
+  // of them (GridClassifier::partial_batch), so they stay in cache; each slot's arithmetic is
+  // the same as classifying it alone.
+  void classify_pending() noexcept;
 
   TrackClassifierConfig config_;
   std::shared_ptr<const TrackClassifierModel> model_;
   Observer* observer_ = nullptr;
   descriptors::DescriptorPipeline describer_;
-  descriptors::Descriptors segment_;
   HolisticDescriptor holistic_{};
   std::vector<Slot> slots_;
+  std::vector<descriptors::Descriptors> batch_;  // max_tracks segments' descriptors
+  rt::FixedVector<Pending> pending_;
+  std::vector<const float*> rows_;  // partial_batch's inputs and sums (max_tracks each)
+  std::vector<LogOdds> sums_;
+  std::vector<LogOdds> segment_log_odds_;
   rt::FixedVector<tracking::Track> deferred_tracks_;
   segmentation::Segments deferred_;
   TrackClassifierCounters counters_;

@@ -131,6 +131,38 @@ TEST(GridClassifier, PartialSumsOfTwoRangesAddUpToClassify) {
   EXPECT_EQ(sum, LogOdds{});
 }
 
+TEST(GridClassifier, PartialBatchGivesEveryInputPartialsSumsBitForBit) {
+  // More inputs than one batch holds (so two table walks), NaN and out-of-range values, a range
+  // that starts inside the layout, and sums that do not start at zero.
+  const auto data = testing::noisy(300, 8, 0.1, 11);
+  const GridClassifier c = testing::trained(data, testing::flat_layout(8), {.rounds = 300});
+  std::mt19937 rng(12);
+  std::normal_distribution<float> g(0.0f, 4.0f);
+  const std::size_t n = GridClassifier::kBatch + 13;
+  std::vector<std::vector<float>> x(n, std::vector<float>(5));
+  std::vector<const float*> rows;
+  std::vector<LogOdds> batch(n), one(n);
+  for (std::size_t j = 0; j < n; ++j) {
+    for (auto& v : x[j]) v = g(rng);
+    if (j % 7 == 0) x[j][1] = std::nanf("");
+    if (j % 11 == 0) x[j][4] = std::numeric_limits<float>::infinity();
+    rows.push_back(x[j].data());
+    batch[j] = one[j] = {0.25f * float(j), -1.0f, 3.0f};
+  }
+  ASSERT_TRUE(c.partial_batch(rows, 3, 8, batch));
+  for (std::size_t j = 0; j < n; ++j) {
+    ASSERT_TRUE(c.partial(x[j], 3, 8, one[j]));
+    for (std::size_t k = 0; k < kClassCount; ++k)
+      EXPECT_EQ(batch[j][k], one[j][k]) << j << " " << k;
+  }
+  EXPECT_NE(batch[1], (LogOdds{0.25f, -1.0f, 3.0f}));  // the sums did move
+  const std::vector<LogOdds> before = batch;
+  EXPECT_FALSE(c.partial_batch(rows, 6, 9, batch));  // past the layout
+  EXPECT_FALSE(c.partial_batch(std::span(rows).first(3), 3, 8, std::span(batch).first(2)));
+  EXPECT_EQ(batch, before);
+  EXPECT_TRUE(c.partial_batch({}, 0, 8, {}));  // nothing to do
+}
+
 TEST(GridClassifier, WrongInputSizeIsRefusedWithThePrior) {
   const GridClassifier c = two_element_classifier();
   const float x[3] = {1, 2, 3};

@@ -116,6 +116,44 @@ TEST(TrackClassifier, OneClassPerTrackAndTheModelsOwnLogOdds) {
   EXPECT_EQ(stage.counters().slot_mismatch, 0u);
 }
 
+TEST(TrackClassifier, TracksClassifiedTogetherGetTheClassesOfEachAlone) {
+  // classify() walks the tables once for all of a scan's tracks; every slot must come out
+  // bit-identical to updating the tracks one call each, also when a slot shows up twice in a
+  // scan (frame 5: track 7 takes track 1's slot, which then comes back in frame 6).
+  auto model = std::make_shared<const TrackClassifierModel>(full_size_model());
+  TrackClassifier together(small_config(), model), alone(small_config(), model);
+  tracking::TrackerOutput tracked(4), one(4);
+  rt::FixedVector<TrackClass> out(4), out_alone(4);
+  for (int frame = 0; frame < 8; ++frame) {
+    const Scene scene(frame);
+    tracked.tracks.clear();
+    ASSERT_TRUE(tracked.tracks.push_back(track(1, 2, 0)));
+    ASSERT_TRUE(tracked.tracks.push_back(track(2, 0, 1)));
+    if (frame == 5) {
+      ASSERT_TRUE(tracked.tracks.push_back(track(7, 2, 1)));
+    }
+    together.classify(scene.xyzi.data(), 16, scene.segments, tracked, out);
+    for (const tracking::Track& t : tracked.tracks) {
+      one.tracks.clear();
+      ASSERT_TRUE(one.tracks.push_back(t));
+      alone.classify(scene.xyzi.data(), 16, scene.segments, one, out_alone);
+    }
+    alone.report(tracked, out_alone);
+    ASSERT_EQ(out.size(), out_alone.size());
+    for (std::size_t i = 0; i < out.size(); ++i) {
+      EXPECT_EQ(out[i].id, out_alone[i].id);
+      EXPECT_EQ(out[i].classified, out_alone[i].classified) << frame << " " << i;
+      EXPECT_EQ(out[i].label, out_alone[i].label);
+      EXPECT_EQ(out[i].log_odds, out_alone[i].log_odds) << frame << " " << i;
+      EXPECT_EQ(out[i].segments, out_alone[i].segments);
+    }
+    EXPECT_TRUE(out[1].classified);
+    EXPECT_EQ(out[0].classified, frame != 5);  // frame 5: the slot holds track 7 at the end
+  }
+  EXPECT_EQ(together.counters().segments_described, alone.counters().segments_described);
+  EXPECT_EQ(together.counters().holistic_described, alone.counters().holistic_described);
+}
+
 TEST(TrackClassifier, AccumulatedCloudIsDescribedAtTheFirstSegmentThenEveryN) {
   TrackClassifier stage(small_config(), nullptr);  // no model: descriptors only
   Recorder seen;
