@@ -62,8 +62,8 @@ Result<bool> apply_schedule(const std::string& thread, const ThreadSchedule& s) 
 
 Result<CpuLatencyRequest> CpuLatencyRequest::hold(int max_us, const char* device) {
   if (max_us < 0) return make_error("CPU wake-up latency " + std::to_string(max_us) + " us is < 0");
-  const int fd = open(device, O_WRONLY | O_CLOEXEC);
-  if (fd < 0) {
+  UniqueFd fd(open(device, O_WRONLY | O_CLOEXEC));
+  if (!fd) {
     const int e = errno;
     return make_error(std::string("CPU wake-up latency request: cannot open ") + device + " (" +
                       std::strerror(e) +
@@ -71,43 +71,26 @@ Result<CpuLatencyRequest> CpuLatencyRequest::hold(int max_us, const char* device
                       "or a kernel with PM QoS (CONFIG_CPU_IDLE)");
   }
   const std::int32_t value = max_us;
-  if (write(fd, &value, sizeof(value)) != static_cast<ssize_t>(sizeof(value))) {
+  if (write(fd.get(), &value, sizeof(value)) != static_cast<ssize_t>(sizeof(value))) {
     const int e = errno;
-    (void)close(fd);
     return make_error(std::string("CPU wake-up latency request: writing ") +
                       std::to_string(max_us) + " us to " + device + " failed (" +
                       std::strerror(e) + ")");
   }
-  return CpuLatencyRequest(fd);
+  return CpuLatencyRequest(std::move(fd));
 }
 
 Result<int> CpuLatencyRequest::current(const char* device) {
-  const int fd = open(device, O_RDONLY | O_CLOEXEC);
-  if (fd < 0) {
+  const UniqueFd fd(open(device, O_RDONLY | O_CLOEXEC));
+  if (!fd) {
     const int e = errno;
     return make_error(std::string("cannot open ") + device + " (" + std::strerror(e) + ")");
   }
   std::int32_t value = 0;
-  const ssize_t n = read(fd, &value, sizeof(value));
-  (void)close(fd);
+  const ssize_t n = read(fd.get(), &value, sizeof(value));
   if (n != static_cast<ssize_t>(sizeof(value)))
     return make_error(std::string(device) + ": not a 4-byte PM QoS value");
   return static_cast<int>(value);
-}
-
-CpuLatencyRequest::CpuLatencyRequest(CpuLatencyRequest&& o) noexcept
-    : fd_(std::exchange(o.fd_, -1)) {}
-
-CpuLatencyRequest& CpuLatencyRequest::operator=(CpuLatencyRequest&& o) noexcept {
-  if (this != &o) {
-    if (fd_ >= 0) (void)close(fd_);
-    fd_ = std::exchange(o.fd_, -1);
-  }
-  return *this;
-}
-
-CpuLatencyRequest::~CpuLatencyRequest() {
-  if (fd_ >= 0) (void)close(fd_);
 }
 
 void name_thread(const char* name) noexcept {

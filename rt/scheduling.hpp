@@ -8,8 +8,10 @@
 #pragma once
 
 #include <string>
+#include <utility>
 
 #include "rt/expected.hpp"
+#include "rt/unique_fd.hpp"
 
 namespace stac::rt {
 
@@ -42,15 +44,9 @@ class CpuLatencyRequest {
   // The current aggregate request of all holders (us), read from `device`.
   static Result<int> current(const char* device = kDevice);
 
-  CpuLatencyRequest(CpuLatencyRequest&& o) noexcept;
-  CpuLatencyRequest& operator=(CpuLatencyRequest&& o) noexcept;
-  CpuLatencyRequest(const CpuLatencyRequest&) = delete;
-  CpuLatencyRequest& operator=(const CpuLatencyRequest&) = delete;
-  ~CpuLatencyRequest();
-
  private:
-  explicit CpuLatencyRequest(int fd) noexcept : fd_(fd) {}
-  int fd_ = -1;
+  explicit CpuLatencyRequest(UniqueFd fd) noexcept : fd_(std::move(fd)) {}
+  UniqueFd fd_;
 };
 
 // Names the calling thread (at most 15 characters shown in top/ps); best effort.

@@ -41,83 +41,55 @@ rt::Result<TcpClient> TcpClient::open(const TcpClientConfig& config) {
                                   "must be >= 1 and max_backoff_ms >= initial_backoff_ms");
   }
   c.config_ = config;
-  c.wake_fd_ = ::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
-  if (c.wake_fd_ < 0) return rt::make_error(where + ": eventfd failed");
+  c.wake_fd_.reset(::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC));
+  if (!c.wake_fd_) return rt::make_error(where + ": eventfd failed");
   return c;
-}
-
-TcpClient::TcpClient(TcpClient&& o) noexcept
-    : config_(std::move(o.config_)), address_(o.address_), fd_(std::exchange(o.fd_, -1)),
-      wake_fd_(std::exchange(o.wake_fd_, -1)), backoff_ms_(o.backoff_ms_),
-      next_attempt_ns_(o.next_attempt_ns_), last_data_ns_(o.last_data_ns_), counters_(o.counters_) {}
-
-TcpClient& TcpClient::operator=(TcpClient&& o) noexcept {
-  if (this != &o) {
-    if (fd_ >= 0) ::close(fd_);
-    if (wake_fd_ >= 0) ::close(wake_fd_);
-    config_ = std::move(o.config_);
-    address_ = o.address_;
-    fd_ = std::exchange(o.fd_, -1);
-    wake_fd_ = std::exchange(o.wake_fd_, -1);
-    backoff_ms_ = o.backoff_ms_;
-    next_attempt_ns_ = o.next_attempt_ns_;
-    last_data_ns_ = o.last_data_ns_;
-    counters_ = o.counters_;
-  }
-  return *this;
-}
-
-TcpClient::~TcpClient() {
-  if (fd_ >= 0) ::close(fd_);
-  if (wake_fd_ >= 0) ::close(wake_fd_);
 }
 
 void TcpClient::stop() noexcept {
   const std::uint64_t one = 1;
-  (void)!::write(wake_fd_, &one, sizeof(one));
+  (void)!::write(wake_fd_.get(), &one, sizeof(one));
 }
 
 bool TcpClient::wait_wake(int timeout_ms) noexcept {
-  pollfd p{wake_fd_, POLLIN, 0};
+  pollfd p{wake_fd_.get(), POLLIN, 0};
   return ::poll(&p, 1, timeout_ms) > 0;
 }
 
 void TcpClient::disconnect(std::int64_t now_ns) noexcept {
-  ::close(fd_);
-  fd_ = -1;
+  fd_.reset();
   backoff_ms_ = config_.initial_backoff_ms;
   next_attempt_ns_ = now_ns + backoff_ms_ * kMs;
 }
 
 bool TcpClient::try_connect(std::int64_t now_ns) noexcept {
-  const int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
-  bool ok = fd >= 0;
+  rt::UniqueFd fd(::socket(AF_INET, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0));
+  bool ok = fd.valid();
   if (ok) {
     const int on = 1;
-    (void)::setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &on, sizeof(on));
+    (void)::setsockopt(fd.get(), IPPROTO_TCP, TCP_NODELAY, &on, sizeof(on));
     sockaddr_in addr{};
     addr.sin_family = AF_INET;
     addr.sin_port = htons(config_.port);
     addr.sin_addr.s_addr = htonl(address_);
-    if (::connect(fd, reinterpret_cast<const sockaddr*>(&addr), sizeof(addr)) != 0) {
+    if (::connect(fd.get(), reinterpret_cast<const sockaddr*>(&addr), sizeof(addr)) != 0) {
       ok = errno == EINPROGRESS;
       if (ok) {
-        pollfd p[2] = {{fd, POLLOUT, 0}, {wake_fd_, POLLIN, 0}};
+        pollfd p[2] = {{fd.get(), POLLOUT, 0}, {wake_fd_.get(), POLLIN, 0}};
         ok = ::poll(p, 2, config_.connect_timeout_ms) > 0 && (p[0].revents & POLLOUT) != 0;
         int error = 0;
         socklen_t len = sizeof(error);
-        ok = ok && ::getsockopt(fd, SOL_SOCKET, SO_ERROR, &error, &len) == 0 && error == 0;
+        ok = ok && ::getsockopt(fd.get(), SOL_SOCKET, SO_ERROR, &error, &len) == 0 && error == 0;
       }
     }
   }
   if (ok) {
-    fd_ = fd;
+    fd_ = std::move(fd);
     ++counters_.connects;
     backoff_ms_ = 0;
     last_data_ns_ = rt::monotonic_ns();
     return true;
   }
-  if (fd >= 0) ::close(fd);
   ++counters_.connect_failures;
   backoff_ms_ = backoff_ms_ == 0 ? config_.initial_backoff_ms : std::min(backoff_ms_ * 2, config_.max_backoff_ms);
   next_attempt_ns_ = now_ns + backoff_ms_ * kMs;
@@ -130,7 +102,7 @@ int TcpClient::receive(std::span<std::uint8_t> out, int timeout_ms) noexcept {
   out = out.first(std::min<std::size_t>(out.size(), 1 << 30));
   while (true) {
     std::int64_t now = rt::monotonic_ns();
-    if (fd_ < 0) {
+    if (!fd_) {
       if (now < next_attempt_ns_) {
         if (now >= deadline) return 0;
         if (wait_wake(ms_until(std::min(next_attempt_ns_, deadline), now))) return kStopped;
@@ -144,13 +116,13 @@ int TcpClient::receive(std::span<std::uint8_t> out, int timeout_ms) noexcept {
       now = rt::monotonic_ns();
     }
     const std::int64_t stall_at = last_data_ns_ + config_.stall_timeout_ms * kMs;
-    pollfd p[2] = {{fd_, POLLIN, 0}, {wake_fd_, POLLIN, 0}};
+    pollfd p[2] = {{fd_.get(), POLLIN, 0}, {wake_fd_.get(), POLLIN, 0}};
     const int rc = ::poll(p, 2, ms_until(std::min(stall_at, deadline), now));
     if (rc < 0 && errno != EINTR) return 0;
     if (p[1].revents != 0) return kStopped;
     now = rt::monotonic_ns();
     if (rc > 0 && p[0].revents != 0) {
-      const ssize_t n = ::recv(fd_, out.data(), out.size(), 0);
+      const ssize_t n = ::recv(fd_.get(), out.data(), out.size(), 0);
       if (n > 0) {
         last_data_ns_ = now;
         counters_.bytes += static_cast<std::uint64_t>(n);

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "rt/expected.hpp"
+#include "rt/unique_fd.hpp"
 
 namespace stac::applanix {
 
@@ -36,10 +37,6 @@ class TcpClient {
 
   // Checks the configuration only (errors name the field); connecting happens in receive().
   static rt::Result<TcpClient> open(const TcpClientConfig& config);
-  TcpClient(TcpClient&&) noexcept;
-  TcpClient& operator=(TcpClient&&) noexcept;
-  TcpClient(const TcpClient&) = delete;
-  ~TcpClient();
 
   // Waits up to timeout_ms for stream bytes, (re)connecting as needed. Returns the number of
   // bytes written to `out` (> 0), 0 when the time ran out, or kStopped after stop().
@@ -49,7 +46,7 @@ class TcpClient {
 
   // Increments with every established connection.
   std::uint64_t session() const noexcept { return counters_.connects; }
-  bool connected() const noexcept { return fd_ >= 0; }
+  bool connected() const noexcept { return fd_.valid(); }
   // Delay before the next connection attempt after the failures so far (0 when connected).
   int backoff_ms() const noexcept { return backoff_ms_; }
   const TcpClientCounters& counters() const noexcept { return counters_; }
@@ -62,8 +59,8 @@ class TcpClient {
 
   TcpClientConfig config_;
   std::uint32_t address_ = 0;
-  int fd_ = -1;
-  int wake_fd_ = -1;
+  rt::UniqueFd fd_;
+  rt::UniqueFd wake_fd_;
   int backoff_ms_ = 0;
   std::int64_t next_attempt_ns_ = 0;
   std::int64_t last_data_ns_ = 0;

@@ -11,7 +11,6 @@
 
 #include <cerrno>
 #include <cstring>
-#include <utility>
 
 #include "rt/clock.hpp"
 
@@ -37,8 +36,8 @@ rt::Result<SocketCanReader> SocketCanReader::open(const SocketCanConfig& config)
                           "' (list them with `ip link show`; a virtual bus for tests: "
                           "`ip link add dev vcan0 type vcan && ip link set vcan0 up`)");
   }
-  const int fd = ::socket(PF_CAN, SOCK_RAW | SOCK_CLOEXEC, CAN_RAW);
-  if (fd < 0) {
+  rt::UniqueFd fd(::socket(PF_CAN, SOCK_RAW | SOCK_CLOEXEC, CAN_RAW));
+  if (!fd) {
     const int e = errno;
     if (e == EAFNOSUPPORT) {
       return rt::make_error("SocketCAN: this kernel has no AF_CAN (" + errno_text(e) +
@@ -60,63 +59,42 @@ rt::Result<SocketCanReader> SocketCanReader::open(const SocketCanConfig& config)
     filters.push_back(k);
   }
   if (!filters.empty() &&
-      setsockopt(fd, SOL_CAN_RAW, CAN_RAW_FILTER, filters.data(),
+      setsockopt(fd.get(), SOL_CAN_RAW, CAN_RAW_FILTER, filters.data(),
                  static_cast<socklen_t>(filters.size() * sizeof(can_filter))) != 0) {
     const int e = errno;
-    ::close(fd);
     return rt::make_error("SocketCAN: " + name + ": CAN_RAW_FILTER refused: " + errno_text(e));
   }
   const int one = 1;
-  setsockopt(fd, SOL_SOCKET, SO_RXQ_OVFL, &one, sizeof(one));  // best effort: a counter only
+  setsockopt(fd.get(), SOL_SOCKET, SO_RXQ_OVFL, &one, sizeof(one));  // best effort: a counter only
   sockaddr_can addr{};
   addr.can_family = AF_CAN;
   addr.can_ifindex = static_cast<int>(index);
-  if (::bind(fd, reinterpret_cast<const sockaddr*>(&addr), sizeof(addr)) != 0) {
+  if (::bind(fd.get(), reinterpret_cast<const sockaddr*>(&addr), sizeof(addr)) != 0) {
     const int e = errno;
-    ::close(fd);
     return rt::make_error("SocketCAN: cannot bind to '" + name + "' (is it a CAN interface and up? " +
                           "`ip link set " + name + " up`): " + errno_text(e));
   }
-  return adopt(fd);
+  return adopt(fd.release());
 }
 
 rt::Result<SocketCanReader> SocketCanReader::adopt(int fd) {
   if (fd < 0) return rt::make_error("SocketCAN: adopt() needs an open descriptor");
   SocketCanReader r;
-  r.fd_ = fd;
+  r.fd_.reset(fd);
   const int one = 1;
   setsockopt(fd, SOL_SOCKET, SO_TIMESTAMPNS, &one, sizeof(one));  // absent: counted per frame
-  r.wake_fd_ = eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
-  if (r.wake_fd_ < 0) return rt::make_error("SocketCAN: eventfd failed: " + errno_text(errno));
+  r.wake_fd_.reset(eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK));
+  if (!r.wake_fd_) return rt::make_error("SocketCAN: eventfd failed: " + errno_text(errno));
   return r;
-}
-
-SocketCanReader::SocketCanReader(SocketCanReader&& o) noexcept
-    : fd_(std::exchange(o.fd_, -1)), wake_fd_(std::exchange(o.wake_fd_, -1)), counters_(o.counters_) {}
-
-SocketCanReader& SocketCanReader::operator=(SocketCanReader&& o) noexcept {
-  if (this != &o) {
-    if (fd_ >= 0) ::close(fd_);
-    if (wake_fd_ >= 0) ::close(wake_fd_);
-    fd_ = std::exchange(o.fd_, -1);
-    wake_fd_ = std::exchange(o.wake_fd_, -1);
-    counters_ = o.counters_;
-  }
-  return *this;
-}
-
-SocketCanReader::~SocketCanReader() {
-  if (fd_ >= 0) ::close(fd_);
-  if (wake_fd_ >= 0) ::close(wake_fd_);
 }
 
 void SocketCanReader::stop() noexcept {
   const std::uint64_t one = 1;
-  [[maybe_unused]] const ssize_t n = ::write(wake_fd_, &one, sizeof(one));
+  [[maybe_unused]] const ssize_t n = ::write(wake_fd_.get(), &one, sizeof(one));
 }
 
 int SocketCanReader::read(std::span<Frame> out, int timeout_ms) noexcept {
-  pollfd fds[2] = {{wake_fd_, POLLIN, 0}, {fd_, POLLIN, 0}};
+  pollfd fds[2] = {{wake_fd_.get(), POLLIN, 0}, {fd_.get(), POLLIN, 0}};
   int ready = 0;
   do {
     ready = ::poll(fds, 2, timeout_ms);
@@ -136,7 +114,7 @@ int SocketCanReader::read(std::span<Frame> out, int timeout_ms) noexcept {
     msg.msg_iovlen = 1;
     msg.msg_control = control;
     msg.msg_controllen = sizeof(control);
-    const ssize_t n = ::recvmsg(fd_, &msg, MSG_DONTWAIT);
+    const ssize_t n = ::recvmsg(fd_.get(), &msg, MSG_DONTWAIT);
     if (n < 0) {
       if (errno == EAGAIN || errno == EWOULDBLOCK) break;
       if (errno == EINTR) continue;
@@ -193,7 +171,7 @@ bool SocketCanReader::write(const Frame& frame) noexcept {
   std::memcpy(cf.data, frame.data.data(), kMaxDataBytes);
   ssize_t n = 0;
   do {
-    n = ::send(fd_, &cf, sizeof(cf), MSG_NOSIGNAL);
+    n = ::send(fd_.get(), &cf, sizeof(cf), MSG_NOSIGNAL);
   } while (n < 0 && errno == EINTR);
   return n == static_cast<ssize_t>(sizeof(cf));
 }

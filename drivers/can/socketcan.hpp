@@ -11,6 +11,7 @@
 
 #include "drivers/can/frame.hpp"
 #include "rt/expected.hpp"
+#include "rt/unique_fd.hpp"
 
 namespace stac::can {
 
@@ -45,11 +46,6 @@ class SocketCanReader {
   // opened elsewhere, or a SOCK_SEQPACKET socketpair end in tests). Asks for SO_TIMESTAMPNS.
   static rt::Result<SocketCanReader> adopt(int fd);
 
-  SocketCanReader(SocketCanReader&&) noexcept;
-  SocketCanReader& operator=(SocketCanReader&&) noexcept;
-  SocketCanReader(const SocketCanReader&) = delete;
-  ~SocketCanReader();
-
   // Waits up to timeout_ms (-1: forever) and returns up to out.size() frames (0 on timeout),
   // kStopped after stop(), kClosed at end of stream, kError on a socket error. No allocation.
   int read(std::span<Frame> out, int timeout_ms) noexcept;
@@ -58,14 +54,14 @@ class SocketCanReader {
   // Any thread: makes the current and every later read() return kStopped.
   void stop() noexcept;
 
-  int fd() const noexcept { return fd_; }
+  int fd() const noexcept { return fd_.get(); }
   const SocketCanCounters& counters() const noexcept { return counters_; }
 
  private:
   SocketCanReader() = default;
 
-  int fd_ = -1;
-  int wake_fd_ = -1;
+  rt::UniqueFd fd_;
+  rt::UniqueFd wake_fd_;
   SocketCanCounters counters_;
 };
 

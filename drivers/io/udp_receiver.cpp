@@ -9,7 +9,6 @@
 
 #include <cerrno>
 #include <cstring>
-#include <utility>
 
 #include "rt/clock.hpp"
 
@@ -40,20 +39,20 @@ rt::Result<UdpReceiver> UdpReceiver::open(const UdpReceiverConfig& config) {
     }
     r.filter_sender_ = true;
   }
-  r.fd_ = ::socket(AF_INET, SOCK_DGRAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
-  if (r.fd_ < 0) return rt::make_error(where(config) + ": socket: " + std::strerror(errno));
+  r.fd_.reset(::socket(AF_INET, SOCK_DGRAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0));
+  if (!r.fd_) return rt::make_error(where(config) + ": socket: " + std::strerror(errno));
   int size = config.receive_buffer_bytes;
-  (void)::setsockopt(r.fd_, SOL_SOCKET, SO_RCVBUF, &size, sizeof(size));
+  (void)::setsockopt(r.fd_.get(), SOL_SOCKET, SO_RCVBUF, &size, sizeof(size));
   socklen_t len = sizeof(r.granted_rcvbuf_);
-  (void)::getsockopt(r.fd_, SOL_SOCKET, SO_RCVBUF, &r.granted_rcvbuf_, &len);
+  (void)::getsockopt(r.fd_.get(), SOL_SOCKET, SO_RCVBUF, &r.granted_rcvbuf_, &len);
   const int on = 1;
-  (void)::setsockopt(r.fd_, SOL_SOCKET, SO_TIMESTAMPNS, &on, sizeof(on));
-  (void)::setsockopt(r.fd_, SOL_SOCKET, SO_RXQ_OVFL, &on, sizeof(on));
+  (void)::setsockopt(r.fd_.get(), SOL_SOCKET, SO_TIMESTAMPNS, &on, sizeof(on));
+  (void)::setsockopt(r.fd_.get(), SOL_SOCKET, SO_RXQ_OVFL, &on, sizeof(on));
   sockaddr_in addr{};
   addr.sin_family = AF_INET;
   addr.sin_port = htons(config.port);
   addr.sin_addr.s_addr = htonl(bind_ip);
-  if (::bind(r.fd_, reinterpret_cast<const sockaddr*>(&addr), sizeof(addr)) != 0) {
+  if (::bind(r.fd_.get(), reinterpret_cast<const sockaddr*>(&addr), sizeof(addr)) != 0) {
     const int e = errno;
     return rt::make_error(where(config) + ": cannot bind: " + std::strerror(e) +
                           (e == EADDRINUSE ? " (another program, e.g. a second stac or a ROS "
@@ -62,10 +61,10 @@ rt::Result<UdpReceiver> UdpReceiver::open(const UdpReceiverConfig& config) {
   }
   sockaddr_in bound{};
   len = sizeof(bound);
-  (void)::getsockname(r.fd_, reinterpret_cast<sockaddr*>(&bound), &len);
+  (void)::getsockname(r.fd_.get(), reinterpret_cast<sockaddr*>(&bound), &len);
   r.port_ = ntohs(bound.sin_port);
-  r.wake_fd_ = ::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
-  if (r.wake_fd_ < 0) return rt::make_error(where(config) + ": eventfd: " + std::strerror(errno));
+  r.wake_fd_.reset(::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC));
+  if (!r.wake_fd_) return rt::make_error(where(config) + ": eventfd: " + std::strerror(errno));
 
   r.batch_ = config.batch;
   r.max_payload_ = static_cast<std::size_t>(config.max_payload);
@@ -78,42 +77,18 @@ rt::Result<UdpReceiver> UdpReceiver::open(const UdpReceiverConfig& config) {
   return r;
 }
 
-UdpReceiver::UdpReceiver(UdpReceiver&& o) noexcept { *this = std::move(o); }
-
-UdpReceiver& UdpReceiver::operator=(UdpReceiver&& o) noexcept {
-  if (this == &o) return *this;
-  if (fd_ >= 0) ::close(fd_);
-  if (wake_fd_ >= 0) ::close(wake_fd_);
-  fd_ = std::exchange(o.fd_, -1);
-  wake_fd_ = std::exchange(o.wake_fd_, -1);
-  port_ = o.port_;
-  granted_rcvbuf_ = o.granted_rcvbuf_;
-  sender_ = o.sender_;
-  filter_sender_ = o.filter_sender_;
-  batch_ = o.batch_;
-  max_payload_ = o.max_payload_;
-  buffers_ = std::move(o.buffers_);
-  control_ = std::move(o.control_);
-  messages_ = std::move(o.messages_);
-  iovecs_ = std::move(o.iovecs_);
-  addresses_ = std::move(o.addresses_);
-  counters_ = o.counters_;
-  return *this;
-}
-
-UdpReceiver::~UdpReceiver() {
-  if (fd_ >= 0) ::close(fd_);
-  if (wake_fd_ >= 0) ::close(wake_fd_);
-}
+UdpReceiver::UdpReceiver(UdpReceiver&&) noexcept = default;
+UdpReceiver& UdpReceiver::operator=(UdpReceiver&&) noexcept = default;
+UdpReceiver::~UdpReceiver() = default;
 
 void UdpReceiver::stop() noexcept {
   const std::uint64_t one = 1;
-  if (wake_fd_ >= 0) (void)!::write(wake_fd_, &one, sizeof(one));
+  if (wake_fd_) (void)!::write(wake_fd_.get(), &one, sizeof(one));
 }
 
 int UdpReceiver::receive(std::span<Datagram> out, int timeout_ms) noexcept {
   if (out.empty()) return 0;
-  pollfd fds[2] = {{fd_, POLLIN, 0}, {wake_fd_, POLLIN, 0}};
+  pollfd fds[2] = {{fd_.get(), POLLIN, 0}, {wake_fd_.get(), POLLIN, 0}};
   const int ready = ::poll(fds, 2, timeout_ms);
   if (ready < 0) return errno == EINTR ? 0 : kError;
   if ((fds[1].revents & POLLIN) != 0) return kStopped;  // the eventfd stays readable: sticky
@@ -134,7 +109,7 @@ int UdpReceiver::receive(std::span<Datagram> out, int timeout_ms) noexcept {
     h.msg_control = control_.data() + i * kControlSpace;
     h.msg_controllen = kControlSpace;
   }
-  const int got = ::recvmmsg(fd_, messages_.data(), n, MSG_DONTWAIT, nullptr);
+  const int got = ::recvmmsg(fd_.get(), messages_.data(), n, MSG_DONTWAIT, nullptr);
   if (got < 0) return (errno == EAGAIN || errno == EINTR) ? 0 : kError;
   int kept = 0;
   for (int i = 0; i < got; ++i) {
@@ -182,27 +157,23 @@ rt::Result<UdpSender> UdpSender::open(const std::string& address, std::uint16_t 
   std::uint32_t ip = 0;
   if (!parse_ipv4(address.c_str(), ip)) return rt::make_error("'" + address + "' is not an IPv4 address");
   UdpSender s;
-  s.fd_ = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
-  if (s.fd_ < 0) return rt::make_error(std::string("socket: ") + std::strerror(errno));
+  s.fd_.reset(::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0));
+  if (!s.fd_) return rt::make_error(std::string("socket: ") + std::strerror(errno));
   const int on = 1;
-  (void)::setsockopt(s.fd_, SOL_SOCKET, SO_BROADCAST, &on, sizeof(on));
+  (void)::setsockopt(s.fd_.get(), SOL_SOCKET, SO_BROADCAST, &on, sizeof(on));
   sockaddr_in addr{};
   addr.sin_family = AF_INET;
   addr.sin_port = htons(port);
   addr.sin_addr.s_addr = htonl(ip);
-  if (::connect(s.fd_, reinterpret_cast<const sockaddr*>(&addr), sizeof(addr)) != 0) {
+  if (::connect(s.fd_.get(), reinterpret_cast<const sockaddr*>(&addr), sizeof(addr)) != 0) {
     return rt::make_error("UDP " + address + ":" + std::to_string(port) + ": " + std::strerror(errno));
   }
   return s;
 }
 
-UdpSender::UdpSender(UdpSender&& o) noexcept : fd_(std::exchange(o.fd_, -1)) {}
-UdpSender::~UdpSender() {
-  if (fd_ >= 0) ::close(fd_);
-}
-
 bool UdpSender::send(std::span<const std::uint8_t> payload) noexcept {
-  return ::send(fd_, payload.data(), payload.size(), 0) == static_cast<ssize_t>(payload.size());
+  return ::send(fd_.get(), payload.data(), payload.size(), 0) ==
+         static_cast<ssize_t>(payload.size());
 }
 
 }  // namespace stac::io

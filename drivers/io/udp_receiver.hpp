@@ -11,6 +11,7 @@
 
 #include "drivers/io/datagram.hpp"
 #include "rt/expected.hpp"
+#include "rt/unique_fd.hpp"
 
 struct mmsghdr;
 
@@ -40,6 +41,7 @@ class UdpReceiver {
 
   // Errors name the address and port and what to change (port in use, bad address, ...).
   static rt::Result<UdpReceiver> open(const UdpReceiverConfig& config);
+  // Defaulted in the .cpp, where mmsghdr is a complete type.
   UdpReceiver(UdpReceiver&&) noexcept;
   UdpReceiver& operator=(UdpReceiver&&) noexcept;
   UdpReceiver(const UdpReceiver&) = delete;
@@ -59,8 +61,8 @@ class UdpReceiver {
  private:
   UdpReceiver() = default;
 
-  int fd_ = -1;
-  int wake_fd_ = -1;
+  rt::UniqueFd fd_;
+  rt::UniqueFd wake_fd_;
   std::uint16_t port_ = 0;
   int granted_rcvbuf_ = 0;
   std::uint32_t sender_ = 0;
@@ -78,15 +80,12 @@ class UdpReceiver {
 class UdpSender {
  public:
   static rt::Result<UdpSender> open(const std::string& address, std::uint16_t port);
-  UdpSender(UdpSender&&) noexcept;
-  UdpSender(const UdpSender&) = delete;
-  ~UdpSender();
   // True when the whole datagram went out.
   bool send(std::span<const std::uint8_t> payload) noexcept;
 
  private:
   UdpSender() = default;
-  int fd_ = -1;
+  rt::UniqueFd fd_;
 };
 
 }  // namespace stac::io

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <random>
 #include <thread>
+#include <type_traits>
 #include <vector>
 
 #include "applanix/applanix_stream.hpp"
@@ -23,6 +24,11 @@ namespace stac::applanix {
 namespace {
 
 using Bytes = std::vector<std::uint8_t>;
+
+// Move-only; a move never throws (the descriptors go with the object).
+static_assert(std::is_nothrow_move_constructible_v<TcpClient> &&
+              std::is_nothrow_move_assignable_v<TcpClient> &&
+              !std::is_copy_constructible_v<TcpClient>);
 
 std::vector<Bytes> random_messages(std::uint32_t seed, int count) {
   std::mt19937 rng(seed);

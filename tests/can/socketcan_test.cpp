@@ -10,6 +10,7 @@
 #include <cerrno>
 #include <cstring>
 #include <thread>
+#include <type_traits>
 
 #include "can/socketcan_pair.hpp"
 #include "rt/testing/alloc_counter.hpp"
@@ -18,6 +19,11 @@ namespace stac::can {
 namespace {
 
 using stac::testing::send_record;
+
+// Move-only; a move never throws (the descriptors go with the object).
+static_assert(std::is_nothrow_move_constructible_v<SocketCanReader> &&
+              std::is_nothrow_move_assignable_v<SocketCanReader> &&
+              !std::is_copy_constructible_v<SocketCanReader>);
 
 TEST(SocketCanReader, ReadsHandMadeCanFrameRecordsWithStamps) {
   auto p = stac::testing::make_socketcan_pair();

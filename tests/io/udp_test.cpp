@@ -2,6 +2,7 @@
 
 #include <array>
 #include <thread>
+#include <type_traits>
 #include <vector>
 
 #include "drivers/io/udp_receiver.hpp"
@@ -10,6 +11,13 @@
 
 namespace stac::io {
 namespace {
+
+// Move-only; a move never throws (the descriptors go with the object).
+static_assert(std::is_nothrow_move_constructible_v<UdpReceiver> &&
+              std::is_nothrow_move_assignable_v<UdpReceiver> &&
+              !std::is_copy_constructible_v<UdpReceiver>);
+static_assert(std::is_nothrow_move_constructible_v<UdpSender> &&
+              !std::is_copy_constructible_v<UdpSender>);
 
 UdpReceiverConfig loopback(int max_payload = 2048) {
   UdpReceiverConfig c;

@@ -12,10 +12,16 @@
 
 #include <cstdio>
 #include <thread>
+#include <type_traits>
 #include <utility>
 
 namespace stac::rt {
 namespace {
+
+// Move-only; a move never throws (the request goes with the descriptor).
+static_assert(std::is_nothrow_move_constructible_v<CpuLatencyRequest> &&
+              std::is_nothrow_move_assignable_v<CpuLatencyRequest> &&
+              !std::is_copy_constructible_v<CpuLatencyRequest>);
 
 int first_allowed_cpu() {
   cpu_set_t set;
