@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "dds/idl_types.hpp"
+#include "rt/unique_fd.hpp"
 #include "tools/capture_scans.hpp"
 #include "tools/child_process.hpp"
 #include "tools/commands.hpp"
@@ -58,25 +59,23 @@ extern "C" void on_interrupt(int) {
 // out. The socket is closed again before the child binds (a short race, reported by the child).
 rt::Result<std::uint16_t> loopback_port(int type, int wanted, const char* option) {
   const char* kind = type == SOCK_DGRAM ? "UDP" : "TCP";
-  const int fd = ::socket(AF_INET, type | SOCK_CLOEXEC, 0);
-  if (fd < 0) return rt::make_error(std::string(kind) + " socket: " + std::strerror(errno));
+  const rt::UniqueFd fd(::socket(AF_INET, type | SOCK_CLOEXEC, 0));
+  if (!fd) return rt::make_error(std::string(kind) + " socket: " + std::strerror(errno));
   const int on = 1;
-  if (type == SOCK_STREAM) (void)::setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &on, sizeof(on));
+  if (type == SOCK_STREAM) (void)::setsockopt(fd.get(), SOL_SOCKET, SO_REUSEADDR, &on, sizeof(on));
   sockaddr_in a{};
   a.sin_family = AF_INET;
   a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
   a.sin_port = htons(static_cast<std::uint16_t>(wanted));
   socklen_t len = sizeof(a);
-  if (::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof(a)) != 0) {
+  if (::bind(fd.get(), reinterpret_cast<sockaddr*>(&a), sizeof(a)) != 0) {
     const int e = errno;
-    ::close(fd);
     return rt::make_error(std::string(kind) + " port " + std::to_string(wanted) +
                           " on 127.0.0.1 is not free (" + std::strerror(e) +
                           "): another program uses it; pass " + option +
                           " with another port, or 0 for any free one");
   }
-  (void)::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len);
-  ::close(fd);
+  (void)::getsockname(fd.get(), reinterpret_cast<sockaddr*>(&a), &len);
   return ntohs(a.sin_port);
 }
 

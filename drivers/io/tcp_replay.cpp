@@ -138,59 +138,34 @@ rt::Result<TcpReplay> TcpReplay::open(const std::filesystem::path& capture,
   if (::inet_pton(AF_INET, config.listen_address.c_str(), &addr.sin_addr) != 1) {
     return rt::make_error(where + ": not an IPv4 address");
   }
-  r.listen_fd_ = ::socket(AF_INET, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
-  if (r.listen_fd_ < 0) return rt::make_error(where + ": socket: " + std::strerror(errno));
+  r.listen_fd_.reset(::socket(AF_INET, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0));
+  if (!r.listen_fd_) return rt::make_error(where + ": socket: " + std::strerror(errno));
   const int on = 1;
-  (void)::setsockopt(r.listen_fd_, SOL_SOCKET, SO_REUSEADDR, &on, sizeof(on));
-  if (::bind(r.listen_fd_, reinterpret_cast<const sockaddr*>(&addr), sizeof(addr)) != 0 ||
-      ::listen(r.listen_fd_, 4) != 0) {
+  (void)::setsockopt(r.listen_fd_.get(), SOL_SOCKET, SO_REUSEADDR, &on, sizeof(on));
+  if (::bind(r.listen_fd_.get(), reinterpret_cast<const sockaddr*>(&addr), sizeof(addr)) != 0 ||
+      ::listen(r.listen_fd_.get(), 4) != 0) {
     return rt::make_error(where + ": " + std::strerror(errno));
   }
   socklen_t len = sizeof(addr);
-  (void)::getsockname(r.listen_fd_, reinterpret_cast<sockaddr*>(&addr), &len);
+  (void)::getsockname(r.listen_fd_.get(), reinterpret_cast<sockaddr*>(&addr), &len);
   r.listen_port_ = ntohs(addr.sin_port);
   return r;
 }
 
-TcpReplay::TcpReplay(TcpReplay&& o) noexcept
-    : capture_(std::move(o.capture_)), config_(std::move(o.config_)), plan_(o.plan_),
-      listen_fd_(std::exchange(o.listen_fd_, -1)), client_fd_(std::exchange(o.client_fd_, -1)),
-      listen_port_(o.listen_port_), accepted_(o.accepted_) {}
-
-TcpReplay& TcpReplay::operator=(TcpReplay&& o) noexcept {
-  if (this != &o) {
-    if (listen_fd_ >= 0) ::close(listen_fd_);
-    if (client_fd_ >= 0) ::close(client_fd_);
-    capture_ = std::move(o.capture_);
-    config_ = std::move(o.config_);
-    plan_ = o.plan_;
-    listen_fd_ = std::exchange(o.listen_fd_, -1);
-    client_fd_ = std::exchange(o.client_fd_, -1);
-    listen_port_ = o.listen_port_;
-    accepted_ = o.accepted_;
-  }
-  return *this;
-}
-
-TcpReplay::~TcpReplay() {
-  if (client_fd_ >= 0) ::close(client_fd_);
-  if (listen_fd_ >= 0) ::close(listen_fd_);
-}
-
 void TcpReplay::accept_pending() noexcept {
-  if (client_fd_ >= 0) return;
-  const int fd = ::accept4(listen_fd_, nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC);
-  if (fd < 0) return;  // none waiting (EAGAIN) or it went away already
+  if (client_fd_) return;
+  rt::UniqueFd fd(::accept4(listen_fd_.get(), nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC));
+  if (!fd) return;  // none waiting (EAGAIN) or it went away already
   const int on = 1;
-  (void)::setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &on, sizeof(on));
-  client_fd_ = fd;
+  (void)::setsockopt(fd.get(), IPPROTO_TCP, TCP_NODELAY, &on, sizeof(on));
+  client_fd_ = std::move(fd);
   ++accepted_;
 }
 
 bool TcpReplay::wait_for_client(const std::atomic<bool>& stop) noexcept {
-  while (client_fd_ < 0) {
+  while (!client_fd_) {
     if (stop.load(std::memory_order_relaxed)) return false;
-    pollfd p{listen_fd_, POLLIN, 0};
+    pollfd p{listen_fd_.get(), POLLIN, 0};
     (void)::poll(&p, 1, kPollSliceMs);
     accept_pending();
   }
@@ -198,22 +173,21 @@ bool TcpReplay::wait_for_client(const std::atomic<bool>& stop) noexcept {
 }
 
 void TcpReplay::drop_client(TcpReplayReport& report) noexcept {
-  ::close(client_fd_);
-  client_fd_ = -1;
+  client_fd_.reset();
   ++report.disconnects;
 }
 
 // Notices a client that closed or reset; bytes it sent are read and ignored.
 void TcpReplay::check_client(TcpReplayReport& report) noexcept {
-  if (client_fd_ < 0) return;
-  pollfd p{client_fd_, POLLIN | POLLRDHUP, 0};
+  if (!client_fd_) return;
+  pollfd p{client_fd_.get(), POLLIN | POLLRDHUP, 0};
   if (::poll(&p, 1, 0) <= 0) return;
   if (p.revents & (POLLERR | POLLHUP | POLLRDHUP)) {
     drop_client(report);
     return;
   }
   std::array<std::uint8_t, 512> sink{};
-  const ssize_t n = ::recv(client_fd_, sink.data(), sink.size(), MSG_DONTWAIT);
+  const ssize_t n = ::recv(client_fd_.get(), sink.data(), sink.size(), MSG_DONTWAIT);
   if (n == 0 || (n < 0 && errno != EAGAIN && errno != EINTR)) drop_client(report);
 }
 
@@ -222,8 +196,8 @@ bool TcpReplay::write_all(std::span<const std::uint8_t> chunk, const std::atomic
   std::size_t done = 0;
   std::int64_t waited_since = rt::monotonic_ns();
   while (done < chunk.size()) {
-    const ssize_t n =
-        ::send(client_fd_, chunk.data() + done, chunk.size() - done, MSG_NOSIGNAL | MSG_DONTWAIT);
+    const ssize_t n = ::send(client_fd_.get(), chunk.data() + done, chunk.size() - done,
+                             MSG_NOSIGNAL | MSG_DONTWAIT);
     if (n > 0) {
       done += static_cast<std::size_t>(n);
       report.bytes += static_cast<std::uint64_t>(n);
@@ -240,7 +214,7 @@ bool TcpReplay::write_all(std::span<const std::uint8_t> chunk, const std::atomic
       drop_client(report);
       return false;
     }
-    pollfd p{client_fd_, POLLOUT, 0};
+    pollfd p{client_fd_.get(), POLLOUT, 0};
     (void)::poll(&p, 1, kPollSliceMs);
   }
   return true;
@@ -251,7 +225,7 @@ rt::Result<TcpReplayReport> TcpReplay::run(const std::atomic<bool>& stop,
   TcpReplayReport report;
   PacingStats pacing;
   // A client accepted by wait_for_client() just before counts for this run.
-  const std::uint64_t accepted_before = accepted_ - (client_fd_ >= 0 ? 1 : 0);
+  const std::uint64_t accepted_before = accepted_ - (client_fd_ ? 1 : 0);
   const ReplayClock clock =
       shared ? *shared
              : ReplayClock{rt::monotonic_ns(), plan_.first_stamp_ns, plan_.pass_period_ns,
@@ -278,7 +252,7 @@ rt::Result<TcpReplayReport> TcpReplay::run(const std::atomic<bool>& stop,
       }
       check_client(report);
       accept_pending();
-      if (client_fd_ < 0) {
+      if (!client_fd_) {
         report.unserved_bytes += chunk.size();
         return true;
       }
@@ -294,10 +268,9 @@ rt::Result<TcpReplayReport> TcpReplay::run(const std::atomic<bool>& stop,
       break;
     }
   }
-  if (client_fd_ >= 0) {  // end of stream for the client
-    (void)::shutdown(client_fd_, SHUT_WR);
-    ::close(client_fd_);
-    client_fd_ = -1;
+  if (client_fd_) {  // end of stream for the client
+    (void)::shutdown(client_fd_.get(), SHUT_WR);
+    client_fd_.reset();
   }
   report.clients = accepted_ - accepted_before;
   report.scheduled_ns = config_.fast ? 0 : last_scheduled;

@@ -22,6 +22,7 @@
 
 #include "drivers/io/replay_pacing.hpp"
 #include "rt/expected.hpp"
+#include "rt/unique_fd.hpp"
 
 namespace stac::io {
 
@@ -72,10 +73,6 @@ class TcpReplay {
   // rate <= 0, or naming address and port when listening fails (in use, bad address).
   static rt::Result<TcpReplay> open(const std::filesystem::path& capture,
                                     const TcpReplayConfig& config);
-  TcpReplay(TcpReplay&&) noexcept;
-  TcpReplay& operator=(TcpReplay&&) noexcept;
-  TcpReplay(const TcpReplay&) = delete;
-  ~TcpReplay();
 
   const TcpReplayPlan& plan() const noexcept { return plan_; }
   std::uint16_t listen_port() const noexcept { return listen_port_; }  // the bound one
@@ -100,8 +97,8 @@ class TcpReplay {
   std::filesystem::path capture_;
   TcpReplayConfig config_;
   TcpReplayPlan plan_;
-  int listen_fd_ = -1;
-  int client_fd_ = -1;
+  rt::UniqueFd listen_fd_;
+  rt::UniqueFd client_fd_;
   std::uint16_t listen_port_ = 0;
   std::uint64_t accepted_ = 0;  // connections accepted since open()
 };

@@ -8,6 +8,7 @@
 #include <atomic>
 #include <chrono>
 #include <thread>
+#include <type_traits>
 #include <vector>
 
 #include "drivers/io/pcap_writer.hpp"
@@ -18,6 +19,11 @@
 
 namespace stac::io {
 namespace {
+
+// Move-only; a move never throws (the descriptors go with the object).
+static_assert(std::is_nothrow_move_constructible_v<TcpReplay> &&
+              std::is_nothrow_move_assignable_v<TcpReplay> &&
+              !std::is_copy_constructible_v<TcpReplay>);
 
 using Bytes = std::vector<std::uint8_t>;
 constexpr std::int64_t kT0 = 1'700'000'000'000'000'000;
