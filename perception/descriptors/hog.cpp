@@ -20,36 +20,28 @@ int reflect(int i, int n) noexcept {
 }  // namespace
 
 GradientCache::GradientCache(std::size_t max_pixels, int bins)
-    : bins_(bins), gradient_(max_pixels) {}
+    : bins_(bins), gradient_(max_pixels), row_begin_(max_pixels + 1, 0) {}
 
 void GradientCache::reset(const float* pixels, int width, int height, int x0, int y0, int x1,
                           int y1) noexcept {
-  width_ = width;
   x0_ = std::clamp(x0, 0, width);
   x1_ = std::clamp(x1, x0_, width);
   y0_ = std::clamp(y0, 0, height);
   y1_ = std::clamp(y1, y0_, height);
   const float bins = static_cast<float>(bins_);
+  std::uint32_t kept = 0;
   for (int y = y0_; y < y1_; ++y) {
+    row_begin_[static_cast<std::size_t>(y - y0_)] = kept;
     const float* row = pixels + static_cast<std::ptrdiff_t>(y) * width;
     const float* up = pixels + static_cast<std::ptrdiff_t>(reflect(y - 1, height)) * width;
     const float* down = pixels + static_cast<std::ptrdiff_t>(reflect(y + 1, height)) * width;
-    Gradient* out = gradient_.data() + static_cast<std::ptrdiff_t>(y) * width;
     for (int x = x0_; x < x1_; ++x) {
       const int left = x > 0 ? x - 1 : reflect(x - 1, width);
       const int right = x + 1 < width ? x + 1 : reflect(x + 1, width);
       const float dx = row[right] - row[left];
       const float dy = down[x] - up[x];
-      Gradient& g = out[x];
-      if (dx == 0.0f && dy == 0.0f) {
-        g = Gradient{{0.0f, 0.0f}, {0, 0}};
-        continue;
-      }
+      if (dx == 0.0f && dy == 0.0f) continue;
       const float magnitude = std::sqrt(dx * dx + dy * dy);
-      if (magnitude == 0.0f) {  // both differences tiny enough to underflow
-        g = Gradient{{0.0f, 0.0f}, {0, 0}};
-        continue;
-      }
       const float angle = angle_of(dy, dx);  // [0, 2 pi)
       const float position = angle * (bins / kPi) - 0.5f;
       int bin = static_cast<int>(floor_exact(position));
@@ -58,12 +50,17 @@ void GradientCache::reset(const float* pixels, int width, int height, int x0, in
       if (bin < 0) bin += bins_;
       while (bin >= bins_) bin -= bins_;
       const int next = bin + 1 == bins_ ? 0 : bin + 1;
+      Gradient& g = gradient_[kept];
       g.weight[0] = magnitude * (1.0f - fraction);
       g.weight[1] = magnitude * fraction;
+      if (g.weight[0] == 0.0f && g.weight[1] == 0.0f) continue;  // underflow: adds nothing
       g.bin[0] = static_cast<std::uint8_t>(bin);
       g.bin[1] = static_cast<std::uint8_t>(next);
+      g.x = static_cast<std::uint16_t>(x);
+      ++kept;
     }
   }
+  row_begin_[static_cast<std::size_t>(y1_ - y0_)] = kept;
 }
 
 HogWindow::HogWindow(const HogShape& shape) : shape_(shape) {
@@ -106,15 +103,18 @@ HogWindow::HogWindow(const HogShape& shape) : shape_(shape) {
 void HogWindow::compute(const GradientCache& gradients, int x0, int y0, float* out) const noexcept {
   const std::size_t n = shape_.size();
   std::fill(out, out + n, 0.0f);
-  // Only where gradients were computed: elsewhere they are zero and add nothing.
-  const int ya = std::max(gradients.y0() - y0, 0), yb = std::min(gradients.y1() - y0, shape_.height);
-  const int xa = std::max(gradients.x0() - x0, 0), xb = std::min(gradients.x1() - x0, shape_.width);
+  // Only where gradients were computed: elsewhere they are zero and add nothing. Each row's
+  // gradients come by column, so the window's pixels are visited in row-major order.
+  const int ya = std::max(gradients.y0() - y0, 0),
+            yb = std::min(gradients.y1() - y0, shape_.height);
   for (int y = ya; y < yb; ++y) {
-    const GradientCache::Gradient* row = gradients.row(y0 + y) + x0;
-    for (int x = xa; x < xb; ++x) {
-      const GradientCache::Gradient& g = row[x];
-      if (g.weight[0] == 0.0f && g.weight[1] == 0.0f) continue;
-      const Share& s = shares_[static_cast<std::size_t>(y * shape_.width + x)];
+    const std::span<const GradientCache::Gradient> row = gradients.row(y0 + y);
+    const auto first = std::partition_point(
+        row.begin(), row.end(), [x0](const GradientCache::Gradient& g) { return g.x < x0; });
+    const Share* shares = shares_.data() + static_cast<std::ptrdiff_t>(y) * shape_.width;
+    for (auto it = first; it != row.end() && it->x < x0 + shape_.width; ++it) {
+      const GradientCache::Gradient& g = *it;
+      const Share& s = shares[g.x - x0];
       for (int k = 0; k < 4; ++k) {
         float* h = out + s.offset[k];
         h[g.bin[0]] += s.weight[k] * g.weight[0];

@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <vector>
 
 namespace stac::descriptors {
@@ -24,9 +25,12 @@ struct HogShape {
 
 // Per-pixel gradients of one image, computed for the whole image by reset() and kept until
 // the next one: central differences [-1 0 1] with reflect-101 borders (OpenCV's convention),
-// magnitude split between the two nearest orientation bins.
+// magnitude split between the two nearest orientation bins. Only the pixels with a gradient
+// are kept, row by row in column order (an intensity view is mostly empty), so a window visits
+// those alone, in the order a dense scan of its pixels would.
 class GradientCache {
  public:
+  // Images of at most `max_pixels` pixels.
   explicit GradientCache(std::size_t max_pixels, int bins);
   // `pixels` row-major, `width` floats a row, width * height <= max_pixels.
   void reset(const float* pixels, int width, int height) noexcept {
@@ -34,28 +38,30 @@ class GradientCache {
   }
   // The same when the gradient is known to be zero outside columns [x0, x1) and rows [y0, y1)
   // (an empty range: everywhere): only there is it computed, and only there do windows look.
-  void reset(const float* pixels, int width, int height, int x0, int y0, int x1,
-             int y1) noexcept;
+  void reset(const float* pixels, int width, int height, int x0, int y0, int x1, int y1) noexcept;
 
   struct Gradient {
-    float weight[2];  // magnitude shares of bin[0] and bin[1]
+    float weight[2];  // magnitude shares of bin[0] and bin[1]; not both zero
     std::uint8_t bin[2];
+    std::uint16_t x;  // column
   };
-  // Inside the computed rectangle only (see x0()..y1()).
-  [[nodiscard]] const Gradient& at(int x, int y) const noexcept { return row(y)[x]; }
-  [[nodiscard]] const Gradient* row(int y) const noexcept {
-    return gradient_.data() + static_cast<std::ptrdiff_t>(y) * width_;
+  // Row y's pixels with a gradient, by column (y in [y0(), y1()); other rows have none).
+  [[nodiscard]] std::span<const Gradient> row(int y) const noexcept {
+    const auto r = static_cast<std::size_t>(y - y0_);
+    return {gradient_.data() + row_begin_[r], row_begin_[r + 1] - row_begin_[r]};
   }
-  // Where gradients were computed (outside: zero, and not stored).
+  // Where gradients were computed (outside: zero).
   [[nodiscard]] int x0() const noexcept { return x0_; }
   [[nodiscard]] int y0() const noexcept { return y0_; }
   [[nodiscard]] int x1() const noexcept { return x1_; }
   [[nodiscard]] int y1() const noexcept { return y1_; }
 
  private:
-  int width_ = 0, bins_ = 6;
+  int bins_ = 6;
   int x0_ = 0, y0_ = 0, x1_ = 0, y1_ = 0;
-  std::vector<Gradient> gradient_;
+  std::vector<Gradient> gradient_;  // the rows' gradients, one after the other
+  std::vector<std::uint32_t>
+      row_begin_;  // row y's are [row_begin_[y - y0], row_begin_[y - y0 + 1])
 };
 
 class HogWindow {
