@@ -137,33 +137,16 @@ bool GridClassifier::classify(std::span<const float> x, LogOdds& out) const noex
   return true;
 }
 
+bool GridClassifier::partial(std::span<const float> x, std::size_t begin, std::size_t end,
+                             LogOdds& sum) const noexcept {
+  if (x.size() != end - begin) return false;
+  const float* row = x.data();
+  return partial_batch({&row, 1}, begin, end, {&sum, 1});
+}
+
 // Same bins as bin(), without its branches; two accumulators (even and odd elements) halve the
 // chain of dependent adds. NaN elements add nothing (then no t below is NaN: lower, scale are
 // finite, scale > 0).
-bool GridClassifier::partial(std::span<const float> x, std::size_t begin, std::size_t end,
-                             LogOdds& sum) const noexcept {
-  if (begin > end || end > dimensions_ || x.size() != end - begin) return false;
-  const std::size_t resolutions = model_.resolutions.size();
-  const float* table = model_.table.data();
-  const float* lower = model_.lower.data();
-  const float* scale = model_.scale.data();
-  float acc[2][kClassCount] = {};
-  for (std::size_t e = begin; e < end; ++e) {
-    const float v = x[e - begin];
-    if (std::isnan(v)) continue;
-    const float* element = table + e * cells_per_element_ * kClassCount;
-    float* a = acc[e & 1];
-    for (std::size_t r = 0; r < resolutions; ++r) {
-      const std::size_t g = e * resolutions + r;
-      const float t = std::min(std::max((v - lower[g]) * scale[g], 0.0f), last_bin_[r]);
-      const float* cell = element + (bin_offset_[r] + static_cast<std::uint32_t>(t)) * kClassCount;
-      for (std::size_t k = 0; k < kClassCount; ++k) a[k] += cell[k];
-    }
-  }
-  for (std::size_t k = 0; k < kClassCount; ++k) sum[k] += acc[0][k] + acc[1][k];
-  return true;
-}
-
 bool GridClassifier::partial_batch(std::span<const float* const> rows, std::size_t begin,
                                    std::size_t end, std::span<LogOdds> sums) const noexcept {
   if (begin > end || end > dimensions_ || rows.size() != sums.size()) return false;
@@ -173,7 +156,8 @@ bool GridClassifier::partial_batch(std::span<const float* const> rows, std::size
   const float* scale = model_.scale.data();
   for (std::size_t first = 0; first < rows.size(); first += kBatch) {
     const std::size_t n = std::min(kBatch, rows.size() - first);
-    float acc[kBatch][2][kClassCount] = {};
+    float acc[kBatch][2][kClassCount];
+    std::fill_n(&acc[0][0][0], n * 2 * kClassCount, 0.0f);
     for (std::size_t e = begin; e < end; ++e) {
       const float* element = table + e * cells_per_element_ * kClassCount;
       for (std::size_t j = 0; j < n; ++j) {

@@ -75,11 +75,11 @@ class GridClassifier {
   // unchanged) when the range is outside the layout or x.size() != end - begin.
   [[nodiscard]] bool partial(std::span<const float> x, std::size_t begin, std::size_t end,
                              LogOdds& sum) const noexcept;
-  // partial() for many inputs at once: rows[j] holds elements [begin, end) of input j, and its
-  // part is added to sums[j]. The table is walked once per kBatch inputs, element by element,
-  // so it stays in cache; each input's adds come in partial()'s order, so every sum is exactly
-  // partial()'s. False (sums unchanged) when the range is outside the layout or the spans'
-  // sizes differ.
+  // partial() for many inputs at once (partial() is this with one): rows[j] holds elements
+  // [begin, end) of input j, and its part is added to sums[j]. The table is walked once per
+  // kBatch inputs, element by element, so it stays in cache; each input's adds come in the
+  // order of partial() alone, so every sum is exactly partial()'s. False (sums unchanged) when the
+  // range is outside the layout or the spans' sizes differ.
   static constexpr std::size_t kBatch = 64;
   [[nodiscard]] bool partial_batch(std::span<const float* const> rows, std::size_t begin,
                                    std::size_t end, std::span<LogOdds> sums) const noexcept;

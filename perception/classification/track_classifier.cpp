@@ -101,7 +101,6 @@ void TrackClassifier::classify_pending() noexcept {
 void TrackClassifier::update(const float* xyzi, std::size_t stride_bytes,
                              const segmentation::Segments& segments,
                              std::span<const tracking::Track> tracks) noexcept {
-  pending_.clear();
   for (const tracking::Track& t : tracks) {
     if (t.slot >= slots_.size()) {
       ++counters_.slot_mismatch;

@@ -141,7 +141,7 @@ struct DescriptorPipeline::State {
   explicit State(const DescriptorConfig& c)
       : x(c.max_points), y(c.max_points), z(c.max_points), value(c.max_points),
         pixel(c.max_points),
-        gradients(c.max_image_px * c.max_image_px, 6),
+        gradients(c.max_image_px * c.max_image_px, c.max_image_px, 6),
         windows{HogWindow(kHogShapes[0][0]), HogWindow(kHogShapes[0][1]),
                 HogWindow(kHogShapes[2][0])} {
     const std::size_t pixels = c.max_image_px * c.max_image_px;

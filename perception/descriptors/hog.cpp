@@ -19,8 +19,8 @@ int reflect(int i, int n) noexcept {
 
 }  // namespace
 
-GradientCache::GradientCache(std::size_t max_pixels, int bins)
-    : bins_(bins), gradient_(max_pixels), row_begin_(max_pixels + 1, 0) {}
+GradientCache::GradientCache(std::size_t max_pixels, std::size_t max_rows, int bins)
+    : bins_(bins), gradient_(max_pixels), row_begin_(max_rows + 1, 0) {}
 
 void GradientCache::reset(const float* pixels, int width, int height, int x0, int y0, int x1,
                           int y1) noexcept {

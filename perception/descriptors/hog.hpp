@@ -30,9 +30,9 @@ struct HogShape {
 // those alone, in the order a dense scan of its pixels would.
 class GradientCache {
  public:
-  // Images of at most `max_pixels` pixels.
-  explicit GradientCache(std::size_t max_pixels, int bins);
-  // `pixels` row-major, `width` floats a row, width * height <= max_pixels.
+  // Images of at most `max_pixels` pixels and `max_rows` rows.
+  GradientCache(std::size_t max_pixels, std::size_t max_rows, int bins);
+  // `pixels` row-major, `width` floats a row, width * height <= max_pixels, height <= max_rows.
   void reset(const float* pixels, int width, int height) noexcept {
     reset(pixels, width, height, 0, 0, width, height);
   }

@@ -4,6 +4,8 @@
 // which we implement too), L2-Hys 0.2, no gamma correction, no padding, explicit locations.
 // Compared: the final normalised descriptors, element by element. The only expected difference
 // is OpenCV's polynomial atan approximation in cartToPolar (about 0.01 degree).
+#include "perception/descriptors/hog.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -12,8 +14,6 @@
 #include <opencv2/objdetect.hpp>
 #include <random>
 #include <vector>
-
-#include "perception/descriptors/hog.hpp"
 
 namespace stac::descriptors {
 namespace {
@@ -47,7 +47,7 @@ void expect_matches_opencv(const cv::Mat& img, const HogShape& shape) {
   ASSERT_EQ(expected.size(), locations.size() * shape.size());
 
   std::vector<float> pixels(img.begin<std::uint8_t>(), img.end<std::uint8_t>());
-  GradientCache gradients(pixels.size(), shape.bins);
+  GradientCache gradients(pixels.size(), static_cast<std::size_t>(img.rows), shape.bins);
   gradients.reset(pixels.data(), img.cols, img.rows);
   const HogWindow window(shape);
   std::vector<float> ours(shape.size());
@@ -85,7 +85,7 @@ TEST(Hog, WindowFillingTheWholeImageMatchesOpenCv) {
 
 TEST(Hog, FlatImageGivesZeroDescriptor) {
   std::vector<float> pixels(40 * 40, 128.0f);
-  GradientCache gradients(pixels.size(), 6);
+  GradientCache gradients(pixels.size(), 40, 6);
   gradients.reset(pixels.data(), 40, 40);
   const HogWindow window({30, 30, 5, 6, 0.2f});
   std::vector<float> out(window.shape().size(), 1.0f);
