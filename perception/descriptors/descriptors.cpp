@@ -23,10 +23,9 @@ constexpr SpinShape kSpins[4] = {{3, 10, 10}, {7, 14, 7}, {10, 20, 10}, {5, 10, 
 // HOG arrays: per view a small and a large window (= block), each at 4 (u, v) offsets.
 constexpr int kViews = 3;
 constexpr const char* kViewNames[kViews] = {"front", "side", "top"};
-constexpr HogShape kHogShapes[kViews][2] = {
-    {{15, 30, 5, 6, 0.2f}, {30, 30, 5, 6, 0.2f}},
-    {{15, 30, 5, 6, 0.2f}, {30, 30, 5, 6, 0.2f}},
-    {{15, 15, 5, 6, 0.2f}, {30, 30, 5, 6, 0.2f}}};
+constexpr HogShape kHogShapes[kViews][2] = {{{15, 30, 5, 6, 0.2f}, {30, 30, 5, 6, 0.2f}},
+                                            {{15, 30, 5, 6, 0.2f}, {30, 30, 5, 6, 0.2f}},
+                                            {{15, 15, 5, 6, 0.2f}, {30, 30, 5, 6, 0.2f}}};
 constexpr float kOffsets[4][2] = {{0.0f, 1.0f}, {0.5f, 0.0f}, {0.5f, 0.5f}, {1.0f, 1.0f}};
 constexpr const char* kOffsetNames[4] = {"u0_v1", "u0.5_v0", "u0.5_v0.5", "u1_v1"};
 constexpr std::size_t kMaxHogRaw = 216;  // 30x30 window, 5 px cells, 6 bins
@@ -45,8 +44,8 @@ struct Layout {
     };
     add("bbox_size", 3);
     for (const SpinShape& s : kSpins) {
-      add("spin_" + std::to_string(static_cast<int>(s.px_per_m)) + "ppm_" +
-              std::to_string(s.rows) + "x" + std::to_string(s.cols),
+      add("spin_" + std::to_string(static_cast<int>(s.px_per_m)) + "ppm_" + std::to_string(s.rows) +
+              "x" + std::to_string(s.cols),
           static_cast<std::size_t>(s.rows * s.cols));
     }
     for (int v = 0; v < kViews; ++v) {
@@ -96,14 +95,30 @@ class Normal {
   bool has_spare_ = false;
 };
 
-// A pixel rectangle, corners inclusive; empty when x1 < x0.
+// A pixel rectangle, corners inclusive; empty when x1 < x0 or y1 < y0. The empty rectangle
+// that unions start from has its first corner beyond the image ({w, h, -1, -1}).
 struct Rect {
   int x0, y0, x1, y1;
-  // Grown by `px` on every side, clipped to a w x h image.
+  [[nodiscard]] bool empty() const noexcept { return x1 < x0 || y1 < y0; }
+  [[nodiscard]] long area() const noexcept {
+    return empty() ? 0 : static_cast<long>(x1 - x0 + 1) * static_cast<long>(y1 - y0 + 1);
+  }
+  [[nodiscard]] bool contains(int x, int y) const noexcept {
+    return x >= x0 && x <= x1 && y >= y0 && y <= y1;
+  }
+  // Grown by `px` on every side, clipped to a w x h image (not empty).
   [[nodiscard]] Rect grown(int px, int w, int h) const noexcept {
     return {std::max(x0 - px, 0), std::max(y0 - px, 0), std::min(x1 + px, w - 1),
             std::min(y1 + px, h - 1)};
   }
+  // The bounding box of both (either may be the empty {w, h, -1, -1}).
+  [[nodiscard]] Rect united(const Rect& o) const noexcept {
+    return {std::min(x0, o.x0), std::min(y0, o.y0), std::max(x1, o.x1), std::max(y1, o.y1)};
+  }
+  [[nodiscard]] Rect intersected(const Rect& o) const noexcept {
+    return {std::max(x0, o.x0), std::max(y0, o.y0), std::min(x1, o.x1), std::min(y1, o.y1)};
+  }
+  bool operator==(const Rect&) const = default;
 };
 
 // Zero mean, unit mean square; an all-equal vector becomes all zeros.
@@ -135,11 +150,16 @@ const char* validate(const DescriptorConfig& c) noexcept {
   return "";
 }
 
-const std::array<Space, kSpaceCount>& spaces() noexcept { return layout().spaces; }
+const std::array<Space, kSpaceCount>& spaces() noexcept {
+  return layout().spaces;
+}
 
 struct DescriptorPipeline::State {
   explicit State(const DescriptorConfig& c)
-      : x(c.max_points), y(c.max_points), z(c.max_points), value(c.max_points),
+      : x(c.max_points),
+        y(c.max_points),
+        z(c.max_points),
+        value(c.max_points),
         pixel(c.max_points),
         gradients(c.max_image_px * c.max_image_px, c.max_image_px, 6),
         windows{HogWindow(kHogShapes[0][0]), HogWindow(kHogShapes[0][1]),
@@ -149,6 +169,7 @@ struct DescriptorPipeline::State {
     sum.assign(pixels, 0.0f);
     count.assign(pixels, 0.0f);
     smooth_tmp.assign(pixels, 0.0f);
+    raw_image.assign(pixels, 0.0f);
     Normal normal(c.projection_seed);
     const double scale = 1.0 / std::sqrt(static_cast<double>(kHogProjectedDim));
     for (int v = 0; v < kViews; ++v) {
@@ -180,9 +201,9 @@ struct DescriptorPipeline::State {
   // Views (0..255 scale, smoothed) and their sizes; accumulators shared between views.
   std::vector<float> images[kViews];
   int width[kViews] = {0, 0, 0}, height[kViews] = {0, 0, 0};
-  std::vector<float> sum, count, smooth_tmp;
+  std::vector<float> sum, count, smooth_tmp, raw_image;  // raw_image: before smoothing
   GradientCache gradients;
-  HogWindow windows[3];  // 15x30, 30x30, 15x15
+  HogWindow windows[3];                      // 15x30, 30x30, 15x15
   std::vector<float> projection[kViews][2];  // raw size x kHogProjectedDim (transposed)
   float raw[kMaxHogRaw];
 };
@@ -205,19 +226,26 @@ DescriptorPipeline::Image DescriptorPipeline::image(View view) const noexcept {
           static_cast<std::size_t>(state_->height[v])};
 }
 
-float DescriptorPipeline::yaw() const noexcept { return state_->yaw; }
+float DescriptorPipeline::yaw() const noexcept {
+  return state_->yaw;
+}
 
 namespace {
 
+constexpr std::size_t kPrefetchAhead = 16;  // points
+
 // Stage 1: read, drop invalid points, centre, rotate into the canonical frame.
-void canonicalize(const SegmentView& segment, const DescriptorConfig& config,
-                  std::vector<float>& x, std::vector<float>& y, std::vector<float>& z,
-                  std::vector<float>& value, std::size_t& n, float& yaw, Descriptors& out) {
+void canonicalize(const SegmentView& segment, const DescriptorConfig& config, std::vector<float>& x,
+                  std::vector<float>& y, std::vector<float>& z, std::vector<float>& value,
+                  std::size_t& n, float& yaw, Descriptors& out) {
   n = 0;
   const std::size_t total = segment.size();
   const double full = config.intensity_full_scale;
   double mx = 0, my = 0, mz = 0;
   for (std::size_t k = 0; k < total; ++k) {
+    // A segment's points are scattered over the scan (megabytes): each read is a cache miss
+    // unless it is asked for well ahead.
+    if (k + kPrefetchAhead < total) segment.prefetch(k + kPrefetchAhead);
     float p[4];
     segment.read(k, p);
     if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]) ||
@@ -273,12 +301,12 @@ void canonicalize(const SegmentView& segment, const DescriptorConfig& config,
 }
 
 // 3x3 Gaussian of OpenCV's cvSmooth(CV_GAUSSIAN, 3, 3): [1 2 1] / 4 separably, reflect-101 at
-// the image's borders, written in `out` only (the caller knows the image is zero elsewhere, and
-// stays so); the same sums as over the whole image.
-void smooth3(float* img, float* tmp, int w, int h, const Rect& out) noexcept {
+// the image's borders, from `src` to `img` within `out` only; it reads `src` within 1 px of
+// `out`. The same sums as over the whole image.
+void smooth3(const float* src, float* tmp, float* img, int w, int h, const Rect& out) noexcept {
   const int r0 = std::max(out.y0 - 1, 0), r1 = std::min(out.y1 + 1, h - 1);
   for (int r = r0; r <= r1; ++r) {  // the rows the column pass reads
-    const float* in = img + static_cast<std::ptrdiff_t>(r) * w;
+    const float* in = src + static_cast<std::ptrdiff_t>(r) * w;
     float* o = tmp + static_cast<std::ptrdiff_t>(r) * w;
     for (int c = out.x0; c <= out.x1; ++c) {
       const float l = in[c > 0 ? c - 1 : (w > 1 ? 1 : 0)];
@@ -367,10 +395,60 @@ void DescriptorPipeline::compute(const SegmentView& segment, Descriptors& out) n
     float pad_w, pad_h;
     fit(max_u - min_u, w, pad_w);
     fit(max_v - min_v, h, pad_h);
-    const std::size_t pixels = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
+    st.width[v] = w;
+    st.height[v] = h;
+
+    // Where the HOG windows go: centre (int(u W), int(v H)), shifted into the image. Only
+    // there are gradients needed, so the view is made only within 2 px of them (the gradient's
+    // and the smoothing's pixel); a large view is mostly outside every window.
+    int placed[2][4][2];  // per array, per offset: top-left
+    Rect look[4];         // per offset: the bounding box of its two windows
+    for (int k = 0; k < 4; ++k) {
+      look[k] = Rect{w, h, -1, -1};
+      for (int a = 0; a < 2; ++a) {
+        const HogShape& shape = st.window(v, a).shape();
+        const auto& o = kOffsets[k];
+        const int x0 = std::clamp(static_cast<int>(o[0] * static_cast<float>(w)) - shape.width / 2,
+                                  0, w - shape.width);
+        const int y0 = std::clamp(static_cast<int>(o[1] * static_cast<float>(h)) - shape.height / 2,
+                                  0, h - shape.height);
+        placed[a][k][0] = x0;
+        placed[a][k][1] = y0;
+        look[k] = look[k].united(Rect{x0, y0, x0 + shape.width - 1, y0 + shape.height - 1});
+      }
+    }
+    // The regions worked on: the offsets' distinct boxes, or their bounding box when that is
+    // no larger than they are together (small views, where the windows overlap).
+    Rect region[4];
+    int regions = 0;
+    int region_of[4];  // offset k's gradients are those of region region_of[k]
+    {
+      Rect all{w, h, -1, -1};
+      long separate = 0;
+      for (int k = 0; k < 4; ++k) {
+        int same = -1;
+        for (int e = 0; e < regions && same < 0; ++e) {
+          if (region[e] == look[k]) same = e;
+        }
+        if (same < 0) {
+          same = regions;
+          region[regions++] = look[k];
+          separate += look[k].area();
+        }
+        region_of[k] = same;
+        all = all.united(look[k]);
+      }
+      if (all.area() <= separate) {
+        regions = 1;
+        region[0] = all;
+        for (int& r : region_of) r = 0;
+      }
+    }
     // Each point's pixel, and the rectangle they cover: everything outside it (grown by the
     // smoothing's and the gradient's 1 px each) is exactly zero, so only that part is worked on.
-    Rect occupied{w, h, -1, -1};  // x0, y0, x1, y1 (inclusive); empty when x1 < x0
+    Rect occupied{w, h, -1, -1};
+    Rect raw_rect[4];  // per region: where the unsmoothed view is read (grown by 2 px)
+    for (int j = 0; j < regions; ++j) raw_rect[j] = region[j].grown(2, w, h);
     for (std::size_t i = 0; i < n; ++i) {
       const float col = floor_exact(us[i] * ppm - min_u + pad_w);
       const float row = floor_exact(max_v - vs[i] * ppm + pad_h);
@@ -380,70 +458,84 @@ void DescriptorPipeline::compute(const SegmentView& segment, Descriptors& out) n
         continue;
       }
       const int c = static_cast<int>(col), r = static_cast<int>(row);
+      bool needed = false;
+      for (int j = 0; j < regions && !needed; ++j) needed = raw_rect[j].contains(c, r);
+      if (!needed) {
+        st.pixel[i] = -1;
+        continue;
+      }
       st.pixel[i] = r * w + c;
-      occupied.x0 = std::min(occupied.x0, c);
-      occupied.x1 = std::max(occupied.x1, c);
-      occupied.y0 = std::min(occupied.y0, r);
-      occupied.y1 = std::max(occupied.y1, r);
+      occupied = occupied.united(Rect{c, r, c, r});
     }
     float* img = st.images[v].data();
-    std::fill(img, img + pixels, 0.0f);
-    Rect roi{0, 0, -1, -1};  // where gradients may be non-zero
-    if (occupied.x1 >= occupied.x0) {
-      for (int r = occupied.y0; r <= occupied.y1; ++r) {
-        const std::ptrdiff_t a = static_cast<std::ptrdiff_t>(r) * w + occupied.x0;
-        const std::ptrdiff_t b = static_cast<std::ptrdiff_t>(r) * w + occupied.x1 + 1;
-        std::fill(st.sum.begin() + a, st.sum.begin() + b, 0.0f);
-        std::fill(st.count.begin() + a, st.count.begin() + b, 0.0f);
+    // The view within each region: the mean intensity of each pixel's points (0 without points),
+    // then a 3x3 Gaussian. Only near the points is anything non-zero: the means within the
+    // occupied rectangle, the smoothed view within 1 px of it, the gradients within 2 px. Each
+    // buffer is zeroed where it is read but not computed, and the Gaussian reads `raw_image`,
+    // never written in place, so overlapping regions give the same values.
+    const bool any = !occupied.empty();
+    auto rows = [w](std::vector<float>& buffer, const Rect& q) {  // zero q (may be empty)
+      for (int r = q.y0; r <= q.y1 && q.x0 <= q.x1; ++r) {
+        const std::ptrdiff_t a = static_cast<std::ptrdiff_t>(r) * w + q.x0;
+        std::fill(buffer.begin() + a, buffer.begin() + a + (q.x1 - q.x0 + 1), 0.0f);
       }
-      for (std::size_t i = 0; i < n; ++i) {
-        if (st.pixel[i] < 0) continue;
-        const auto p = static_cast<std::size_t>(st.pixel[i]);
-        st.sum[p] += st.value[i];
-        st.count[p] += 1.0f;
-      }
-      for (int r = occupied.y0; r <= occupied.y1; ++r) {
-        for (int c = occupied.x0; c <= occupied.x1; ++c) {
+    };
+    Rect mean_rect[4], smooth_rect[4];
+    for (int j = 0; j < regions && any; ++j) {
+      mean_rect[j] = raw_rect[j].intersected(occupied);
+      smooth_rect[j] = region[j].grown(1, w, h).intersected(occupied.grown(1, w, h));
+      rows(st.sum, mean_rect[j]);
+      rows(st.count, mean_rect[j]);
+      rows(st.raw_image, raw_rect[j].intersected(occupied.grown(2, w, h)));
+      rows(st.images[v], region[j].grown(1, w, h).intersected(occupied.grown(3, w, h)));
+    }
+    for (std::size_t i = 0; i < n && any; ++i) {
+      if (st.pixel[i] < 0) continue;
+      const auto p = static_cast<std::size_t>(st.pixel[i]);
+      st.sum[p] += st.value[i];
+      st.count[p] += 1.0f;
+    }
+    for (int j = 0; j < regions && any; ++j) {
+      const Rect& q = mean_rect[j];
+      for (int r = q.y0; r <= q.y1; ++r) {
+        for (int c = q.x0; c <= q.x1; ++c) {
           const std::size_t p = static_cast<std::size_t>(r) * static_cast<std::size_t>(w) +
                                 static_cast<std::size_t>(c);
-          img[p] = st.count[p] > 0 ? 255.0f * st.sum[p] / st.count[p] : 0.0f;
+          st.raw_image[p] = st.count[p] > 0 ? 255.0f * st.sum[p] / st.count[p] : 0.0f;
         }
       }
-      const Rect smoothed = occupied.grown(1, w, h);
-      smooth3(img, st.smooth_tmp.data(), w, h, smoothed);
-      roi = smoothed.grown(1, w, h);
     }
-    st.width[v] = w;
-    st.height[v] = h;
+    for (int j = 0; j < regions && any; ++j) {
+      if (!smooth_rect[j].empty()) {
+        smooth3(st.raw_image.data(), st.smooth_tmp.data(), img, w, h, smooth_rect[j]);
+      }
+    }
+    const Rect nonzero = any ? occupied.grown(2, w, h) : occupied;  // where gradients may be
 
-    // (d) HOG windows at the 4 offsets: centre (int(u W), int(v H)), shifted into the image;
-    // each projected by its array's fixed random matrix.
-    st.gradients.reset(img, w, h, roi.x0, roi.y0, roi.x1 + 1, roi.y1 + 1);
-    for (int a = 0; a < 2; ++a) {
-      const HogWindow& win = st.window(v, a);
-      const HogShape& shape = win.shape();
-      const std::size_t raw_n = shape.size();
-      const float* m = st.projection[v][a].data();
-      int placed[4][2];
-      for (int k = 0; k < 4; ++k) {
-        const auto& o = kOffsets[k];
-        int x0 = static_cast<int>(o[0] * static_cast<float>(w)) - shape.width / 2;
-        int y0 = static_cast<int>(o[1] * static_cast<float>(h)) - shape.height / 2;
-        x0 = std::clamp(x0, 0, w - shape.width);
-        y0 = std::clamp(y0, 0, h - shape.height);
-        placed[k][0] = x0;
-        placed[k][1] = y0;
-        float* dst = out.values.data() + sp[space].offset;
+    // (d) HOG windows at the 4 offsets, each projected by its array's fixed random matrix.
+    int gradients_of = -1;  // the region whose gradients the cache holds
+    for (int k = 0; k < 4; ++k) {
+      for (int a = 0; a < 2; ++a) {
+        const HogWindow& win = st.window(v, a);
+        const std::size_t raw_n = win.shape().size();
+        const float* m = st.projection[v][a].data();
+        const int x0 = placed[a][k][0], y0 = placed[a][k][1];
+        const std::size_t slot = space + static_cast<std::size_t>(a * 4 + k);
+        float* dst = out.values.data() + sp[slot].offset;
         int same = -1;  // an earlier offset of this array landed on the same window: reuse it
         for (int e = 0; e < k && same < 0; ++e) {
-          if (placed[e][0] == x0 && placed[e][1] == y0) same = e;
+          if (placed[a][e][0] == x0 && placed[a][e][1] == y0) same = e;
         }
         if (same >= 0) {
-          const std::size_t earlier = space - static_cast<std::size_t>(k - same);
-          const float* src = out.values.data() + sp[earlier].offset;
+          const float* src =
+              out.values.data() + sp[slot - static_cast<std::size_t>(k - same)].offset;
           std::copy(src, src + kHogProjectedDim, dst);
-          ++space;
           continue;
+        }
+        if (gradients_of != region_of[k]) {
+          gradients_of = region_of[k];
+          const Rect g = region[gradients_of].intersected(nonzero);
+          st.gradients.reset(img, w, h, g.x0, g.y0, g.x1 + 1, g.y1 + 1);
         }
         win.compute(st.gradients, x0, y0, st.raw);
         // dst = M raw, each output summed over j in order (the same sums as row by row), the
@@ -456,9 +548,9 @@ void DescriptorPipeline::compute(const SegmentView& segment, Descriptors& out) n
           for (std::size_t k2 = 0; k2 < kHogProjectedDim; ++k2) acc[k2] += col[k2] * r;
         }
         std::copy(acc, acc + kHogProjectedDim, dst);
-        ++space;
       }
     }
+    space += 8;
   }
 }
 

@@ -34,15 +34,20 @@ struct SegmentView {
     const std::size_t i = indices.empty() ? k : indices[k];
     std::memcpy(p, reinterpret_cast<const unsigned char*>(xyzi) + i * stride_bytes, sizeof(p));
   }
+  // A hint that point k is read soon (no effect on results).
+  void prefetch(std::size_t k) const noexcept {
+    const std::size_t i = indices.empty() ? k : indices[k];
+    __builtin_prefetch(reinterpret_cast<const unsigned char*>(xyzi) + i * stride_bytes);
+  }
 };
 
 // The layout is fixed (the thesis's spaces); only capacities and scales are configurable.
 struct DescriptorConfig {
-  std::size_t max_points = 30000;  // points per segment; beyond: counted, ignored
-  std::size_t max_image_px = 256;  // intensity image side capacity (px); larger views are
-                                   // cropped about their centre and the lost points counted
-  std::size_t min_image_px = 30;   // images are at least this many px on a side (thesis: 30)
-  double image_px_per_m = 15.0;    // orthographic intensity image resolution (thesis: 15)
+  std::size_t max_points = 30000;       // points per segment; beyond: counted, ignored
+  std::size_t max_image_px = 256;       // intensity image side capacity (px); larger views are
+                                        // cropped about their centre and the lost points counted
+  std::size_t min_image_px = 30;        // images are at least this many px on a side (thesis: 30)
+  double image_px_per_m = 15.0;         // orthographic intensity image resolution (thesis: 15)
   double intensity_full_scale = 255.0;  // return intensity meaning "full" (driver: 255,
                                         // KITTI reflectance: 1); clamped to [0, 1] of it
   std::uint64_t projection_seed = 20110509;  // seed of the fixed HOG random projections
@@ -99,7 +104,10 @@ class DescriptorPipeline {
   // Intermediate results of the last compute() (tests, visualisation). Canonical frame: origin
   // at the centroid, x along the major XY axis, z up; image rows top (max) to bottom.
   struct Image {
-    const float* pixels = nullptr;  // row-major, `width` floats a row; 0 where no return
+    // Row-major, `width` floats a row; 0 where no return. Only the pixels within 1 px of the
+    // HOG windows are computed (a large view is mostly outside every window); the others hold
+    // whatever an earlier segment left.
+    const float* pixels = nullptr;
     std::size_t width = 0, height = 0;
   };
   enum class View : std::uint8_t { kFront = 0, kSide = 1, kTop = 2 };  // along x, y, z
