@@ -25,13 +25,14 @@ inline float floor_exact(float v) noexcept {
 inline float angle_of(float y, float x) noexcept {
   const float ax = std::fabs(x), ay = std::fabs(y);
   const bool steep = ay > ax;
-  const float a = steep ? ax / ay : ay / ax;
+  // Selections only, no branch and one division: loops over pixels can do several at once.
+  const float a = (steep ? ax : ay) / (steep ? ay : ax);
   const float s = a * a;
   float r = ((((0.0208351f * s - 0.0851330f) * s + 0.1801410f) * s - 0.3302995f) * s +
              0.9998660f) * a;
-  if (steep) r = 0.5f * kPi - r;
-  if (x < 0) r = kPi - r;
-  if (y < 0) r = 2 * kPi - r;
+  r = steep ? 0.5f * kPi - r : r;
+  r = x < 0 ? kPi - r : r;
+  r = y < 0 ? 2 * kPi - r : r;
   return r;
 }
 

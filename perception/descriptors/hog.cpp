@@ -20,7 +20,15 @@ int reflect(int i, int n) noexcept {
 }  // namespace
 
 GradientCache::GradientCache(std::size_t max_pixels, std::size_t max_rows, int bins)
-    : bins_(bins), gradient_(max_pixels), row_begin_(max_rows + 1, 0) {}
+    : bins_(bins),
+      gradient_(max_pixels),
+      row_begin_(max_rows + 1, 0),
+      dx_(std::min(max_pixels, kMaxRowPixels)),
+      dy_(dx_.size()),
+      w0_(dx_.size()),
+      w1_(dx_.size()),
+      bin_(dx_.size()),
+      x_(dx_.size()) {}
 
 void GradientCache::reset(const float* pixels, int width, int height, int x0, int y0, int x1,
                           int y1) noexcept {
@@ -29,35 +37,55 @@ void GradientCache::reset(const float* pixels, int width, int height, int x0, in
   y0_ = std::clamp(y0, 0, height);
   y1_ = std::clamp(y1, y0_, height);
   const float bins = static_cast<float>(bins_);
+  const float to_position = bins / kPi;
   std::uint32_t kept = 0;
+  float* const dxs = dx_.data();
+  float* const dys = dy_.data();
+  std::uint16_t* const xs = x_.data();
   for (int y = y0_; y < y1_; ++y) {
     row_begin_[static_cast<std::size_t>(y - y0_)] = kept;
     const float* row = pixels + static_cast<std::ptrdiff_t>(y) * width;
     const float* up = pixels + static_cast<std::ptrdiff_t>(reflect(y - 1, height)) * width;
     const float* down = pixels + static_cast<std::ptrdiff_t>(reflect(y + 1, height)) * width;
+    // 1. The row's pixels with a gradient, side by side (dx, dy, column).
+    int m = 0;
     for (int x = x0_; x < x1_; ++x) {
       const int left = x > 0 ? x - 1 : reflect(x - 1, width);
       const int right = x + 1 < width ? x + 1 : reflect(x + 1, width);
       const float dx = row[right] - row[left];
       const float dy = down[x] - up[x];
-      if (dx == 0.0f && dy == 0.0f) continue;
+      dxs[m] = dx;
+      dys[m] = dy;
+      xs[m] = static_cast<std::uint16_t>(x);
+      m += (dx != 0.0f || dy != 0.0f) ? 1 : 0;
+    }
+    // 2. Magnitude split between the two nearest bins: the same operations on every element,
+    // without branches, so the compiler can do several at once (the same values as one by one).
+    for (int i = 0; i < m; ++i) {
+      const float dx = dxs[i], dy = dys[i];
       const float magnitude = std::sqrt(dx * dx + dy * dy);
-      const float angle = angle_of(dy, dx);  // [0, 2 pi)
-      const float position = angle * (bins / kPi) - 0.5f;
-      int bin = static_cast<int>(floor_exact(position));
-      const float fraction = position - static_cast<float>(bin);
-      // position is in [-0.5, 2 bins): one or two wraps at most, no integer division.
-      if (bin < 0) bin += bins_;
-      while (bin >= bins_) bin -= bins_;
-      const int next = bin + 1 == bins_ ? 0 : bin + 1;
-      Gradient& g = gradient_[kept];
-      g.weight[0] = magnitude * (1.0f - fraction);
-      g.weight[1] = magnitude * fraction;
-      if (g.weight[0] == 0.0f && g.weight[1] == 0.0f) continue;  // underflow: adds nothing
+      const float position = angle_of(dy, dx) * to_position - 0.5f;  // [-0.5, 2 bins)
+      // floor_exact without its cases for huge, NaN and integral -0 values (position is none).
+      const float toward_zero = static_cast<float>(static_cast<int>(position));
+      const float floor = toward_zero > position ? toward_zero - 1.0f : toward_zero;
+      const float fraction = position - floor;
+      w0_[i] = magnitude * (1.0f - fraction);
+      w1_[i] = magnitude * fraction;
+      int bin = static_cast<int>(floor);
+      bin += bin < 0 ? bins_ : 0;
+      bin -= bin >= bins_ ? bins_ : 0;
+      bin_[i] = bin;
+    }
+    // 3. Kept in column order; an underflow to two zero weights adds nothing and is dropped.
+    for (int i = 0; i < m; ++i) {
+      if (w0_[i] == 0.0f && w1_[i] == 0.0f) continue;
+      const int bin = bin_[static_cast<std::size_t>(i)];
+      Gradient& g = gradient_[kept++];
+      g.weight[0] = w0_[i];
+      g.weight[1] = w1_[i];
       g.bin[0] = static_cast<std::uint8_t>(bin);
-      g.bin[1] = static_cast<std::uint8_t>(next);
-      g.x = static_cast<std::uint16_t>(x);
-      ++kept;
+      g.bin[1] = static_cast<std::uint8_t>(bin + 1 == bins_ ? 0 : bin + 1);
+      g.x = xs[i];
     }
   }
   row_begin_[static_cast<std::size_t>(y1_ - y0_)] = kept;

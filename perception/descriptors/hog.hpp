@@ -62,6 +62,12 @@ class GradientCache {
   std::vector<Gradient> gradient_;  // the rows' gradients, one after the other
   std::vector<std::uint32_t>
       row_begin_;  // row y's are [row_begin_[y - y0], row_begin_[y - y0 + 1])
+  // One row's work, element by element (rows of at most min(max_pixels, 65536) pixels: a
+  // column fits in the Gradient's 16 bits).
+  static constexpr std::size_t kMaxRowPixels = 65536;
+  std::vector<float> dx_, dy_, w0_, w1_;
+  std::vector<int> bin_;
+  std::vector<std::uint16_t> x_;
 };
 
 class HogWindow {
