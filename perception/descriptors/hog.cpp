@@ -120,6 +120,7 @@ HogWindow::HogWindow(const HogShape& shape) : shape_(shape) {
         s.weight[n] = w * gauss;
         ++n;
       }
+      s.cells = n;
       for (; n < 4; ++n) {
         s.offset[n] = 0;
         s.weight[n] = 0.0f;
@@ -143,7 +144,8 @@ void HogWindow::compute(const GradientCache& gradients, int x0, int y0, float* o
     for (auto it = first; it != row.end() && it->x < x0 + shape_.width; ++it) {
       const GradientCache::Gradient& g = *it;
       const Share& s = shares[g.x - x0];
-      for (int k = 0; k < 4; ++k) {
+      // The unused shares would add exactly +0 (the histogram is never -0): skipped.
+      for (int k = 0; k < s.cells; ++k) {
         float* h = out + s.offset[k];
         h[g.bin[0]] += s.weight[k] * g.weight[0];
         h[g.bin[1]] += s.weight[k] * g.weight[1];

@@ -83,6 +83,7 @@ class HogWindow {
   struct Share {
     std::uint16_t offset[4];  // histogram offsets of up to 4 cells
     float weight[4];          // Gaussian x bilinear weights (0 for unused)
+    int cells;                // how many are used (a pixel near the block's edge: 1 or 2)
   };
   HogShape shape_;
   std::vector<Share> shares_;  // per window pixel, row-major
