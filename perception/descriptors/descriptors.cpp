@@ -19,6 +19,13 @@ struct SpinShape {
   int rows, cols;
 };
 constexpr SpinShape kSpins[4] = {{3, 10, 10}, {7, 14, 7}, {10, 20, 10}, {5, 10, 5}};
+constexpr int kMaxSpinCells = 200;  // the largest rows x cols above
+static_assert([] {
+  for (const SpinShape& s : kSpins) {
+    if (s.rows * s.cols > kMaxSpinCells) return false;
+  }
+  return true;
+}());
 
 // HOG arrays: per view a small and a large window (= block), each at 4 (u, v) offsets.
 constexpr int kViews = 3;
@@ -161,6 +168,8 @@ struct DescriptorPipeline::State {
         z(c.max_points),
         value(c.max_points),
         pixel(c.max_points),
+        row_index(c.max_points),
+        radius(c.max_points),
         gradients(c.max_image_px * c.max_image_px, c.max_image_px, 6),
         windows{HogWindow(kHogShapes[0][0]), HogWindow(kHogShapes[0][1]),
                 HogWindow(kHogShapes[2][0])} {
@@ -195,7 +204,11 @@ struct DescriptorPipeline::State {
 
   // Canonical cloud (structure of arrays) and normalised intensity in [0.25, 1].
   std::vector<float> x, y, z, value;
-  std::vector<std::int32_t> pixel;  // a point's pixel in the view being drawn, -1: cropped
+  std::vector<std::int32_t> pixel;      // a point's pixel in the view being drawn, -1: cropped
+                                        // (first its spin image bin)
+  std::vector<std::int32_t> row_index;  // a point's row in the view being drawn
+  std::vector<float> radius;            // a point's distance from the vertical axis
+  std::uint32_t spin_count[4][kMaxSpinCells + 1];
   std::size_t n = 0;
   float yaw = 0.0f;
   // Views (0..255 scale, smoothed) and their sizes; accumulators shared between views.
@@ -325,6 +338,34 @@ void smooth3(const float* src, float* tmp, float* img, int w, int h, const Rect&
   }
 }
 
+// Each point's bin in spin image `s` (row-major), or rows x cols (a bin that is dropped) when it
+// falls outside; no branch, so several points at once.
+void spin_bins(const float* __restrict radius, const float* __restrict z, std::size_t n,
+               const SpinShape& s, float half, std::int32_t* __restrict bin) noexcept {
+  const float ppm = s.px_per_m;
+  // Unsigned: a negative index wraps to a large one, and the arithmetic of an index outside
+  // is defined (and masked out).
+  const auto rows = static_cast<std::uint32_t>(s.rows), cols = static_cast<std::uint32_t>(s.cols);
+  const std::uint32_t dropped = rows * cols;
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto col = static_cast<std::uint32_t>(floor_index(radius[i] * ppm));
+    const auto row = static_cast<std::uint32_t>(floor_index((half - z[i]) * ppm));
+    const std::uint32_t inside = 0u - static_cast<std::uint32_t>((col < cols) & (row < rows));
+    bin[i] = static_cast<std::int32_t>(((row * cols + col) & inside) | (dropped & ~inside));
+  }
+}
+
+// Each point's column and row in a view (floor of its scaled coordinates, as floor_index), no
+// branch, so several points at once.
+void view_cells(const float* __restrict us, const float* __restrict vs, std::size_t n, float ppm,
+                float min_u, float pad_w, float max_v, float pad_h, std::int32_t* __restrict col,
+                std::int32_t* __restrict row) noexcept {
+  for (std::size_t i = 0; i < n; ++i) {
+    col[i] = floor_index(us[i] * ppm - min_u + pad_w);
+    row[i] = floor_index(max_v - vs[i] * ppm + pad_h);
+  }
+}
+
 }  // namespace
 
 void DescriptorPipeline::compute(const SegmentView& segment, Descriptors& out) noexcept {
@@ -353,17 +394,30 @@ void DescriptorPipeline::compute(const SegmentView& segment, Descriptors& out) n
 
   // (b) Spin images about the vertical axis through the centroid: column = floor(r * ppm),
   // row = floor((rows / (2 ppm) - z) * ppm) (row 0 on top); counts, then whitened.
+  // Counted as integers (exact, as the float counts were: n < 2^24) in four interleaved copies,
+  // so that successive points in the same bin do not wait for each other; each point's bin is
+  // found first, in a loop without branches.
+  float* const radius = st.radius.data();
+  for (std::size_t i = 0; i < n; ++i) radius[i] = std::sqrt(st.x[i] * st.x[i] + st.y[i] * st.y[i]);
   for (std::size_t k = 0; k < 4; ++k) {
     const SpinShape& s = kSpins[k];
     float* img = out.values.data() + sp[1 + k].offset;
     const float half = static_cast<float>(s.rows) / (2.0f * s.px_per_m);
-    for (std::size_t i = 0; i < n; ++i) {
-      const float col = floor_exact(std::sqrt(st.x[i] * st.x[i] + st.y[i] * st.y[i]) * s.px_per_m);
-      const float row = floor_exact((half - st.z[i]) * s.px_per_m);
-      if (col < 0 || col >= static_cast<float>(s.cols) || row < 0 ||
-          row >= static_cast<float>(s.rows))
-        continue;
-      img[static_cast<int>(row) * s.cols + static_cast<int>(col)] += 1.0f;
+    const int cells = s.rows * s.cols;
+    std::int32_t* const bin = st.pixel.data();
+    spin_bins(radius, st.z.data(), n, s, half, bin);
+    std::uint32_t(&count)[4][kMaxSpinCells + 1] = st.spin_count;
+    for (auto& c : count) std::fill(c, c + cells + 1, 0u);
+    std::size_t i = 0;
+    for (; i + 4 <= n; i += 4) {
+      ++count[0][bin[i]];
+      ++count[1][bin[i + 1]];
+      ++count[2][bin[i + 2]];
+      ++count[3][bin[i + 3]];
+    }
+    for (; i < n; ++i) ++count[0][bin[i]];
+    for (int j = 0; j < cells; ++j) {
+      img[j] = static_cast<float>(count[0][j] + count[1][j] + count[2][j] + count[3][j]);
     }
     whiten(img, sp[1 + k].size);
   }
@@ -449,15 +503,14 @@ void DescriptorPipeline::compute(const SegmentView& segment, Descriptors& out) n
     Rect occupied{w, h, -1, -1};
     Rect raw_rect[4];  // per region: where the unsmoothed view is read (grown by 2 px)
     for (int j = 0; j < regions; ++j) raw_rect[j] = region[j].grown(2, w, h);
+    view_cells(us, vs, n, ppm, min_u, pad_w, max_v, pad_h, st.pixel.data(), st.row_index.data());
     for (std::size_t i = 0; i < n; ++i) {
-      const float col = floor_exact(us[i] * ppm - min_u + pad_w);
-      const float row = floor_exact(max_v - vs[i] * ppm + pad_h);
-      if (!(col >= 0 && col < static_cast<float>(w) && row >= 0 && row < static_cast<float>(h))) {
+      const int c = st.pixel[i], r = st.row_index[i];
+      if (!(c >= 0 && c < w && r >= 0 && r < h)) {
         ++out.pixels_cropped;
         st.pixel[i] = -1;
         continue;
       }
-      const int c = static_cast<int>(col), r = static_cast<int>(row);
       bool needed = false;
       for (int j = 0; j < regions && !needed; ++j) needed = raw_rect[j].contains(c, r);
       if (!needed) {

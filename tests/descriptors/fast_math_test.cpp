@@ -1,6 +1,7 @@
 // The descriptors' own floor and atan2 (perception/descriptors/fast_math.hpp) against libm:
-// floor_exact equals std::floor bit for bit, angle_of is within the documented 1.2e-5 rad of
-// std::atan2 mapped to [0, 2 pi), including the axes, the diagonals and signed zeros.
+// floor_exact equals std::floor bit for bit, floor_index equals it as an int in range, angle_of is
+// within the documented 1.2e-5 rad of std::atan2 mapped to [0, 2 pi), including the axes, the
+// diagonals and signed zeros.
 #include "perception/descriptors/fast_math.hpp"
 
 #include <gtest/gtest.h>
@@ -22,9 +23,24 @@ std::uint32_t bits(float v) {
 }
 
 TEST(FastMath, FloorExactIsStdFloorBitForBit) {
-  std::vector<float> values = {0.0f,  -0.0f,  0.5f,   -0.5f,  1.0f,      -1.0f,     2.9999998f,
-                               -2.9999998f, 1e-30f, -1e-30f, 8388607.5f, -8388607.5f, 8388609.0f,
-                               2147483520.0f, -2147483648.0f, 2147483648.0f, 1e20f, -1e20f,
+  std::vector<float> values = {0.0f,
+                               -0.0f,
+                               0.5f,
+                               -0.5f,
+                               1.0f,
+                               -1.0f,
+                               2.9999998f,
+                               -2.9999998f,
+                               1e-30f,
+                               -1e-30f,
+                               8388607.5f,
+                               -8388607.5f,
+                               8388609.0f,
+                               2147483520.0f,
+                               -2147483648.0f,
+                               2147483648.0f,
+                               1e20f,
+                               -1e20f,
                                std::numeric_limits<float>::infinity(),
                                -std::numeric_limits<float>::infinity()};
   std::mt19937 rng(7);
@@ -34,6 +50,24 @@ TEST(FastMath, FloorExactIsStdFloorBitForBit) {
     EXPECT_EQ(bits(floor_exact(v)), bits(std::floor(v))) << v;
   }
   EXPECT_TRUE(std::isnan(floor_exact(std::numeric_limits<float>::quiet_NaN())));
+}
+
+TEST(FastMath, FloorIndexIsStdFloorInRangeAndOutOfRangeBeyondIt) {
+  std::vector<float> values = {0.0f,       -0.0f,         0.5f,           -0.5f,
+                               1.0f,       -1.0f,         2.9999998f,     -2.9999998f,
+                               1e-30f,     -1e-30f,       8388607.5f,     -8388607.5f,
+                               8388609.0f, 2147483520.0f, -2147483648.0f, -2147483520.0f};
+  std::mt19937 rng(8);
+  std::uniform_real_distribution<float> wide(-1e4f, 1e4f), narrow(-3.0f, 3.0f);
+  for (int i = 0; i < 200000; ++i) values.push_back(i % 2 ? wide(rng) : narrow(rng));
+  for (const float v : values) {
+    EXPECT_EQ(floor_index(v), static_cast<int>(std::floor(v))) << v;
+  }
+  const float inf = std::numeric_limits<float>::infinity();
+  for (const float v : {2147483648.0f, 1e20f, inf}) EXPECT_EQ(floor_index(v), 2147483520) << v;
+  for (const float v : {-2147483904.0f, -1e20f, -inf, std::numeric_limits<float>::quiet_NaN()}) {
+    EXPECT_EQ(floor_index(v), std::numeric_limits<int>::min()) << v;
+  }
 }
 
 TEST(FastMath, AngleOfIsAtan2WithinTheStatedErrorOnAllOctants) {
