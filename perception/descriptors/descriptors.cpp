@@ -321,11 +321,16 @@ void smooth3(const float* src, float* tmp, float* img, int w, int h, const Rect&
   for (int r = r0; r <= r1; ++r) {  // the rows the column pass reads
     const float* in = src + static_cast<std::ptrdiff_t>(r) * w;
     float* o = tmp + static_cast<std::ptrdiff_t>(r) * w;
-    for (int c = out.x0; c <= out.x1; ++c) {
+    auto at = [&](int c) {  // with the borders' reflections
       const float l = in[c > 0 ? c - 1 : (w > 1 ? 1 : 0)];
       const float rr = in[c + 1 < w ? c + 1 : (w > 1 ? w - 2 : 0)];
       o[c] = 0.25f * l + 0.5f * in[c] + 0.25f * rr;
-    }
+    };
+    // Columns 1 .. w-2 need no reflection: that loop does several at once.
+    const int c0 = std::max(out.x0, 1), c1 = std::min(out.x1, w - 2);
+    for (int c = out.x0; c <= out.x1 && c < c0; ++c) at(c);
+    for (int c = c0; c <= c1; ++c) o[c] = 0.25f * in[c - 1] + 0.5f * in[c] + 0.25f * in[c + 1];
+    for (int c = std::max(c1 + 1, c0); c <= out.x1; ++c) at(c);
   }
   for (int r = out.y0; r <= out.y1; ++r) {
     const int up = r > 0 ? r - 1 : (h > 1 ? 1 : 0);
@@ -363,6 +368,17 @@ void view_cells(const float* __restrict us, const float* __restrict vs, std::siz
   for (std::size_t i = 0; i < n; ++i) {
     col[i] = floor_index(us[i] * ppm - min_u + pad_w);
     row[i] = floor_index(max_v - vs[i] * ppm + pad_h);
+  }
+}
+
+// out[c] = 255 sum[c] / count[c], or 0 without points, for c in [c0, c1); no branch (the
+// division by 1 where count is 0 is discarded), so several pixels at once.
+void mean_row(const float* __restrict sum, const float* __restrict count, int c0, int c1,
+              float* __restrict out) noexcept {
+  for (int c = c0; c < c1; ++c) {
+    const float n = count[c];
+    const float mean = 255.0f * sum[c] / (n > 0 ? n : 1.0f);
+    out[c] = n > 0 ? mean : 0.0f;
   }
 }
 
@@ -551,11 +567,9 @@ void DescriptorPipeline::compute(const SegmentView& segment, Descriptors& out) n
     for (int j = 0; j < regions && any; ++j) {
       const Rect& q = mean_rect[j];
       for (int r = q.y0; r <= q.y1; ++r) {
-        for (int c = q.x0; c <= q.x1; ++c) {
-          const std::size_t p = static_cast<std::size_t>(r) * static_cast<std::size_t>(w) +
-                                static_cast<std::size_t>(c);
-          st.raw_image[p] = st.count[p] > 0 ? 255.0f * st.sum[p] / st.count[p] : 0.0f;
-        }
+        const std::ptrdiff_t at = static_cast<std::ptrdiff_t>(r) * w;
+        mean_row(st.sum.data() + at, st.count.data() + at, q.x0, q.x1 + 1,
+                 st.raw_image.data() + at);
       }
     }
     for (int j = 0; j < regions && any; ++j) {
