@@ -514,8 +514,9 @@ void DescriptorPipeline::compute(const SegmentView& segment, Descriptors& out) n
         for (int& r : region_of) r = 0;
       }
     }
-    // Each point's pixel, and the rectangle they cover: everything outside it (grown by the
-    // smoothing's and the gradient's 1 px each) is exactly zero, so only that part is worked on.
+    // Each point's pixel (-1: cropped, or too far from every window to matter), and the
+    // rectangle the kept points cover: outside it (grown by the smoothing's and the gradient's
+    // 1 px each) everything is exactly zero, so only that part is worked on.
     Rect occupied{w, h, -1, -1};
     Rect raw_rect[4];  // per region: where the unsmoothed view is read (grown by 2 px)
     for (int j = 0; j < regions; ++j) raw_rect[j] = region[j].grown(2, w, h);
@@ -542,42 +543,44 @@ void DescriptorPipeline::compute(const SegmentView& segment, Descriptors& out) n
     // occupied rectangle, the smoothed view within 1 px of it, the gradients within 2 px. Each
     // buffer is zeroed where it is read but not computed, and the Gaussian reads `raw_image`,
     // never written in place, so overlapping regions give the same values.
-    const bool any = !occupied.empty();
-    auto rows = [w](std::vector<float>& buffer, const Rect& q) {  // zero q (may be empty)
-      for (int r = q.y0; r <= q.y1 && q.x0 <= q.x1; ++r) {
-        const std::ptrdiff_t a = static_cast<std::ptrdiff_t>(r) * w + q.x0;
-        std::fill(buffer.begin() + a, buffer.begin() + a + (q.x1 - q.x0 + 1), 0.0f);
+    if (!occupied.empty()) {
+      auto zero = [w](std::vector<float>& buffer, const Rect& q) {  // q may be empty
+        for (int r = q.y0; r <= q.y1 && q.x0 <= q.x1; ++r) {
+          const std::ptrdiff_t a = static_cast<std::ptrdiff_t>(r) * w + q.x0;
+          std::fill(buffer.begin() + a, buffer.begin() + a + (q.x1 - q.x0 + 1), 0.0f);
+        }
+      };
+      Rect mean_rect[4], smooth_rect[4];
+      for (int j = 0; j < regions; ++j) {
+        mean_rect[j] = raw_rect[j].intersected(occupied);
+        smooth_rect[j] = region[j].grown(1, w, h).intersected(occupied.grown(1, w, h));
+        zero(st.sum, mean_rect[j]);
+        zero(st.count, mean_rect[j]);
+        zero(st.raw_image, raw_rect[j].intersected(occupied.grown(2, w, h)));
+        zero(st.images[v], region[j].grown(1, w, h).intersected(occupied.grown(3, w, h)));
       }
-    };
-    Rect mean_rect[4], smooth_rect[4];
-    for (int j = 0; j < regions && any; ++j) {
-      mean_rect[j] = raw_rect[j].intersected(occupied);
-      smooth_rect[j] = region[j].grown(1, w, h).intersected(occupied.grown(1, w, h));
-      rows(st.sum, mean_rect[j]);
-      rows(st.count, mean_rect[j]);
-      rows(st.raw_image, raw_rect[j].intersected(occupied.grown(2, w, h)));
-      rows(st.images[v], region[j].grown(1, w, h).intersected(occupied.grown(3, w, h)));
-    }
-    for (std::size_t i = 0; i < n && any; ++i) {
-      if (st.pixel[i] < 0) continue;
-      const auto p = static_cast<std::size_t>(st.pixel[i]);
-      st.sum[p] += st.value[i];
-      st.count[p] += 1.0f;
-    }
-    for (int j = 0; j < regions && any; ++j) {
-      const Rect& q = mean_rect[j];
-      for (int r = q.y0; r <= q.y1; ++r) {
-        const std::ptrdiff_t at = static_cast<std::ptrdiff_t>(r) * w;
-        mean_row(st.sum.data() + at, st.count.data() + at, q.x0, q.x1 + 1,
-                 st.raw_image.data() + at);
+      for (std::size_t i = 0; i < n; ++i) {
+        if (st.pixel[i] < 0) continue;
+        const auto p = static_cast<std::size_t>(st.pixel[i]);
+        st.sum[p] += st.value[i];
+        st.count[p] += 1.0f;
+      }
+      for (int j = 0; j < regions; ++j) {
+        const Rect& q = mean_rect[j];
+        for (int r = q.y0; r <= q.y1; ++r) {
+          const std::ptrdiff_t at = static_cast<std::ptrdiff_t>(r) * w;
+          mean_row(st.sum.data() + at, st.count.data() + at, q.x0, q.x1 + 1,
+                   st.raw_image.data() + at);
+        }
+      }
+      for (int j = 0; j < regions; ++j) {
+        if (!smooth_rect[j].empty()) {
+          smooth3(st.raw_image.data(), st.smooth_tmp.data(), img, w, h, smooth_rect[j]);
+        }
       }
     }
-    for (int j = 0; j < regions && any; ++j) {
-      if (!smooth_rect[j].empty()) {
-        smooth3(st.raw_image.data(), st.smooth_tmp.data(), img, w, h, smooth_rect[j]);
-      }
-    }
-    const Rect nonzero = any ? occupied.grown(2, w, h) : occupied;  // where gradients may be
+    // Where gradients may be non-zero (nowhere without a kept point).
+    const Rect nonzero = occupied.empty() ? occupied : occupied.grown(2, w, h);
 
     // (d) HOG windows at the 4 offsets, each projected by its array's fixed random matrix.
     int gradients_of = -1;  // the region whose gradients the cache holds

@@ -65,13 +65,10 @@ void GradientCache::reset(const float* pixels, int width, int height, int x0, in
       const float dx = dxs[i], dy = dys[i];
       const float magnitude = std::sqrt(dx * dx + dy * dy);
       const float position = angle_of(dy, dx) * to_position - 0.5f;  // [-0.5, 2 bins)
-      // floor_exact without its cases for huge, NaN and integral -0 values (position is none).
-      const float toward_zero = static_cast<float>(static_cast<int>(position));
-      const float floor = toward_zero > position ? toward_zero - 1.0f : toward_zero;
-      const float fraction = position - floor;
+      int bin = floor_index(position);
+      const float fraction = position - static_cast<float>(bin);
       w0_[i] = magnitude * (1.0f - fraction);
       w1_[i] = magnitude * fraction;
-      int bin = static_cast<int>(floor);
       bin += bin < 0 ? bins_ : 0;
       bin -= bin >= bins_ ? bins_ : 0;
       bin_[i] = bin;
