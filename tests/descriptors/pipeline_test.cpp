@@ -221,7 +221,7 @@ TEST(DescriptorPipeline, CapacitiesAreCountedNotOverrun) {
 }
 
 // Points on the faces of an axis-aligned box (sx x sy x sz m) at (x, y, z), intensity varying
-// along x; `holes` leaves out a regular pattern so that the views have structure.
+// along x; a regular pattern of "windows" is left out so that the views have structure.
 Cloud box(double sx, double sy, double sz, double x, double y, double z, int points,
           unsigned seed) {
   std::mt19937 rng(seed);
