@@ -53,6 +53,7 @@ rt::Result<tracking::TrackerConfig> load_tracking_config(const std::filesystem::
   STAC_GET(double, "end_on_max_width_m", c.end_on_max_width_m);
   STAC_GET(double, "end_on_max_depth_m", c.end_on_max_depth_m);
   STAC_GET(double, "end_on_min_height_m", c.end_on_min_height_m);
+  STAC_GET(double, "extent_memory_length_m", c.extent_memory_length_m);
   STAC_GET(double, "box_smoothing", c.box_smoothing);
   STAC_GET(double, "min_heading_speed_mps", c.min_heading_speed_mps);
 #undef STAC_GET

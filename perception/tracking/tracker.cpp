@@ -99,6 +99,23 @@ bool narrow_and_tall(const TrackerConfig& c, float length, float width, float he
           (wide <= c.absorb_keep_wide_m && height >= c.absorb_keep_wide_height_m));
 }
 
+// Known extent (TrackerConfig::extent_memory_length_m): the centre of end-on detection d's
+// box made `known` m long instead, its near end (the face) kept. False (centre unchanged) when
+// memory is off or not yet that long, d is not end-on or longer, or d's box does not lie along
+// the track's (within 30 degrees).
+bool anchored_centre(const TrackerConfig& c, float known, float track_yaw, const Detection& d,
+                     Eigen::Vector2f& centre) {
+  if (!(c.extent_memory_length_m > 0) || !c.position_from_box || !d.end_on ||
+      !(known >= c.extent_memory_length_m) || !(d.length < known) || !d.box_center.allFinite() ||
+      !(std::abs(box_angle_diff(d.yaw, track_yaw)) <= std::numbers::pi / 6)) {
+    return false;
+  }
+  // complete_end_on's box points away from the sensor along its yaw.
+  centre = d.box_center +
+           (0.5f * (known - d.length)) * Eigen::Vector2f(std::cos(d.yaw), std::sin(d.yaw));
+  return true;
+}
+
 void check(bool ok, const char* what) {
   if (!ok) throw std::invalid_argument(std::string("tracking config: ") + what);
 }
@@ -136,6 +153,7 @@ bool complete_end_on(const TrackerConfig& c, const Eigen::Vector2f& sensor_xy,
   d.width = d.length;
   d.length = length;
   d.yaw = std::atan2(r.y(), r.x());
+  d.end_on = true;
   return true;
 }
 
@@ -189,6 +207,7 @@ struct Tracker::Slot {
   State x = State::Zero();
   Cov p = Cov::Identity();
   std::int32_t measured = -1;  // index in merged_ of the measurement of this scan, -1: none
+  float known_length = 0;      // longest tall measurement so far (extent_memory_length_m), m
 };
 
 Tracker::Tracker(const TrackerConfig& c)
@@ -218,6 +237,8 @@ Tracker::Tracker(const TrackerConfig& c)
         "end_on_length_m >= 0, end_on_min_width_m <= end_on_max_width_m, depth and height >= 0 "
         "required");
   check(c.absorb_narrow_gap_m >= 0, "absorb_narrow_gap_m must be >= 0");
+  check(c.extent_memory_length_m >= 0 && c.extent_memory_length_m <= 100,
+        "extent_memory_length_m must be in [0, 100] (0: off)");
   check(c.absorb_keep_wide_m >= 0 && c.absorb_keep_wide_height_m >= 0,
         "absorb_keep_wide_m and absorb_keep_wide_height_m must be >= 0");
   check(c.absorb_strip_length_m >= 0 && c.absorb_strip_width_m >= 0,
@@ -299,6 +320,8 @@ void Tracker::correct(Slot& s, const Detection& d, std::int64_t stamp_ns) noexce
     t.state = TrackState::kConfirmed;
   t.features.add_segment(Eigen::Vector3f(xy.x(), xy.y(), d.centroid.z()), stamp_ns,
                          config_.min_heading_speed_mps);
+  if (tall(config_, d.height) && fits_one_object(config_, d.length, d.width, true))
+    s.known_length = std::max(s.known_length, d.length);
 }
 
 bool Tracker::spawn(const Detection& d, std::int64_t stamp_ns) noexcept {
@@ -334,6 +357,8 @@ bool Tracker::spawn(const Detection& d, std::int64_t stamp_ns) noexcept {
   t.points = d.points;
   t.segment = static_cast<std::int32_t>(d.segment);
   t.hits = 1;
+  s.known_length =
+      tall(config_, d.height) && fits_one_object(config_, d.length, d.width, true) ? d.length : 0;
   t.features.add_segment(Eigen::Vector3f(xy.x(), xy.y(), d.centroid.z()), stamp_ns,
                          config_.min_heading_speed_mps);
   ++counters_.spawned;
@@ -424,6 +449,7 @@ void Tracker::absorb_fragments(std::span<const Detection> detections) noexcept {
       h.yaw = static_cast<float>(wrap_pi(h.yaw + std::numbers::pi / 2));
     }
     h.height = std::max(h.height, f.height);
+    h.end_on = false;  // a union: its heading no longer points away from the sensor
     h.points += f.points;
     host_[best] = 1;
     if (own != nullptr) {
@@ -652,9 +678,19 @@ void Tracker::update(std::int64_t stamp_ns, std::span<const Detection> detection
     const Eigen::Vector2d predicted = s.x.head<2>();
     float* costs = &pair_cost_[ti * nd];
     bool any = false;
+    // A track of known extent measures a shorter detection at its anchored centre, up to half
+    // its length from the box's.
+    const bool known =
+        config_.extent_memory_length_m > 0 && s.known_length >= config_.extent_memory_length_m;
+    const double reach = known ? gate_axis + 0.5 * s.known_length : gate_axis;
     for (std::size_t di = 0; di < nd; ++di) {
-      const Eigen::Vector2d e = positions_[di] - predicted;
+      Eigen::Vector2d e = positions_[di] - predicted;
       costs[di] = -1.0f;
+      if (!(std::abs(e.x()) <= reach && std::abs(e.y()) <= reach)) continue;
+      Eigen::Vector2f centre;
+      if (known && anchored_centre(config_, s.known_length, s.track.yaw, detections[di], centre)) {
+        e = centre.cast<double>() - predicted;
+      }
       if (!(std::abs(e.x()) <= gate_axis && std::abs(e.y()) <= gate_axis)) continue;
       const double m2 = e.dot(sinv * e);
       if (!(m2 <= config_.gate_mahalanobis_sq && e.norm() <= config_.gate_distance_m)) continue;
@@ -681,7 +717,14 @@ void Tracker::update(std::int64_t stamp_ns, std::span<const Detection> detection
   for (std::size_t di = 0; di < nd; ++di) {
     if (det_match_[di] >= 0) {
       Slot& slot = slots_[live_[static_cast<std::size_t>(det_match_[di])]];
-      correct(slot, merged_[di], stamp_ns);
+      Detection& m = merged_[di];
+      Eigen::Vector2f centre;
+      if (anchored_centre(config_, slot.known_length, slot.track.yaw, m, centre)) {
+        m.box_center = centre;
+        m.length = slot.known_length;
+        ++counters_.anchored_detections;
+      }
+      correct(slot, m, stamp_ns);
       slot.measured = static_cast<std::int32_t>(di);
     }
   }

@@ -26,6 +26,7 @@ struct Detection {
   float yaw = 0;                            // box heading, rad (mod pi)
   std::uint32_t points = 0;
   std::uint32_t segment = 0;  // index of the segment it came from
+  bool end_on = false;        // completed by complete_end_on: the near end (a face) was seen
 
   // The x,y position the tracker measures: the box centre (position_from_box) or the centroid.
   [[nodiscard]] Eigen::Vector2f position(bool from_box) const noexcept {
@@ -102,6 +103,13 @@ struct TrackerConfig {
   double end_on_max_width_m = 2.7;   // m
   double end_on_max_depth_m = 1.6;   // m, along the ray
   double end_on_min_height_m = 0.0;  // m
+  // Known extent of tall vehicles: a track remembers the longest box of its tall measurements
+  // (at least absorb_tall_height_m high, fitting absorb_tall_length_m x absorb_max_width_m).
+  // Once that is at least extent_memory_length_m, an end-on detection (complete_end_on) along
+  // the track's box (within 30 degrees) is the face of that body, not of a car: it is gated,
+  // associated and measured with the known length instead of end_on_length_m, extending away
+  // from the sensor. 0: off.
+  double extent_memory_length_m = 6.0;  // m
   // Box smoothing: weight of the new measurement in the exponential average (0..1].
   double box_smoothing = 0.3;
   // Holistic features: headings of slower smoothed velocities are not differentiated (m/s).
@@ -124,6 +132,7 @@ struct TrackerCounters {
   std::uint64_t absorbed_detections = 0;  // fragments joined to a matched track's measurement
   std::uint64_t deleted_merged = 0;       // younger tracks of fragments merged into an older one
   std::uint64_t deleted_overlap = 0;      // younger tracks inside an older track's box
+  std::uint64_t anchored_detections = 0;  // measured as the visible end of a known tall body
 };
 
 // Caller-owned result of one update: every live track (deleted ones are gone).

@@ -582,6 +582,58 @@ TEST(CompleteEndOn, ALowBumperFarAwayIsCompletedToo) {
   }
 }
 
+TEST(Tracker, AnEndOnFaceOfATruckSeenWholeBeforeIsMeasuredAtTheTrucksCentre) {
+  // A 9 m truck (2.4 m tall) drives away along +x at 6 m/s from a sensor at the origin: seen
+  // whole for 10 scans, then only its rear face (2.4 m across, 0.3 m deep), which
+  // complete_end_on makes a 4.5 m car box, 2.25 m short of the truck's centre. The track
+  // remembers the 9 m and measures the face as the rear of a 9 m box: it stays on the truck's
+  // centre. With the memory off it falls 2.25 m behind it.
+  const auto run = [](double memory_m, TrackerCounters& counters) {
+    TrackerConfig c;
+    c.extent_memory_length_m = memory_m;
+    Tracker tracker(c);
+    TrackerOutput out(c.max_tracks);
+    const Eigen::Vector2f sensor(0, 0);
+    double worst = 0;
+    for (int k = 0; k < 25; ++k) {
+      const double centre = 25 + 0.6 * k;
+      Detection d = k < 10 ? box(centre, 0, 9.0, 2.4, 2.4, 0, 0)
+                           : box(centre - 4.5 + 0.15, 0, 2.4, 0.3, 2.4, M_PI / 2, 0);
+      if (k >= 10) {
+        EXPECT_TRUE(complete_end_on(c, sensor, d));
+      }
+      tracker.update(k * kScanNs, std::vector<Detection>{d}, out);
+      EXPECT_EQ(out.tracks.size(), 1u) << "scan " << k;
+      if (k >= 15 && !out.tracks.empty())
+        worst = std::max(worst, std::abs(out.tracks[0].position.x() - centre));
+    }
+    counters = tracker.counters();
+    return worst;
+  };
+  TrackerCounters counters;
+  EXPECT_LT(run(TrackerConfig{}.extent_memory_length_m, counters), 0.3);
+  EXPECT_EQ(counters.anchored_detections, 15u);
+  EXPECT_GT(run(0.0, counters), 2.0);
+  EXPECT_EQ(counters.anchored_detections, 0u);
+}
+
+TEST(Tracker, ACarsFaceIsNotMeasuredWithAnyMemory) {
+  // A 4.6 m car seen whole, then end-on: its memory (4.6 m, and not tall) is never used.
+  TrackerConfig c;
+  Tracker tracker(c);
+  TrackerOutput out(c.max_tracks);
+  for (int k = 0; k < 20; ++k) {
+    const double centre = 25 + 0.6 * k;
+    Detection d = k < 10 ? box(centre, 0, 4.6, 1.8, 1.5, 0, 0)
+                         : box(centre - 2.3 + 0.15, 0, 1.8, 0.3, 1.5, M_PI / 2, 0);
+    if (k >= 10) {
+      EXPECT_TRUE(complete_end_on(c, Eigen::Vector2f(0, 0), d));
+    }
+    tracker.update(k * kScanNs, std::vector<Detection>{d}, out);
+  }
+  EXPECT_EQ(tracker.counters().anchored_detections, 0u);
+}
+
 TEST(Tracker, NewTrackInsideAnOlderTracksBoxMergesIntoItAndTheOldIdLivesOn) {
   // A car tracked for 10 scans is lost for 3 and comes back 1.2 m from its prediction, outside
   // the (narrowed) gate: the detection spawns a track, which lies inside the old track's box and
@@ -683,6 +735,9 @@ TEST(Tracker, RejectsInvalidConfig) {
   EXPECT_THROW(Tracker{c}, std::invalid_argument);
   c = TrackerConfig{};
   c.absorb_strip_width_m = -0.1;
+  EXPECT_THROW(Tracker{c}, std::invalid_argument);
+  c = TrackerConfig{};
+  c.extent_memory_length_m = -1;
   EXPECT_THROW(Tracker{c}, std::invalid_argument);
 }
 
