@@ -54,6 +54,8 @@ rt::Result<segmentation::SegmenterConfig> load_segmentation_settings(
                         count("min_segment_points", kMaxCount, c.min_segment_points),
                         count("max_segment_points", kMaxCount, c.max_segment_points),
                         s.read("max_segment_extent_m", c.max_segment_extent_m),
+                        count("box_fit_points", 100000, c.box_fit_points, 0),
+                        s.read("box_fit_min_length_m", c.box_fit_min_length_m),
                         count("max_points", kMaxCount, c.max_points),
                         count("max_occupied_cells", kMaxCount, c.max_occupied_cells),
                         count("max_segments", kMaxCount, c.max_segments)}) {

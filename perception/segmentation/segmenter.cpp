@@ -80,6 +80,9 @@ const char* validate(const SegmenterConfig& c) noexcept {
   if (c.max_segment_points < c.min_segment_points)
     return "max_segment_points must be >= min_segment_points";
   if (!(c.max_segment_extent_m > 0)) return "max_segment_extent_m must be > 0 m";
+  if (c.box_fit_points > 100'000) return "box_fit_points must be in [0, 100000]";
+  if (!(c.box_fit_min_length_m >= 0 && c.box_fit_min_length_m <= 1000))
+    return "box_fit_min_length_m must be in [0, 1000] m";
   if (c.max_points < 1 || c.max_points > kUnvisited) return "max_points must be in 1..4294967293";
   if (c.max_occupied_cells < 1 || c.max_occupied_cells > kUnvisited)
     return "max_occupied_cells must be >= 1";
@@ -122,7 +125,9 @@ struct Segmenter::State {
         component_cells(c.max_occupied_cells),
         part(c.max_occupied_cells),
         split_queue(c.max_occupied_cells),
-        parts(c.max_segments + 1) {}
+        parts(c.max_segments + 1),
+        fit_x(c.box_fit_points),
+        fit_y(c.box_fit_points) {}
 
   std::uint32_t n, m;   // fine and coarse cells across
   std::uint32_t tiles;  // 8 x 8 tiles across the fine grid
@@ -178,6 +183,7 @@ struct Segmenter::State {
   rt::FixedVector<std::uint32_t> part;
   rt::FixedVector<std::uint32_t> split_queue;
   rt::FixedVector<Part> parts;
+  rt::FixedVector<float> fit_x, fit_y;  // box fit: the sampled points about the centroid
 };
 
 Segmenter::Segmenter(const SegmenterConfig& config) : config_(config) {
@@ -204,6 +210,61 @@ Segmenter::~Segmenter() = default;
 Segments Segmenter::make_segments() const {
   return Segments(config_.max_segments, config_.max_points);
 }
+
+namespace {
+
+// L-shape fitting's rectangle search (SegmenterConfig::box_fit_points): the heading in
+// [0, pi/2) whose rectangle the points lie closest to the edges of, by the closeness criterion
+// (sum over the points of 1 / max(distance to the nearer edge, 1 cm)), in 1-degree steps, over
+// up to `cap` of the points (evenly strided) about (mx, my).
+double fit_heading(const PointView& points, std::span<const std::uint32_t> indices, double mx,
+                   double my, float* fx, float* fy, std::size_t cap) noexcept {
+  const std::size_t n = indices.size();
+  const std::size_t stride = (n + cap - 1) / cap;
+  std::size_t m = 0;
+  for (std::size_t k = 0; k < n && m < cap; k += stride) {
+    float x, y, z;
+    points.read(indices[k], x, y, z);
+    fx[m] = static_cast<float>(x - mx);
+    fy[m] = static_cast<float>(y - my);
+    ++m;
+  }
+  // The score of one heading.
+  const auto closeness = [&](double yaw) {
+    const auto ca = static_cast<float>(std::cos(yaw)), sa = static_cast<float>(std::sin(yaw));
+    float u0 = std::numeric_limits<float>::infinity(), u1 = -u0, v0 = u0, v1 = -u0;
+    for (std::size_t i = 0; i < m; ++i) {
+      const float u = ca * fx[i] + sa * fy[i], v = -sa * fx[i] + ca * fy[i];
+      u0 = std::min(u0, u), u1 = std::max(u1, u), v0 = std::min(v0, v), v1 = std::max(v1, v);
+    }
+    constexpr float kMinDistance = 0.01f;
+    float score = 0;
+    for (std::size_t i = 0; i < m; ++i) {
+      const float u = ca * fx[i] + sa * fy[i], v = -sa * fx[i] + ca * fy[i];
+      const float d = std::min(std::min(u - u0, u1 - u), std::min(v - v0, v1 - v));
+      score += 1.0f / std::max(d, kMinDistance);
+    }
+    return score;
+  };
+  // Every 6 degrees, then every degree within 5 of the best.
+  constexpr double kDegree = M_PI / 180;
+  int best_step = 0;
+  float best = -1;
+  for (int a = 0; a < 90; a += 6) {
+    const float score = closeness(a * kDegree);
+    if (score > best) best = score, best_step = a;
+  }
+  const int coarse = best_step;
+  for (int a = coarse - 5; a <= coarse + 5; ++a) {
+    if (a == coarse) continue;
+    const float score = closeness(a * kDegree);
+    if (score > best) best = score, best_step = a;
+  }
+  const double best_yaw = best_step * kDegree;
+  return best_yaw;
+}
+
+}  // namespace
 
 void Segmenter::segment(const PointView& points, Segments& out) noexcept {
   State& s = *state_;
@@ -695,15 +756,24 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
     const double mx = x0 + sx * inv, my = y0 + sy * inv;
     const double cxx = sxx * inv - sx * sx * inv * inv, cxy = sxy * inv - sx * sy * inv * inv,
                  cyy = syy * inv - sy * sy * inv * inv;
-    const double yaw = 0.5 * std::atan2(2.0 * cxy, cxx - cyy);
-    const double ca = std::cos(yaw), sa = std::sin(yaw);
-    double u0 = std::numeric_limits<double>::infinity(), u1 = -u0, v0 = u0, v1 = -u0;
-    for (const std::uint32_t i : out.indices(seg)) {
-      float x, y, z;
-      points.read(i, x, y, z);
-      const double dx = x - mx, dy = y - my;
-      const double u = ca * dx + sa * dy, v = -sa * dx + ca * dy;
-      u0 = std::min(u0, u), u1 = std::max(u1, u), v0 = std::min(v0, v), v1 = std::max(v1, v);
+    double yaw = 0.5 * std::atan2(2.0 * cxy, cxx - cyy);
+    double ca = 0, sa = 0, u0 = 0, u1 = 0, v0 = 0, v1 = 0;
+    const auto extents = [&] {  // of the points along yaw and across it, about the centroid
+      ca = std::cos(yaw), sa = std::sin(yaw);
+      u0 = std::numeric_limits<double>::infinity(), u1 = -u0, v0 = u0, v1 = -u0;
+      for (const std::uint32_t i : out.indices(seg)) {
+        float x, y, z;
+        points.read(i, x, y, z);
+        const double dx = x - mx, dy = y - my;
+        const double u = ca * dx + sa * dy, v = -sa * dx + ca * dy;
+        u0 = std::min(u0, u), u1 = std::max(u1, u), v0 = std::min(v0, v), v1 = std::max(v1, v);
+      }
+    };
+    extents();
+    if (c.box_fit_points > 0 && std::max(u1 - u0, v1 - v0) >= c.box_fit_min_length_m) {
+      yaw = fit_heading(points, out.indices(seg), mx, my, s.fit_x.data(), s.fit_y.data(),
+                        c.box_fit_points);
+      extents();
     }
     const double uc = 0.5 * (u0 + u1), vc = 0.5 * (v0 + v1);
     seg.centroid[0] = static_cast<float>(mx);

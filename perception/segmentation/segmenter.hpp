@@ -88,6 +88,12 @@ struct SegmenterConfig {
   std::uint32_t min_segment_points = 8;      // fewer obstacle points: dropped (too small)
   std::uint32_t max_segment_points = 60000;  // more: dropped (too large)
   double max_segment_extent_m = 15.0;        // a longer footprint side (cell bounds): dropped
+  // Box heading: 0 = the principal axis of the XY footprint (the thesis); N > 0 = the
+  // rectangle fit of L-shape fitting (the heading whose box edges the points lie closest to,
+  // the "closeness" criterion of Zhang et al. 2017), searched over up to N of the segment's
+  // points (evenly strided). A car seen at a corner shows an L whose principal axis is diagonal.
+  std::uint32_t box_fit_points = 64;
+  double box_fit_min_length_m = 2.5;  // ...for segments whose principal-axis box is this long
   // Capacities (allocated at construction).
   std::size_t max_points = 300000;          // points per scan; beyond: counted, ignored
   std::size_t max_occupied_cells = 200000;  // occupied fine cells per scan; beyond: counted

@@ -20,7 +20,11 @@ namespace {
 void check_scan(const std::string& relative) {
   SCOPED_TRACE(relative);
   const auto cloud = testing::read_kitti_bin(relative);
-  segmentation::Segmenter segmenter(segmentation::SegmenterConfig{});
+  // The principal-axis box (box_fit_points 0): the definition of the bbox_size space, so the two
+  // can be compared below (the default L-shape fit turns boxes of long segments).
+  segmentation::SegmenterConfig by_axis;
+  by_axis.box_fit_points = 0;
+  segmentation::Segmenter segmenter(by_axis);
   auto segments = segmenter.make_segments();
   segmenter.segment({cloud.data(), cloud.size() / 4, 16}, segments);
   ASSERT_GE(segments.segments.size(), 20u);

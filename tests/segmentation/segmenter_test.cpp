@@ -410,6 +410,47 @@ TEST(Segmenter, OrientedBoxFollowsARotatedCar) {
   EXPECT_NEAR(b.height, 1.5f - static_cast<float>(test_config().ground_clearance_m), 0.06f);
 }
 
+TEST(Segmenter, BoxOfACarSeenAtACornerFollowsItsSidesNotTheDiagonal) {
+  // A 4.5 x 1.8 m car at yaw 0.6 seen at a corner: only its left side and its rear return
+  // points, an L. The principal axis of an L lies between its legs; the L-shape fit
+  // (box_fit_points) finds the car's heading, size and centre.
+  Scene scene;
+  scene.flat_ground();
+  const float yaw = 0.6f, c = std::cos(yaw), s = std::sin(yaw);
+  const auto put = [&](float x, float y) {
+    for (float z = 0.4f; z <= 1.41f; z += 0.1f)
+      scene.add(7.0f + c * x - s * y, -4.0f + s * x + c * y, z);
+  };
+  for (float x = -2.25f; x <= 2.251f; x += 0.05f) put(x, -0.9f);   // the side
+  for (float y = -0.85f; y <= 0.901f; y += 0.05f) put(-2.25f, y);  // the rear
+  SegmenterConfig fit = test_config();
+  ASSERT_GT(fit.box_fit_points, 0u);  // the default
+  const Segments out = run(scene, fit);
+  ASSERT_EQ(out.segments.size(), 1u);
+  const OrientedBox& b = out.segments[0].box;
+  EXPECT_NEAR(b.yaw, yaw, 0.02f);
+  EXPECT_NEAR(b.length, 4.5f, 0.05f);
+  EXPECT_NEAR(b.width, 1.8f, 0.05f);
+  EXPECT_NEAR(b.cx, 7.0f, 0.05f);
+  EXPECT_NEAR(b.cy, -4.0f, 0.05f);
+  // The principal axis (box_fit_points 0, the thesis) is diagonal: the box is off.
+  SegmenterConfig pca = test_config();
+  pca.box_fit_points = 0;
+  const Segments by_axis = run(scene, pca);
+  ASSERT_EQ(by_axis.segments.size(), 1u);
+  const OrientedBox p = by_axis.segments[0].box;
+  EXPECT_GT(std::abs(p.yaw - yaw), 0.1f);
+  EXPECT_GT(std::hypot(p.cx - 7.0f, p.cy + 4.0f), 0.2f);
+  // Below box_fit_min_length_m (a person, a bicycle) the principal axis is kept.
+  SegmenterConfig small = test_config();
+  small.box_fit_min_length_m = 10.0;
+  const Segments small_out = run(scene, small);
+  ASSERT_EQ(small_out.segments.size(), 1u);
+  const OrientedBox q = small_out.segments[0].box;
+  EXPECT_EQ(q.yaw, p.yaw);
+  EXPECT_EQ(q.cx, p.cx);
+}
+
 TEST(Segmenter, DropsClustersTooSmallAndTooLarge) {
   Scene scene;
   scene.flat_ground(25.0f);
@@ -571,6 +612,9 @@ TEST(Segmenter, RejectsInvalidConfiguration) {
   EXPECT_STREQ(validate(c), "");
   c.split_person_m = 0.1;  // below cell_m
   EXPECT_STRNE(validate(c), "");
+  c = SegmenterConfig{};
+  c.box_fit_min_length_m = -1;
+  EXPECT_STREQ(validate(c), "box_fit_min_length_m must be in [0, 1000] m");
   EXPECT_STREQ(validate(SegmenterConfig{}), "");
 }
 
