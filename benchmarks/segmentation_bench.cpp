@@ -99,8 +99,12 @@ void report(benchmark::State& state, Times& t, double points, double segments) {
   state.counters["segments"] = segments;
 }
 
+// Arg 1: the default (L-shape fitted boxes); 0: principal-axis boxes (box_fit_points 0), for
+// the fit's cost.
 void BM_StacSegmenter(benchmark::State& state) {
-  Segmenter segmenter{SegmenterConfig{}};
+  SegmenterConfig config;
+  if (state.range(0) == 0) config.box_fit_points = 0;
+  Segmenter segmenter{config};
   Segments out = segmenter.make_segments();
   segmenter.segment(view(scans()[0]), out);  // warm-up
   Times t;
@@ -118,7 +122,7 @@ void BM_StacSegmenter(benchmark::State& state) {
   const auto n = static_cast<double>(t.wall.size());
   report(state, t, points / n, segments / n);
 }
-BENCHMARK(BM_StacSegmenter)->Iterations(1200)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_StacSegmenter)->Arg(1)->Arg(0)->Iterations(1200)->Unit(benchmark::kMillisecond);
 
 // Segmentation + tracking of one scan per iteration, as the perception thread runs them:
 // ScanPipeline::process without poses (no deskew, the sensor parked: segment, detections with
