@@ -144,13 +144,13 @@ bool GridClassifier::partial(std::span<const float> x, std::size_t begin, std::s
   return partial_batch({&row, 1}, begin, end, {&sum, 1});
 }
 
-// Same bins as bin(), without its branches; two accumulators (even and odd elements) halve the
-// chain of dependent adds. NaN elements add nothing (then no t below is NaN: lower, scale are
-// finite, scale > 0).
 namespace {
 constexpr std::size_t kAhead = 8;  // partial_batch: elements prefetched ahead
 }  // namespace
 
+// Same bins as bin(), without its branches; two accumulators (even and odd elements) halve the
+// chain of dependent adds. NaN elements add nothing (then no t below is NaN: lower, scale are
+// finite, scale > 0).
 bool GridClassifier::partial_batch(std::span<const float* const> rows, std::size_t begin,
                                    std::size_t end, std::span<LogOdds> sums) const noexcept {
   if (begin > end || end > dimensions_ || rows.size() != sums.size()) return false;
@@ -162,21 +162,21 @@ bool GridClassifier::partial_batch(std::span<const float* const> rows, std::size
     const std::size_t n = std::min(kBatch, rows.size() - first);
     float acc[kBatch][2][kClassCount];
     std::fill_n(&acc[0][0][0], n * 2 * kClassCount, 0.0f);
+    // The responses of element e's grid r for a value v (not NaN).
+    const auto cell_of = [&](std::size_t e, std::size_t r, float v) {
+      const std::size_t g = e * resolutions + r;
+      const float t = std::min(std::max((v - lower[g]) * scale[g], 0.0f), last_bin_[r]);
+      return table + (e * cells_per_element_ + bin_offset_[r] + static_cast<std::uint32_t>(t)) *
+                         kClassCount;
+    };
     for (std::size_t e = begin; e < end; ++e) {
-      const float* element = table + e * cells_per_element_ * kClassCount;
       // The cells kAhead elements on are fetched now: the table (MBs) is not in the nearer
       // caches, and which cell of an element is read depends on the input (no effect on sums).
       if (const std::size_t ahead = e + kAhead; ahead < end) {
-        const float* element_ahead = table + ahead * cells_per_element_ * kClassCount;
         for (std::size_t j = 0; j < n; ++j) {
           const float w = rows[first + j][ahead - begin];
           if (std::isnan(w)) continue;
-          for (std::size_t r = 0; r < resolutions; ++r) {
-            const std::size_t g = ahead * resolutions + r;
-            const float t = std::min(std::max((w - lower[g]) * scale[g], 0.0f), last_bin_[r]);
-            __builtin_prefetch(element_ahead +
-                               (bin_offset_[r] + static_cast<std::uint32_t>(t)) * kClassCount);
-          }
+          for (std::size_t r = 0; r < resolutions; ++r) __builtin_prefetch(cell_of(ahead, r, w));
         }
       }
       for (std::size_t j = 0; j < n; ++j) {
@@ -184,10 +184,7 @@ bool GridClassifier::partial_batch(std::span<const float* const> rows, std::size
         if (std::isnan(v)) continue;
         float* a = acc[j][e & 1];
         for (std::size_t r = 0; r < resolutions; ++r) {
-          const std::size_t g = e * resolutions + r;
-          const float t = std::min(std::max((v - lower[g]) * scale[g], 0.0f), last_bin_[r]);
-          const float* cell =
-              element + (bin_offset_[r] + static_cast<std::uint32_t>(t)) * kClassCount;
+          const float* cell = cell_of(e, r, v);
           for (std::size_t k = 0; k < kClassCount; ++k) a[k] += cell[k];
         }
       }

@@ -214,9 +214,10 @@ Segments Segmenter::make_segments() const {
 namespace {
 
 // L-shape fitting's rectangle search (SegmenterConfig::box_fit_points): the heading in
-// [0, pi/2) whose rectangle the points lie closest to the edges of, by the closeness criterion
-// (sum over the points of 1 / max(distance to the nearer edge, 1 cm)), in 1-degree steps, over
-// up to `cap` of the points (evenly strided) about (mx, my).
+// [-5, 95) degrees whose rectangle the points lie closest to the edges of, by the closeness
+// criterion (sum over the points of 1 / max(distance to the nearer edge, 1 cm)), searched every
+// 6 degrees and then every degree within 5 of the best, over up to `cap` of the points (evenly
+// strided) about (mx, my).
 double fit_heading(const PointView& points, std::span<const std::uint32_t> indices, double mx,
                    double my, float* fx, float* fy, std::size_t cap) noexcept {
   const std::size_t n = indices.size();
@@ -260,8 +261,7 @@ double fit_heading(const PointView& points, std::span<const std::uint32_t> indic
     const float score = closeness(a * kDegree);
     if (score > best) best = score, best_step = a;
   }
-  const double best_yaw = best_step * kDegree;
-  return best_yaw;
+  return best_step * kDegree;
 }
 
 }  // namespace

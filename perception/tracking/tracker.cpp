@@ -99,14 +99,26 @@ bool narrow_and_tall(const TrackerConfig& c, float length, float width, float he
           (wide <= c.absorb_keep_wide_m && height >= c.absorb_keep_wide_height_m));
 }
 
+// What a measurement tells a track of its known extent (extent_memory_length_m): its length
+// when it is a tall box that fits one object, else 0.
+float tall_length(const TrackerConfig& c, const Detection& d) {
+  return tall(c, d.height) && fits_one_object(c, d.length, d.width, true) ? d.length : 0.0f;
+}
+
+// Whether a track that remembers `known` m measures end-on faces with it (memory on and long
+// enough).
+bool knows_extent(const TrackerConfig& c, float known) {
+  return c.extent_memory_length_m > 0 && known >= c.extent_memory_length_m;
+}
+
 // Known extent (TrackerConfig::extent_memory_length_m): the centre of end-on detection d's
 // box made `known` m long instead, its near end (the face) kept. False (centre unchanged) when
 // memory is off or not yet that long, d is not end-on or longer, or d's box does not lie along
 // the track's (within 30 degrees).
 bool anchored_centre(const TrackerConfig& c, float known, float track_yaw, const Detection& d,
                      Eigen::Vector2f& centre) {
-  if (!(c.extent_memory_length_m > 0) || !c.position_from_box || !d.end_on ||
-      !(known >= c.extent_memory_length_m) || !(d.length < known) || !d.box_center.allFinite() ||
+  if (!knows_extent(c, known) || !c.position_from_box || !d.end_on || !(d.length < known) ||
+      !d.box_center.allFinite() ||
       !(std::abs(box_angle_diff(d.yaw, track_yaw)) <= std::numbers::pi / 6)) {
     return false;
   }
@@ -320,8 +332,7 @@ void Tracker::correct(Slot& s, const Detection& d, std::int64_t stamp_ns) noexce
     t.state = TrackState::kConfirmed;
   t.features.add_segment(Eigen::Vector3f(xy.x(), xy.y(), d.centroid.z()), stamp_ns,
                          config_.min_heading_speed_mps);
-  if (tall(config_, d.height) && fits_one_object(config_, d.length, d.width, true))
-    s.known_length = std::max(s.known_length, d.length);
+  s.known_length = std::max(s.known_length, tall_length(config_, d));
 }
 
 bool Tracker::spawn(const Detection& d, std::int64_t stamp_ns) noexcept {
@@ -357,8 +368,7 @@ bool Tracker::spawn(const Detection& d, std::int64_t stamp_ns) noexcept {
   t.points = d.points;
   t.segment = static_cast<std::int32_t>(d.segment);
   t.hits = 1;
-  s.known_length =
-      tall(config_, d.height) && fits_one_object(config_, d.length, d.width, true) ? d.length : 0;
+  s.known_length = tall_length(config_, d);
   t.features.add_segment(Eigen::Vector3f(xy.x(), xy.y(), d.centroid.z()), stamp_ns,
                          config_.min_heading_speed_mps);
   ++counters_.spawned;
@@ -678,10 +688,9 @@ void Tracker::update(std::int64_t stamp_ns, std::span<const Detection> detection
     const Eigen::Vector2d predicted = s.x.head<2>();
     float* costs = &pair_cost_[ti * nd];
     bool any = false;
-    // A track of known extent measures a shorter detection at its anchored centre, up to half
+    // A track of known extent measures an end-on detection at its anchored centre, up to half
     // its length from the box's.
-    const bool known =
-        config_.extent_memory_length_m > 0 && s.known_length >= config_.extent_memory_length_m;
+    const bool known = knows_extent(config_, s.known_length);
     const double reach = known ? gate_axis + 0.5 * s.known_length : gate_axis;
     for (std::size_t di = 0; di < nd; ++di) {
       Eigen::Vector2d e = positions_[di] - predicted;

@@ -388,24 +388,35 @@ TEST(Segmenter, SplitLeavesACarSeenFromBehindAt30mWhole) {
   EXPECT_EQ(out.counters.split_segments, 0u);
 }
 
+// The rotated car of the box tests: 4.5 x 1.8 m, centred at (7, -4), heading kCarYaw. A point
+// (x, y, z) of the car's own frame is added to `scene` in the sensor frame.
+constexpr float kCarYaw = 0.6f;
+void add_car_point(Scene& scene, float x, float y, float z) {
+  const float c = std::cos(kCarYaw), s = std::sin(kCarYaw);
+  scene.add(7.0f + c * x - s * y, -4.0f + s * x + c * y, z);
+}
+
+// The box is that car's, heading within `yaw_tol`, size within `size_tol`, centre within
+// `centre_tol`.
+void expect_car_box(const OrientedBox& b, float yaw_tol, float size_tol, float centre_tol) {
+  EXPECT_NEAR(b.yaw, kCarYaw, yaw_tol);
+  EXPECT_NEAR(b.length, 4.5f, size_tol);
+  EXPECT_NEAR(b.width, 1.8f, size_tol);
+  EXPECT_NEAR(b.cx, 7.0f, centre_tol);
+  EXPECT_NEAR(b.cy, -4.0f, centre_tol);
+}
+
 TEST(Segmenter, OrientedBoxFollowsARotatedCar) {
   Scene car;
   car.box(0.0f, 0.0f, 4.5f, 1.8f, 1.5f);
   Scene scene;
   scene.flat_ground();
-  const float yaw = 0.6f, c = std::cos(yaw), s = std::sin(yaw);
-  for (std::size_t i = 0; i < car.size(); ++i) {
-    const float x = car.xyzi[4 * i], y = car.xyzi[4 * i + 1];
-    scene.add(7.0f + c * x - s * y, -4.0f + s * x + c * y, car.xyzi[4 * i + 2]);
-  }
+  for (std::size_t i = 0; i < car.size(); ++i)
+    add_car_point(scene, car.xyzi[4 * i], car.xyzi[4 * i + 1], car.xyzi[4 * i + 2]);
   const Segments out = run(scene);
   ASSERT_EQ(out.segments.size(), 1u);
   const OrientedBox& b = out.segments[0].box;
-  EXPECT_NEAR(b.yaw, yaw, 0.05f);
-  EXPECT_NEAR(b.length, 4.5f, 0.2f);
-  EXPECT_NEAR(b.width, 1.8f, 0.2f);
-  EXPECT_NEAR(b.cx, 7.0f, 0.1f);
-  EXPECT_NEAR(b.cy, -4.0f, 0.1f);
+  expect_car_box(b, 0.05f, 0.2f, 0.1f);
   // Segments hold the points above the ground clearance: the box starts there.
   EXPECT_NEAR(b.height, 1.5f - static_cast<float>(test_config().ground_clearance_m), 0.06f);
 }
@@ -416,10 +427,8 @@ TEST(Segmenter, BoxOfACarSeenAtACornerFollowsItsSidesNotTheDiagonal) {
   // (box_fit_points) finds the car's heading, size and centre.
   Scene scene;
   scene.flat_ground();
-  const float yaw = 0.6f, c = std::cos(yaw), s = std::sin(yaw);
   const auto put = [&](float x, float y) {
-    for (float z = 0.4f; z <= 1.41f; z += 0.1f)
-      scene.add(7.0f + c * x - s * y, -4.0f + s * x + c * y, z);
+    for (float z = 0.4f; z <= 1.41f; z += 0.1f) add_car_point(scene, x, y, z);
   };
   for (float x = -2.25f; x <= 2.251f; x += 0.05f) put(x, -0.9f);   // the side
   for (float y = -0.85f; y <= 0.901f; y += 0.05f) put(-2.25f, y);  // the rear
@@ -427,19 +436,14 @@ TEST(Segmenter, BoxOfACarSeenAtACornerFollowsItsSidesNotTheDiagonal) {
   ASSERT_GT(fit.box_fit_points, 0u);  // the default
   const Segments out = run(scene, fit);
   ASSERT_EQ(out.segments.size(), 1u);
-  const OrientedBox& b = out.segments[0].box;
-  EXPECT_NEAR(b.yaw, yaw, 0.02f);
-  EXPECT_NEAR(b.length, 4.5f, 0.05f);
-  EXPECT_NEAR(b.width, 1.8f, 0.05f);
-  EXPECT_NEAR(b.cx, 7.0f, 0.05f);
-  EXPECT_NEAR(b.cy, -4.0f, 0.05f);
+  expect_car_box(out.segments[0].box, 0.02f, 0.05f, 0.05f);
   // The principal axis (box_fit_points 0, the thesis) is diagonal: the box is off.
   SegmenterConfig pca = test_config();
   pca.box_fit_points = 0;
   const Segments by_axis = run(scene, pca);
   ASSERT_EQ(by_axis.segments.size(), 1u);
   const OrientedBox p = by_axis.segments[0].box;
-  EXPECT_GT(std::abs(p.yaw - yaw), 0.1f);
+  EXPECT_GT(std::abs(p.yaw - kCarYaw), 0.1f);
   EXPECT_GT(std::hypot(p.cx - 7.0f, p.cy + 4.0f), 0.2f);
   // Below box_fit_min_length_m (a person, a bicycle) the principal axis is kept.
   SegmenterConfig small = test_config();
