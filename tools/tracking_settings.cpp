@@ -46,6 +46,7 @@ rt::Result<tracking::TrackerConfig> load_tracking_config(const std::filesystem::
   STAC_GET(double, "absorb_strip_length_m", c.absorb_strip_length_m);
   STAC_GET(double, "absorb_strip_width_m", c.absorb_strip_width_m);
   STAC_GET(double, "absorb_narrow_gap_m", c.absorb_narrow_gap_m);
+  STAC_GET(std::uint32_t, "absorb_established_hits", c.absorb_established_hits);
   STAC_GET(double, "overlap_margin_m", c.overlap_margin_m);
   STAC_GET(double, "end_on_length_m", c.end_on_length_m);
   STAC_GET(double, "end_on_min_range_m", c.end_on_min_range_m);

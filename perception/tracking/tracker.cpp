@@ -416,6 +416,10 @@ void Tracker::absorb_fragments(std::span<const Detection> detections) noexcept {
       if (own != nullptr && !narrow_host) {
         const Slot& host = slots_[live_[static_cast<std::size_t>(det_match_[hi])]];
         if (!older(host.track, own->track)) continue;
+        if (config_.absorb_established_hits > 0 &&
+            own->track.hits >= config_.absorb_established_hits) {
+          continue;
+        }
         if (own->track.state != TrackState::kTentative &&
             (host.x.tail<2>() - own->x.tail<2>()).norm() > config_.absorb_velocity_mps) {
           continue;

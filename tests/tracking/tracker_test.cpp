@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -415,35 +416,62 @@ TEST(Tracker, FragmentBesideAMatchedTrackJoinsItsMeasurement) {
   EXPECT_GT(out.tracks[0].length, 2.0f);
 }
 
-TEST(Tracker, YoungerTrackOfAFragmentMergesIntoTheOlderOne) {
-  // Two pieces moving together at 5 m/s, 2.5 m apart (gap beyond 2 m): two tracks. As the gap
-  // closes below absorb_gap_m, the younger track is merged into the older one.
-  TrackerConfig c;
-  Tracker tracker(c);
-  TrackerOutput out(c.max_tracks);
+// Two pieces moving together at 5 m/s: the older alone for 3 scans, then the younger 2.5 m
+// ahead (gap beyond absorb_gap_m 2 m), the gap closing by `closing` m a scan (down to 1.5 m).
+// Returns the older track's id.
+std::uint64_t pieces_closing_in(Tracker& tracker, TrackerOutput& out, double closing, int scans) {
   for (int k = 0; k < 3; ++k) {
     tracker.update(k * kScanNs, std::vector<Detection>{box(20 + 0.5 * k, 0, 1.0, 1.8, 0.6, 0, 0)},
                    out);
   }
-  for (int k = 3; k < 10; ++k) {
+  EXPECT_EQ(out.tracks.size(), 1u);
+  const std::uint64_t older = out.tracks.empty() ? 0 : out.tracks[0].id;
+  for (int k = 3; k < scans; ++k) {
     const double x = 20 + 0.5 * k;
+    const double gap_closed = std::min(1.0, closing * (k - 3));
     tracker.update(k * kScanNs,
                    std::vector<Detection>{box(x, 0, 1.0, 1.8, 0.6, 0, 0),
-                                          box(x + 3.6, 0, 1.2, 1.8, 1.2, 0, 1)},
+                                          box(x + 3.6 - gap_closed, 0, 1.2, 1.8, 1.2, 0, 1)},
                    out);
   }
-  ASSERT_EQ(out.tracks.size(), 2u);
-  const std::uint64_t older = by_segment(out, 0)->id;
-  for (int k = 10; k < 30; ++k) {  // the gap closes by 0.05 m a scan (0.5 m/s), to 1.5 m
-    const double x = 20 + 0.5 * k;
-    tracker.update(k * kScanNs,
-                   std::vector<Detection>{box(x, 0, 1.0, 1.8, 0.6, 0, 0),
-                                          box(x + 3.6 - 0.05 * (k - 9), 0, 1.2, 1.8, 1.2, 0, 1)},
-                   out);
-  }
+  return older;
+}
+
+TEST(Tracker, YoungerTrackOfAFragmentMergesIntoTheOlderOne) {
+  // The gap closes at 0.1 m a scan: below 2 m at scan 9, while the younger track has fewer than
+  // absorb_established_hits (10) hits. It is merged into the older one, whose id lives on.
+  TrackerConfig c;
+  Tracker tracker(c);
+  TrackerOutput out(c.max_tracks);
+  const std::uint64_t older = pieces_closing_in(tracker, out, 0.1, 20);
   ASSERT_EQ(out.tracks.size(), 1u);
   EXPECT_EQ(out.tracks[0].id, older);
   EXPECT_GE(tracker.counters().deleted_merged, 1u);  // the first; a tentative may follow it
+}
+
+TEST(Tracker, AnEstablishedTrackBesideAnOlderOneKeepsItsOwnId) {
+  // The same pieces, the gap closing at 0.03 m a scan: below 2 m at scan 20, when the younger
+  // track has 18 hits. With absorb_established_hits (10) it is an object of its own (two cars
+  // nose to tail, a person by a car) and is never joined; with the rule off it is merged.
+  for (const std::uint32_t established : {10u, 0u}) {
+    SCOPED_TRACE(established);
+    TrackerConfig c;
+    c.absorb_established_hits = established;
+    Tracker tracker(c);
+    TrackerOutput out(c.max_tracks);
+    const std::uint64_t older = pieces_closing_in(tracker, out, 0.03, 40);
+    if (established > 0) {
+      ASSERT_EQ(out.tracks.size(), 2u);
+      EXPECT_EQ(by_segment(out, 0)->id, older);
+      EXPECT_NE(by_segment(out, 1), nullptr);
+      EXPECT_EQ(tracker.counters().deleted_merged, 0u);
+      EXPECT_EQ(tracker.counters().absorbed_detections, 0u);
+    } else {
+      ASSERT_EQ(out.tracks.size(), 1u);
+      EXPECT_EQ(out.tracks[0].id, older);
+      EXPECT_GE(tracker.counters().deleted_merged, 1u);
+    }
+  }
 }
 
 TEST(Tracker, PeopleAndWholeCarsAreNeverJoined) {
