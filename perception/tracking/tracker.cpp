@@ -398,6 +398,9 @@ void Tracker::absorb_fragments(std::span<const Detection> detections) noexcept {
     }
     const Slot* own =
         det_match_[fi] >= 0 ? &slots_[live_[static_cast<std::size_t>(det_match_[fi])]] : nullptr;
+    // A fragment whose own track is established joins only a person (its own legs), never a car.
+    const bool established = own != nullptr && config_.absorb_established_hits > 0 &&
+                             own->track.hits >= config_.absorb_established_hits;
     // The matched measurement nearest to the fragment (box gap) whose union with it still fits;
     // a matched fragment only joins an older track moving with it.
     std::size_t best = nd;
@@ -415,11 +418,7 @@ void Tracker::absorb_fragments(std::span<const Detection> detections) noexcept {
       if (narrow_host && f.height >= config_.absorb_keep_height_m) continue;
       if (own != nullptr && !narrow_host) {
         const Slot& host = slots_[live_[static_cast<std::size_t>(det_match_[hi])]];
-        if (!older(host.track, own->track)) continue;
-        if (config_.absorb_established_hits > 0 &&
-            own->track.hits >= config_.absorb_established_hits) {
-          continue;
-        }
+        if (established || !older(host.track, own->track)) continue;
         if (own->track.state != TrackState::kTentative &&
             (host.x.tail<2>() - own->x.tail<2>()).norm() > config_.absorb_velocity_mps) {
           continue;

@@ -86,7 +86,7 @@ struct TrackerConfig {
   double absorb_strip_width_m = 0.1;       // m; 0: off
   // A fragment whose own track has at least absorb_established_hits hits is an object of its
   // own (a person beside a car, two cars nose to tail): it is never joined to a car's or a
-  // truck's measurement, and its track is never merged into the older one (0: off).
+  // truck's measurement, so absorbing never merges its track (overlap_margin_m still may; 0: off).
   std::uint32_t absorb_established_hits = 10;
   // Overlapping tracks: a track whose position lies inside an older track's box grown by
   // overlap_margin_m (neither a person nor a bicyclist, as above, who take only low tracks
