@@ -47,6 +47,7 @@ rt::Result<tracking::TrackerConfig> load_tracking_config(const std::filesystem::
   STAC_GET(double, "absorb_strip_width_m", c.absorb_strip_width_m);
   STAC_GET(double, "absorb_narrow_gap_m", c.absorb_narrow_gap_m);
   STAC_GET(std::uint32_t, "absorb_established_hits", c.absorb_established_hits);
+  STAC_GET(double, "absorb_known_margin_m", c.absorb_known_margin_m);
   STAC_GET(double, "overlap_margin_m", c.overlap_margin_m);
   STAC_GET(double, "end_on_length_m", c.end_on_length_m);
   STAC_GET(double, "end_on_min_range_m", c.end_on_min_range_m);
@@ -55,6 +56,7 @@ rt::Result<tracking::TrackerConfig> load_tracking_config(const std::filesystem::
   STAC_GET(double, "end_on_max_depth_m", c.end_on_max_depth_m);
   STAC_GET(double, "end_on_min_height_m", c.end_on_min_height_m);
   STAC_GET(double, "extent_memory_length_m", c.extent_memory_length_m);
+  STAC_GET(bool, "body_gating", c.body_gating);
   STAC_GET(double, "box_smoothing", c.box_smoothing);
   STAC_GET(double, "min_heading_speed_mps", c.min_heading_speed_mps);
 #undef STAC_GET

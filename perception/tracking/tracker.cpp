@@ -128,6 +128,30 @@ bool anchored_centre(const TrackerConfig& c, float known, float track_yaw, const
   return true;
 }
 
+// Known extent (TrackerConfig::body_gating): where the centre of the known body lies, nearest the
+// track's prediction, when tall detection d is a piece of it. Along the track's heading the
+// body, `known` m long, must cover d's box: its centre lies in [d's far end - known / 2, d's near
+// end + known / 2], and is taken nearest the prediction; across, d's box centre stands. False
+// (centre unchanged) when this is off, memory is off or not yet that long, d is end-on
+// (anchored_centre), lower than absorb_tall_height_m, a person, not shorter than the body,
+// longer than it along the heading, or not along the track's box (within 30 degrees).
+bool body_centre(const TrackerConfig& c, float known, float track_yaw,
+                 const Eigen::Vector2f& predicted, const Detection& d, Eigen::Vector2f& centre) {
+  if (!c.body_gating || !knows_extent(c, known) || !c.position_from_box || d.end_on ||
+      !(d.length < known) || !d.box_center.allFinite() || !tall(c, d.height) ||
+      narrow_and_tall(c, d.length, d.width, d.height) ||
+      !(std::abs(box_angle_diff(d.yaw, track_yaw)) <= std::numbers::pi / 6)) {
+    return false;
+  }
+  const Extent e = extent_in(d, predicted, track_yaw);
+  const float lo = e.u1 - 0.5f * known, hi = e.u0 + 0.5f * known;
+  if (!(lo <= hi)) return false;
+  const float u = std::clamp(0.0f, lo, hi), v = 0.5f * (e.v0 + e.v1);
+  const float cy = std::cos(track_yaw), sy = std::sin(track_yaw);
+  centre = predicted + Eigen::Vector2f(cy * u - sy * v, sy * u + cy * v);
+  return true;
+}
+
 void check(bool ok, const char* what) {
   if (!ok) throw std::invalid_argument(std::string("tracking config: ") + what);
 }
@@ -256,6 +280,7 @@ Tracker::Tracker(const TrackerConfig& c)
   check(c.absorb_strip_length_m >= 0 && c.absorb_strip_width_m >= 0,
         "absorb_strip_length_m and absorb_strip_width_m must be >= 0");
   check(c.overlap_margin_m <= 5, "overlap_margin_m must be at most 5 (< 0: off)");
+  check(c.absorb_known_margin_m <= 5, "absorb_known_margin_m must be at most 5 (< 0: off)");
   check(c.absorb_velocity_mps >= 0 && c.absorb_keep_length_m >= 0 && c.absorb_keep_width_m >= 0 &&
             c.absorb_keep_height_m >= 0,
         "absorb_velocity_mps and absorb_keep_length_m, _width_m, _height_m must be >= 0");
@@ -375,6 +400,16 @@ bool Tracker::spawn(const Detection& d, std::int64_t stamp_ns) noexcept {
   return true;
 }
 
+bool Tracker::inside_known_body(std::int32_t track, const Detection& f) const noexcept {
+  if (config_.absorb_known_margin_m < 0 || track < 0) return false;
+  const Slot& s = slots_[live_[static_cast<std::size_t>(track)]];
+  if (!knows_extent(config_, s.known_length)) return false;
+  const auto margin = static_cast<float>(config_.absorb_known_margin_m);
+  const Extent e = extent_in(f, s.x.head<2>().cast<float>(), s.track.yaw);
+  const float hl = 0.5f * s.known_length + margin, hw = 0.5f * s.track.width + margin;
+  return e.u0 >= -hl && e.u1 <= hl && e.v0 >= -hw && e.v1 <= hw;
+}
+
 void Tracker::absorb_fragments(std::span<const Detection> detections) noexcept {
   const std::size_t nd = detections.size();
   for (std::size_t di = 0; di < nd; ++di) {
@@ -392,7 +427,9 @@ void Tracker::absorb_fragments(std::span<const Detection> detections) noexcept {
   };
   for (std::size_t fi = 0; fi < nd; ++fi) {
     const Detection& f = detections[fi];
-    if (det_match_[fi] == kAbsorbed || host_[fi] != 0 || person(f) || !f.centroid.allFinite() ||
+    // A person-like piece joins only the known body of a truck it lies in (inside_known_body).
+    const bool f_person = person(f);
+    if (det_match_[fi] == kAbsorbed || host_[fi] != 0 || !f.centroid.allFinite() ||
         !f.position(true).allFinite()) {
       continue;
     }
@@ -407,6 +444,7 @@ void Tracker::absorb_fragments(std::span<const Detection> detections) noexcept {
     float best_gap = max_gap;
     Extent best_union{};
     float best_heading = 0, best_area = 0;
+    bool best_known = false;
     const Eigen::Vector2f fc = f.position(true);
     for (std::size_t hi = 0; hi < nd; ++hi) {
       if (hi == fi || det_match_[hi] < 0) continue;
@@ -415,6 +453,8 @@ void Tracker::absorb_fragments(std::span<const Detection> detections) noexcept {
       // A person or bicyclist takes only low pieces (legs, a wheel), whatever their tracks' ages,
       // and stays narrow.
       const bool narrow_host = person(merged_[hi]);
+      const bool in_body = !narrow_host && inside_known_body(det_match_[hi], f);
+      if (f_person && !in_body) continue;
       if (narrow_host && f.height >= config_.absorb_keep_height_m) continue;
       if (own != nullptr && !narrow_host) {
         const Slot& host = slots_[live_[static_cast<std::size_t>(det_match_[hi])]];
@@ -424,10 +464,20 @@ void Tracker::absorb_fragments(std::span<const Detection> detections) noexcept {
           continue;
         }
       }
-      // The union in the host's heading or the fragment's, whichever fits tighter (a piece's
-      // principal axis may be diagonal to the car).
       const Detection& h = merged_[hi];
       const Eigen::Vector2f centre = h.position(true);
+      // Inside the body of a host track of known extent: joined in the track's heading, the
+      // first such host taken.
+      if (in_body) {
+        const float heading = slots_[live_[static_cast<std::size_t>(det_match_[hi])]].track.yaw;
+        const Extent a = extent_in(h, centre, heading), b = extent_in(f, centre, heading);
+        best = hi, best_heading = heading, best_known = true;
+        best_union = {std::min(a.u0, b.u0), std::max(a.u1, b.u1), std::min(a.v0, b.v0),
+                      std::max(a.v1, b.v1)};
+        break;
+      }
+      // The union in the host's heading or the fragment's, whichever fits tighter (a piece's
+      // principal axis may be diagonal to the car).
       for (const float heading : {h.yaw, f.yaw}) {
         const Extent a = extent_in(h, centre, heading), b = extent_in(f, centre, heading);
         const float gu = std::max(0.0f, std::max(a.u0, b.u0) - std::min(a.u1, b.u1));
@@ -464,7 +514,7 @@ void Tracker::absorb_fragments(std::span<const Detection> detections) noexcept {
     h.height = std::max(h.height, f.height);
     h.end_on = false;  // a union: its heading no longer points away from the sensor
     h.points += f.points;
-    host_[best] = 1;
+    host_[best] = best_known || host_[best] == 2 ? 2 : 1;
     if (own != nullptr) {
       merged_track_[static_cast<std::size_t>(det_match_[fi])] = 1;
       ++counters_.deleted_merged;
@@ -700,7 +750,9 @@ void Tracker::update(std::int64_t stamp_ns, std::span<const Detection> detection
       costs[di] = -1.0f;
       if (!(std::abs(e.x()) <= reach && std::abs(e.y()) <= reach)) continue;
       Eigen::Vector2f centre;
-      if (known && anchored_centre(config_, s.known_length, s.track.yaw, detections[di], centre)) {
+      if (known && (anchored_centre(config_, s.known_length, s.track.yaw, detections[di], centre) ||
+                    body_centre(config_, s.known_length, s.track.yaw, predicted.cast<float>(),
+                                detections[di], centre))) {
         e = centre.cast<double>() - predicted;
       }
       if (!(std::abs(e.x()) <= gate_axis && std::abs(e.y()) <= gate_axis)) continue;
@@ -736,7 +788,9 @@ void Tracker::update(std::int64_t stamp_ns, std::span<const Detection> detection
         m.length = slot.known_length;
         ++counters_.anchored_detections;
       }
+      const float known = slot.known_length;
       correct(slot, m, stamp_ns);
+      if (host_[di] == 2) slot.known_length = known;  // a body's union never lengthens it
       slot.measured = static_cast<std::int32_t>(di);
     }
   }

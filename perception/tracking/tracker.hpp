@@ -88,6 +88,12 @@ struct TrackerConfig {
   // own (a person beside a car, two cars nose to tail): it is never joined to a car's or a
   // truck's measurement, so absorbing never merges its track (overlap_margin_m still may; 0: off).
   std::uint32_t absorb_established_hits = 10;
+  // A track of known extent (extent_memory_length_m) also takes, whatever the gap and the union's
+  // width, a fragment that lies wholly inside its body: its known length x its width, about its
+  // predicted centre along its heading, grown by absorb_known_margin_m on every side (a truck
+  // seen as a cab, a cargo box's side and its rear face), person-like pieces included (nobody
+  // stands inside a truck). Such a union never lengthens what the track knows. < 0: off.
+  double absorb_known_margin_m = 0.5;  // m
   // Overlapping tracks: a track whose position lies inside an older track's box grown by
   // overlap_margin_m (neither a person nor a bicyclist, as above, who take only low tracks
   // within absorb_narrow_gap_m) is the same object when both boxes fit in
@@ -114,6 +120,12 @@ struct TrackerConfig {
   // associated and measured with the known length instead of end_on_length_m, extending away
   // from the sensor. 0: off.
   double extent_memory_length_m = 6.0;  // m
+  // With a known extent, any other tall detection (absorb_tall_height_m) along the track's box
+  // (within 30 degrees) that is shorter than the body is gated and associated as a piece of it:
+  // at the body's centre nearest the prediction among those whose known length covers the piece
+  // (a truck's cab, or its cargo box, seen apart). It is measured as it is, with the pieces
+  // absorb_known_margin_m joins to it. false: gated at its own box centre.
+  bool body_gating = true;
   // Box smoothing: weight of the new measurement in the exponential average (0..1].
   double box_smoothing = 0.3;
   // Holistic features: headings of slower smoothed velocities are not differentiated (m/s).
@@ -175,6 +187,9 @@ class Tracker {
   void correct(Slot& s, const Detection& d, std::int64_t stamp_ns) noexcept;
   bool spawn(const Detection& d, std::int64_t stamp_ns) noexcept;  // false: not spawned (counted)
   void absorb_fragments(std::span<const Detection> detections) noexcept;
+  // Whether fragment f lies wholly inside the known body of live track `track` (a det_match_
+  // value; absorb_known_margin_m).
+  [[nodiscard]] bool inside_known_body(std::int32_t track, const Detection& f) const noexcept;
   void merge_overlapping(std::int64_t stamp_ns) noexcept;
   // Solves the assignment of the gated rows_ x cols_ (pair_cost_, nd detections per track) per
   // connected component of the allowed pairs into det_match_.
