@@ -19,6 +19,9 @@ using Gain = Eigen::Matrix<double, 5, 3>;
 constexpr double kForbidden = 1e9;       // cost of a pair outside the gate (dropped after solving)
 constexpr std::int32_t kUnmatched = -1;  // det_match_: no track (spawns one)
 constexpr std::int32_t kAbsorbed = -2;   // det_match_: joined a matched track's measurement
+// host_ per detection: 0 none joined it; kHost a fragment did; kBodyHost one inside a known body
+// did (TrackerConfig::absorb_known_margin_m), so its measurement never lengthens that extent.
+constexpr std::uint8_t kHost = 1, kBodyHost = 2;
 
 // Angle difference wrapped to [-pi/2, pi/2): box headings are defined modulo pi.
 double box_angle_diff(double a, double b) {
@@ -46,6 +49,11 @@ double position_std(const Cov& p) {
 struct Extent {
   float u0, u1, v0, v1;
 };
+
+// The smallest extent holding both.
+Extent hull(const Extent& a, const Extent& b) {
+  return {std::min(a.u0, b.u0), std::max(a.u1, b.u1), std::min(a.v0, b.v0), std::max(a.v1, b.v1)};
+}
 
 // The extent of the box (box_centre, length x width at yaw) about `centre` along heading h.
 Extent extent_in(const Eigen::Vector2f& box_centre, float length, float width, float yaw,
@@ -326,7 +334,8 @@ void Tracker::predict(Slot& s, double dt) const noexcept {
   s.p = f * s.p * f.transpose() + qm;
 }
 
-void Tracker::correct(Slot& s, const Detection& d, std::int64_t stamp_ns) noexcept {
+void Tracker::correct(Slot& s, const Detection& d, std::int64_t stamp_ns,
+                      bool learns_extent) noexcept {
   const double r = config_.measurement_std_m * config_.measurement_std_m;
   const double rz = config_.measurement_z_std_m * config_.measurement_z_std_m;
   MeasCov sm = s.p.topLeftCorner<3, 3>();
@@ -357,7 +366,7 @@ void Tracker::correct(Slot& s, const Detection& d, std::int64_t stamp_ns) noexce
     t.state = TrackState::kConfirmed;
   t.features.add_segment(Eigen::Vector3f(xy.x(), xy.y(), d.centroid.z()), stamp_ns,
                          config_.min_heading_speed_mps);
-  s.known_length = std::max(s.known_length, tall_length(config_, d));
+  if (learns_extent) s.known_length = std::max(s.known_length, tall_length(config_, d));
 }
 
 bool Tracker::spawn(const Detection& d, std::int64_t stamp_ns) noexcept {
@@ -400,10 +409,8 @@ bool Tracker::spawn(const Detection& d, std::int64_t stamp_ns) noexcept {
   return true;
 }
 
-bool Tracker::inside_known_body(std::int32_t track, const Detection& f) const noexcept {
-  if (config_.absorb_known_margin_m < 0 || track < 0) return false;
-  const Slot& s = slots_[live_[static_cast<std::size_t>(track)]];
-  if (!knows_extent(config_, s.known_length)) return false;
+bool Tracker::inside_known_body(const Slot& s, const Detection& f) const noexcept {
+  if (config_.absorb_known_margin_m < 0 || !knows_extent(config_, s.known_length)) return false;
   const auto margin = static_cast<float>(config_.absorb_known_margin_m);
   const Extent e = extent_in(f, s.x.head<2>().cast<float>(), s.track.yaw);
   const float hl = 0.5f * s.known_length + margin, hw = 0.5f * s.track.width + margin;
@@ -453,11 +460,11 @@ void Tracker::absorb_fragments(std::span<const Detection> detections) noexcept {
       // A person or bicyclist takes only low pieces (legs, a wheel), whatever their tracks' ages,
       // and stays narrow.
       const bool narrow_host = person(merged_[hi]);
-      const bool in_body = !narrow_host && inside_known_body(det_match_[hi], f);
+      const Slot& host = slots_[live_[static_cast<std::size_t>(det_match_[hi])]];
+      const bool in_body = !narrow_host && inside_known_body(host, f);
       if (f_person && !in_body) continue;
       if (narrow_host && f.height >= config_.absorb_keep_height_m) continue;
       if (own != nullptr && !narrow_host) {
-        const Slot& host = slots_[live_[static_cast<std::size_t>(det_match_[hi])]];
         if (established || !older(host.track, own->track)) continue;
         if (own->track.state != TrackState::kTentative &&
             (host.x.tail<2>() - own->x.tail<2>()).norm() > config_.absorb_velocity_mps) {
@@ -469,11 +476,9 @@ void Tracker::absorb_fragments(std::span<const Detection> detections) noexcept {
       // Inside the body of a host track of known extent: joined in the track's heading, the
       // first such host taken.
       if (in_body) {
-        const float heading = slots_[live_[static_cast<std::size_t>(det_match_[hi])]].track.yaw;
-        const Extent a = extent_in(h, centre, heading), b = extent_in(f, centre, heading);
+        const float heading = host.track.yaw;
         best = hi, best_heading = heading, best_known = true;
-        best_union = {std::min(a.u0, b.u0), std::max(a.u1, b.u1), std::min(a.v0, b.v0),
-                      std::max(a.v1, b.v1)};
+        best_union = hull(extent_in(h, centre, heading), extent_in(f, centre, heading));
         break;
       }
       // The union in the host's heading or the fragment's, whichever fits tighter (a piece's
@@ -484,8 +489,7 @@ void Tracker::absorb_fragments(std::span<const Detection> detections) noexcept {
         const float gv = std::max(0.0f, std::max(a.v0, b.v0) - std::min(a.v1, b.v1));
         const float gap = std::hypot(gu, gv);
         if (!(gap <= best_gap) || (narrow_host && gap > config_.absorb_narrow_gap_m)) continue;
-        const Extent u{std::min(a.u0, b.u0), std::max(a.u1, b.u1), std::min(a.v0, b.v0),
-                       std::max(a.v1, b.v1)};
+        const Extent u = hull(a, b);
         const float lu = u.u1 - u.u0, lv = u.v1 - u.v0;
         if (!fits_one_object(config_, lu, lv, tall(config_, h.height) && tall(config_, f.height))) continue;
         if (narrow_host && !narrow_and_tall(config_, lu, lv, merged_[hi].height)) continue;
@@ -514,7 +518,7 @@ void Tracker::absorb_fragments(std::span<const Detection> detections) noexcept {
     h.height = std::max(h.height, f.height);
     h.end_on = false;  // a union: its heading no longer points away from the sensor
     h.points += f.points;
-    host_[best] = best_known || host_[best] == 2 ? 2 : 1;
+    host_[best] = best_known || host_[best] == kBodyHost ? kBodyHost : kHost;
     if (own != nullptr) {
       merged_track_[static_cast<std::size_t>(det_match_[fi])] = 1;
       ++counters_.deleted_merged;
@@ -592,7 +596,8 @@ void Tracker::merge_overlapping(std::int64_t stamp_ns) noexcept {
       // measured in this scan, b's measurement corrects a.
       bool moved = false;
       if (a.track.segment < 0 && b.measured >= 0) {
-        correct(a, merged_[static_cast<std::size_t>(b.measured)], stamp_ns);
+        // Learns the extent from any measurement, a known body's union too (unlike step 4).
+        correct(a, merged_[static_cast<std::size_t>(b.measured)], stamp_ns, true);
         track_xy_[i] = a.x.head<2>();
         a.measured = b.measured;
         shape();
@@ -788,9 +793,7 @@ void Tracker::update(std::int64_t stamp_ns, std::span<const Detection> detection
         m.length = slot.known_length;
         ++counters_.anchored_detections;
       }
-      const float known = slot.known_length;
-      correct(slot, m, stamp_ns);
-      if (host_[di] == 2) slot.known_length = known;  // a body's union never lengthens it
+      correct(slot, m, stamp_ns, host_[di] != kBodyHost);  // a body's union never lengthens it
       slot.measured = static_cast<std::int32_t>(di);
     }
   }

@@ -92,7 +92,8 @@ struct TrackerConfig {
   // width, a fragment that lies wholly inside its body: its known length x its width, about its
   // predicted centre along its heading, grown by absorb_known_margin_m on every side (a truck
   // seen as a cab, a cargo box's side and its rear face), person-like pieces included (nobody
-  // stands inside a truck). Such a union never lengthens what the track knows. < 0: off.
+  // stands inside a truck). Such a union never lengthens what its track knows (an older track
+  // the overlap merge corrects with it still learns from it). < 0: off.
   double absorb_known_margin_m = 0.5;  // m
   // Overlapping tracks: a track whose position lies inside an older track's box grown by
   // overlap_margin_m (neither a person nor a bicyclist, as above, who take only low tracks
@@ -184,12 +185,12 @@ class Tracker {
  private:
   struct Slot;
   void predict(Slot& s, double dt) const noexcept;
-  void correct(Slot& s, const Detection& d, std::int64_t stamp_ns) noexcept;
+  // learns_extent: d may lengthen the track's known extent (not a union made inside that body).
+  void correct(Slot& s, const Detection& d, std::int64_t stamp_ns, bool learns_extent) noexcept;
   bool spawn(const Detection& d, std::int64_t stamp_ns) noexcept;  // false: not spawned (counted)
   void absorb_fragments(std::span<const Detection> detections) noexcept;
-  // Whether fragment f lies wholly inside the known body of live track `track` (a det_match_
-  // value; absorb_known_margin_m).
-  [[nodiscard]] bool inside_known_body(std::int32_t track, const Detection& f) const noexcept;
+  // Whether fragment f lies wholly inside the known body of track slot s (absorb_known_margin_m).
+  [[nodiscard]] bool inside_known_body(const Slot& s, const Detection& f) const noexcept;
   void merge_overlapping(std::int64_t stamp_ns) noexcept;
   // Solves the assignment of the gated rows_ x cols_ (pair_cost_, nd detections per track) per
   // connected component of the allowed pairs into det_match_.
