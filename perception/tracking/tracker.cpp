@@ -136,15 +136,18 @@ bool anchored_centre(const TrackerConfig& c, float known, float track_yaw, const
   return true;
 }
 
-// Known extent (TrackerConfig::body_gating): where the centre of the known body lies, nearest the
-// track's prediction, when tall detection d is a piece of it. Along the track's heading the
-// body, `known` m long, must cover d's box: its centre lies in [d's far end - known / 2, d's near
-// end + known / 2], and is taken nearest the prediction; across, d's box centre stands. False
-// (centre unchanged) when this is off, memory is off or not yet that long, d is end-on
-// (anchored_centre), lower than absorb_tall_height_m, a person, not shorter than the body,
-// longer than it along the heading, or not along the track's box (within 30 degrees).
-bool body_centre(const TrackerConfig& c, float known, float track_yaw,
-                 const Eigen::Vector2f& predicted, const Detection& d, Eigen::Vector2f& centre) {
+// Known extent (TrackerConfig::body_gating): tall detection d as a piece of the known body
+// (`known` m long, `known_width` m wide, along the track's heading). Where in the body the piece
+// lies is unknown, so it measures the body's centre at its own box centre, with the variance of a
+// position uniform over the slack added: (known - the piece's extent along the heading)^2 / 12
+// along, (known_width - its extent across)^2 / 12 across (m^2, in `spread` in x,y). `gap` is the
+// distance from the prediction to the nearest centre at which the body covers the piece (the
+// distance gate's). False when this is off, memory is off or not yet that long, d is end-on
+// (anchored_centre), lower than absorb_tall_height_m, a person, not shorter than the body, longer
+// than it along the heading, or not along the track's box (within 30 degrees).
+bool piece_of_body(const TrackerConfig& c, float known, float known_width, float track_yaw,
+                   const Eigen::Vector2f& predicted, const Detection& d, Eigen::Matrix2d& spread,
+                   float& gap) {
   if (!c.body_gating || !knows_extent(c, known) || !c.position_from_box || d.end_on ||
       !(d.length < known) || !d.box_center.allFinite() || !tall(c, d.height) ||
       narrow_and_tall(c, d.length, d.width, d.height) ||
@@ -152,11 +155,17 @@ bool body_centre(const TrackerConfig& c, float known, float track_yaw,
     return false;
   }
   const Extent e = extent_in(d, predicted, track_yaw);
-  const float lo = e.u1 - 0.5f * known, hi = e.u0 + 0.5f * known;
-  if (!(lo <= hi)) return false;
-  const float u = std::clamp(0.0f, lo, hi), v = 0.5f * (e.v0 + e.v1);
-  const float cy = std::cos(track_yaw), sy = std::sin(track_yaw);
-  centre = predicted + Eigen::Vector2f(cy * u - sy * v, sy * u + cy * v);
+  const float slack_u = known - (e.u1 - e.u0);
+  if (!(slack_u >= 0)) return false;
+  const float slack_v = std::max(0.0f, known_width - (e.v1 - e.v0));
+  const float uc = 0.5f * (e.u0 + e.u1), vc = 0.5f * (e.v0 + e.v1);
+  gap = std::hypot(std::max(0.0f, std::abs(uc) - 0.5f * slack_u),
+                   std::max(0.0f, std::abs(vc) - 0.5f * slack_v));
+  const double cy = std::cos(track_yaw), sy = std::sin(track_yaw);
+  Eigen::Matrix2d rot;
+  rot << cy, -sy, sy, cy;
+  const Eigen::Vector2d var(slack_u * slack_u / 12.0, slack_v * slack_v / 12.0);
+  spread = rot * var.asDiagonal() * rot.transpose();
   return true;
 }
 
@@ -252,6 +261,7 @@ struct Tracker::Slot {
   Cov p = Cov::Identity();
   std::int32_t measured = -1;  // index in merged_ of the measurement of this scan, -1: none
   float known_length = 0;      // longest tall measurement so far (extent_memory_length_m), m
+  float known_width = 0;       // widest tall measurement so far (the body's width), m
 };
 
 Tracker::Tracker(const TrackerConfig& c)
@@ -334,20 +344,20 @@ void Tracker::predict(Slot& s, double dt) const noexcept {
   s.p = f * s.p * f.transpose() + qm;
 }
 
-void Tracker::correct(Slot& s, const Detection& d, std::int64_t stamp_ns,
-                      bool learns_extent) noexcept {
+void Tracker::correct(Slot& s, const Detection& d, std::int64_t stamp_ns, bool learns_extent,
+                      const Eigen::Matrix2d* spread) noexcept {
   const double r = config_.measurement_std_m * config_.measurement_std_m;
   const double rz = config_.measurement_z_std_m * config_.measurement_z_std_m;
-  MeasCov sm = s.p.topLeftCorner<3, 3>();
-  sm.diagonal() += Meas(r, r, rz);
+  MeasCov rm = MeasCov::Zero();
+  rm.diagonal() = Meas(r, r, rz);
+  if (spread != nullptr) rm.topLeftCorner<2, 2>() += *spread;  // a piece of a known body
+  MeasCov sm = s.p.topLeftCorner<3, 3>() + rm;
   const Gain k = s.p.leftCols<3>() * sm.inverse();
   const Eigen::Vector2f xy = d.position(config_.position_from_box);
   const Meas innovation = Meas(xy.x(), xy.y(), d.centroid.z()) - s.x.head<3>();
   s.x += k * innovation;
   Cov ikh = Cov::Identity();
   ikh.leftCols<3>() -= k;
-  MeasCov rm = MeasCov::Zero();
-  rm.diagonal() = Meas(r, r, rz);
   s.p = ikh * s.p * ikh.transpose() + k * rm * k.transpose();  // Joseph form: stays symmetric PSD
 
   Track& t = s.track;
@@ -366,7 +376,10 @@ void Tracker::correct(Slot& s, const Detection& d, std::int64_t stamp_ns,
     t.state = TrackState::kConfirmed;
   t.features.add_segment(Eigen::Vector3f(xy.x(), xy.y(), d.centroid.z()), stamp_ns,
                          config_.min_heading_speed_mps);
-  if (learns_extent) s.known_length = std::max(s.known_length, tall_length(config_, d));
+  if (const float known = tall_length(config_, d); learns_extent && known > 0) {
+    s.known_length = std::max(s.known_length, known);
+    s.known_width = std::max(s.known_width, d.width);
+  }
 }
 
 bool Tracker::spawn(const Detection& d, std::int64_t stamp_ns) noexcept {
@@ -403,6 +416,7 @@ bool Tracker::spawn(const Detection& d, std::int64_t stamp_ns) noexcept {
   t.segment = static_cast<std::int32_t>(d.segment);
   t.hits = 1;
   s.known_length = tall_length(config_, d);
+  s.known_width = s.known_length > 0 ? d.width : 0.0f;
   t.features.add_segment(Eigen::Vector3f(xy.x(), xy.y(), d.centroid.z()), stamp_ns,
                          config_.min_heading_speed_mps);
   ++counters_.spawned;
@@ -597,7 +611,12 @@ void Tracker::merge_overlapping(std::int64_t stamp_ns) noexcept {
       bool moved = false;
       if (a.track.segment < 0 && b.measured >= 0) {
         // Learns the extent from any measurement, a known body's union too (unlike step 4).
-        correct(a, merged_[static_cast<std::size_t>(b.measured)], stamp_ns, true);
+        const Detection& m = merged_[static_cast<std::size_t>(b.measured)];
+        Eigen::Matrix2d spread;
+        float gap = 0;
+        const bool piece = piece_of_body(config_, a.known_length, a.known_width, a.track.yaw,
+                                         a.x.head<2>().cast<float>(), m, spread, gap);
+        correct(a, m, stamp_ns, true, piece ? &spread : nullptr);
         track_xy_[i] = a.x.head<2>();
         a.measured = b.measured;
         shape();
@@ -755,14 +774,25 @@ void Tracker::update(std::int64_t stamp_ns, std::span<const Detection> detection
       costs[di] = -1.0f;
       if (!(std::abs(e.x()) <= reach && std::abs(e.y()) <= reach)) continue;
       Eigen::Vector2f centre;
-      if (known && (anchored_centre(config_, s.known_length, s.track.yaw, detections[di], centre) ||
-                    body_centre(config_, s.known_length, s.track.yaw, predicted.cast<float>(),
-                                detections[di], centre))) {
-        e = centre.cast<double>() - predicted;
+      Eigen::Matrix2d spread;
+      float gap = 0;
+      double m2 = 0;
+      if (known && piece_of_body(config_, s.known_length, s.known_width, s.track.yaw,
+                                 predicted.cast<float>(), detections[di], spread, gap)) {
+        // A piece of the known body: its centre, with the spread of where in the body it lies;
+        // the distance gate applies to the nearest centre at which the body covers it.
+        if (!(gap <= config_.gate_distance_m)) continue;
+        m2 = e.dot((sxy + spread).inverse() * e);
+        if (!(m2 <= config_.gate_mahalanobis_sq)) continue;
+      } else {
+        if (known &&
+            anchored_centre(config_, s.known_length, s.track.yaw, detections[di], centre)) {
+          e = centre.cast<double>() - predicted;
+        }
+        if (!(std::abs(e.x()) <= gate_axis && std::abs(e.y()) <= gate_axis)) continue;
+        m2 = e.dot(sinv * e);
+        if (!(m2 <= config_.gate_mahalanobis_sq && e.norm() <= config_.gate_distance_m)) continue;
       }
-      if (!(std::abs(e.x()) <= gate_axis && std::abs(e.y()) <= gate_axis)) continue;
-      const double m2 = e.dot(sinv * e);
-      if (!(m2 <= config_.gate_mahalanobis_sq && e.norm() <= config_.gate_distance_m)) continue;
       costs[di] = static_cast<float>(m2);
       any = true;
       if (col_of_det_[di] < 0) {
@@ -788,12 +818,17 @@ void Tracker::update(std::int64_t stamp_ns, std::span<const Detection> detection
       Slot& slot = slots_[live_[static_cast<std::size_t>(det_match_[di])]];
       Detection& m = merged_[di];
       Eigen::Vector2f centre;
+      Eigen::Matrix2d spread;
+      float gap = 0;
+      const bool piece = piece_of_body(config_, slot.known_length, slot.known_width, slot.track.yaw,
+                                       slot.x.head<2>().cast<float>(), m, spread, gap);
       if (anchored_centre(config_, slot.known_length, slot.track.yaw, m, centre)) {
         m.box_center = centre;
         m.length = slot.known_length;
         ++counters_.anchored_detections;
       }
-      correct(slot, m, stamp_ns, host_[di] != kBodyHost);  // a body's union never lengthens it
+      // A body's union never lengthens it; a piece of it measures the body's centre loosely.
+      correct(slot, m, stamp_ns, host_[di] != kBodyHost, piece ? &spread : nullptr);
       slot.measured = static_cast<std::int32_t>(di);
     }
   }

@@ -122,10 +122,12 @@ struct TrackerConfig {
   // from the sensor. 0: off.
   double extent_memory_length_m = 6.0;  // m
   // With a known extent, any other tall detection (absorb_tall_height_m) along the track's box
-  // (within 30 degrees) that is shorter than the body is gated and associated as a piece of it:
-  // at the body's centre nearest the prediction among those whose known length covers the piece
-  // (a truck's cab, or its cargo box, seen apart). It is measured as it is, with the pieces
-  // absorb_known_margin_m joins to it. false: gated at its own box centre.
+  // (within 30 degrees) that is shorter than the body is a piece of it (a truck's cab, or its
+  // cargo box, seen apart): it measures the body's centre at its own box centre, with the
+  // variance of where in the body it may lie added (uniform over the slack: (known length - its
+  // length)^2 / 12 along the heading, (known width - its width)^2 / 12 across), in the gate, the
+  // assignment and the update; the distance gate applies to the nearest centre at which the
+  // body covers it. false: an ordinary detection.
   bool body_gating = true;
   // Box smoothing: weight of the new measurement in the exponential average (0..1].
   double box_smoothing = 0.3;
@@ -186,7 +188,8 @@ class Tracker {
   struct Slot;
   void predict(Slot& s, double dt) const noexcept;
   // learns_extent: d may lengthen the track's known extent (not a union made inside that body).
-  void correct(Slot& s, const Detection& d, std::int64_t stamp_ns, bool learns_extent) noexcept;
+  void correct(Slot& s, const Detection& d, std::int64_t stamp_ns, bool learns_extent,
+               const Eigen::Matrix2d* spread = nullptr) noexcept;
   bool spawn(const Detection& d, std::int64_t stamp_ns) noexcept;  // false: not spawned (counted)
   void absorb_fragments(std::span<const Detection> detections) noexcept;
   // Whether fragment f lies wholly inside the known body of track slot s (absorb_known_margin_m).
