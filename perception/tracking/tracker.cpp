@@ -119,20 +119,24 @@ bool knows_extent(const TrackerConfig& c, float known) {
   return c.extent_memory_length_m > 0 && known >= c.extent_memory_length_m;
 }
 
-// Known extent (TrackerConfig::extent_memory_length_m): the centre of end-on detection d's
-// box made `known` m long instead, its near end (the face) kept. False (centre unchanged) when
-// memory is off or not yet that long, d is not end-on or longer, or d's box does not lie along
-// the track's (within 30 degrees).
-bool anchored_centre(const TrackerConfig& c, float known, float track_yaw, const Detection& d,
+// Known extent (TrackerConfig::extent_memory_length_m): the centre of the body, `known` m long
+// along heading `body_yaw` (the track's known_yaw), whose face end-on detection d is: its near
+// end (the face) kept, the body extending from it away from the sensor. complete_end_on turned
+// d's box along the sensor's ray, which for a vehicle not straight ahead is not its heading.
+// False (centre unchanged) when memory is off or not yet that long, d is not end-on or longer,
+// or d's box does not lie along the body's heading (within 30 degrees).
+bool anchored_centre(const TrackerConfig& c, float known, float body_yaw, const Detection& d,
                      Eigen::Vector2f& centre) {
   if (!knows_extent(c, known) || !c.position_from_box || !d.end_on || !(d.length < known) ||
       !d.box_center.allFinite() ||
-      !(std::abs(box_angle_diff(d.yaw, track_yaw)) <= std::numbers::pi / 6)) {
+      !(std::abs(box_angle_diff(d.yaw, body_yaw)) <= std::numbers::pi / 6)) {
     return false;
   }
-  // complete_end_on's box points away from the sensor along its yaw.
-  centre = d.box_center +
-           (0.5f * (known - d.length)) * Eigen::Vector2f(std::cos(d.yaw), std::sin(d.yaw));
+  // complete_end_on's box points away from the sensor along its yaw: its near end is the face.
+  const Eigen::Vector2f ray(std::cos(d.yaw), std::sin(d.yaw));
+  Eigen::Vector2f heading(std::cos(body_yaw), std::sin(body_yaw));
+  if (heading.dot(ray) < 0) heading = -heading;
+  centre = d.box_center - (0.5f * d.length) * ray + (0.5f * known) * heading;
   return true;
 }
 
@@ -262,6 +266,9 @@ struct Tracker::Slot {
   std::int32_t measured = -1;  // index in merged_ of the measurement of this scan, -1: none
   float known_length = 0;      // longest tall measurement so far (extent_memory_length_m), m
   float known_width = 0;       // widest tall measurement so far (the body's width), m
+  // Heading of the last tall measurement at least extent_memory_length_m long that was not an
+  // end-on face (whose yaw is the sensor's ray): the body's, for its faces and its joins (rad).
+  float known_yaw = 0;
 };
 
 Tracker::Tracker(const TrackerConfig& c)
@@ -379,6 +386,7 @@ void Tracker::correct(Slot& s, const Detection& d, std::int64_t stamp_ns, bool l
   if (const float known = tall_length(config_, d); learns_extent && known > 0) {
     s.known_length = std::max(s.known_length, known);
     s.known_width = std::max(s.known_width, d.width);
+    if (knows_extent(config_, known) && !d.end_on) s.known_yaw = d.yaw;
   }
 }
 
@@ -417,6 +425,7 @@ bool Tracker::spawn(const Detection& d, std::int64_t stamp_ns) noexcept {
   t.hits = 1;
   s.known_length = tall_length(config_, d);
   s.known_width = s.known_length > 0 ? d.width : 0.0f;
+  s.known_yaw = t.yaw;
   t.features.add_segment(Eigen::Vector3f(xy.x(), xy.y(), d.centroid.z()), stamp_ns,
                          config_.min_heading_speed_mps);
   ++counters_.spawned;
@@ -426,7 +435,7 @@ bool Tracker::spawn(const Detection& d, std::int64_t stamp_ns) noexcept {
 bool Tracker::inside_known_body(const Slot& s, const Detection& f) const noexcept {
   if (config_.absorb_known_margin_m < 0 || !knows_extent(config_, s.known_length)) return false;
   const auto margin = static_cast<float>(config_.absorb_known_margin_m);
-  const Extent e = extent_in(f, s.x.head<2>().cast<float>(), s.track.yaw);
+  const Extent e = extent_in(f, s.x.head<2>().cast<float>(), s.known_yaw);
   const float hl = 0.5f * s.known_length + margin, hw = 0.5f * s.track.width + margin;
   return e.u0 >= -hl && e.u1 <= hl && e.v0 >= -hw && e.v1 <= hw;
 }
@@ -436,6 +445,18 @@ void Tracker::absorb_fragments(std::span<const Detection> detections) noexcept {
   for (std::size_t di = 0; di < nd; ++di) {
     merged_[di] = detections[di];
     host_[di] = 0;
+    // An end-on face matched to a track of known extent is that body (its face kept) before
+    // any fragment joins it.
+    if (det_match_[di] >= 0) {
+      const Slot& slot = slots_[live_[static_cast<std::size_t>(det_match_[di])]];
+      Detection& m = merged_[di];
+      Eigen::Vector2f centre;
+      if (anchored_centre(config_, slot.known_length, slot.known_yaw, m, centre)) {
+        m.box_center = centre;
+        m.length = slot.known_length;
+        ++counters_.anchored_detections;
+      }
+    }
   }
   std::fill_n(merged_track_.begin(), live_.size(), std::uint8_t{0});
   if (config_.absorb_gap_m <= 0) return;
@@ -487,10 +508,10 @@ void Tracker::absorb_fragments(std::span<const Detection> detections) noexcept {
       }
       const Detection& h = merged_[hi];
       const Eigen::Vector2f centre = h.position(true);
-      // Inside the body of a host track of known extent: joined in the track's heading, the
-      // first such host taken.
+      // Inside the body of a host track of known extent: joined in the body's heading (its
+      // last whole view), the first such host taken.
       if (in_body) {
-        const float heading = host.track.yaw;
+        const float heading = host.known_yaw;
         best = hi, best_heading = heading, best_known = true;
         best_union = hull(extent_in(h, centre, heading), extent_in(f, centre, heading));
         break;
@@ -786,7 +807,7 @@ void Tracker::update(std::int64_t stamp_ns, std::span<const Detection> detection
         if (!(m2 <= config_.gate_mahalanobis_sq)) continue;
       } else {
         if (known &&
-            anchored_centre(config_, s.known_length, s.track.yaw, detections[di], centre)) {
+            anchored_centre(config_, s.known_length, s.known_yaw, detections[di], centre)) {
           e = centre.cast<double>() - predicted;
         }
         if (!(std::abs(e.x()) <= gate_axis && std::abs(e.y()) <= gate_axis)) continue;
@@ -816,17 +837,11 @@ void Tracker::update(std::int64_t stamp_ns, std::span<const Detection> detection
   for (std::size_t di = 0; di < nd; ++di) {
     if (det_match_[di] >= 0) {
       Slot& slot = slots_[live_[static_cast<std::size_t>(det_match_[di])]];
-      Detection& m = merged_[di];
-      Eigen::Vector2f centre;
+      const Detection& m = merged_[di];  // an end-on face of a known body: the body already
       Eigen::Matrix2d spread;
       float gap = 0;
       const bool piece = piece_of_body(config_, slot.known_length, slot.known_width, slot.track.yaw,
                                        slot.x.head<2>().cast<float>(), m, spread, gap);
-      if (anchored_centre(config_, slot.known_length, slot.track.yaw, m, centre)) {
-        m.box_center = centre;
-        m.length = slot.known_length;
-        ++counters_.anchored_detections;
-      }
       // A body's union never lengthens it; a piece of it measures the body's centre loosely.
       correct(slot, m, stamp_ns, host_[di] != kBodyHost, piece ? &spread : nullptr);
       slot.measured = static_cast<std::int32_t>(di);

@@ -90,7 +90,8 @@ struct TrackerConfig {
   std::uint32_t absorb_established_hits = 10;
   // A track of known extent (extent_memory_length_m) also takes, whatever the gap and the union's
   // width, a fragment that lies wholly inside its body: its known length x its width, about its
-  // predicted centre along its heading, grown by absorb_known_margin_m on every side (a truck
+  // predicted centre along the heading of its last whole view, grown by absorb_known_margin_m
+  // on every side (an end-on face it is matched to is made that body first) (a truck
   // seen as a cab, a cargo box's side and its rear face), person-like pieces included (nobody
   // stands inside a truck). Such a union never lengthens what its track knows (an older track
   // the overlap merge corrects with it still learns from it). < 0: off.
@@ -117,9 +118,10 @@ struct TrackerConfig {
   // Known extent of tall vehicles: a track remembers the longest box of its tall measurements
   // (at least absorb_tall_height_m high, fitting absorb_tall_length_m x absorb_max_width_m).
   // Once that is at least extent_memory_length_m, an end-on detection (complete_end_on) along
-  // the track's box (within 30 degrees) is the face of that body, not of a car: it is gated,
-  // associated and measured with the known length instead of end_on_length_m, extending away
-  // from the sensor. 0: off.
+  // the body's heading (that of its last tall view at least that long and not end-on; within
+  // 30 degrees) is the face of that body, not of a car: it is gated, associated and measured
+  // (with any fragments joined to it) as the known body extending from the face along that
+  // heading, away from the sensor, instead of end_on_length_m along the ray. 0: off.
   double extent_memory_length_m = 6.0;  // m
   // With a known extent, any other tall detection (absorb_tall_height_m) along the track's box
   // (within 30 degrees) that is shorter than the body is a piece of it (a truck's cab, or its
