@@ -160,7 +160,7 @@ void ScanPipeline::process(velodyne::Scan& scan, const ego::PoseHistory* poses,
   }
   tracker_.update(out.stamp_ns,
                   std::span<const tracking::Detection>(detections_.data(), detections_.size()),
-                  out.tracked);
+                  out.tracked, &sensor_xy);
   const std::int64_t t3 = now_ns(config_.clock);
   out.classes.clear();
   if (classifier_ != nullptr && config_.defer_classification) {

@@ -146,12 +146,19 @@ bool anchored_centre(const TrackerConfig& c, float known, float body_yaw, const 
 // position uniform over the slack added: (known - the piece's extent along the heading)^2 / 12
 // along, (known_width - its extent across)^2 / 12 across (m^2, in `spread` in x,y). `gap` is the
 // distance from the prediction to the nearest centre at which the body covers the piece (the
-// distance gate's). False when this is off, memory is off or not yet that long, d is end-on
-// (anchored_centre), lower than absorb_tall_height_m, a person, not shorter than the body, longer
-// than it along the heading, or not along the track's box (within 30 degrees).
-bool piece_of_body(const TrackerConfig& c, float known, float known_width, float track_yaw,
-                   const Eigen::Vector2f& predicted, const Detection& d, Eigen::Matrix2d& spread,
-                   float& gap) {
+// distance gate's). Along the heading, when `occluded(u0, u1, vc)` (Tracker::hidden_end) says
+// that exactly one end of the piece is hidden behind a nearer object, the other end, in view,
+// is the body's: the centre lies `known_single` / 2 from it (the length of at least two
+// one-segment views, so that one view of two vehicles as one segment does not set it), and no
+// spread is added along (`anchored`). `centre`: the body's centre measured. False when this is
+// off, memory is off or not yet that long, d is end-on (anchored_centre), lower than
+// absorb_tall_height_m, a person, not shorter than the body, longer than it along the heading,
+// or not along the track's box (within 30 degrees).
+template <class Occluded>
+bool piece_of_body(const TrackerConfig& c, float known, float known_single, float known_width,
+                   float track_yaw, const Eigen::Vector2f& predicted, const Detection& d,
+                   Eigen::Matrix2d& spread, float& gap, Eigen::Vector2f& centre, bool& anchored,
+                   Occluded&& occluded) {
   if (!c.body_gating || !knows_extent(c, known) || !c.position_from_box || d.end_on ||
       !(d.length < known) || !d.box_center.allFinite() || !tall(c, d.height) ||
       narrow_and_tall(c, d.length, d.width, d.height) ||
@@ -162,15 +169,52 @@ bool piece_of_body(const TrackerConfig& c, float known, float known_width, float
   const float slack_u = known - (e.u1 - e.u0);
   if (!(slack_u >= 0)) return false;
   const float slack_v = std::max(0.0f, known_width - (e.v1 - e.v0));
-  const float uc = 0.5f * (e.u0 + e.u1), vc = 0.5f * (e.v0 + e.v1);
-  gap = std::hypot(std::max(0.0f, std::abs(uc) - 0.5f * slack_u),
+  float uc = 0.5f * (e.u0 + e.u1);
+  const float vc = 0.5f * (e.v0 + e.v1);
+  anchored = false;
+  double var_u = slack_u * slack_u / 12.0;
+  if (knows_extent(c, known_single) && known_single > e.u1 - e.u0) {
+    const int hidden = occluded(e.u0, e.u1, vc);
+    if (hidden == 1) uc = e.u1 - 0.5f * known_single, anchored = true;  // the low end hidden
+    if (hidden == 2) uc = e.u0 + 0.5f * known_single, anchored = true;  // the high end hidden
+    if (anchored) var_u = 0;
+  }
+  gap = std::hypot(anchored ? std::abs(uc) : std::max(0.0f, std::abs(uc) - 0.5f * slack_u),
                    std::max(0.0f, std::abs(vc) - 0.5f * slack_v));
   const double cy = std::cos(track_yaw), sy = std::sin(track_yaw);
   Eigen::Matrix2d rot;
   rot << cy, -sy, sy, cy;
-  const Eigen::Vector2d var(slack_u * slack_u / 12.0, slack_v * slack_v / 12.0);
+  const Eigen::Vector2d var(var_u, slack_v * slack_v / 12.0);
   spread = rot * var.asDiagonal() * rot.transpose();
+  centre = predicted + Eigen::Vector2f(static_cast<float>(cy * uc - sy * vc),
+                                       static_cast<float>(sy * uc + cy * vc));
   return true;
+}
+
+// Whether the segment from `from` to `to` passes through the box (centre, length x width at
+// yaw) at most `before` m from `from`.
+bool ray_hits_box(const Eigen::Vector2f& from, const Eigen::Vector2f& to,
+                  const Eigen::Vector2f& centre, float length, float width, float yaw,
+                  float before) {
+  const float cy = std::cos(yaw), sy = std::sin(yaw);
+  const Eigen::Vector2f a = from - centre, b = to - centre;
+  const Eigen::Vector2f p(cy * a.x() + sy * a.y(), -sy * a.x() + cy * a.y());
+  const Eigen::Vector2f q(cy * b.x() + sy * b.y(), -sy * b.x() + cy * b.y());
+  const Eigen::Vector2f dir = q - p;
+  const float hl = 0.5f * length, hw = 0.5f * width;
+  float t0 = 0, t1 = 1;
+  for (int axis = 0; axis < 2; ++axis) {
+    const float lo = axis == 0 ? -hl : -hw, hi = axis == 0 ? hl : hw;
+    if (std::abs(dir[axis]) < 1e-9f) {
+      if (p[axis] < lo || p[axis] > hi) return false;
+      continue;
+    }
+    float ta = (lo - p[axis]) / dir[axis], tb = (hi - p[axis]) / dir[axis];
+    if (ta > tb) std::swap(ta, tb);
+    t0 = std::max(t0, ta), t1 = std::min(t1, tb);
+    if (t0 > t1) return false;
+  }
+  return t0 * dir.norm() <= before;
 }
 
 void check(bool ok, const char* what) {
@@ -266,6 +310,10 @@ struct Tracker::Slot {
   std::int32_t measured = -1;  // index in merged_ of the measurement of this scan, -1: none
   float known_length = 0;      // longest tall measurement so far (extent_memory_length_m), m
   float known_width = 0;       // widest tall measurement so far (the body's width), m
+  // The two longest tall measurements of one segment (no union, not end-on), m: the second is
+  // the body's length for a piece anchored at its visible end (one view of two vehicles as one
+  // segment does not make it).
+  float single_first = 0, known_single = 0;
   // Heading of the last tall measurement at least extent_memory_length_m long that was not an
   // end-on face (whose yaw is the sensor's ray): the body's, for its faces and its joins (rad).
   float known_yaw = 0;
@@ -352,7 +400,7 @@ void Tracker::predict(Slot& s, double dt) const noexcept {
 }
 
 void Tracker::correct(Slot& s, const Detection& d, std::int64_t stamp_ns, bool learns_extent,
-                      const Eigen::Matrix2d* spread) noexcept {
+                      const Eigen::Matrix2d* spread, bool single) noexcept {
   const double r = config_.measurement_std_m * config_.measurement_std_m;
   const double rz = config_.measurement_z_std_m * config_.measurement_z_std_m;
   MeasCov rm = MeasCov::Zero();
@@ -386,6 +434,13 @@ void Tracker::correct(Slot& s, const Detection& d, std::int64_t stamp_ns, bool l
   if (const float known = tall_length(config_, d); learns_extent && known > 0) {
     s.known_length = std::max(s.known_length, known);
     s.known_width = std::max(s.known_width, d.width);
+    if (single && !d.end_on) {
+      if (known >= s.single_first) {
+        s.known_single = s.single_first, s.single_first = known;
+      } else {
+        s.known_single = std::max(s.known_single, known);
+      }
+    }
     if (knows_extent(config_, known) && !d.end_on) s.known_yaw = d.yaw;
   }
 }
@@ -425,11 +480,37 @@ bool Tracker::spawn(const Detection& d, std::int64_t stamp_ns) noexcept {
   t.hits = 1;
   s.known_length = tall_length(config_, d);
   s.known_width = s.known_length > 0 ? d.width : 0.0f;
+  s.single_first = d.end_on ? 0.0f : s.known_length;
+  s.known_single = 0;
   s.known_yaw = t.yaw;
   t.features.add_segment(Eigen::Vector3f(xy.x(), xy.y(), d.centroid.z()), stamp_ns,
                          config_.min_heading_speed_mps);
   ++counters_.spawned;
   return true;
+}
+
+int Tracker::hidden_end(const Slot& s, const Detection& d, float u0, float u1,
+                        float vc) const noexcept {
+  if (!have_sensor_) return 0;
+  const Eigen::Vector2f predicted = s.x.head<2>().cast<float>();
+  const float cy = std::cos(s.track.yaw), sy = std::sin(s.track.yaw);
+  const Eigen::Vector2f h(cy, sy), v(-sy, cy);
+  // An end is hidden when the line of sight to the point 0.3 m beyond it (along the heading)
+  // passes through another detection's box at least 0.5 m nearer than that point: the body may
+  // go on behind it. An end whose beyond is in view is a real end.
+  const auto hidden = [&](float u, float beyond) {
+    const Eigen::Vector2f end = predicted + h * (u + beyond) + v * vc;
+    const float range = (end - sensor_xy_).norm();
+    for (const Detection& o : scan_) {
+      if (&o == &d || !o.box_center.allFinite()) continue;
+      if (inside_known_body(s, o)) continue;  // a piece of the same body
+      if (ray_hits_box(sensor_xy_, end, o.position(true), o.length, o.width, o.yaw, range - 0.5f))
+        return true;
+    }
+    return false;
+  };
+  const bool lo = hidden(u0, -0.3f), hi = hidden(u1, 0.3f);
+  return lo && !hi ? 1 : (hi && !lo ? 2 : 0);
 }
 
 bool Tracker::inside_known_body(const Slot& s, const Detection& f) const noexcept {
@@ -450,7 +531,7 @@ void Tracker::absorb_fragments(std::span<const Detection> detections) noexcept {
     if (det_match_[di] >= 0) {
       const Slot& slot = slots_[live_[static_cast<std::size_t>(det_match_[di])]];
       Detection& m = merged_[di];
-      Eigen::Vector2f centre;
+      Eigen::Vector2f centre = Eigen::Vector2f::Zero();
       if (anchored_centre(config_, slot.known_length, slot.known_yaw, m, centre)) {
         m.box_center = centre;
         m.length = slot.known_length;
@@ -635,9 +716,18 @@ void Tracker::merge_overlapping(std::int64_t stamp_ns) noexcept {
         const Detection& m = merged_[static_cast<std::size_t>(b.measured)];
         Eigen::Matrix2d spread;
         float gap = 0;
-        const bool piece = piece_of_body(config_, a.known_length, a.known_width, a.track.yaw,
-                                         a.x.head<2>().cast<float>(), m, spread, gap);
-        correct(a, m, stamp_ns, true, piece ? &spread : nullptr);
+        Eigen::Vector2f centre = Eigen::Vector2f::Zero();
+        bool anchored = false;
+        const bool piece = piece_of_body(
+            config_, a.known_length, a.known_single, a.known_width, a.track.yaw,
+            a.x.head<2>().cast<float>(), m, spread, gap, centre, anchored,
+            [&](float u0, float u1, float vc) {
+              return hidden_end(a, scan_[static_cast<std::size_t>(b.measured)], u0, u1, vc);
+            });
+        Detection mm = m;
+        if (piece) mm.box_center = centre;
+        correct(a, mm, stamp_ns, true, piece ? &spread : nullptr,
+                host_[static_cast<std::size_t>(b.measured)] == 0);
         track_xy_[i] = a.x.head<2>();
         a.measured = b.measured;
         shape();
@@ -744,12 +834,15 @@ void Tracker::assign(std::size_t nd, std::size_t nrows, std::size_t ncols) noexc
 }
 
 void Tracker::update(std::int64_t stamp_ns, std::span<const Detection> detections,
-                     TrackerOutput& out) noexcept {
+                     TrackerOutput& out, const Eigen::Vector2f* sensor_xy) noexcept {
   ++counters_.scans;
+  have_sensor_ = sensor_xy != nullptr && sensor_xy->allFinite();
+  if (have_sensor_) sensor_xy_ = *sensor_xy;
   if (detections.size() > config_.max_detections) {
     counters_.dropped_detections += detections.size() - config_.max_detections;
     detections = detections.first(config_.max_detections);
   }
+  scan_ = detections;
   // 1. Predict every track to the scan stamp.
   double dt = 0;
   if (have_stamp_) {
@@ -794,15 +887,20 @@ void Tracker::update(std::int64_t stamp_ns, std::span<const Detection> detection
       Eigen::Vector2d e = positions_[di] - predicted;
       costs[di] = -1.0f;
       if (!(std::abs(e.x()) <= reach && std::abs(e.y()) <= reach)) continue;
-      Eigen::Vector2f centre;
+      Eigen::Vector2f centre = Eigen::Vector2f::Zero();
       Eigen::Matrix2d spread;
       float gap = 0;
       double m2 = 0;
-      if (known && piece_of_body(config_, s.known_length, s.known_width, s.track.yaw,
-                                 predicted.cast<float>(), detections[di], spread, gap)) {
+      bool anchored = false;
+      if (known && piece_of_body(config_, s.known_length, s.known_single, s.known_width,
+                                 s.track.yaw, predicted.cast<float>(), detections[di], spread, gap,
+                                 centre, anchored, [&](float u0, float u1, float vc) {
+                                   return hidden_end(s, detections[di], u0, u1, vc);
+                                 })) {
         // A piece of the known body: its centre, with the spread of where in the body it lies;
         // the distance gate applies to the nearest centre at which the body covers it.
         if (!(gap <= config_.gate_distance_m)) continue;
+        e = centre.cast<double>() - predicted;
         m2 = e.dot((sxy + spread).inverse() * e);
         if (!(m2 <= config_.gate_mahalanobis_sq)) continue;
       } else {
@@ -837,13 +935,20 @@ void Tracker::update(std::int64_t stamp_ns, std::span<const Detection> detection
   for (std::size_t di = 0; di < nd; ++di) {
     if (det_match_[di] >= 0) {
       Slot& slot = slots_[live_[static_cast<std::size_t>(det_match_[di])]];
-      const Detection& m = merged_[di];  // an end-on face of a known body: the body already
+      Detection& m = merged_[di];  // an end-on face of a known body: the body already
       Eigen::Matrix2d spread;
       float gap = 0;
-      const bool piece = piece_of_body(config_, slot.known_length, slot.known_width, slot.track.yaw,
-                                       slot.x.head<2>().cast<float>(), m, spread, gap);
+      Eigen::Vector2f centre = Eigen::Vector2f::Zero();
+      bool anchored = false;
+      const bool piece =
+          piece_of_body(config_, slot.known_length, slot.known_single, slot.known_width,
+                        slot.track.yaw, slot.x.head<2>().cast<float>(), m, spread, gap, centre,
+                        anchored, [&](float u0, float u1, float vc) {
+                          return hidden_end(slot, detections[di], u0, u1, vc);
+                        });
+      if (piece) merged_[di].box_center = centre;
       // A body's union never lengthens it; a piece of it measures the body's centre loosely.
-      correct(slot, m, stamp_ns, host_[di] != kBodyHost, piece ? &spread : nullptr);
+      correct(slot, m, stamp_ns, host_[di] != kBodyHost, piece ? &spread : nullptr, host_[di] == 0);
       slot.measured = static_cast<std::int32_t>(di);
     }
   }

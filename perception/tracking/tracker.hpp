@@ -129,7 +129,10 @@ struct TrackerConfig {
   // variance of where in the body it may lie added (uniform over the slack: (known length - its
   // length)^2 / 12 along the heading, (known width - its width)^2 / 12 across), in the gate, the
   // assignment and the update; the distance gate applies to the nearest centre at which the
-  // body covers it. false: an ordinary detection.
+  // body covers it. When update() has the sensor's position and exactly one end of the piece is
+  // hidden behind a nearer detection, the body's centre is measured half the body's length (the
+  // second longest one-segment view) from the other, visible end instead. false: an ordinary
+  // detection.
   bool body_gating = true;
   // Box smoothing: weight of the new measurement in the exponential average (0..1].
   double box_smoothing = 0.3;
@@ -179,8 +182,10 @@ class Tracker {
 
   // One scan: predict every track to stamp_ns, associate, update, spawn, prune, report.
   // out.tracks must have capacity >= config.max_tracks (else it is filled up to its capacity).
-  void update(std::int64_t stamp_ns, std::span<const Detection> detections,
-              TrackerOutput& out) noexcept;
+  // sensor_xy: the sensor's x,y in the frame of the detections, for the occlusion of a known
+  // body's ends (TrackerConfig::body_gating); nullptr: unknown, never tested.
+  void update(std::int64_t stamp_ns, std::span<const Detection> detections, TrackerOutput& out,
+              const Eigen::Vector2f* sensor_xy = nullptr) noexcept;
 
   [[nodiscard]] const TrackerConfig& config() const noexcept { return config_; }
   [[nodiscard]] const TrackerCounters& counters() const noexcept { return counters_; }
@@ -191,11 +196,16 @@ class Tracker {
   void predict(Slot& s, double dt) const noexcept;
   // learns_extent: d may lengthen the track's known extent (not a union made inside that body).
   void correct(Slot& s, const Detection& d, std::int64_t stamp_ns, bool learns_extent,
-               const Eigen::Matrix2d* spread = nullptr) noexcept;
+               const Eigen::Matrix2d* spread = nullptr, bool single = false) noexcept;
   bool spawn(const Detection& d, std::int64_t stamp_ns) noexcept;  // false: not spawned (counted)
   void absorb_fragments(std::span<const Detection> detections) noexcept;
   // Whether fragment f lies wholly inside the known body of track slot s (absorb_known_margin_m).
   [[nodiscard]] bool inside_known_body(const Slot& s, const Detection& f) const noexcept;
+  // Of piece d of track s's known body, spanning [u0, u1] along the track's heading about its
+  // prediction, at vc across: 1 when only the low end is hidden from the sensor by a nearer
+  // detection (not a piece of the same body), 2 when only the high end is, else 0.
+  [[nodiscard]] int hidden_end(const Slot& s, const Detection& d, float u0, float u1,
+                               float vc) const noexcept;
   void merge_overlapping(std::int64_t stamp_ns) noexcept;
   // Solves the assignment of the gated rows_ x cols_ (pair_cost_, nd detections per track) per
   // connected component of the allowed pairs into det_match_.
@@ -224,6 +234,9 @@ class Tracker {
   std::vector<Detection> merged_;           // per detection: its measurement, fragments joined
   std::vector<std::uint8_t> host_;          // per detection: 1 when it absorbed a fragment
   std::vector<std::uint8_t> merged_track_;  // per live index: merged into another, delete
+  std::span<const Detection> scan_;         // this scan's detections (during update)
+  Eigen::Vector2f sensor_xy_ = Eigen::Vector2f::Zero();
+  bool have_sensor_ = false;
   std::uint64_t next_id_ = 1;
   std::int64_t last_stamp_ns_ = 0;
   bool have_stamp_ = false;

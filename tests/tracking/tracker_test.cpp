@@ -791,6 +791,49 @@ TEST(Tracker, AnOffAxisTrucksFaceIsMeasuredAlongItsBodysHeading) {
   expect_face_and_strip_on_the_truck(10.0);
 }
 
+// An 8 m truck (2.4 m wide and tall) driving along +x at 8 m/s, 12 m to the left of the
+// sensor, seen whole for 10 scans; then for 20 only its front 5 m (its rear hidden behind a car
+// 6 m to the left of the sensor, when `occluder`). Returns the largest
+// distance of the first track from the truck's centre over the last 10 scans; `sensor`: whether
+// the tracker is told where the sensor is.
+double truck_with_hidden_rear(bool occluder, bool sensor) {
+  TrackerConfig c;
+  Tracker tracker(c);
+  TrackerOutput out(c.max_tracks);
+  const Eigen::Vector2f origin(0, 0);
+  std::uint64_t id = 0;
+  double worst = 0;
+  for (int k = 0; k < 30; ++k) {
+    const double centre = -10 + 0.8 * k;
+    std::vector<Detection> d;
+    if (k < 10) {
+      d.push_back(box(centre, 12, 8.0, 2.4, 2.4, 0, 0));
+    } else {
+      d.push_back(box(centre + 1.5, 12, 5.0, 2.4, 2.4, 0, 0));  // the front 5 m
+      // Where the lines of sight to the truck's rear cross y = 6, not those to its front.
+      if (occluder) d.push_back(box(0.5 * (centre - 3), 6, 4.0, 1.8, 1.5, 0, 1));
+    }
+    tracker.update(k * kScanNs, d, out, sensor ? &origin : nullptr);
+    if (k == 0) id = out.tracks[0].id;
+    if (k < 20) continue;
+    const auto it = std::find_if(out.tracks.begin(), out.tracks.end(),
+                                 [&](const Track& t) { return t.id == id; });
+    if (it == out.tracks.end()) return std::numeric_limits<double>::infinity();
+    worst = std::max(worst, std::hypot(it->position.x() - centre, it->position.y() - 12.0));
+  }
+  return worst;
+}
+
+TEST(Tracker, APieceWithOneEndHiddenIsAnchoredAtItsVisibleEnd) {
+  // The rear hidden behind the car: the front end, in view, is the truck's, and the track stays
+  // on the truck. Without knowing the sensor (nothing is known hidden) the piece measures the
+  // body's centre loosely at its own centre, and the track drifts to the piece's centre, 1.5 m
+  // ahead. With the sensor but no car, both ends are in view: not anchored either.
+  EXPECT_LT(truck_with_hidden_rear(true, true), 0.3);
+  EXPECT_GT(truck_with_hidden_rear(true, false), 1.0);
+  EXPECT_GT(truck_with_hidden_rear(false, true), 1.0);
+}
+
 TEST(Tracker, ACarsFaceIsNotMeasuredWithAnyMemory) {
   // A 4.6 m car seen whole, then end-on: its memory (4.6 m, and not tall) is never used.
   TrackerConfig c;
