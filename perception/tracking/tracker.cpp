@@ -500,9 +500,17 @@ int Tracker::hidden_end(const Slot& s, const Detection& d, float u0, float u1,
   // go on behind it. An end whose beyond is in view is a real end.
   const auto hidden = [&](float u, float beyond) {
     const Eigen::Vector2f end = predicted + h * (u + beyond) + v * vc;
-    const float range = (end - sensor_xy_).norm();
+    const Eigen::Vector2f sight = end - sensor_xy_;
+    const float range = sight.norm();
+    if (!(range > 0.5f)) return false;
+    const Eigen::Vector2f along = sight / range;
     for (const Detection& o : scan_) {
       if (&o == &d || !o.box_center.allFinite()) continue;
+      // Cheap test first: a box farther from the line of sight than its half diagonal is missed.
+      const Eigen::Vector2f rel = o.position(true) - sensor_xy_;
+      const float t = std::clamp(rel.dot(along), 0.0f, range);
+      const float reach = 0.5f * std::hypot(o.length, o.width) + 1e-3f;
+      if ((rel - t * along).squaredNorm() > reach * reach) continue;
       if (inside_known_body(s, o)) continue;  // a piece of the same body
       if (ray_hits_box(sensor_xy_, end, o.position(true), o.length, o.width, o.yaw, range - 0.5f))
         return true;
