@@ -150,14 +150,14 @@ bool anchored_centre(const TrackerConfig& c, float known, float body_yaw, const 
 // that exactly one end of the piece is hidden behind a nearer object, the other end, in view,
 // is the body's: the centre lies `known_single` / 2 from it (the length of at least two
 // one-segment views, so that one view of two vehicles as one segment does not set it), and no
-// spread is added along (`anchored`). `centre`: the body's centre measured. False when this is
+// spread is added along. `centre`: the body's centre measured. False when this is
 // off, memory is off or not yet that long, d is end-on (anchored_centre), lower than
 // absorb_tall_height_m, a person, not shorter than the body, longer than it along the heading,
 // or not along the track's box (within 30 degrees).
 template <class Occluded>
 bool piece_of_body(const TrackerConfig& c, float known, float known_single, float known_width,
                    float track_yaw, const Eigen::Vector2f& predicted, const Detection& d,
-                   Eigen::Matrix2d& spread, float& gap, Eigen::Vector2f& centre, bool& anchored,
+                   Eigen::Matrix2d& spread, float& gap, Eigen::Vector2f& centre,
                    Occluded&& occluded) {
   if (!c.body_gating || !knows_extent(c, known) || !c.position_from_box || d.end_on ||
       !(d.length < known) || !d.box_center.allFinite() || !tall(c, d.height) ||
@@ -171,7 +171,7 @@ bool piece_of_body(const TrackerConfig& c, float known, float known_single, floa
   const float slack_v = std::max(0.0f, known_width - (e.v1 - e.v0));
   float uc = 0.5f * (e.u0 + e.u1);
   const float vc = 0.5f * (e.v0 + e.v1);
-  anchored = false;
+  bool anchored = false;
   double var_u = slack_u * slack_u / 12.0;
   if (knows_extent(c, known_single) && known_single > e.u1 - e.u0) {
     const int hidden = occluded(e.u0, e.u1, vc);
@@ -521,6 +521,14 @@ int Tracker::hidden_end(const Slot& s, const Detection& d, float u0, float u1,
   return lo && !hi ? 1 : (hi && !lo ? 2 : 0);
 }
 
+bool Tracker::piece(const Slot& s, const Detection& m, std::size_t di, Eigen::Matrix2d& spread,
+                    float& gap, Eigen::Vector2f& centre) const noexcept {
+  return piece_of_body(
+      config_, s.known_length, s.known_single, s.known_width, s.track.yaw,
+      s.x.head<2>().cast<float>(), m, spread, gap, centre,
+      [&](float u0, float u1, float vc) { return hidden_end(s, scan_[di], u0, u1, vc); });
+}
+
 bool Tracker::inside_known_body(const Slot& s, const Detection& f) const noexcept {
   if (config_.absorb_known_margin_m < 0 || !knows_extent(config_, s.known_length)) return false;
   const auto margin = static_cast<float>(config_.absorb_known_margin_m);
@@ -721,21 +729,14 @@ void Tracker::merge_overlapping(std::int64_t stamp_ns) noexcept {
       bool moved = false;
       if (a.track.segment < 0 && b.measured >= 0) {
         // Learns the extent from any measurement, a known body's union too (unlike step 4).
-        const Detection& m = merged_[static_cast<std::size_t>(b.measured)];
+        const auto bi = static_cast<std::size_t>(b.measured);
         Eigen::Matrix2d spread;
         float gap = 0;
         Eigen::Vector2f centre = Eigen::Vector2f::Zero();
-        bool anchored = false;
-        const bool piece = piece_of_body(
-            config_, a.known_length, a.known_single, a.known_width, a.track.yaw,
-            a.x.head<2>().cast<float>(), m, spread, gap, centre, anchored,
-            [&](float u0, float u1, float vc) {
-              return hidden_end(a, scan_[static_cast<std::size_t>(b.measured)], u0, u1, vc);
-            });
-        Detection mm = m;
-        if (piece) mm.box_center = centre;
-        correct(a, mm, stamp_ns, true, piece ? &spread : nullptr,
-                host_[static_cast<std::size_t>(b.measured)] == 0);
+        Detection m = merged_[bi];
+        const bool is_piece = piece(a, m, bi, spread, gap, centre);
+        if (is_piece) m.box_center = centre;
+        correct(a, m, stamp_ns, true, is_piece ? &spread : nullptr, host_[bi] == 0);
         track_xy_[i] = a.x.head<2>();
         a.measured = b.measured;
         shape();
@@ -899,12 +900,7 @@ void Tracker::update(std::int64_t stamp_ns, std::span<const Detection> detection
       Eigen::Matrix2d spread;
       float gap = 0;
       double m2 = 0;
-      bool anchored = false;
-      if (known && piece_of_body(config_, s.known_length, s.known_single, s.known_width,
-                                 s.track.yaw, predicted.cast<float>(), detections[di], spread, gap,
-                                 centre, anchored, [&](float u0, float u1, float vc) {
-                                   return hidden_end(s, detections[di], u0, u1, vc);
-                                 })) {
+      if (known && piece(s, detections[di], di, spread, gap, centre)) {
         // A piece of the known body: its centre, with the spread of where in the body it lies;
         // the distance gate applies to the nearest centre at which the body covers it.
         if (!(gap <= config_.gate_distance_m)) continue;
@@ -947,16 +943,11 @@ void Tracker::update(std::int64_t stamp_ns, std::span<const Detection> detection
       Eigen::Matrix2d spread;
       float gap = 0;
       Eigen::Vector2f centre = Eigen::Vector2f::Zero();
-      bool anchored = false;
-      const bool piece =
-          piece_of_body(config_, slot.known_length, slot.known_single, slot.known_width,
-                        slot.track.yaw, slot.x.head<2>().cast<float>(), m, spread, gap, centre,
-                        anchored, [&](float u0, float u1, float vc) {
-                          return hidden_end(slot, detections[di], u0, u1, vc);
-                        });
-      if (piece) merged_[di].box_center = centre;
+      const bool is_piece = piece(slot, m, di, spread, gap, centre);
+      if (is_piece) m.box_center = centre;
       // A body's union never lengthens it; a piece of it measures the body's centre loosely.
-      correct(slot, m, stamp_ns, host_[di] != kBodyHost, piece ? &spread : nullptr, host_[di] == 0);
+      correct(slot, m, stamp_ns, host_[di] != kBodyHost, is_piece ? &spread : nullptr,
+              host_[di] == 0);
       slot.measured = static_cast<std::int32_t>(di);
     }
   }

@@ -206,6 +206,12 @@ class Tracker {
   // detection (not a piece of the same body), 2 when only the high end is, else 0.
   [[nodiscard]] int hidden_end(const Slot& s, const Detection& d, float u0, float u1,
                                float vc) const noexcept;
+  // Whether measurement m (of detection di) is a piece of track s's known body (piece_of_body in
+  // tracker.cpp, with s's known extent and hidden_end): its spread, distance gap and the body's
+  // centre it measures.
+  [[nodiscard]] bool piece(const Slot& s, const Detection& m, std::size_t di,
+                           Eigen::Matrix2d& spread, float& gap,
+                           Eigen::Vector2f& centre) const noexcept;
   void merge_overlapping(std::int64_t stamp_ns) noexcept;
   // Solves the assignment of the gated rows_ x cols_ (pair_cost_, nd detections per track) per
   // connected component of the allowed pairs into det_match_.
