@@ -1,5 +1,8 @@
 // One section of config/stac.yaml, read once at start-up (STYLE rule 4): every key is required
-// unless read with get_or(), and every error names the file and `section.key`.
+// unless read with get_or(), and every error names the file and `section.key`. The shipped
+// config/stac.yaml, built in, is the schema: a section or key it does not have (a misspelling),
+// a key written twice, a file that is not a map of sections or a section that is not a map of
+// keys is an error naming the line (with the nearest known name when one is close).
 //
 //   auto s = ConfigSection::open(file, "velodyne");     if (!s) return error;
 //   auto port = s->get<int>("port");                     if (!port) return port.error();

@@ -67,9 +67,79 @@ TEST(EgoSettings, EveryBrokenKeyIsNamed) {
     auto s = load_ego_settings(with_line(pattern, replacement));
     ASSERT_FALSE(s) << replacement;
     const std::string key = replacement.substr(0, replacement.find(':'));
-    const std::string named = key == "deskew_buckets_us" ? "ego.deskew_bucket_us" : "ego." + key;
-    EXPECT_NE(s.error().message.find(named), std::string::npos) << s.error().message;
+    EXPECT_NE(s.error().message.find("ego." + key), std::string::npos) << s.error().message;
   }
+}
+
+// A file that is not a configuration, or a key or section the shipped file does not know.
+TEST(ConfigFile, WhatIsNotAConfigurationIsNamedAndNothingThrows) {
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("stac_cfg_dir_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const auto write = [&](const std::string& name, const std::string& text) {
+    const auto path = dir / name;
+    std::ofstream(path) << text;
+    return path;
+  };
+  struct Case {
+    std::filesystem::path file;
+    std::string expected;
+  };
+  const Case cases[] = {
+      {dir, "is a directory"},
+      {dir / "absent.yaml", "no such configuration file"},
+      {write("scalar.yaml", "42\n"),
+       "the configuration is a single value; it must be a map of sections"},
+      {write("list.yaml", "- velodyne\n- ego\n"), "the configuration is a list"},
+      {write("empty.yaml", ""), "the configuration is empty"},
+      {write("binary.yaml", std::string("\x01\x02\xff\xfe\x00garbage", 12)),
+       "cannot read the configuration"},
+      {write("section_list.yaml", "velodyne: [1, 2]\n"),
+       "the 'velodyne:' section (line 1) is a list; it must be a map of keys"},
+  };
+  for (const auto& c : cases) {
+    auto s = load_velodyne_settings(c.file);
+    ASSERT_FALSE(s) << c.file;
+    EXPECT_NE(s.error().message.find(c.expected), std::string::npos) << s.error().message;
+  }
+  std::filesystem::remove_all(dir);
+}
+
+TEST(ConfigFile, AMisspelledKeyOrSectionIsAnErrorWithTheNearestKnownName) {
+  auto typo =
+      load_velodyne_settings(with_line(R"(sender_address: "")", R"(sender_adress: "10.9.9.9")"));
+  ASSERT_FALSE(typo);
+  EXPECT_NE(typo.error().message.find("unknown key 'velodyne.sender_adress' (line "),
+            std::string::npos)
+      << typo.error().message;
+  EXPECT_NE(typo.error().message.find("did you mean 'sender_address'?"), std::string::npos)
+      << typo.error().message;
+  // Any section's loader checks every section's name.
+  auto section = load_velodyne_settings(with_line("\nsegmentation:", "\nsegmentaton:"));
+  ASSERT_FALSE(section);
+  EXPECT_NE(section.error().message.find("unknown section 'segmentaton:'"), std::string::npos)
+      << section.error().message;
+  EXPECT_NE(section.error().message.find("did you mean 'segmentation'?"), std::string::npos)
+      << section.error().message;
+  auto far =
+      load_ego_settings(with_line("  ins_port: 5602", "  ins_port: 5602\n  wheelbase_m: 2.7"));
+  ASSERT_FALSE(far);
+  EXPECT_NE(far.error().message.find("unknown key 'ego.wheelbase_m'"), std::string::npos)
+      << far.error().message;
+}
+
+TEST(ConfigFile, AKeyWrittenTwiceIsAnError) {
+  auto twice =
+      load_tracking_config(with_line("  max_tracks: 512", "  max_tracks: 512\n  max_tracks: 0"));
+  ASSERT_FALSE(twice);
+  EXPECT_NE(twice.error().message.find("key 'tracking.max_tracks' (line "), std::string::npos)
+      << twice.error().message;
+  EXPECT_NE(twice.error().message.find("appears twice"), std::string::npos)
+      << twice.error().message;
+}
+
+TEST(ConfigFile, TheShippedFileHasEveryKeyTheLoadersRead) {
+  EXPECT_TRUE(load_pipeline_settings(kShipped)) << load_pipeline_settings(kShipped).error().message;
 }
 
 // classification.model's line (velodyne.model is another key of the same name).
@@ -101,8 +171,7 @@ TEST(ClassificationSettings, EveryBrokenKeyIsNamed) {
   for (const auto& [pattern, replacement] : cases) {
     auto s = load_classification_settings(with_line(pattern, replacement));
     ASSERT_FALSE(s) << replacement;
-    std::string key = replacement.substr(0, replacement.find(':'));
-    if (key == "max_segment_pts") key = "max_segment_points";
+    const std::string key = replacement.substr(0, replacement.find(':'));  // a misspelling: itself
     EXPECT_NE(s.error().message.find("classification." + key), std::string::npos)
         << s.error().message;
   }
