@@ -1,8 +1,9 @@
 // stac: one binary, one subcommand per job. `stac --help` lists them; `stac <sub> --help` explains
 // each one.
 #include <CLI/CLI.hpp>
-
 #include <cstdio>
+#include <exception>
+#include <new>
 
 #include "tools/commands.hpp"
 
@@ -57,6 +58,20 @@ int main(int argc, char** argv) {
   stac::tools::add_dataset_command(app);
   stac::tools::add_train_command(app);
   stac::tools::add_kitti_objects_command(app);
-  CLI11_PARSE(app, argc, argv);
+  // What escapes a subcommand is reported, never an abort: start-up allocates every capacity of
+  // the configuration, and a machine without the memory for them gets told so.
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr,
+                 "stac: out of memory while allocating what the configuration asks for; lower the "
+                 "capacities (max_* keys, classification.accumulated_points) or free memory\n");
+    return 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "stac: %s\n", e.what());
+    return 1;
+  }
   return 0;
 }

@@ -56,9 +56,9 @@ rt::Result<segmentation::SegmenterConfig> load_segmentation_settings(
                         s.read("max_segment_extent_m", c.max_segment_extent_m),
                         count("box_fit_points", 100000, c.box_fit_points, 0),
                         s.read("box_fit_min_length_m", c.box_fit_min_length_m),
-                        count("max_points", kMaxCount, c.max_points),
-                        count("max_occupied_cells", kMaxCount, c.max_occupied_cells),
-                        count("max_segments", kMaxCount, c.max_segments)}) {
+                        count("max_points", 10'000'000, c.max_points),
+                        count("max_occupied_cells", 4'194'304, c.max_occupied_cells),
+                        count("max_segments", 1'000'000, c.max_segments)}) {
     if (!r) return rt::Unexpected<rt::Error>{r.error()};
   }
   if (const char* why = segmentation::validate(c); *why != '\0') {

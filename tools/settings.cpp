@@ -88,6 +88,13 @@ rt::Result<PipelineSettings> load_pipeline_settings(const std::filesystem::path&
   if (!tracker) return rt::Unexpected<rt::Error>{tracker.error()};
   auto classification = load_classification_settings(config_file);
   if (!classification) return rt::Unexpected<rt::Error>{classification.error()};
+  // The classifier keeps one accumulated cloud per track: capacities of two sections together.
+  classification::TrackClassifierConfig together = classification->classifier;
+  together.max_tracks = tracker->max_tracks;
+  if (const char* why = classification::validate(together); *why != '\0') {
+    return rt::make_error(config_file.string() +
+                          ": 'tracking.max_tracks' and 'classification:': " + why);
+  }
   return PipelineSettings{std::move(*velodyne), std::move(*ego), *segmenter, *tracker,
                           std::move(*classification)};
 }

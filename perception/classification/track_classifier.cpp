@@ -12,7 +12,10 @@ const char* validate(const TrackClassifierConfig& c) noexcept {
     return "accumulated_points must be in [1, 1000000]";
   if (c.holistic_every < 1 || c.holistic_every > 10'000)
     return "holistic_every must be in [1, 10000]";
-  if (c.max_points < 1 || c.max_points > 100'000'000) return "max_points must be in [1, 1e8]";
+  if (c.max_tracks * c.accumulated_points > 33'554'432)
+    return "max_tracks x accumulated_points must be at most 33554432 (the tracks' accumulated "
+           "clouds, allocated at start-up)";
+  if (c.max_points < 1 || c.max_points > 10'000'000) return "max_points must be in [1, 1e7]";
   return descriptors::validate(c.descriptors);
 }
 

@@ -46,8 +46,9 @@ const char* validate(const SegmenterConfig& c) noexcept {
   if (!(c.range_m > 0 && c.range_m <= 500)) return "range_m must be in (0, 500] m";
   if (!(c.min_range_m >= 0 && c.min_range_m < c.range_m))
     return "min_range_m must be in [0, range_m)";
-  if (cells_across(c.range_m, c.cell_m) > 20000)
-    return "range_m / cell_m gives a grid over 20000 cells across";
+  if (cells_across(c.range_m, c.cell_m) > 8192)
+    return "2 x range_m / cell_m gives a grid over 8192 cells across (its map alone would take "
+           "over 256 MB)";
   if (!(c.sensor_height_m >= 0 && c.sensor_height_m <= 10))
     return "sensor_height_m must be in [0, 10] m";
   if (!(c.below_ground_m >= 0)) return "below_ground_m must be >= 0 m";
@@ -86,10 +87,12 @@ const char* validate(const SegmenterConfig& c) noexcept {
   if (c.box_fit_points > 100'000) return "box_fit_points must be in [0, 100000]";
   if (!(c.box_fit_min_length_m >= 0 && c.box_fit_min_length_m <= 1000))
     return "box_fit_min_length_m must be in [0, 1000] m";
-  if (c.max_points < 1 || c.max_points > kUnvisited) return "max_points must be in 1..4294967293";
-  if (c.max_occupied_cells < 1 || c.max_occupied_cells > kUnvisited)
-    return "max_occupied_cells must be >= 1";
-  if (c.max_segments < 1) return "max_segments must be >= 1";
+  // Capacities: allocated at construction, so bounded (a scan of the HDL-64E has at most about
+  // 0.9 million returns, dual return at 5 Hz).
+  if (c.max_points < 1 || c.max_points > 10'000'000) return "max_points must be in 1..10000000";
+  if (c.max_occupied_cells < 1 || c.max_occupied_cells > 4'194'304)
+    return "max_occupied_cells must be in 1..4194304";
+  if (c.max_segments < 1 || c.max_segments > 1'000'000) return "max_segments must be in 1..1000000";
   return "";
 }
 

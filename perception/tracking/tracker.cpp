@@ -319,13 +319,17 @@ struct Tracker::Slot {
   float known_yaw = 0;
 };
 
-Tracker::Tracker(const TrackerConfig& c)
-    : config_(c),
-      live_(c.max_tracks),
-      free_(c.max_tracks),
-      solver_(c.max_tracks, c.max_detections) {
+namespace {
+
+constexpr std::size_t kMaxTrackDetectionPairs = std::size_t{1} << 22;
+
+// Every check of the configuration, before the constructor allocates anything (an oversized
+// capacity is an error, never an attempt to allocate it).
+const TrackerConfig& validated(const TrackerConfig& c) {
   check(c.max_tracks >= 1 && c.max_tracks <= 100000, "max_tracks must be in 1..100000");
   check(c.max_detections >= 1 && c.max_detections <= 100000, "max_detections must be in 1..100000");
+  check(c.max_tracks * c.max_detections <= kMaxTrackDetectionPairs,
+        "max_tracks x max_detections must be at most 4194304 (the assignment's cost matrix)");
   check(c.accel_std_mps2 > 0 && c.z_velocity_std_mps > 0, "process noise must be > 0");
   check(c.measurement_std_m > 0 && c.measurement_z_std_m > 0, "measurement noise must be > 0");
   check(c.initial_velocity_std_mps > 0, "initial_velocity_std_mps must be > 0");
@@ -357,6 +361,16 @@ Tracker::Tracker(const TrackerConfig& c)
   check(c.absorb_velocity_mps >= 0 && c.absorb_keep_length_m >= 0 && c.absorb_keep_width_m >= 0 &&
             c.absorb_keep_height_m >= 0,
         "absorb_velocity_mps and absorb_keep_length_m, _width_m, _height_m must be >= 0");
+  return c;
+}
+
+}  // namespace
+
+Tracker::Tracker(const TrackerConfig& c)
+    : config_(validated(c)),
+      live_(c.max_tracks),
+      free_(c.max_tracks),
+      solver_(c.max_tracks, c.max_detections) {
   slots_.resize(c.max_tracks);
   for (std::size_t i = c.max_tracks; i-- > 0;) (void)free_.push_back(static_cast<std::uint32_t>(i));
   cost_.assign(c.max_tracks * c.max_detections, 0.0);

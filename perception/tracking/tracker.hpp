@@ -37,6 +37,7 @@ struct Detection {
 struct TrackerConfig {
   std::size_t max_tracks = 512;       // track pool; spawns beyond it are counted, not made
   std::size_t max_detections = 1024;  // per scan; detections beyond it are dropped and counted
+                                      // (each 1..100000, their product at most 2^22)
   // Kalman filter.
   double accel_std_mps2 = 2.0;            // white-noise acceleration in x,y (m/s^2)
   double z_velocity_std_mps = 0.5;        // z random walk (m/s)

@@ -304,6 +304,12 @@ TEST(TrackClassifier, BadConfigurationIsRefusedWithAMessage) {
   c.accumulated_points = 0;
   EXPECT_NE(std::string(validate(c)).find("accumulated_points"), std::string::npos);
   EXPECT_EQ(std::string(validate(small_config())), "");
+  // Each within its range, together 8 GB of accumulated clouds: refused before allocating.
+  c = small_config();
+  c.max_tracks = 512;
+  c.accumulated_points = 1'000'000;
+  EXPECT_NE(std::string(validate(c)).find("max_tracks x accumulated_points"), std::string::npos);
+  EXPECT_THROW(TrackClassifier(c, nullptr), std::invalid_argument);
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 // `stac segment` as a user runs it: KITTI scans, simulated captures, bad input, bad config.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 
 #include <filesystem>
 #include <fstream>
@@ -111,6 +112,55 @@ TEST(SegmentCli, ConfigErrorsNameTheKey) {
     EXPECT_EQ(r.code, 1);
     EXPECT_NE(r.output.find("segmentation.cell_m must be in"), std::string::npos) << r.output;
   }
+}
+
+// Capacities beyond their bounds are errors before anything is allocated; within them, a machine
+// without the memory (here: 400 MB of address space) gets a message and exit code 1, not an abort.
+TEST(SegmentCli, CapacitiesAreBoundedAndMemoryLeftShortIsAnError) {
+  STAC_REQUIRE_SHARED_DATA("kitti/000000.bin");
+  const auto dir = fresh_dir("capacities");
+  std::ifstream in(std::string(STAC_SOURCE_DIR) + "/config/stac.yaml");
+  std::stringstream text;
+  text << in.rdbuf();
+  const std::string scan = stac::testing::shared_data("kitti/000000.bin").string();
+  const auto with = [&](const std::string& name,
+                        std::initializer_list<std::pair<std::string, std::string>> edits) {
+    std::string yaml = text.str();
+    for (const auto& [from, to] : edits) {
+      const auto at = yaml.find(from);
+      EXPECT_NE(at, std::string::npos) << from;
+      yaml.replace(at, from.size(), to);
+    }
+    const auto path = dir / name;
+    std::ofstream(path) << yaml;
+    return path.string();
+  };
+  const CliResult over = stac(
+      "segment --config " +
+      with("over.yaml", {{"  max_occupied_cells: 200000 ", "  max_occupied_cells: 100000000 "}}) +
+      " --in " + scan);
+  EXPECT_EQ(over.code, 1);
+  EXPECT_NE(over.output.find("'segmentation.max_occupied_cells' must be in 1..4194304"),
+            std::string::npos)
+      << over.output;
+  const std::string most =
+      with("most.yaml", {{"  max_points: 300000 ", "  max_points: 10000000 "},
+                         {"  max_occupied_cells: 200000 ", "  max_occupied_cells: 4194304 "},
+                         {"  max_segments: 2000 ", "  max_segments: 1000000 "}});
+  const std::string cmd = "bash -c 'ulimit -v 400000; " + std::string(STAC_CLI) +
+                          " segment --config " + most + " --in " + scan + " --out " +
+                          (dir / "x.csv").string() + "' 2>&1";
+  FILE* p = popen(cmd.c_str(), "r");
+  ASSERT_NE(p, nullptr);
+  std::string out;
+  char buf[4096];
+  while (const std::size_t n = std::fread(buf, 1, sizeof(buf), p)) out.append(buf, n);
+  const int status = pclose(p);
+  ASSERT_TRUE(WIFEXITED(status)) << out;
+  EXPECT_EQ(WEXITSTATUS(status), 1) << out;
+  EXPECT_NE(out.find("stac: out of memory while allocating what the configuration asks for"),
+            std::string::npos)
+      << out;
 }
 
 }  // namespace

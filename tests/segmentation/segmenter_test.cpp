@@ -599,6 +599,21 @@ TEST(Segmenter, RejectsInvalidConfiguration) {
   SegmenterConfig c;
   c.cell_m = 0.0;
   EXPECT_THROW(Segmenter{c}, std::invalid_argument);
+  // Capacities are allocated at construction: each is bounded.
+  c = SegmenterConfig{};
+  c.max_occupied_cells = 100'000'000;
+  EXPECT_STREQ(validate(c), "max_occupied_cells must be in 1..4194304");
+  c = SegmenterConfig{};
+  c.max_points = 10'000'001;
+  EXPECT_STREQ(validate(c), "max_points must be in 1..10000000");
+  c = SegmenterConfig{};
+  c.max_segments = 1'000'001;
+  EXPECT_STREQ(validate(c), "max_segments must be in 1..1000000");
+  c = SegmenterConfig{};
+  c.range_m = 500;  // 0.15 m cells: 6667 across
+  EXPECT_STREQ(validate(c), "");
+  c.cell_m = 0.1;  // 10000 across
+  EXPECT_STRNE(validate(c), "");
   c = SegmenterConfig{};
   c.obstacle_height_m = 0.1;  // below the ground clearance
   EXPECT_STRNE(validate(c), "");

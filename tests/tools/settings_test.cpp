@@ -138,6 +138,16 @@ TEST(ConfigFile, AKeyWrittenTwiceIsAnError) {
       << twice.error().message;
 }
 
+TEST(ConfigFile, CapacitiesOfTwoSectionsAreCheckedTogether) {
+  auto s =
+      load_pipeline_settings(with_line("accumulated_points: 4096", "accumulated_points: 1000000"));
+  ASSERT_FALSE(s);
+  EXPECT_NE(s.error().message.find(
+                "'tracking.max_tracks' and 'classification:': max_tracks x accumulated_points"),
+            std::string::npos)
+      << s.error().message;
+}
+
 TEST(ConfigFile, TheShippedFileHasEveryKeyTheLoadersRead) {
   EXPECT_TRUE(load_pipeline_settings(kShipped)) << load_pipeline_settings(kShipped).error().message;
 }

@@ -941,6 +941,15 @@ TEST(Tracker, RejectsInvalidConfig) {
   TrackerConfig c;
   c.max_tracks = 0;
   EXPECT_THROW(Tracker{c}, std::invalid_argument);
+  // Checked before anything is allocated: 4e9 tracks would be 16 GB of free list alone.
+  c.max_tracks = 4'000'000'000;
+  EXPECT_THROW(Tracker{c}, std::invalid_argument);
+  c.max_tracks = 100'000;  // each within its range, the assignment's matrix 80 GB
+  c.max_detections = 100'000;
+  EXPECT_THROW(Tracker{c}, std::invalid_argument);
+  c.max_detections = 41;  // 4.1 million pairs
+  EXPECT_NO_THROW(Tracker{c});
+  c = TrackerConfig{};
   c = TrackerConfig{};
   c.box_smoothing = 0;
   EXPECT_THROW(Tracker{c}, std::invalid_argument);
