@@ -20,6 +20,14 @@ std::filesystem::path fresh_dir(const std::string& name) {
   return stac::testing::fresh_dir("stac_segment_" + name);
 }
 
+// The text of the shipped config/stac.yaml.
+std::string shipped_config() {
+  std::ifstream in(std::string(STAC_SOURCE_DIR) + "/config/stac.yaml");
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
 // The number after `label` in the summary, e.g. "segments   217 of ...".
 long summary_number(const std::string& output, const std::string& label) {
   const auto at = output.find(label);
@@ -87,12 +95,10 @@ TEST(SegmentCli, RejectsAFileThatIsNotAKittiScan) {
 TEST(SegmentCli, ConfigErrorsNameTheKey) {
   STAC_REQUIRE_SHARED_DATA("kitti/000000.bin");
   const auto dir = fresh_dir("config");
-  std::ifstream in(std::string(STAC_SOURCE_DIR) + "/config/stac.yaml");
-  std::stringstream text;
-  text << in.rdbuf();
+  const std::string shipped = shipped_config();
   const std::string scan = stac::testing::shared_data("kitti/000000.bin").string();
   {
-    std::string yaml = text.str();
+    std::string yaml = shipped;
     const auto at = yaml.find("  ground_radius_m:");
     yaml.erase(at, yaml.find('\n', at) - at + 1);
     std::ofstream(dir / "missing.yaml") << yaml;
@@ -104,7 +110,7 @@ TEST(SegmentCli, ConfigErrorsNameTheKey) {
         << r.output;
   }
   {
-    std::string yaml = text.str();
+    std::string yaml = shipped;
     const auto at = yaml.find("  cell_m: 0.15");
     yaml.replace(at, 14, "  cell_m: 0.0");
     std::ofstream(dir / "zero.yaml") << yaml;
@@ -119,13 +125,11 @@ TEST(SegmentCli, ConfigErrorsNameTheKey) {
 TEST(SegmentCli, CapacitiesAreBoundedAndMemoryLeftShortIsAnError) {
   STAC_REQUIRE_SHARED_DATA("kitti/000000.bin");
   const auto dir = fresh_dir("capacities");
-  std::ifstream in(std::string(STAC_SOURCE_DIR) + "/config/stac.yaml");
-  std::stringstream text;
-  text << in.rdbuf();
+  const std::string shipped = shipped_config();
   const std::string scan = stac::testing::shared_data("kitti/000000.bin").string();
   const auto with = [&](const std::string& name,
                         std::initializer_list<std::pair<std::string, std::string>> edits) {
-    std::string yaml = text.str();
+    std::string yaml = shipped;
     for (const auto& [from, to] : edits) {
       const auto at = yaml.find(from);
       EXPECT_NE(at, std::string::npos) << from;
