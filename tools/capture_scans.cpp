@@ -1,6 +1,7 @@
 #include "tools/capture_scans.hpp"
 
 #include "drivers/io/pcap_reader.hpp"
+#include "tools/capture_input.hpp"
 
 namespace stac::tools {
 
@@ -29,6 +30,10 @@ rt::Result<std::uint64_t> for_each_complete_scan(const std::filesystem::path& ca
   if (more) {
     (void)stream.finish();
     drain();
+  }
+  if (complete == 0) {
+    return rt::make_error(nothing_decoded_reason(capture.string(), reader->counters(),
+                                                 stream.assembler().counters(), settings.port));
   }
   return complete;
 }

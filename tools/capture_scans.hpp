@@ -14,7 +14,7 @@
 namespace stac::tools {
 
 // Calls on_scan(scan) for each complete scan until it returns false; returns how many were passed
-// (an error when the capture cannot be opened).
+// (an error when the capture cannot be opened or holds no complete scan, saying why).
 rt::Result<std::uint64_t> for_each_complete_scan(const std::filesystem::path& capture,
                                                  const velodyne::Calibration& calibration,
                                                  const VelodyneSettings& settings,

@@ -1,4 +1,6 @@
 // stac decode: a pcap capture of HDL-64E packets -> calibrated, timed points (csv or KITTI bins).
+#include "tools/decode.hpp"
+
 #include <cstdio>
 #include <filesystem>
 #include <optional>
@@ -7,8 +9,8 @@
 #include "drivers/io/pcap_reader.hpp"
 #include "drivers/velodyne/scan_stream.hpp"
 #include "tools/birds_eye.hpp"
+#include "tools/capture_input.hpp"
 #include "tools/commands.hpp"
-#include "tools/decode.hpp"
 #include "tools/progress.hpp"
 #include "tools/scan_writers.hpp"
 #include "tools/sensor_status.hpp"
@@ -95,29 +97,17 @@ int run_decode(const DecodeOptions& o) {
   const auto& pc = reader->counters();
   std::fprintf(stderr,
                "stac decode: %s -> %s (%s)\n"
-               "  packets   %llu read on port %u, %llu other frames skipped\n"
+               "  capture   %s\n"
                "  scans     %llu (%llu complete, framed at %.2f deg)\n"
                "  points    %llu (no return %llu, out of range %llu)\n"
-               "  dropped   wrong size %llu, invalid block %llu, duplicate %llu, late firings %llu,"
-               " over capacity %llu\n"
-               "  estimated packets lost %llu, scans closed by silence %llu, by timeout %llu\n",
+               "  dropped   %s\n",
                o.in.c_str(), o.out.c_str(), o.format.c_str(),
-               static_cast<unsigned long long>(a.packets), s.port,
-               static_cast<unsigned long long>(pc.frames - a.packets),
+               capture_frames_summary(pc, a.packets, s.port).c_str(),
                static_cast<unsigned long long>(scans), static_cast<unsigned long long>(complete),
                s.assembler.cut_angle / 100.0, static_cast<unsigned long long>(points),
                static_cast<unsigned long long>(dc.no_return),
-               static_cast<unsigned long long>(dc.out_of_range),
-               static_cast<unsigned long long>(a.wrong_size),
-               static_cast<unsigned long long>(a.invalid_block),
-               static_cast<unsigned long long>(a.duplicates),
-               static_cast<unsigned long long>(a.late_firings),
-               static_cast<unsigned long long>(a.points_dropped),
-               static_cast<unsigned long long>(a.packets_lost),
-               static_cast<unsigned long long>(a.time_gaps),
-               static_cast<unsigned long long>(a.timeouts));
-  if (a.packets == 0) return fail(o.in + ": no UDP packet to port " + std::to_string(s.port) +
-                                  " in the capture (wrong --port?)");
+               static_cast<unsigned long long>(dc.out_of_range), packet_drops_summary(a).c_str());
+  if (scans == 0) return fail(nothing_decoded_reason(o.in, pc, a, s.port));
   return 0;
 }
 

@@ -11,10 +11,11 @@
 #include <string>
 #include <vector>
 
-#include "drivers/io/pcap_reader.hpp"
 #include "dds/idl_types.hpp"
+#include "drivers/io/pcap_reader.hpp"
 #include "drivers/velodyne/scan_stream.hpp"
 #include "pipeline/scan_pipeline.hpp"
+#include "tools/capture_input.hpp"
 #include "tools/capture_poses.hpp"
 #include "tools/commands.hpp"
 #include "tools/dds_settings.hpp"
@@ -244,6 +245,10 @@ int run_process(const ProcessOptions& o) {
 
   std::fprintf(stderr, "stac process: %s -> %s: %llu complete scans\n", o.in.c_str(), o.tracks.c_str(),
                static_cast<unsigned long long>(scans));
+  const velodyne::AssemblerCounters& ac = stream.assembler().counters();
+  std::fprintf(stderr, "  capture     %s\n  dropped     %s\n",
+               capture_frames_summary(reader->counters(), ac.packets, vs.port).c_str(),
+               packet_drops_summary(ac).c_str());
   if (poses) {
     std::fprintf(stderr,
                  "  ego         %llu INS fixes (%llu skipped before a GPS week, %llu not aligned); "
@@ -279,7 +284,7 @@ int run_process(const ProcessOptions& o) {
         static_cast<unsigned long long>(dds_errors));
   }
   print_stats(stages);
-  if (scans == 0) return fail(o.in + ": no complete scan in the capture");
+  if (scans == 0) return fail(nothing_decoded_reason(o.in, reader->counters(), ac, vs.port));
   return 0;
 }
 

@@ -3,7 +3,9 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <thread>
 
@@ -148,6 +150,82 @@ TEST(Cli, DecodeSaysWhenNoPacketIsOnThePort) {
                      " --in " + pcap.string() + " --out " + (dir / "x.csv").string());
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.output.find("no UDP packet to port 2369"), std::string::npos) << r.output;
+}
+
+// The capture with every record cut to `keep` captured bytes (a small snap length): caplen
+// shrinks, the length on the wire stays.
+std::filesystem::path snapped_copy(const std::filesystem::path& pcap, std::uint32_t keep) {
+  std::ifstream in(pcap, std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::string out = bytes.substr(0, 24);
+  for (std::size_t at = 24; at + 16 <= bytes.size();) {
+    std::uint32_t caplen = 0;
+    std::memcpy(&caplen, bytes.data() + at + 8, 4);
+    const std::uint32_t kept = std::min(caplen, keep);
+    std::string header = bytes.substr(at, 16);
+    std::memcpy(header.data() + 8, &kept, 4);
+    out += header + bytes.substr(at + 16, kept);
+    at += 16 + caplen;
+  }
+  const auto path = pcap.parent_path() / ("snapped_" + std::to_string(keep) + ".pcap");
+  std::ofstream(path, std::ios::binary) << out;
+  return path;
+}
+
+// A capture that gives nothing says why, in decode, process and segment alike: packets of the
+// wrong size, or frames truncated by the capture's snap length; drops are in the summary.
+TEST(Cli, ACaptureThatGivesNoScanSaysWhy) {
+  STAC_REQUIRE_SHARED_DATA(kYaml);
+  const auto dir = fresh_dir("nothing");
+  const auto pcap = write_capture(dir);
+  const std::string calib = " --calib " + stac::testing::shared_data(kYaml).string();
+  {  // 600 of the 1206 payload bytes: wrong size
+    const auto wrong = dir / "wrong.pcap";
+    auto w = io::PcapWriter::open(wrong);
+    ASSERT_TRUE(w);
+    auto reader = io::PcapReader::open(pcap);
+    ASSERT_TRUE(reader);
+    io::Datagram d;
+    std::uint64_t n = 0;
+    while (reader->next(d)) {
+      d.payload = d.payload.first(600);
+      ASSERT_TRUE(w->write_udp(d));
+      ++n;
+    }
+    ASSERT_TRUE(w->close());
+    const CliResult r =
+        stac("decode" + calib + " --in " + wrong.string() + " --out " + (dir / "x.csv").string());
+    EXPECT_EQ(r.code, 1);
+    EXPECT_NE(r.output.find("none of its " + std::to_string(n) +
+                            " packets to port 2368 is an HDL-64E data packet: wrong size " +
+                            std::to_string(n)),
+              std::string::npos)
+        << r.output;
+    const CliResult p =
+        stac("process " + wrong.string() + calib + " --tracks " + (dir / "t.jsonl").string());
+    EXPECT_EQ(p.code, 1);
+    EXPECT_NE(p.output.find("dropped     wrong size " + std::to_string(n) + ","), std::string::npos)
+        << p.output;
+    EXPECT_NE(p.output.find("is an HDL-64E data packet"), std::string::npos) << p.output;
+  }
+  {  // a snap length of 600 bytes
+    const auto snapped = snapped_copy(pcap, 600);
+    for (const std::string& cmd :
+         {"decode" + calib + " --in " + snapped.string() + " --out " + (dir / "y.csv").string(),
+          "segment" + calib + " --in " + snapped.string(),
+          "process " + snapped.string() + calib + " --tracks " + (dir / "u.jsonl").string()}) {
+      const CliResult r = stac(cmd);
+      EXPECT_EQ(r.code, 1) << cmd;
+      EXPECT_NE(r.output.find("no UDP packet to port 2368 in the capture: "), std::string::npos)
+          << r.output;
+      EXPECT_NE(
+          r.output.find(
+              "frames are truncated (captured shorter than their headers say); capture again with "
+              "the full snap length"),
+          std::string::npos)
+          << r.output;
+    }
+  }
 }
 
 TEST(Cli, RecordWritesWhatArrivesOnTheSocket) {
