@@ -14,7 +14,7 @@ inline constexpr unsigned kMaxClassifications = 5;
 inline constexpr unsigned kMaxFootprint = 8;
 inline constexpr unsigned kMaxSegments = 2048;
 inline constexpr unsigned kMaxStages = 12;
-inline constexpr unsigned kMaxDrops = 16;
+inline constexpr unsigned kMaxDrops = 32;
 inline constexpr unsigned kMaxSensors = 4;
 inline constexpr unsigned kMaxCloudPoints = 131072;
 

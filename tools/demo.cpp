@@ -19,8 +19,9 @@
 #include <map>
 #include <mutex>
 #include <optional>
-#include <set>
 #include <regex>
+#include <set>
+#include <type_traits>
 #include <vector>
 
 #include "dds/idl_types.hpp"
@@ -151,7 +152,8 @@ class DriveWatch {
   }
 
   void on_health(const typename T::Health& s, dds_time_t, const dds_sample_info_t&) {
-    end_to_end_ms_.push_back(static_cast<double>(s.end_to_end_latency_us) * 1e-3);
+    if (s.stages._length > 0)
+      end_to_end_ms_.push_back(static_cast<double>(s.end_to_end_latency_us) * 1e-3);
     deadline_misses_ = s.deadline_misses;
     drops_.clear();
     for (std::uint32_t i = 0; i < s.drops._length; ++i)
@@ -252,6 +254,10 @@ int watch_drive(const DemoOptions& o, const std::filesystem::path& dir, const st
     return [&, member](const auto& s, dds_time_t t, const dds_sample_info_t& i) {
       const std::lock_guard<std::mutex> lock(mutex);
       (w.*member)(s, t, i);
+      // Health without stages comes each second while no scan is published: not a scan's.
+      if constexpr (std::is_same_v<std::decay_t<decltype(s)>, typename T::Health>) {
+        if (s.stages._length == 0) return;
+      }
       ++arrived;
     };
   };

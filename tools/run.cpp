@@ -56,6 +56,8 @@ void on_signal(int) {
 }
 
 enum Input : std::size_t { kLidar, kIns, kCan };
+// While no scan is published, a health sample (without stages) every second.
+constexpr std::int64_t kIdleHealthNs = 1'000'000'000;
 constexpr const char* kInputNames[] = {"lidar", "ins", "can"};
 
 // Health stages: where the time of one scan went, from its last firing to its publication.
@@ -91,6 +93,13 @@ struct Shared {
   std::atomic<bool> stopping{false};  // main: stop requested; the receiver drains its socket first
   std::atomic<bool> receiver_done{false}, perception_done{false};
   std::atomic<std::uint64_t> packets{0}, kernel_drops{0}, receive_errors{0};
+  // The receiver's packets dropped by the decoder, by cause (AssemblerCounters).
+  std::atomic<std::uint64_t> wrong_size{0}, invalid_block{0}, duplicates{0}, late_firings{0};
+  // The INS input's (ParserCounters, TcpClientCounters): checksum, framing (length, terminator,
+  // oversize, truncated), layout, bytes skipped, and the TCP connection.
+  std::atomic<std::uint64_t> ins_bad_checksum{0}, ins_bad_framing{0}, ins_malformed{0},
+      ins_garbage_bytes{0};
+  std::atomic<std::uint64_t> ins_connect_failures{0}, ins_disconnects{0};
   std::atomic<std::uint64_t> scans{0}, incomplete{0}, published{0}, publish_errors{0};
   std::atomic<std::uint8_t> ego_source{0};  // 0 none, 1 INS, 2 CAN dead reckoning
   CanCounterCells can;                      // written by the thread that reads CAN
@@ -166,9 +175,23 @@ void pose_loop(PoseInputs& in, ego::EgoEstimator& estimator, const ego::PoseHist
   for (;;) {
     bool stopped = false;
     auto take = [&](const applanix::StreamParser& p) {
-      const bool fix = std::holds_alternative<applanix::Group1>(m.content);
+      const std::uint64_t fixes = estimator.counters().ins_fixes;
       estimator.add_ins(m, p);
-      if (fix) watchdog.beat(kIns, rt::monotonic_ns());
+      // Only a fix that became a pose shows the INS alive (not a rejected or unusable one).
+      if (estimator.counters().ins_fixes != fixes) watchdog.beat(kIns, rt::monotonic_ns());
+    };
+    auto publish_counters = [&](const applanix::ParserCounters& pc) {
+      const auto set = [](std::atomic<std::uint64_t>& a, std::uint64_t v) {
+        a.store(v, std::memory_order_relaxed);
+      };
+      set(shared.ins_bad_checksum, pc.bad_checksum);
+      set(shared.ins_bad_framing, pc.bad_length + pc.bad_terminator + pc.oversize + pc.truncated);
+      set(shared.ins_malformed, pc.malformed);
+      set(shared.ins_garbage_bytes, pc.garbage_bytes);
+      if (in.tcp) {
+        set(shared.ins_connect_failures, in.tcp->counters().connect_failures);
+        set(shared.ins_disconnects, in.tcp->counters().disconnects + in.tcp->counters().stalls);
+      }
     };
     if (in.tcp) {
       const int n = in.tcp->receive(bytes, timeout_ms);
@@ -181,10 +204,12 @@ void pose_loop(PoseInputs& in, ego::EgoEstimator& estimator, const ego::PoseHist
         parser.feed({bytes.data(), static_cast<std::size_t>(n)});
         while (parser.next(m)) take(parser);
       }
+      publish_counters(parser.counters());
     } else if (in.udp) {
       const int n = in.udp->receive(timeout_ms);
       if (n == io::UdpReceiver::kStopped) stopped = true;
       while (n > 0 && in.udp->next(m)) take(in.udp->parser());
+      publish_counters(in.udp->parser().counters());
     }
     if (in.socketcan && !can_closed) {
       const can::InputEvent e =
@@ -385,13 +410,22 @@ int run_live(const RunOptions& o) {
         idle();
         continue;
       }
+      const velodyne::AssemblerCounters& ac = stream.assembler().counters();
+      const auto rejected = [&] { return ac.wrong_size + ac.invalid_block + ac.duplicates; };
+      const std::uint64_t rejected_before = rejected();
       for (int i = 0; i < n; ++i) {
         const io::Datagram& d = batch[static_cast<std::size_t>(i)];
         (void)stream.add_packet(d.payload, d.stamp_ns);
       }
       if (n > 0) {
-        watchdog.beat(kLidar, rt::monotonic_ns());
+        // Only a packet the decoder took shows the sensor alive (not garbage on its port).
+        if (rejected() - rejected_before < static_cast<std::uint64_t>(n))
+          watchdog.beat(kLidar, rt::monotonic_ns());
         shared.packets.fetch_add(static_cast<std::uint64_t>(n), std::memory_order_relaxed);
+        shared.wrong_size.store(ac.wrong_size, std::memory_order_relaxed);
+        shared.invalid_block.store(ac.invalid_block, std::memory_order_relaxed);
+        shared.duplicates.store(ac.duplicates, std::memory_order_relaxed);
+        shared.late_firings.store(ac.late_firings, std::memory_order_relaxed);
       }
       shared.kernel_drops.store(receiver->counters().kernel_drops, std::memory_order_relaxed);
     }
@@ -452,14 +486,80 @@ int run_live(const RunOptions& o) {
     start_thread("publisher", rs->publisher);
     std::array<std::int64_t, kHealthStages> stage_ns{};
     std::array<dds::StageLatencyIn, kHealthStages> stages{};
-    std::array<dds::DropCountIn, 16> drops{};
+    std::array<dds::DropCountIn, 26> drops{};
     static_assert(std::tuple_size_v<decltype(drops)> <= dds::kMaxDrops, "idl/stac.idl's bound");
     std::array<dds::SensorStatusIn, 3> sensors{};
     bool reported = false;
+    // The counters of the last published scan's frame (health without a scan repeats them).
+    struct FrameDrops {
+      std::uint64_t incomplete = 0, packets_lost = 0, segment_overflow = 0, without_pose = 0;
+      std::uint64_t pool_overflow = 0, dropped_detections = 0;
+    } frame_drops;
+    const auto get = [](const std::atomic<std::uint64_t>& a) {
+      return a.load(std::memory_order_relaxed);
+    };
+    // Health now: drops by cause and the inputs' status, with this scan's stages (none when no
+    // scan is published: the samples of a silent or dead sensor).
+    const auto health_sample = [&](std::int64_t stamp_ns, std::uint64_t index,
+                                   std::span<const dds::StageLatencyIn> scan_stages,
+                                   std::int64_t end_to_end) {
+      const std::int64_t now = rt::monotonic_ns();
+      watchdog.update(now);
+      const can::CanInputCounters cc = shared.can.load();
+      const FrameDrops& fd = frame_drops;
+      drops = {dds::DropCountIn{"velodyne.kernel", get(shared.kernel_drops)},
+               {"velodyne.wrong_size", get(shared.wrong_size)},
+               {"velodyne.invalid_block", get(shared.invalid_block)},
+               {"velodyne.duplicates", get(shared.duplicates)},
+               {"velodyne.late_firings", get(shared.late_firings)},
+               {"velodyne.scan_slots_full", stream.scans_dropped()},
+               {"velodyne.incomplete_scan", fd.incomplete},
+               {"velodyne.packets_lost", fd.packets_lost},
+               {"results.slots_full", results.dropped()},
+               {"segmentation.overflow", fd.segment_overflow},
+               {"tracking.pool_full", fd.pool_overflow},
+               {"tracking.detections", fd.dropped_detections},
+               {"dds.errors", get(shared.publish_errors)},
+               {"pose.rejected", history.rejected()},
+               {"ins.bad_checksum", get(shared.ins_bad_checksum)},
+               {"ins.bad_framing", get(shared.ins_bad_framing)},
+               {"ins.malformed", get(shared.ins_malformed)},
+               {"ins.garbage_bytes", get(shared.ins_garbage_bytes)},
+               {"ins.connect_failures", get(shared.ins_connect_failures)},
+               {"ins.disconnects", get(shared.ins_disconnects)},
+               {"ego.scans_without_pose", fd.without_pose},
+               {"can.not_mapped", cc.not_mapped},
+               {"can.overflow", cc.kernel_drops + cc.overflows + get(shared.can.ring_full)},
+               {"can.fd", cc.can_fd},
+               {"can.malformed", cc.malformed},
+               {"can.other_channel", cc.other_channel}};
+      for (std::size_t i = 0; i < sensors.size(); ++i) {
+        const rt::InputStatus st = watchdog.status(i, now);
+        sensors[i] = {kInputNames[i], sensor_status(st),
+                      static_cast<float>(static_cast<double>(st.age_ns) * 1e-9)};
+      }
+      return dds::HealthIn{.scan = {stamp_ns, index},
+                           .stages = scan_stages,
+                           .end_to_end_latency_us = to_us(end_to_end),
+                           .deadline_misses = monitor.misses(),
+                           .drops = drops,
+                           .sensors = sensors};
+    };
+    std::int64_t last_health_ns = rt::monotonic_ns();
     for (;;) {
       Frame* f = results.take();
       if (f == nullptr) {
         if (!shared.perception_done.load(std::memory_order_acquire)) {
+          // No scan for kIdleHealthNs: a health sample without stages, so that subscribers see
+          // a stale or dead sensor (and garbage on its port counted) while nothing is published.
+          if (rt::monotonic_ns() - last_health_ns >= kIdleHealthNs) {
+            const std::uint64_t published = get(shared.published);
+            const dds::HealthIn h =
+                health_sample(rt::realtime_ns(), published == 0 ? 0 : published - 1, {}, 0);
+            if (auto r = (*publisher)->publish_health(h); !r)
+              shared.publish_errors.fetch_add(1, std::memory_order_relaxed);
+            last_health_ns = rt::monotonic_ns();
+          }
           idle();
           continue;
         }
@@ -480,42 +580,14 @@ int run_live(const RunOptions& o) {
                   t0 - f->finished_ns,
                   t1 - t0};
       (void)monitor.record(stage_ns, end_to_end);
-      const std::int64_t now = rt::monotonic_ns();
-      watchdog.update(now);
       for (std::size_t i = 0; i < kHealthStages; ++i)
         stages[i] = {kStageNames[i], to_us(stage_ns[i])};
       const tracking::TrackerCounters& tc = f->result.tracked.counters;
-      const can::CanInputCounters cc = shared.can.load();
-      drops = {
-          dds::DropCountIn{"velodyne.kernel", shared.kernel_drops.load(std::memory_order_relaxed)},
-          {"velodyne.scan_slots_full", stream.scans_dropped()},
-          {"velodyne.incomplete_scan", f->incomplete},
-          {"velodyne.packets_lost", f->packets_lost},
-          {"results.slots_full", results.dropped()},
-          {"segmentation.overflow", f->segment_overflow},
-          {"tracking.pool_full", tc.pool_overflow},
-          {"tracking.detections", tc.dropped_detections},
-          {"dds.errors", shared.publish_errors.load(std::memory_order_relaxed)},
-          {"pose.rejected", history.rejected()},
-          {"ego.scans_without_pose", f->without_pose},
-          {"can.not_mapped", cc.not_mapped},
-          {"can.overflow",
-           cc.kernel_drops + cc.overflows + shared.can.ring_full.load(std::memory_order_relaxed)},
-          {"can.fd", cc.can_fd},
-          {"can.malformed", cc.malformed},
-          {"can.other_channel", cc.other_channel}};
-      for (std::size_t i = 0; i < sensors.size(); ++i) {
-        const rt::InputStatus s = watchdog.status(i, now);
-        sensors[i] = {kInputNames[i], sensor_status(s),
-                      static_cast<float>(static_cast<double>(s.age_ns) * 1e-9)};
-      }
-      const dds::HealthIn health{.scan = {f->result.stamp_ns, index},
-                                 .stages = stages,
-                                 .end_to_end_latency_us = to_us(end_to_end),
-                                 .deadline_misses = monitor.misses(),
-                                 .drops = drops,
-                                 .sensors = sensors};
+      frame_drops = {f->incomplete,   f->packets_lost,  f->segment_overflow,
+                     f->without_pose, tc.pool_overflow, tc.dropped_detections};
+      const dds::HealthIn health = health_sample(f->result.stamp_ns, index, stages, end_to_end);
       if (auto h = (*publisher)->publish_health(health); !h && status) status = h;
+      last_health_ns = rt::monotonic_ns();
       // The viewers' cloud last, outside the scan's end-to-end latency (it is the largest sample).
       if (auto c = scan_publishing.publish_cloud(f->result, index); !c && status) status = c;
       pipeline.want_cloud(scan_publishing.cloud_reader());  // as publish_cloud found it
@@ -561,6 +633,12 @@ int run_live(const RunOptions& o) {
                u(shared.receive_errors.load()));
   std::fprintf(
       stderr,
+      "  dropped     wrong size %llu, invalid block %llu, duplicate %llu, late firings %llu "
+      "(packets the decoder refused)\n",
+      u(shared.wrong_size.load()), u(shared.invalid_block.load()), u(shared.duplicates.load()),
+      u(shared.late_firings.load()));
+  std::fprintf(
+      stderr,
       "  scans       %llu received (complete), %llu published, %llu incomplete (not processed)\n",
       u(shared.scans.load()), u(shared.published.load()), u(shared.incomplete.load()));
   std::fprintf(
@@ -574,6 +652,15 @@ int run_live(const RunOptions& o) {
       stderr, "  ego         %llu INS fixes, %llu dead-reckoned poses, %llu scans without a pose\n",
       u(estimator.counters().ins_fixes), u(estimator.counters().dead_reckoned),
       u(pipeline.scans_without_pose()));
+  if (have_pose_thread && rs->ins != InsTransport::kNone) {
+    std::fprintf(stderr,
+                 "  ins         %llu poses rejected; input: bad checksum %llu, bad framing %llu, "
+                 "malformed %llu, %llu bytes skipped; connect failures %llu, disconnects %llu\n",
+                 u(history.rejected()), u(shared.ins_bad_checksum.load()),
+                 u(shared.ins_bad_framing.load()), u(shared.ins_malformed.load()),
+                 u(shared.ins_garbage_bytes.load()), u(shared.ins_connect_failures.load()),
+                 u(shared.ins_disconnects.load()));
+  }
   if (can_config) {
     const can::CanInputCounters cc = inputs.can_counters();
     std::fprintf(stderr,

@@ -169,6 +169,7 @@ TEST(RunCli, ReplayedDriveGivesOneTrackedObjectsSamplePerScanAndHealthThatAgrees
     float resolution = 0;
   };
   std::vector<CloudSeen> clouds;
+  std::size_t healths_before = 0;
   for (int quiet = 0; quiet < 200;) {
     const int n = tracked.drain<Types::TrackedObjects>([&](const Types::TrackedObjects& s) {
       indices.push_back(s.scan_index);
@@ -191,7 +192,12 @@ TEST(RunCli, ReplayedDriveGivesOneTrackedObjectsSamplePerScanAndHealthThatAgrees
       }
       clouds.push_back(c);
     });
-    quiet = n > 0 ? 0 : quiet + 1;
+    // Health without a scan comes every second while nothing is published: not a scan's.
+    bool scan_sample = static_cast<std::size_t>(n) > healths.size() - healths_before;
+    for (std::size_t i = healths_before; i < healths.size(); ++i)
+      scan_sample |= !healths[i].stages.empty();
+    quiet = scan_sample ? 0 : quiet + 1;
+    healths_before = healths.size();
     dds_sleepfor(DDS_MSECS(10));
   }
   ASSERT_EQ(run.stop(SIGINT), 0) << run.output();
@@ -220,9 +226,17 @@ TEST(RunCli, ReplayedDriveGivesOneTrackedObjectsSamplePerScanAndHealthThatAgrees
     EXPECT_NE(out.find(word), std::string::npos) << word << " missing from:\n" << out;
   }
 
-  // DDS: one tracked_objects sample per published scan, in order, none lost; health for each.
+  // DDS: one tracked_objects sample per published scan, in order, none lost; health for each,
+  // and, while no scan was published for a second (before the replay), health without stages.
   ASSERT_EQ(indices.size(), published) << out;
   for (std::size_t i = 0; i < indices.size(); ++i) EXPECT_EQ(indices[i], i);
+  std::erase_if(healths, [&](const HealthSeen& h) {
+    if (!h.stages.empty()) return false;
+    EXPECT_EQ(h.end_to_end_us, 0u);
+    EXPECT_LT(h.scan_index, std::max<std::uint64_t>(published, 1));
+    EXPECT_EQ(h.drops.size(), 26u);
+    return true;
+  });
   ASSERT_EQ(healths.size(), published);
   const HealthSeen& last = healths.back();
   EXPECT_EQ(last.scan_index, published - 1);
@@ -281,6 +295,70 @@ TEST(RunCli, ReplayedDriveGivesOneTrackedObjectsSamplePerScanAndHealthThatAgrees
     classified += c.classified;
   }
   EXPECT_GT(classified, 0u);  // the shipped model classifies tracks: their returns carry classes
+}
+
+// Garbage on the sensor's port: every datagram is counted by cause, in health (published each
+// second while no scan comes) and in the summary, and it does not make the lidar look alive.
+TEST(RunCli, GarbageOnTheSensorPortIsCountedInHealthAndTheLidarStaysStale) {
+  constexpr std::uint32_t kDomain = 145;
+  const auto dir = fresh_dir("garbage");
+  const std::string uri = stac::testing::loopback_uri();
+  const dds_entity_t domain = dds_create_domain(kDomain, uri.c_str());
+  ASSERT_GT(domain, 0);
+  const dds_entity_t participant = dds_create_participant(kDomain, nullptr, nullptr);
+  ASSERT_GT(participant, 0);
+  Reader health(participant, Types::health(), "stac/health", dds::Topic::kHealth);
+  ASSERT_TRUE(health.ok());
+  const std::uint16_t udp = free_port(SOCK_DGRAM);
+  ASSERT_NE(udp, 0);
+  Child run("run --domain " + std::to_string(kDomain) + " --bind 127.0.0.1 --port " +
+                std::to_string(udp) + " --ins none",
+            dir / "run.log");
+  ASSERT_TRUE(run.started());
+  for (int i = 0; i < 2000 && !health.matched(); ++i) dds_sleepfor(DDS_MSECS(10));
+  ASSERT_TRUE(health.matched()) << run.output();
+
+  const int fd = socket(AF_INET, SOCK_DGRAM, 0);
+  sockaddr_in to{};
+  to.sin_family = AF_INET;
+  to.sin_port = htons(udp);
+  to.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  std::vector<std::uint8_t> junk(1206, 0x5A);  // the size of a data packet, no 0xEEFF block
+  constexpr int kEach = 40;
+  for (int i = 0; i < kEach; ++i) {
+    ASSERT_EQ(sendto(fd, junk.data(), 100, 0, reinterpret_cast<sockaddr*>(&to), sizeof(to)), 100);
+    ASSERT_EQ(sendto(fd, junk.data(), junk.size(), 0, reinterpret_cast<sockaddr*>(&to), sizeof(to)),
+              1206);
+    dds_sleepfor(DDS_MSECS(20));  // the whole second: a lidar that beats on anything looks alive
+  }
+  close(fd);
+  std::optional<HealthSeen> seen;
+  for (int i = 0; i < 400 && !(seen && seen->drops["velodyne.wrong_size"] == kEach &&
+                               seen->drops["velodyne.invalid_block"] == kEach);
+       ++i) {
+    (void)health.drain<Types::Health>([&](const Types::Health& s) {
+      HealthSeen h{s.scan_index, s.deadline_misses, s.end_to_end_latency_us, {}, {}, {}};
+      EXPECT_EQ(s.stages._length, 0u);  // no scan: health without stages
+      for (std::uint32_t k = 0; k < s.drops._length; ++k)
+        h.drops[s.drops._buffer[k].cause] = s.drops._buffer[k].count;
+      for (std::uint32_t k = 0; k < s.sensors._length; ++k)
+        h.sensors[s.sensors._buffer[k].name] = s.sensors._buffer[k].status;
+      seen = std::move(h);
+    });
+    dds_sleepfor(DDS_MSECS(10));
+  }
+  ASSERT_TRUE(seen) << run.output();
+  EXPECT_EQ(seen->drops["velodyne.wrong_size"], static_cast<std::uint64_t>(kEach));
+  EXPECT_EQ(seen->drops["velodyne.invalid_block"], static_cast<std::uint64_t>(kEach));
+  EXPECT_NE(seen->sensors.at("lidar"), 0u);  // not ok: nothing it sent was a packet
+  EXPECT_FALSE(seen->drops.count("")) << "a drop without its cause";
+  EXPECT_EQ(run.stop(SIGINT), 0) << run.output();
+  const std::string out = run.output();
+  EXPECT_NE(out.find("dropped     wrong size " + std::to_string(kEach) + ", invalid block " +
+                     std::to_string(kEach)),
+            std::string::npos)
+      << out;
+  dds_delete(domain);
 }
 
 TEST(RunCli, InsOverUdpDeskewsTheScansAndSigtermStopsAfterPublishingWhatWasReceived) {
