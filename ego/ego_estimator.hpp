@@ -37,6 +37,9 @@ struct EgoCounters {
   std::uint64_t ins_fixes = 0;        // Group 1 turned into poses
   std::uint64_t no_absolute_time = 0; // Group 1 before a Group 3 gave the GPS week: skipped
   std::uint64_t not_aligned = 0;      // alignment status above the limit: skipped
+  std::uint64_t impossible = 0;       // a value no vehicle has (NaN, |lat| > 90, |lon| > 360, alt
+                                      // outside -1..20 km, speed over 200 m/s): skipped, never
+                                      // the origin
   std::uint64_t dead_reckoned = 0;    // poses pushed from odometry
   std::uint64_t rejected = 0;         // poses the history refused (out of order)
 };

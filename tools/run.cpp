@@ -58,6 +58,8 @@ void on_signal(int) {
 enum Input : std::size_t { kLidar, kIns, kCan };
 // While no scan is published, a health sample (without stages) every second.
 constexpr std::int64_t kIdleHealthNs = 1'000'000'000;
+// After a stop request the receiver reads what its socket holds for at most this long.
+constexpr std::int64_t kStopDrainNs = 300'000'000;
 constexpr const char* kInputNames[] = {"lidar", "ins", "can"};
 
 // Health stages: where the time of one scan went, from its last firing to its publication.
@@ -400,11 +402,15 @@ int run_live(const RunOptions& o) {
   std::thread receiver_thread([&] {
     start_thread("receiver", rs->receiver);
     std::array<io::Datagram, 32> batch{};
+    std::int64_t stop_seen_ns = 0;
     for (;;) {
-      // After a stop request: what the socket already holds is still read, then the thread ends.
+      // After a stop request: what the socket already holds is still read, then the thread ends;
+      // under a flood that never lets the socket run empty, for at most kStopDrainNs.
       const bool stopping = shared.stopping.load(std::memory_order_acquire);
+      if (stopping && stop_seen_ns == 0) stop_seen_ns = rt::monotonic_ns();
       const int n = receiver->receive(batch, stopping ? 0 : 100);
       if (n == io::UdpReceiver::kStopped || (stopping && n == 0)) break;
+      if (stopping && rt::monotonic_ns() - stop_seen_ns > kStopDrainNs) break;
       if (n == io::UdpReceiver::kError) {
         shared.receive_errors.fetch_add(1, std::memory_order_relaxed);
         idle();
@@ -654,12 +660,13 @@ int run_live(const RunOptions& o) {
       u(pipeline.scans_without_pose()));
   if (have_pose_thread && rs->ins != InsTransport::kNone) {
     std::fprintf(stderr,
-                 "  ins         %llu poses rejected; input: bad checksum %llu, bad framing %llu, "
-                 "malformed %llu, %llu bytes skipped; connect failures %llu, disconnects %llu\n",
-                 u(history.rejected()), u(shared.ins_bad_checksum.load()),
-                 u(shared.ins_bad_framing.load()), u(shared.ins_malformed.load()),
-                 u(shared.ins_garbage_bytes.load()), u(shared.ins_connect_failures.load()),
-                 u(shared.ins_disconnects.load()));
+                 "  ins         %llu poses rejected, %llu fixes with impossible values; input: bad "
+                 "checksum %llu, bad framing %llu, malformed %llu, %llu bytes skipped; connect "
+                 "failures %llu, disconnects %llu\n",
+                 u(history.rejected()), u(estimator.counters().impossible),
+                 u(shared.ins_bad_checksum.load()), u(shared.ins_bad_framing.load()),
+                 u(shared.ins_malformed.load()), u(shared.ins_garbage_bytes.load()),
+                 u(shared.ins_connect_failures.load()), u(shared.ins_disconnects.load()));
   }
   if (can_config) {
     const can::CanInputCounters cc = inputs.can_counters();

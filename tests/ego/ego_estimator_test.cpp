@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <vector>
 
@@ -73,6 +74,40 @@ TEST(EgoEstimator, InsFixesBecomeUtcPosesInTheLocalFrame) {
   EXPECT_NEAR(l.pose.position_m.x(), 0.05, 0.01);
   EXPECT_NEAR(l.pose.velocity_mps.x(), 10.0, 1e-6);
   EXPECT_EQ(ego.source(utc), EgoSource::kIns);
+}
+
+// A Group 1 with a valid checksum and impossible values (NaN, off the Earth) is skipped and
+// counted; with the origin taken from the first fix, it does not become the origin, and the
+// fixes after it are poses.
+TEST(EgoEstimator, AFixWithImpossibleValuesIsSkippedAndNeverTheOrigin) {
+  LocalFrame frame;  // origin: the first fix
+  PoseHistory history(PoseHistoryConfig{.capacity = 100});
+  EgoEstimator ego(EgoEstimatorConfig{}, frame, history);
+  InsStream s;
+  s.feed(s.group3(), ego);
+  const auto bad = [&](double sow, auto&& spoil) {
+    applanix::Group1 g;
+    g.latitude_deg = kOrigin.lat_deg;
+    g.longitude_deg = kOrigin.lon_deg;
+    g.altitude_m = kOrigin.alt_m;
+    spoil(g);
+    applanix::TimeDistance t;
+    t.time1_s = sow;
+    t.time_types = 0x01;
+    s.feed(applanix::encode_group1(g, t, s.bytes), ego);
+  };
+  bad(100.000,
+      [](applanix::Group1& g) { g.latitude_deg = std::numeric_limits<double>::quiet_NaN(); });
+  bad(100.001, [](applanix::Group1& g) { g.latitude_deg = 1e308; });
+  bad(100.002, [](applanix::Group1& g) { g.altitude_m = std::numeric_limits<double>::infinity(); });
+  bad(100.003, [](applanix::Group1& g) { g.north_velocity_mps = 1e6f; });
+  EXPECT_EQ(ego.counters().impossible, 4u);
+  EXPECT_EQ(ego.counters().ins_fixes, 0u);
+  for (int i = 1; i <= 3; ++i) s.feed(s.group1(100.0 + 0.005 * i, 0.05 * i), ego);
+  EXPECT_EQ(ego.counters().ins_fixes, 3u);
+  EXPECT_EQ(ego.counters().rejected, 0u);
+  EXPECT_NEAR(frame.origin().lat_deg, kOrigin.lat_deg, 1e-9);
+  EXPECT_NEAR(frame.origin().lon_deg, kOrigin.lon_deg + 0.05 / 79'800.0, 1e-9);
 }
 
 TEST(EgoEstimator, CanOdometryCarriesThePoseWhenTheInsGoesSilent) {
