@@ -99,14 +99,16 @@ int run_decode(const DecodeOptions& o) {
                "stac decode: %s -> %s (%s)\n"
                "  capture   %s\n"
                "  scans     %llu (%llu complete, framed at %.2f deg)\n"
-               "  points    %llu (no return %llu, out of range %llu)\n"
+               "  points    %llu (no return %llu, out of range %llu, of lasers the calibration "
+               "disables %llu)\n"
                "  dropped   %s\n",
                o.in.c_str(), o.out.c_str(), o.format.c_str(),
                capture_frames_summary(pc, a.packets, s.port).c_str(),
                static_cast<unsigned long long>(scans), static_cast<unsigned long long>(complete),
                s.assembler.cut_angle / 100.0, static_cast<unsigned long long>(points),
                static_cast<unsigned long long>(dc.no_return),
-               static_cast<unsigned long long>(dc.out_of_range), packet_drops_summary(a).c_str());
+               static_cast<unsigned long long>(dc.out_of_range),
+               static_cast<unsigned long long>(dc.disabled), packet_drops_summary(a).c_str());
   if (scans == 0) return fail(nothing_decoded_reason(o.in, pc, a, s.port));
   return 0;
 }

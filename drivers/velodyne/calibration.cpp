@@ -46,8 +46,10 @@ rt::Result<bool> check_ranges(const std::filesystem::path& path, const Calibrati
       return bad("focal_distance", l.focal_distance_m, "0..200 m");
     if (!std::isfinite(l.focal_slope) || std::abs(l.focal_slope) > 100)
       return bad("focal_slope", l.focal_slope, "+-100");
-    if (l.min_intensity < 0 || l.max_intensity > 255 || l.min_intensity > l.max_intensity)
-      return bad("min_intensity/max_intensity", l.min_intensity, "0 <= min <= max <= 255");
+    if (l.min_intensity < 0 || l.min_intensity > 255)
+      return bad("min_intensity", l.min_intensity, "0..255");
+    if (l.max_intensity < l.min_intensity || l.max_intensity > 255)
+      return bad("max_intensity", l.max_intensity, "min_intensity..255");
   }
   if (!(c.distance_resolution_m > 0 && c.distance_resolution_m < 0.1)) {
     std::ostringstream s;
@@ -65,9 +67,9 @@ rt::Result<Calibration> finish(const std::filesystem::path& path,
   Calibration c;
   c.source = path.string();
   c.distance_resolution_m = distance_resolution_m;
-  if (lasers.empty() || lasers.size() > static_cast<std::size_t>(kMaxLasers)) {
-    return rt::make_error(path.string() + ": expected 1 to 64 lasers, found " +
-                          std::to_string(lasers.size()));
+  if (lasers.size() != static_cast<std::size_t>(kMaxLasers)) {  // the returns of missing ones: lost
+    return rt::make_error(path.string() + ": an HDL-64E calibration has 64 lasers, this file " +
+                          std::to_string(lasers.size()) + " (cut short, or another sensor's)");
   }
   c.num_lasers = static_cast<int>(lasers.size());
   std::set<int> seen;
@@ -143,6 +145,15 @@ rt::Result<Calibration> load_ros_yaml(const std::filesystem::path& path) {
     auto r = yaml_number(root, "distance_resolution", path.string() + ": ", std::nullopt);
     if (!r) return rt::Unexpected<rt::Error>{r.error()};
     resolution = *r;
+  }
+  if (root["num_lasers"]) {  // when written, it must agree with the list
+    auto n = yaml_number(root, "num_lasers", path.string() + ": ", std::nullopt);
+    if (!n) return rt::Unexpected<rt::Error>{n.error()};
+    if (*n != static_cast<double>(root["lasers"].size())) {
+      return rt::make_error(path.string() + ": 'num_lasers' is " +
+                            root["num_lasers"].as<std::string>() + " but the 'lasers' list holds " +
+                            std::to_string(root["lasers"].size()));
+    }
   }
   std::vector<LaserCalibration> lasers;
   int index = 0;

@@ -143,20 +143,37 @@ TEST(Calibration, RejectsBrokenFilesWithClearMessages) {
     std::string text;
     const char* expect;
   };
-  std::string dup = "lasers:\n" + ros_yaml_laser(0) + ros_yaml_laser(0);
+  // Lasers 1..n-1 of a valid file, after what a case puts first.
+  const auto rest = [](int n) {
+    std::string s;
+    for (int i = 1; i < n; ++i) s += ros_yaml_laser(i);
+    return s;
+  };
+  std::string dup = "lasers:\n" + ros_yaml_laser(0) + rest(63) + ros_yaml_laser(0);
   std::string non_number = "lasers:\n" + ros_yaml_laser(0) + "  focal_slope: abc\n";
-  std::string out_of_range = "lasers:\n- laser_id: 0\n  rot_correction: 0\n"
-                             "  dist_correction: 1.4\n  vert_correction: 2.5\n";
+  std::string out_of_range =
+      "lasers:\n- laser_id: 0\n  rot_correction: 0\n"
+      "  dist_correction: 1.4\n  vert_correction: 2.5\n" +
+      rest(64);
+  std::string intensity = "lasers:\n" + ros_yaml_laser(0) + "  max_intensity: 99999\n" + rest(64);
   const Case cases[] = {
       {"dup.yaml", dup, "appears twice"},
       {"nan.yaml", non_number, "'focal_slope' is not a number"},
       {"range.yaml", out_of_range, "'vert_correction'"},
+      {"intensity.yaml", intensity, "'max_intensity' = 99999 is outside"},
+      // A file cut short: the returns of the missing lasers would be lost.
+      {"short.yaml", "lasers:\n" + ros_yaml_laser(0) + rest(63),
+       "an HDL-64E calibration has 64 lasers, this file 63"},
+      {"count.yaml", "num_lasers: 32\nlasers:\n" + ros_yaml_laser(0) + rest(64),
+       "'num_lasers' is 32 but the 'lasers' list holds 64"},
       {"garbage.yaml", "\x01\x02 not a calibration {{{", "neither a Velodyne db.xml"},
       {"list.yaml", "lasers: 5\n", "missing the 'lasers' list"},
-      {"bad.xml", "<?xml version=\"1.0\"?><boost_serialization><DB><points_><item><px><id_>0</id_>"
-                  "<rotCorrection_>1</rotCorrection_></px></item></points_></DB></boost_serialization>",
+      {"bad.xml",
+       "<?xml version=\"1.0\"?><boost_serialization><DB><points_><item><px><id_>0</id_>"
+       "<rotCorrection_>1</rotCorrection_></px></item></points_></DB></boost_serialization>",
        "laser 0: missing <vertCorrection_>"},
-      {"trunc.xml", "<?xml version=\"1.0\"?><boost_serialization><DB><points_>", "not readable as XML"},
+      {"trunc.xml", "<?xml version=\"1.0\"?><boost_serialization><DB><points_>",
+       "not readable as XML"},
   };
   for (const Case& k : cases) {
     const auto path = write_temp(k.name, k.text);
