@@ -81,6 +81,28 @@ void EgoEstimator::add_ins(const applanix::Parsed& message,
   fix.velocity_ned_mps = {g->north_velocity_mps, g->east_velocity_mps, g->down_velocity_mps};
   fix.angular_rate_frd_dps = {g->rate_longitudinal_dps, g->rate_transverse_dps, g->rate_down_dps};
   const PoseSample pose = frame_.pose(fix);
+  // A fix over kTimeJumpNs after the last one counts only when the next follows it within
+  // kConfirmNs (the INS back after an outage); alone, it was a corrupted time.
+  constexpr std::int64_t kTimeJumpNs = 1'000'000'000, kConfirmNs = 100'000'000;
+  if (have_ins_ && pose.stamp_ns - last_ins_.stamp_ns > kTimeJumpNs) {
+    const bool confirms = have_after_jump_ && pose.stamp_ns > after_jump_.stamp_ns &&
+                          pose.stamp_ns - after_jump_.stamp_ns <= kConfirmNs;
+    if (!confirms) {
+      if (have_after_jump_) ++counters_.time_jumps;
+      after_jump_ = pose;
+      have_after_jump_ = true;
+      return;
+    }
+    have_after_jump_ = false;
+    accept(after_jump_);
+  } else if (have_after_jump_) {
+    ++counters_.time_jumps;  // the fixes went on from before it
+    have_after_jump_ = false;
+  }
+  accept(pose);
+}
+
+void EgoEstimator::accept(const PoseSample& pose) noexcept {
   if (!history_.push(pose)) {
     ++counters_.rejected;
     return;

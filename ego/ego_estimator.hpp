@@ -42,6 +42,9 @@ struct EgoCounters {
                                       // the origin
   std::uint64_t dead_reckoned = 0;    // poses pushed from odometry
   std::uint64_t rejected = 0;         // poses the history refused (out of order)
+  std::uint64_t time_jumps = 0;       // a fix over 1 s after the last that no fix within 0.1 s
+                                      // followed: a corrupted time, dropped (else every later
+                                      // fix would be "out of order")
 };
 
 class EgoEstimator {
@@ -62,8 +65,13 @@ class EgoEstimator {
   LocalFrame& frame_;
   PoseHistory& history_;
   can::DeadReckoning odometry_;
+  void accept(const PoseSample& pose) noexcept;
+
   PoseSample last_ins_;
   bool have_ins_ = false;
+  // A fix that jumped ahead of the last accepted one, held until the next one confirms it.
+  PoseSample after_jump_;
+  bool have_after_jump_ = false;
   std::int64_t last_pushed_ns_ = 0;
   EgoCounters counters_;
 };

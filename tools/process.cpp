@@ -252,12 +252,13 @@ int run_process(const ProcessOptions& o) {
   if (poses) {
     std::fprintf(stderr,
                  "  ego         %llu INS fixes (%llu skipped before a GPS week, %llu not aligned, "
-                 "%llu impossible); "
+                 "%llu impossible, %llu time jumps); "
                  "scan clock: %s; %llu scans without a pose (not deskewed)\n",
                  static_cast<unsigned long long>(poses->counters.ins_fixes),
                  static_cast<unsigned long long>(poses->counters.no_absolute_time),
                  static_cast<unsigned long long>(poses->counters.not_aligned),
                  static_cast<unsigned long long>(poses->counters.impossible),
+                 static_cast<unsigned long long>(poses->counters.time_jumps),
                  ego::to_string(result.clock_source),
                  static_cast<unsigned long long>(pipeline.scans_without_pose()));
   } else {

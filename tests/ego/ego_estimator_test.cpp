@@ -110,6 +110,30 @@ TEST(EgoEstimator, AFixWithImpossibleValuesIsSkippedAndNeverTheOrigin) {
   EXPECT_NEAR(frame.origin().lon_deg, kOrigin.lon_deg + 0.05 / 79'800.0, 1e-9);
 }
 
+// One fix whose time jumped an hour ahead (a corrupted message with a valid checksum) is dropped
+// once the next fix shows the time going on from before it; the INS back after a 5 s outage is
+// taken at its second fix, with the first.
+TEST(EgoEstimator, AFixThatJumpsAheadAloneIsDroppedAndTheInsBackAfterAnOutageIsTaken) {
+  LocalFrame frame(kOrigin);
+  PoseHistory history(PoseHistoryConfig{.capacity = 4096});
+  EgoEstimator ego(EgoEstimatorConfig{}, frame, history);
+  InsStream s;
+  s.feed(s.group3(), ego);
+  for (int i = 0; i < 100; ++i) {
+    const double sow = 100.0 + 0.005 * i;
+    s.feed(s.group1(i == 50 ? sow + 3600.0 : sow, 0.05 * i), ego);
+  }
+  EXPECT_EQ(ego.counters().time_jumps, 1u);
+  EXPECT_EQ(ego.counters().rejected, 0u);
+  EXPECT_EQ(ego.counters().ins_fixes, 99u);
+  s.feed(s.group1(105.5, 55.0), ego);        // 5 s of silence, then fixes again
+  EXPECT_EQ(ego.counters().ins_fixes, 99u);  // held until the next one
+  s.feed(s.group1(105.505, 55.05), ego);
+  EXPECT_EQ(ego.counters().ins_fixes, 101u);
+  EXPECT_EQ(ego.counters().time_jumps, 1u);
+  EXPECT_EQ(ego.counters().rejected, 0u);
+}
+
 TEST(EgoEstimator, CanOdometryCarriesThePoseWhenTheInsGoesSilent) {
   LocalFrame frame(kOrigin);
   PoseHistory history(PoseHistoryConfig{.capacity = 1000});
