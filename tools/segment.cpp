@@ -164,12 +164,28 @@ int segment_capture(const SegmentOptions& o, const segmentation::SegmenterConfig
               std::to_string(o.scan) + " is not among them (scans count from 0)");
 }
 
+// A pcap or pcapng file by its first four bytes (whatever its name); anything else is read as a
+// KITTI scan, which checks its size.
+bool is_capture(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  unsigned char m[4] = {};
+  if (!in.read(reinterpret_cast<char*>(m), 4)) return false;
+  const std::uint32_t le =
+      m[0] | (m[1] << 8) | (m[2] << 16) | (static_cast<std::uint32_t>(m[3]) << 24);
+  for (const std::uint32_t magic : {0xa1b2c3d4u, 0xa1b23c4du, 0x0a0d0d0au}) {
+    const std::uint32_t swapped = ((magic & 0xffu) << 24) | ((magic & 0xff00u) << 8) |
+                                  ((magic >> 8) & 0xff00u) | (magic >> 24);
+    if (le == magic || le == swapped) return true;
+  }
+  return false;
+}
+
 int run_segment(const SegmentOptions& o) {
   auto config = load_segmentation_settings(config_path(o.config));
   if (!config) return fail(config.error().message);
   if (o.scan < 0) return fail("--scan must be >= 0");
   if (o.view_range_m <= 0) return fail("--view-range must be > 0");
-  if (std::filesystem::path(o.in).extension() != ".bin") return segment_capture(o, *config);
+  if (is_capture(o.in)) return segment_capture(o, *config);
   auto cloud = load_kitti_scan(o.in);
   if (!cloud) return fail(cloud.error().message);
   const segmentation::PointView view{cloud->data(), cloud->size() / 4, 4 * sizeof(float)};
@@ -190,7 +206,7 @@ void add_segment_command(CLI::App& app) {
       "scan).\n"
       "csv: one row per segment: id,points,centroid_x,centroid_y,centroid_z,box_x,box_y,length,\n"
       "width,height,yaw (rad, from x, counter-clockwise),z_min,z_max (m, sensor frame).");
-  cmd->add_option("--in", o->in, "KITTI .bin scan, or a pcap capture")
+  cmd->add_option("--in", o->in, "KITTI .bin scan, or a pcap/pcapng capture (told apart by their first bytes)")
       ->required()
       ->check(CLI::ExistingFile);
   cmd->add_option("--out", o->out, "write the segments as csv");

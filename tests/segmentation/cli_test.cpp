@@ -82,6 +82,20 @@ TEST(SegmentCli, SimulatedCaptureIsDecodedAndSegmented) {
   EXPECT_EQ(missing.code, 1);
   EXPECT_NE(missing.output.find("--scan 40 is not among them"), std::string::npos)
       << missing.output;
+
+  // The format comes from the file's first bytes, not its name.
+  std::filesystem::copy_file(pcap, dir / "capture.bin");
+  const CliResult named_bin = stac("segment --in " + (dir / "capture.bin").string() + " --scan 1");
+  ASSERT_EQ(named_bin.code, 0) << named_bin.output;
+  EXPECT_NE(named_bin.output.find("capture.bin scan 1"), std::string::npos) << named_bin.output;
+  EXPECT_EQ(summary_number(named_bin.output, "segments   "),
+            summary_number(r.output, "segments   "));
+  if (std::filesystem::exists(stac::testing::shared_data("kitti/000000.bin"))) {
+    std::filesystem::copy_file(stac::testing::shared_data("kitti/000000.bin"), dir / "scan.dat");
+    const CliResult kitti = stac("segment --in " + (dir / "scan.dat").string());
+    ASSERT_EQ(kitti.code, 0) << kitti.output;
+    EXPECT_EQ(summary_number(kitti.output, "points     "), 124668) << kitti.output;
+  }
 }
 
 TEST(SegmentCli, RejectsAFileThatIsNotAKittiScan) {
