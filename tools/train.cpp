@@ -60,6 +60,19 @@ int run_train(const TrainOptions& o) {
     return fail(
         "every track of the datasets is inconsistent: nothing to train on "
         "(--keep-inconsistent trains on them)");
+  // A class without tracks cannot be learned: none of the three is an error, one missing a warning.
+  if (per[0] + per[1] + per[2] == 0) {
+    return fail("the datasets hold " + std::to_string(per[3]) +
+                " background tracks and no car, pedestrian or bicyclist: nothing to tell apart "
+                "(add drives with objects: stac sim --scenario urban, then stac dataset)");
+  }
+  for (std::size_t k = 0; k < 3; ++k) {
+    if (per[k] == 0) {
+      std::fprintf(stderr, "stac train: warning: no %s track: the model will never say %s\n",
+                   classification::class_name(static_cast<classification::ObjectClass>(k)),
+                   classification::class_name(static_cast<classification::ObjectClass>(k)));
+    }
+  }
   learning::TrackTrainingConfig config;
   config.segment.rounds = o.rounds;
   config.holistic.rounds = o.rounds;

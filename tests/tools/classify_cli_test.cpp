@@ -198,6 +198,18 @@ TEST_F(ClassifyCli, MalformedInputsAreRefusedWithMessages) {
   EXPECT_NE(late.code, 0);
   EXPECT_NE(late.output.find("by time"), std::string::npos) << late.output;
 
+  // The empty street alone: background tracks only, no class to tell apart.
+  const CliResult background = stac("dataset --in " + at("empty.pcap") + " --truth " +
+                                    at("empty.jsonl") + " --out " + at("background_data"));
+  ASSERT_EQ(background.code, 0) << background.output;
+  const CliResult nothing =
+      stac("train --data " + at("background_data") + " --out " + at("m0.stac") + " --rounds 5");
+  EXPECT_EQ(nothing.code, 1);
+  EXPECT_NE(nothing.output.find("background tracks and no car, pedestrian or bicyclist"),
+            std::string::npos)
+      << nothing.output;
+  EXPECT_FALSE(std::filesystem::exists(at("m0.stac")));
+
   const CliResult no_data = stac("train --data " + at("nowhere") + " --out " + at("m.stac"));
   EXPECT_NE(no_data.code, 0);
   EXPECT_NE(no_data.output.find("stac dataset"), std::string::npos) << no_data.output;
