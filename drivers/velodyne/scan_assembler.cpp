@@ -9,6 +9,9 @@ namespace {
 
 constexpr int kHalfTurn = kRotationUnits / 2;
 constexpr double kGapFactor = 1.5;  // an azimuth step this many times the usual one is a gap
+// Between two blocks of one packet the rotation advances by at most kMaxBlockStep (0.01 deg:
+// 3 deg, ten times a firing's step at 1200 rpm) and goes back by at most kMaxBlockBack (jitter).
+constexpr int kMaxBlockStep = 300, kMaxBlockBack = 5;
 constexpr std::size_t kPointsPerPacket = kBlocksPerPacket * kLasersPerBlock;
 
 int forward(int from, int to) noexcept { return (to - from + kRotationUnits) % kRotationUnits; }
@@ -111,6 +114,16 @@ bool ScanAssembler::add_packet(std::span<const std::uint8_t> payload,
   }
   for (const RawBlock& b : packet->blocks) {
     if ((b.bank != kUpperBank && b.bank != kLowerBank) || b.rotation >= kRotationUnits) {
+      ++counters_.invalid_block;
+      return false;
+    }
+  }
+  // The blocks of one packet are fired within about 0.3 ms: their rotations advance by a few
+  // hundredths of a degree (equal within a firing). Rotations that jump (a corrupted packet whose
+  // bank ids hold) would cross the cut angle and split a scan: the packet is dropped.
+  for (int b = 1; b < kBlocksPerPacket; ++b) {
+    const int step = forward(packet->blocks[b - 1].rotation, packet->blocks[b].rotation);
+    if (step > kMaxBlockStep && step < kRotationUnits - kMaxBlockBack) {
       ++counters_.invalid_block;
       return false;
     }

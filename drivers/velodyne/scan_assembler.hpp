@@ -32,7 +32,8 @@ struct ScanAssemblerConfig {
 struct AssemblerCounters {
   std::uint64_t packets = 0;        // payloads offered
   std::uint64_t wrong_size = 0;     // not 1206 bytes: dropped
-  std::uint64_t invalid_block = 0;  // bad bank id or rotation >= 36000: packet dropped
+  std::uint64_t invalid_block = 0;  // bad bank id, rotation >= 36000, or rotations that jump
+                                    // between its blocks (over 3 deg): packet dropped
   std::uint64_t duplicates = 0;     // identical to one of the last 16 packets: dropped
   std::uint64_t late_firings = 0;   // reordered firings belonging to an already closed scan
   std::uint64_t packets_lost = 0;   // estimated from azimuth steps

@@ -219,6 +219,37 @@ TEST(ScanAssembler, CountsMalformedPacketsWithoutCrashing) {
   EXPECT_TRUE(scan.points.empty());
 }
 
+// Packets whose bank ids hold but whose blocks' rotations jump (corrupted) are dropped: the
+// scans are framed as without them, none is split, nothing counts as lost or late.
+TEST(ScanAssembler, PacketsWithJumpingRotationsAreDroppedAndSplitNoScan) {
+  StreamSpec spec;
+  spec.seconds = 1.05;
+  const auto clean = make_stream(spec);
+  std::vector<StreamPacket> mixed;
+  std::mt19937 rng(7);
+  std::uint64_t wild = 0;
+  for (std::size_t i = 0; i < clean.size(); ++i) {
+    mixed.push_back(clean[i]);
+    if (i % 97 == 13) {  // after it, a copy with random rotations (each < 36000)
+      StreamPacket w = clean[i];
+      for (int b = 0; b < kBlocksPerPacket; ++b)
+        store_u16(w.bytes.data() + 100 * b + 2, static_cast<std::uint16_t>(rng() % 36000));
+      w.bytes[1010] ^= 0x5A;  // a distance byte: not a duplicate of the packet before it
+      mixed.push_back(w);
+      ++wild;
+    }
+  }
+  const Assembled a = assemble(clean), b = assemble(mixed);
+  EXPECT_EQ(b.counters.invalid_block, wild);
+  ASSERT_EQ(a.headers.size(), b.headers.size());
+  for (std::size_t i = 0; i < a.headers.size(); ++i) {
+    EXPECT_EQ(a.headers[i].complete(), b.headers[i].complete()) << i;
+    EXPECT_EQ(a.sizes[i], b.sizes[i]) << i;
+  }
+  EXPECT_EQ(b.counters.packets_lost, 0u);
+  EXPECT_EQ(b.counters.late_firings, 0u);
+}
+
 TEST(ScanAssembler, CountsPointsBeyondCapacity) {
   StreamSpec spec;
   spec.seconds = 0.3;
