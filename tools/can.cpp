@@ -77,6 +77,8 @@ int run_candump(const CandumpOptions& o) {
               rc.frames, rc.can_fd, dc.decoded, rows, o.out.c_str());
   if (dc.short_frames > 0) std::printf("candump: %" PRIu64 " frames too short for their signal, dropped\n", dc.short_frames);
   if (dr.gaps() > 0) std::printf("candump: %" PRIu64 " intervals not integrated (input stale)\n", dr.gaps());
+  if (rc.frames == 0)
+    return fail(o.in + ": no CAN frame in the log (candump -l format: '(time) can0 123#DEADBEEF')");
   return 0;
 }
 

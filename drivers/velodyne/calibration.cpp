@@ -3,7 +3,9 @@
 #include <tinyxml2.h>
 #include <yaml-cpp/yaml.h>
 
+#include <cctype>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <numbers>
 #include <optional>
@@ -110,9 +112,14 @@ rt::Result<double> xml_number(const tinyxml2::XMLElement* parent, const char* ta
                               const std::string& ctx) {
   const tinyxml2::XMLElement* e = parent->FirstChildElement(tag);
   if (e == nullptr) return rt::make_error(ctx + "missing <" + std::string(tag) + ">");
-  double v = 0;
-  if (e->QueryDoubleText(&v) != tinyxml2::XML_SUCCESS) {
-    return rt::make_error(ctx + "<" + std::string(tag) + "> is not a number");
+  // The whole text must be the number ("-7.15abc" is a broken file, not -7.15).
+  const char* text = e->GetText();
+  char* end = nullptr;
+  const double v = text != nullptr ? std::strtod(text, &end) : 0.0;
+  while (end != nullptr && *end != '\0' && std::isspace(static_cast<unsigned char>(*end))) ++end;
+  if (text == nullptr || end == text || *end != '\0') {
+    return rt::make_error(ctx + "<" + std::string(tag) + "> is not a number: '" +
+                          (text != nullptr ? std::string(text) : std::string{}) + "'");
   }
   return v;
 }

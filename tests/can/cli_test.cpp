@@ -101,6 +101,11 @@ TEST(CanCli, CandumpErrorsNameTheFileAndLineOrTheSignal) {
                            (dir / "x.csv").string());
   EXPECT_NE(m.code, 0);
   EXPECT_NE(m.output.find("no message 'WheelSpeeds'"), std::string::npos) << m.output;
+  const auto empty = dir / "empty.log";
+  std::ofstream(empty) << "";
+  const CliResult e = stac("candump --in " + empty.string() + " --out " + (dir / "e.csv").string());
+  EXPECT_EQ(e.code, 1);
+  EXPECT_NE(e.output.find("empty.log: no CAN frame in the log"), std::string::npos) << e.output;
   const CliResult h = stac("candump --help");
   EXPECT_EQ(h.code, 0);
   EXPECT_NE(h.output.find("time (s, from the log),speed_mps,yaw_rate_dps"), std::string::npos) << h.output;

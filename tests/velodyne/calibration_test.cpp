@@ -174,6 +174,10 @@ TEST(Calibration, RejectsBrokenFilesWithClearMessages) {
        "laser 0: missing <vertCorrection_>"},
       {"trunc.xml", "<?xml version=\"1.0\"?><boost_serialization><DB><points_>",
        "not readable as XML"},
+      {"trailing.xml",
+       "<?xml version=\"1.0\"?><boost_serialization><DB><points_><item><px><id_>0</id_>"
+       "<rotCorrection_>-7.15abc</rotCorrection_></px></item></points_></DB></boost_serialization>",
+       "laser 0: <rotCorrection_> is not a number: '-7.15abc'"},
   };
   for (const Case& k : cases) {
     const auto path = write_temp(k.name, k.text);
