@@ -1,12 +1,12 @@
 #include "tools/tracks_jsonl.hpp"
 
-#include <nlohmann/json.hpp>
-
+#include <algorithm>
 #include <charconv>
 #include <cinttypes>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <nlohmann/json.hpp>
 
 namespace stac::tools {
 namespace {
@@ -19,7 +19,11 @@ struct FieldError {
 };
 
 const json& field(const json& j, const char* key, const std::string& where) {
-  if (!j.is_object()) throw FieldError{where + " is not an object"};
+  if (!j.is_object()) {
+    throw FieldError{where.empty()
+                         ? std::string("the line is not a JSON object (one scan per line)")
+                         : "'" + where.substr(0, where.size() - 1) + "' is not an object"};
+  }
   const auto it = j.find(key);
   if (it == j.end()) throw FieldError{"missing key '" + where + key + "'"};
   return *it;
@@ -91,6 +95,12 @@ rt::Result<std::vector<Record>> read_file(const std::filesystem::path& file, Par
     if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
     auto r = parser(line);
     if (!r) return rt::make_error(file.string() + ":" + std::to_string(number_of_line) + ": " + r.error().message);
+    if (!out.empty() && r->scan <= out.back().scan) {  // one line per scan, in order
+      return rt::make_error(file.string() + ":" + std::to_string(number_of_line) + ": scan " +
+                            std::to_string(r->scan) + " after scan " +
+                            std::to_string(out.back().scan) +
+                            " (each scan once, in increasing order)");
+    }
     out.push_back(std::move(*r));
   }
   if (in.bad()) return rt::make_error(file.string() + ": read error");
@@ -173,6 +183,13 @@ void append_json_line(const TracksScan& s, std::string& out) {
   out += "]}\n";
 }
 
+// A box's sides are lengths: never negative.
+static void sizes(double length, double width, double height, const char* what) {
+  if (length < 0 || width < 0 || height < 0) {
+    throw FieldError{std::string("'") + what + "' has a negative length, width or height"};
+  }
+}
+
 rt::Result<TracksScan> parse_tracks_line(std::string_view line) {
   return parse<TracksScan>(line, [](const json& j, TracksScan& s) {
     s.scan = integer<std::uint64_t>(j, "scan");
@@ -190,6 +207,7 @@ rt::Result<TracksScan> parse_tracks_line(std::string_view line) {
       r.width = number(g, "width", w);
       r.height = number(g, "height", w);
       r.yaw = number(g, "yaw", w);
+      sizes(r.length, r.width, r.height, "segments[]");
       if (const auto it = g.find("truth"); it != g.end()) {
         if (!it->is_object()) throw FieldError{"'segments[].truth' is not an object"};
         r.has_truth = true;
@@ -227,9 +245,27 @@ rt::Result<TracksScan> parse_tracks_line(std::string_view line) {
       r.points = integer<std::uint32_t>(t, "points", w);
       r.age = integer<std::uint32_t>(t, "age", w);
       r.segment = integer<std::int32_t>(t, "segment", w);
+      // The id of one of the scan's segments when they are written, or -1 (none).
+      const bool listed = std::any_of(
+          s.segments.begin(), s.segments.end(),
+          [&](const SegmentRecord& g) { return static_cast<std::int64_t>(g.id) == r.segment; });
+      if (r.segment < -1 || (r.segment >= 0 && !s.segments.empty() && !listed)) {
+        throw FieldError{"'tracks[].segment' is " + std::to_string(r.segment) +
+                         ", the id of no segment of the scan (-1: none)"};
+      }
+      for (const TrackRecord& other : s.tracks) {
+        if (other.id == r.id)
+          throw FieldError{"track " + std::to_string(r.id) + " appears twice in the scan"};
+      }
+      sizes(r.length, r.width, r.height, "tracks[]");
       if (t.contains("class")) {
         r.classified = true;
         r.cls = text(t, "class", w);
+        if (r.cls != "car" && r.cls != "pedestrian" && r.cls != "bicyclist" &&
+            r.cls != "background") {
+          throw FieldError{"'tracks[].class' is '" + r.cls +
+                           "'; expected car, pedestrian, bicyclist or background"};
+        }
         const auto lo = t.find("log_odds");
         if (lo == t.end() || !lo->is_array() || lo->size() != 3) {
           throw FieldError{"'tracks[].log_odds' must be 3 numbers when 'class' is given"};
@@ -273,6 +309,11 @@ rt::Result<TruthScanRecord> parse_truth_line(std::string_view line) {
       r.vx = number(v, "x", "objects[].velocity.");
       r.vy = number(v, "y", "objects[].velocity.");
       r.points = integer<std::uint32_t>(o, "points", "objects[].");
+      sizes(r.length, r.width, r.height, "objects[].box");
+      for (const TruthObjectRecord& other : s.objects) {
+        if (other.id == r.id)
+          throw FieldError{"object " + std::to_string(r.id) + " appears twice in the scan"};
+      }
       s.objects.push_back(std::move(r));
     }
   });

@@ -349,6 +349,60 @@ TEST(TracksJsonl, MalformedFilesNameFileLineAndKey) {
   EXPECT_NE(none.error().message.find("absent.jsonl: cannot open"), std::string::npos);
 }
 
+// Files whose lines parse but do not fit together: a scan twice or out of order, a track twice in
+// a scan, a track's segment that is none of the scan's, negative sizes, an unknown class.
+TEST(TracksJsonl, InconsistentFilesAreRefusedNamingLineAndWhat) {
+  const auto dir = std::filesystem::temp_directory_path() / "stac_eval_inconsistent";
+  std::filesystem::create_directories(dir);
+  const std::string head = R"("time":1.0,"ego":{"x":0,"y":0,"z":0,"yaw":0},)";
+  const std::string segment =
+      R"({"id":4,"points":9,"x":1,"y":2,"z":0,"length":1,"width":1,"height":1,"yaw":0})";
+  const auto track = [](int id, int seg, const std::string& extra = "", double length = 4) {
+    return R"({"id":)" + std::to_string(id) +
+           R"(,"state":"confirmed","x":1,"y":2,"z":0,"vx":0,"vy":0,"length":)" +
+           std::to_string(length) +
+           R"(,"width":1,"height":1,"yaw":0,"points":9,"age":3,"segment":)" + std::to_string(seg) +
+           extra + "}";
+  };
+  const auto scan = [&](int n, const std::string& tracks) {
+    return R"({"scan":)" + std::to_string(n) + "," + head + R"("segments":[)" + segment +
+           R"(],"tracks":[)" + tracks + "]}\n";
+  };
+  const std::pair<std::string, std::string> cases[] = {
+      {scan(0, track(1, 4)) + scan(0, track(1, 4)),
+       ":2: scan 0 after scan 0 (each scan once, in increasing order)"},
+      {scan(3, track(1, 4)) + scan(2, track(1, 4)), ":2: scan 2 after scan 3"},
+      {scan(0, track(1, 4) + "," + track(1, -1)), ":1: track 1 appears twice in the scan"},
+      {scan(0, track(1, 7)),
+       ":1: 'tracks[].segment' is 7, the id of no segment of the scan (-1: none)"},
+      {scan(0, track(1, -2)), ":1: 'tracks[].segment' is -2"},
+      {scan(0, track(1, 4, "", -4)), ":1: 'tracks[]' has a negative length, width or height"},
+      {scan(0, track(1, 4, R"(,"class":"dragon","log_odds":[0,0,0])")),
+       ":1: 'tracks[].class' is 'dragon'"},
+      {"[]\n", ":1: the line is not a JSON object (one scan per line)"},
+  };
+  for (const auto& [text, expected] : cases) {
+    std::ofstream(dir / "tracks.jsonl") << text;
+    auto k = read_tracks_file(dir / "tracks.jsonl");
+    ASSERT_FALSE(k) << text;
+    EXPECT_NE(k.error().message.find("tracks.jsonl" + expected), std::string::npos)
+        << k.error().message;
+  }
+  std::ofstream(dir / "ok.jsonl") << scan(0, track(1, 4)) +
+                                         scan(1, track(1, -1) + "," + track(2, 4));
+  EXPECT_TRUE(read_tracks_file(dir / "ok.jsonl"));
+
+  const std::string object =
+      R"({"id":5,"class":"car","box":{"x":1,"y":2,"z":0,"length":-4,"width":1.8,)"
+      R"("height":1.5,"yaw":0},"velocity":{"x":0,"y":0},"points":40})";
+  std::ofstream(dir / "truth.jsonl") << R"({"scan":0,)" + head + R"("objects":[)" + object + "]}\n";
+  auto t = read_truth_file(dir / "truth.jsonl");
+  ASSERT_FALSE(t);
+  EXPECT_NE(t.error().message.find("truth.jsonl:1: 'objects[].box' has a negative length"),
+            std::string::npos)
+      << t.error().message;
+}
+
 }  // namespace
 }  // namespace stac::tools
 
