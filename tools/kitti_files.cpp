@@ -1,5 +1,6 @@
 #include "tools/kitti_files.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -46,6 +47,19 @@ rt::Result<Eigen::Isometry3d> load_kitti_rect_T_velo(const std::string& calib_pa
     return rt::make_error(calib_path +
                           ": needs 'R0_rect:' (9 numbers) and 'Tr_velo_to_cam:' (12 numbers)");
   }
+  // Both rotations: orthonormal with determinant +1 (a file of zeros would put every point at
+  // the camera and every object at range 0).
+  const auto rotation = [](const Eigen::Matrix3d& m) {
+    return (m * m.transpose() - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() < 1e-3 &&
+           std::abs(m.determinant() - 1.0) < 1e-3;
+  };
+  if (!rotation(r0))
+    return rt::make_error(calib_path +
+                          ": 'R0_rect:' is not a rotation (orthonormal, determinant 1)");
+  if (!rotation(tr.leftCols<3>())) {
+    return rt::make_error(
+        calib_path + ": the rotation of 'Tr_velo_to_cam:' is not one (orthonormal, determinant 1)");
+  }
   Eigen::Isometry3d velo_to_cam = Eigen::Isometry3d::Identity();
   velo_to_cam.linear() = tr.leftCols<3>();
   velo_to_cam.translation() = tr.col(3);
@@ -79,9 +93,21 @@ rt::Result<std::vector<KittiObject>> load_kitti_labels(const std::string& path) 
     ss >> o.type >> o.truncated >> o.occluded >> alpha >> bbox[0] >> bbox[1] >> bbox[2] >>
         bbox[3] >> o.height >> o.width >> o.length >> o.bottom_centre.x() >> o.bottom_centre.y() >>
         o.bottom_centre.z() >> o.rotation_y;
-    if (!ss) {
+    std::string extra;
+    if (!ss || (ss >> extra)) {
       return rt::make_error(path + ":" + std::to_string(n) +
                             ": not a KITTI label line (type, 14 numbers)");
+    }
+    static const char* const kTypes[] = {"Car",     "Van",  "Truck", "Pedestrian", "Person_sitting",
+                                         "Cyclist", "Tram", "Misc",  "DontCare"};
+    if (std::find(std::begin(kTypes), std::end(kTypes), o.type) == std::end(kTypes)) {
+      return rt::make_error(path + ":" + std::to_string(n) + ": type '" + o.type +
+                            "' is not a KITTI class (Car, Van, Truck, Pedestrian, Person_sitting, "
+                            "Cyclist, Tram, Misc, DontCare)");
+    }
+    if (o.type != "DontCare" && (o.height < 0 || o.width < 0 || o.length < 0)) {
+      return rt::make_error(path + ":" + std::to_string(n) +
+                            ": negative dimensions (height, width, length)");
     }
     if (o.type != "DontCare") out.push_back(o);
   }

@@ -67,10 +67,32 @@ TEST(KittiObjectsCli, BrokenFoldersAndFilesAreNamed) {
   EXPECT_NE(labels.code, 0);
   EXPECT_NE(labels.output.find("label_2/000000.txt:1: not a KITTI label line"), std::string::npos)
       << labels.output;
+  const std::string box = " 0.00 0 1.5 10 20 30 40 1.5 1.6 3.9 1 1.7 12 0.1\n";  // 14 numbers
+  const std::pair<std::string, std::string> label_cases[] = {
+      {"Dragon" + box, "label_2/000000.txt:1: type 'Dragon' is not a KITTI class"},
+      {"Car 0.00 0 1.5 10 20 30 40 -1.5 1.6 3.9 1 1.7 12 0.1\n",
+       "label_2/000000.txt:1: negative dimensions"},
+      {"Car" + box.substr(0, box.size() - 1) + " 7\n",
+       "label_2/000000.txt:1: not a KITTI label line"},
+  };
+  for (const auto& [text, expected] : label_cases) {
+    std::ofstream(dir / "label_2/000000.txt", std::ios::trunc) << text;
+    const auto r = stac("kitti-objects --dir " + dir.string());
+    EXPECT_NE(r.code, 0) << text;
+    EXPECT_NE(r.output.find(expected), std::string::npos) << r.output;
+  }
+  std::ofstream(dir / "label_2/000000.txt", std::ios::trunc) << "Car" + box;
   std::ofstream(dir / "calib/000000.txt", std::ios::trunc) << "P0: 1 2 3\n";
   const auto calib = stac("kitti-objects --dir " + dir.string());
   EXPECT_NE(calib.code, 0);
   EXPECT_NE(calib.output.find("Tr_velo_to_cam"), std::string::npos) << calib.output;
+  // All zeros: every point at the camera, every object at range 0, not a calibration.
+  std::ofstream(dir / "calib/000000.txt", std::ios::trunc)
+      << "R0_rect: 0 0 0 0 0 0 0 0 0\nTr_velo_to_cam: 0 -1 0 0 0 0 -1 -0.08 1 0 0 -0.27\n";
+  const auto singular = stac("kitti-objects --dir " + dir.string());
+  EXPECT_NE(singular.code, 0);
+  EXPECT_NE(singular.output.find("'R0_rect:' is not a rotation"), std::string::npos)
+      << singular.output;
 }
 
 TEST(KittiFiles, LabelBoxesHoldTheirCentreAndNotWhatIsBesideThem) {
