@@ -212,6 +212,9 @@ int run_replay(const ReplayOptions& o) {
   auto replay = io::UdpReplay::open(o.in, c);
   if (!replay) return fail(replay.error().message);
   const io::ReplayPlan& plan = replay->plan();
+  if (plan.packets == 0)
+    std::fprintf(stderr, "stac replay: warning: %s; the TCP streams only\n",
+                 plan.why_empty.c_str());
   if (plan.packets > 0) {
     std::string ports;
     for (auto p : plan.dst_ports) ports += (ports.empty() ? "" : ",") + std::to_string(p);

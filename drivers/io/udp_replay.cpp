@@ -46,7 +46,6 @@ rt::Result<UdpReplay> UdpReplay::open(const std::filesystem::path& capture,
     }
   }
   if (!reader->error().empty()) return rt::make_error(reader->error());
-  if (r.plan_.packets == 0 && config.allow_empty) return r;
   if (r.plan_.packets == 0) {
     const PcapCounters& c = reader->counters();
     std::string why = capture.string() + ": no UDP datagram to replay";
@@ -54,7 +53,12 @@ rt::Result<UdpReplay> UdpReplay::open(const std::filesystem::path& capture,
     why += " (" + std::to_string(c.frames) + " frames: " + std::to_string(c.non_udp) +
            " IPv4 not UDP, " + std::to_string(c.non_ipv4) + " not IPv4, " +
            std::to_string(c.filtered_out) + " UDP to other ports, " + std::to_string(c.fragments) +
-           " fragments)";
+           " fragments, " + std::to_string(c.truncated_frame) +
+           " truncated: captured shorter than their headers say, a snap length below the packet "
+           "size?, " +
+           std::to_string(c.bad_header) + " with impossible headers)";
+    r.plan_.why_empty = why;
+    if (config.allow_empty) return r;
     return rt::make_error(why);
   }
   r.plan_.span_ns = std::max<std::int64_t>(0, last - r.plan_.first_stamp_ns);

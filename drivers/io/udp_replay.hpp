@@ -40,6 +40,7 @@ struct ReplayPlan {
   std::int64_t pass_period_ns = 0;       // recorded time from one pass's start to the next one's:
                                          // the span plus one mean gap between datagrams
   std::vector<std::uint16_t> dst_ports;  // distinct captured destination ports
+  std::string why_empty;                 // no datagram (allowed): the capture's frames by cause
 };
 
 struct ReplayReport {

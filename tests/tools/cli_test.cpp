@@ -421,6 +421,13 @@ TEST(ReplayCli, MissingFileAndNoMatchingPacketsAreClearErrors) {
   const CliResult none = stac("replay --in " + pcap.string() + " --filter-port 9999");
   EXPECT_EQ(none.code, 1);
   EXPECT_NE(none.output.find("no UDP datagram to replay to port 9999"), std::string::npos) << none.output;
+  // Cut by a small snap length: every frame counted as truncated, none sent.
+  const CliResult snapped =
+      stac("replay --in " + snapped_copy(pcap, 600).string() + " --no-tcp --fast");
+  EXPECT_EQ(snapped.code, 1);
+  EXPECT_NE(snapped.output.find("truncated: captured shorter than their headers say"),
+            std::string::npos)
+      << snapped.output;
   const CliResult both = stac("replay --in " + pcap.string() + " --fast --rate 2");
   EXPECT_NE(both.code, 0);  // --fast and --rate exclude each other
 }
