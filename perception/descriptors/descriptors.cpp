@@ -254,20 +254,22 @@ void canonicalize(const SegmentView& segment, const DescriptorConfig& config, st
   n = 0;
   const std::size_t total = segment.size();
   const double full = config.intensity_full_scale;
+  // A segment of more than max_points is read at max_points evenly spaced positions.
+  const std::size_t reads = std::min(total, x.size());
+  out.points_over_capacity = static_cast<std::uint32_t>(total - reads);
+  const auto position = [&](std::size_t j) {
+    return reads == total ? j : static_cast<std::size_t>(static_cast<std::uint64_t>(j) * total / reads);
+  };
   double mx = 0, my = 0, mz = 0;
-  for (std::size_t k = 0; k < total; ++k) {
+  for (std::size_t j = 0; j < reads; ++j) {
     // A segment's points are scattered over the scan (megabytes): each read is a cache miss
     // unless it is asked for well ahead.
-    if (k + kPrefetchAhead < total) segment.prefetch(k + kPrefetchAhead);
+    if (j + kPrefetchAhead < reads) segment.prefetch(position(j + kPrefetchAhead));
     float p[4];
-    segment.read(k, p);
+    segment.read(position(j), p);
     if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]) ||
         !std::isfinite(p[3])) {
       ++out.points_invalid;
-      continue;
-    }
-    if (n == x.size()) {
-      ++out.points_over_capacity;
       continue;
     }
     x[n] = p[0];

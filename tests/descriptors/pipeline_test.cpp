@@ -220,6 +220,35 @@ TEST(DescriptorPipeline, CapacitiesAreCountedNotOverrun) {
   for (const float v : d.values) ASSERT_TRUE(std::isfinite(v));
 }
 
+// A segment over max_points is read at evenly spaced positions (not its first max_points, which
+// are one end of a scan-ordered segment): each point twice in a row, capped at the number of
+// distinct points, reads each once and describes exactly the distinct points (spin counts are
+// halved, which whitening undoes up to rounding).
+TEST(DescriptorPipeline, ASegmentOverMaxPointsIsDescribedFromEvenlySpacedPoints) {
+  const Cloud distinct = car(0.3, 8, -2, -1);
+  const std::size_t n = distinct.size() / 4;
+  Cloud doubled;
+  for (std::size_t i = 0; i < n; ++i) {
+    for (int twice = 0; twice < 2; ++twice)
+      doubled.insert(doubled.end(), distinct.begin() + 4 * i, distinct.begin() + 4 * i + 4);
+  }
+  DescriptorConfig capped;
+  capped.max_points = n;
+  DescriptorPipeline all(DescriptorConfig{}), sampled(capped);
+  Descriptors expected, d;
+  all.compute(view(distinct), expected);
+  sampled.compute(view(doubled), d);
+  EXPECT_EQ(d.points_used, n);
+  EXPECT_EQ(d.points_over_capacity, n);
+  for (std::size_t k = 0; k < kDimensions; ++k)
+    EXPECT_NEAR(d.values[k], expected.values[k], 1e-4f) << k;
+  // The first n points alone are the car's first half: other descriptors.
+  Cloud first_half(doubled.begin(), doubled.begin() + static_cast<std::ptrdiff_t>(4 * n));
+  Descriptors half;
+  all.compute(view(first_half), half);
+  EXPECT_NE(half.values, expected.values);
+}
+
 // Points on the faces of an axis-aligned box (sx x sy x sz m) at (x, y, z), intensity varying
 // along x; a regular pattern of "windows" is left out so that the views have structure.
 Cloud box(double sx, double sy, double sz, double x, double y, double z, int points,
