@@ -152,12 +152,15 @@ void BM_StacSegmentAndTrack(benchmark::State& state) {
   };
   for (int warm = 0; warm < 20; ++warm) pipeline.process(next(), nullptr, result);
   Times t;
+  std::vector<double> segment_ms, track_ms;  // the pipeline's own stage times (thread CPU)
   double points = 0, segments = 0, tracks = 0;
   for (auto _ : state) {
     velodyne::Scan& scan = next();
     t.start();
     pipeline.process(scan, nullptr, result);
     t.stop();
+    segment_ms.push_back(1e-6 * static_cast<double>(result.stage_ns[stac::pipeline::kSegment]));
+    track_ms.push_back(1e-6 * static_cast<double>(result.stage_ns[stac::pipeline::kTrack]));
     benchmark::DoNotOptimize(result.tracked.tracks.data());
     points += static_cast<double>(scan.points.size());
     segments += static_cast<double>(result.segments.segments.size());
@@ -166,6 +169,12 @@ void BM_StacSegmentAndTrack(benchmark::State& state) {
   const auto n = static_cast<double>(t.wall.size());
   report(state, t, points / n, segments / n);
   state.counters["tracks"] = tracks / n;
+  for (auto* v : {&segment_ms, &track_ms}) std::sort(v->begin(), v->end());
+  const auto p99 = [](const std::vector<double>& v) { return v[v.size() * 99 / 100]; };
+  state.counters["segment_median_ms"] = segment_ms[segment_ms.size() / 2];
+  state.counters["segment_p99_ms"] = p99(segment_ms);
+  state.counters["track_median_ms"] = track_ms[track_ms.size() / 2];
+  state.counters["track_p99_ms"] = p99(track_ms);
 }
 BENCHMARK(BM_StacSegmentAndTrack)->Iterations(1200)->Unit(benchmark::kMillisecond);
 
