@@ -109,8 +109,8 @@ void ScanPipeline::fill_cloud(const velodyne::Scan& scan, ScanResult& out) noexc
   }
 }
 
-void ScanPipeline::process(velodyne::Scan& scan, const ego::PoseHistory* poses,
-                           ScanResult& out) noexcept {
+void ScanPipeline::process(velodyne::Scan& scan, const ego::PoseHistory* poses, ScanResult& out,
+                           std::int64_t classify_until_ns) noexcept {
   const std::int64_t t0 = now_ns(config_.clock);
   const ego::ScanClock clock =
       ego::scan_clock(scan.header, config_.trailer,
@@ -163,9 +163,15 @@ void ScanPipeline::process(velodyne::Scan& scan, const ego::PoseHistory* poses,
                   out.tracked, &sensor_xy);
   const std::int64_t t3 = now_ns(config_.clock);
   out.classes.clear();
-  if (classifier_ != nullptr && config_.defer_classification) {
+  out.classes_late = out.classes_current = 0;
+  if (classifier_ != nullptr && config_.split_classification) {
+    classifier_->begin(out.segments, out.tracked);
+    const classification::UpdateCount n =
+        classifier_->update(&scan.points.data()->x, sizeof(velodyne::Point),
+                            {.tentative = config_.publish_tentative, .until_ns = classify_until_ns});
+    out.classes_late = static_cast<std::uint32_t>(n.late);
+    out.classes_current = static_cast<std::uint32_t>(n.classified);
     classifier_->report(out.tracked, out.classes);
-    classifier_->defer(out.segments, out.tracked);
   } else if (classifier_ != nullptr) {
     classifier_->classify(&scan.points.data()->x, sizeof(velodyne::Point), out.segments,
                           out.tracked, out.classes);
@@ -179,10 +185,10 @@ void ScanPipeline::process(velodyne::Scan& scan, const ego::PoseHistory* poses,
   out.stage_ns[kClassifyDeferred] = deferred_classify_ns_;
 }
 
-void ScanPipeline::classify_deferred(const velodyne::Scan& scan) noexcept {
-  if (classifier_ == nullptr || !config_.defer_classification) return;
+void ScanPipeline::finish_scan(const velodyne::Scan& scan) noexcept {
+  if (classifier_ == nullptr || !config_.split_classification) return;
   const std::int64_t t0 = now_ns(config_.clock);
-  classifier_->update_deferred(&scan.points.data()->x, sizeof(velodyne::Point));
+  classifier_->finish(&scan.points.data()->x, sizeof(velodyne::Point));
   deferred_classify_ns_ = now_ns(config_.clock) - t0;
 }
 

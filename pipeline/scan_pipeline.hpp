@@ -9,6 +9,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <limits>
 #include <memory>
 
 #include "drivers/velodyne/model.hpp"
@@ -35,10 +36,12 @@ struct PipelineConfig {
   classification::TrackClassifierConfig classifier;  // its max_tracks is the tracker's
   std::shared_ptr<const classification::TrackClassifierModel> model;  // null: tracks unclassified
   bool describe = false;  // run the classify stage without a model too (an observer's descriptors)
-  // true: process() reports the classes the scans before left and keeps this scan's segments;
-  // classify_deferred() classifies them after the result is handed on (stac run: the tracks'
-  // latency does not wait for classification; classes come one scan later, docs/run.md).
-  bool defer_classification = false;
+  // true: process() classifies only the tracks it will publish (confirmed ones; tentative ones
+  // too with publish_tentative), and only until its classify_until_ns; finish_scan() classifies
+  // the others and grows the tracks' accumulated clouds after the result is handed on (stac run:
+  // the costly part waits until the scan is published; docs/run.md). false: process() does all.
+  bool split_classification = false;
+  bool publish_tentative = false;
   velodyne::TrailerKind trailer = velodyne::TrailerKind::kGpsStatus;  // the model's (scan clock)
   // The compact cloud for viewers (ScanResult::cloud): every return in a kept segment and every
   // cloud_stride-th other one, at most cloud_max_points; cloud_stride 0: none.
@@ -47,7 +50,8 @@ struct PipelineConfig {
   StageClock clock = StageClock::kThreadCpu;
 };
 
-// kClassifyDeferred: the previous scan's classify_deferred() (0 unless defer_classification).
+// kClassify: process()'s part of the classification; kClassifyDeferred: the previous scan's
+// finish_scan() (0 unless split_classification).
 enum Stage : std::uint8_t { kDeskew, kSegment, kTrack, kClassify, kClassifyDeferred, kStageCount };
 const char* stage_name(Stage s) noexcept;  // "deskew", ..., "classify", "classify_deferred"
 
@@ -88,6 +92,10 @@ struct ScanResult {
   rt::FixedVector<classification::TrackClass> classes;  // classes[i]: tracked.tracks[i]'s class
                                                         // (empty when the stage does not run)
   std::int64_t stage_ns[kStageCount] = {};  // on PipelineConfig::clock
+  // split_classification: tracks to publish whose segment process() left to finish_scan() when
+  // its time was up (their class is the one the scans before left).
+  std::uint32_t classes_late = 0;
+  std::uint32_t classes_current = 0;  // tracks to publish that process() classified
   rt::FixedVector<CloudPoint> cloud;        // PipelineConfig::cloud_stride > 0; origin below
   bool has_cloud = false;  // the cloud was built for this scan (cloud_stride > 0 and wanted)
   Eigen::Vector3d cloud_origin = Eigen::Vector3d::Zero();  // world (m): world_T_sensor's
@@ -103,13 +111,16 @@ class ScanPipeline {
 
   [[nodiscard]] ScanResult make_result() const;
   // One scan (deskewed in place). `poses` may be nullptr: no deskew, the sensor parked at
-  // vehicle_T_sensor in the world.
-  void process(velodyne::Scan& scan, const ego::PoseHistory* poses, ScanResult& out) noexcept;
+  // vehicle_T_sensor in the world. With split_classification, no track is classified from
+  // `classify_until_ns` on (CLOCK_REALTIME; the scan's last firing + a budget).
+  static constexpr std::int64_t kNoLimit = std::numeric_limits<std::int64_t>::max();
+  void process(velodyne::Scan& scan, const ego::PoseHistory* poses, ScanResult& out,
+               std::int64_t classify_until_ns = kNoLimit) noexcept;
 
-  // With defer_classification: classifies the segments of the last process()ed scan, which must
-  // be `scan`, still unchanged; its time is the next result's stage_ns[kClassify]. No-op
-  // otherwise. No allocation, exception or I/O.
-  void classify_deferred(const velodyne::Scan& scan) noexcept;
+  // With split_classification: the classification process() left of the last scan, which must
+  // be `scan`, its points unchanged (its Segments may have changed); its time is the next
+  // result's stage_ns[kClassifyDeferred]. No-op otherwise. No allocation, exception or I/O.
+  void finish_scan(const velodyne::Scan& scan) noexcept;
 
   [[nodiscard]] const tracking::Tracker& tracker() const noexcept { return tracker_; }
   // Null when the classify stage does not run (no model, describe off).
@@ -130,7 +141,7 @@ class ScanPipeline {
   void fill_cloud(const velodyne::Scan& scan, ScanResult& out) noexcept;
   Eigen::Isometry3d sensor_T_vehicle_;
   std::uint64_t without_pose_ = 0;
-  std::int64_t deferred_classify_ns_ = 0;  // the last classify_deferred()'s time
+  std::int64_t deferred_classify_ns_ = 0;  // the last finish_scan()'s time
   std::atomic<bool> cloud_wanted_{true};
 };
 

@@ -88,6 +88,7 @@ struct Frame {
   std::uint64_t packets_lost = 0;
   std::uint64_t segment_overflow = 0;
   std::uint64_t without_pose = 0;  // scans not deskewed (no pose at their time)
+  std::uint64_t classes_late = 0;  // published tracks classified after publication (budget)
 };
 
 // Counters shared between the threads (each written by one thread).
@@ -103,6 +104,8 @@ struct Shared {
       ins_garbage_bytes{0};
   std::atomic<std::uint64_t> ins_connect_failures{0}, ins_disconnects{0};
   std::atomic<std::uint64_t> scans{0}, incomplete{0}, published{0}, publish_errors{0};
+  // Published tracks classified before / after their scan's publication (run.classify_budget_ms).
+  std::atomic<std::uint64_t> classes_current{0}, classes_late{0};
   std::atomic<std::uint8_t> ego_source{0};  // 0 none, 1 INS, 2 CAN dead reckoning
   CanCounterCells can;                      // written by the thread that reads CAN
 };
@@ -325,7 +328,8 @@ int run_live(const RunOptions& o) {
                                     .classifier = settings->classification.classifier,
                                     .model = *model,
                                     .describe = false,
-                                    .defer_classification = rs->classify_after_publish,
+                                    .split_classification = true,
+                                    .publish_tentative = dds_config->tentative_tracks,
                                     .trailer = velodyne::traits(vs.assembler.decoder.model).trailer,
                                     .cloud_stride = dds_config->point_cloud_stride,
                                     .cloud_max_points = dds::kMaxCloudPoints,
@@ -454,7 +458,8 @@ int run_live(const RunOptions& o) {
   }
   std::thread perception_thread([&] {
     start_thread("perception", rs->perception);
-    std::uint64_t incomplete = 0, packets_lost = 0, overflow = 0;
+    std::uint64_t incomplete = 0, packets_lost = 0, overflow = 0, classes_late = 0,
+                  classes_current = 0;
     for (;;) {
       velodyne::Scan* scan = stream.take();
       if (scan == nullptr) {
@@ -473,17 +478,23 @@ int run_live(const RunOptions& o) {
       Frame& f = results.current();
       f.started_ns = rt::realtime_ns();
       f.last_firing_ns = scan->header.end_stamp_ns;
-      pipeline.process(*scan, poses, f.result);
+      // Published tracks are classified until the scan is classify_budget old; the rest after.
+      pipeline.process(*scan, poses, f.result, f.last_firing_ns + rs->classify_budget_ns);
+      classes_late += f.result.classes_late;
+      classes_current += f.result.classes_current;
       const segmentation::SegmentCounters& c = f.result.segments.counters;
       overflow += c.ignored_over_capacity + c.dropped_cell_overflow + c.dropped_segment_overflow;
       f.incomplete = incomplete;
       f.packets_lost = packets_lost;
       f.segment_overflow = overflow;
       f.without_pose = pipeline.scans_without_pose();
+      f.classes_late = classes_late;
+      shared.classes_late.store(classes_late, std::memory_order_relaxed);
+      shared.classes_current.store(classes_current, std::memory_order_relaxed);
       f.finished_ns = rt::realtime_ns();
       shared.scans.fetch_add(1, std::memory_order_relaxed);
       (void)results.publish();  // full: dropped and counted by the exchange; perception goes on
-      pipeline.classify_deferred(*scan);  // classify_after_publish: off the tracks' latency
+      pipeline.finish_scan(*scan);  // the other tracks and the accumulated clouds: off the latency
       stream.release();
     }
     shared.perception_done.store(true, std::memory_order_release);
@@ -492,14 +503,14 @@ int run_live(const RunOptions& o) {
     start_thread("publisher", rs->publisher);
     std::array<std::int64_t, kHealthStages> stage_ns{};
     std::array<dds::StageLatencyIn, kHealthStages> stages{};
-    std::array<dds::DropCountIn, 26> drops{};
+    std::array<dds::DropCountIn, 27> drops{};
     static_assert(std::tuple_size_v<decltype(drops)> <= dds::kMaxDrops, "idl/stac.idl's bound");
     std::array<dds::SensorStatusIn, 3> sensors{};
     bool reported = false;
     // The counters of the last published scan's frame (health without a scan repeats them).
     struct FrameDrops {
       std::uint64_t incomplete = 0, packets_lost = 0, segment_overflow = 0, without_pose = 0;
-      std::uint64_t pool_overflow = 0, dropped_detections = 0;
+      std::uint64_t pool_overflow = 0, dropped_detections = 0, classes_late = 0;
     } frame_drops;
     const auto get = [](const std::atomic<std::uint64_t>& a) {
       return a.load(std::memory_order_relaxed);
@@ -534,6 +545,7 @@ int run_live(const RunOptions& o) {
                {"ins.connect_failures", get(shared.ins_connect_failures)},
                {"ins.disconnects", get(shared.ins_disconnects)},
                {"ego.scans_without_pose", fd.without_pose},
+               {"classification.late", fd.classes_late},
                {"can.not_mapped", cc.not_mapped},
                {"can.overflow", cc.kernel_drops + cc.overflows + get(shared.can.ring_full)},
                {"can.fd", cc.can_fd},
@@ -589,8 +601,9 @@ int run_live(const RunOptions& o) {
       for (std::size_t i = 0; i < kHealthStages; ++i)
         stages[i] = {kStageNames[i], to_us(stage_ns[i])};
       const tracking::TrackerCounters& tc = f->result.tracked.counters;
-      frame_drops = {f->incomplete,   f->packets_lost,  f->segment_overflow,
-                     f->without_pose, tc.pool_overflow, tc.dropped_detections};
+      frame_drops = {f->incomplete,      f->packets_lost,       f->segment_overflow,
+                     f->without_pose,    tc.pool_overflow,      tc.dropped_detections,
+                     f->classes_late};
       const dds::HealthIn health = health_sample(f->result.stamp_ns, index, stages, end_to_end);
       if (auto h = (*publisher)->publish_health(health); !h && status) status = h;
       last_health_ns = rt::monotonic_ns();
@@ -654,6 +667,13 @@ int run_live(const RunOptions& o) {
       u(stream.scans_dropped()), u(results.dropped()), u(shared.publish_errors.load()),
       u(pipeline.tracker().counters().pool_overflow),
       u(pipeline.tracker().counters().dropped_detections));
+  if (pipeline.classifier() != nullptr) {
+    std::fprintf(stderr,
+                 "  classes     %llu published tracks classified before publication, %llu after "
+                 "it (run.classify_budget_ms %.1f: their class one scan late)\n",
+                 u(shared.classes_current.load()), u(shared.classes_late.load()),
+                 ms(rs->classify_budget_ns));
+  }
   std::fprintf(
       stderr, "  ego         %llu INS fixes, %llu dead-reckoned poses, %llu scans without a pose\n",
       u(estimator.counters().ins_fixes), u(estimator.counters().dead_reckoned),
@@ -709,10 +729,12 @@ void add_run_command(CLI::App& app) {
   cmd->description(
       "Receives the HDL-64E's UDP packets, the Applanix INS (TCP or UDP) and optionally the\n"
       "vehicle CAN bus (SocketCAN or a gs_usb adapter: can.transport), runs every complete scan\n"
-      "through deskew -> segment -> track on its own thread and publishes tracked_objects,\n"
-      "segments, ego_pose and health on DDS, watching the deadline (run.deadline_ms) and the\n"
-      "inputs. Stops on Ctrl-C/SIGTERM, --seconds or --scans and prints a summary: scans, drops\n"
-      "by cause, deadline misses, latencies (docs/run.md).");
+      "through deskew -> segment -> track -> classify on its own thread and publishes\n"
+      "tracked_objects, segments, ego_pose and health on DDS, watching the deadline\n"
+      "(run.deadline_ms) and the inputs. The published tracks are classified before publication\n"
+      "while the scan is younger than run.classify_budget_ms; the rest after it. Stops on\n"
+      "Ctrl-C/SIGTERM, --seconds or --scans and prints a summary: scans, drops by cause, classes\n"
+      "classified before and after publication, deadline misses, latencies (docs/run.md).");
   cmd->add_option("--config", o->config,
                   "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
   cmd->add_option("--seconds", o->seconds, "stop after this many seconds")

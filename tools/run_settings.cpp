@@ -34,7 +34,7 @@ rt::Result<RunSettings> load_run_settings(const std::filesystem::path& config_fi
   if (!section) return rt::Unexpected<rt::Error>{section.error()};
   const ConfigSection& r = *section;
   RunSettings s;
-  double deadline_ms = 0, histogram_ms = 0, velodyne_timeout_s = 0;
+  double deadline_ms = 0, histogram_ms = 0, velodyne_timeout_s = 0, classify_budget_ms = 0;
   int slots = 0;
   std::string ins;
   STAC_CONFIG_GET(r, double, "deadline_ms", deadline_ms);
@@ -42,7 +42,7 @@ rt::Result<RunSettings> load_run_settings(const std::filesystem::path& config_fi
   STAC_CONFIG_GET(r, int, "result_slots", slots);
   STAC_CONFIG_GET(r, bool, "lock_memory", s.lock_memory);
   STAC_CONFIG_GET(r, int, "cpu_wake_latency_us", s.cpu_wake_latency_us);
-  STAC_CONFIG_GET(r, bool, "classify_after_publish", s.classify_after_publish);
+  STAC_CONFIG_GET(r, double, "classify_budget_ms", classify_budget_ms);
   STAC_CONFIG_GET(r, std::string, "ins", ins);
   STAC_CONFIG_GET(r, std::string, "ins_address", s.ins_address);
   STAC_CONFIG_GET(r, bool, "can", s.can);
@@ -60,6 +60,10 @@ rt::Result<RunSettings> load_run_settings(const std::filesystem::path& config_fi
                    "must be at least run.deadline_ms and at most 60000 ms");
   }
   if (slots < 2 || slots > 64) return r.error("result_slots", "must be 2..64");
+  if (!(classify_budget_ms >= 0 && classify_budget_ms <= deadline_ms)) {
+    return r.error("classify_budget_ms",
+                   "must be in [0, run.deadline_ms] ms (0: every class after publication)");
+  }
   if (s.cpu_wake_latency_us < -1 || s.cpu_wake_latency_us > 1'000'000)
     return r.error("cpu_wake_latency_us", "must be -1 (no request) or 0..1000000 us");
   if (!(velodyne_timeout_s > 0 && velodyne_timeout_s <= 10))
@@ -77,6 +81,7 @@ rt::Result<RunSettings> load_run_settings(const std::filesystem::path& config_fi
   s.deadline.histogram_bins =
       static_cast<std::size_t>(std::ceil(histogram_ms / 0.1));  // 0.1 ms bins
   s.result_slots = static_cast<std::size_t>(slots);
+  s.classify_budget_ns = std::llround(classify_budget_ms * 1e6);
   s.velodyne_timeout_ns = std::llround(velodyne_timeout_s * 1e9);
   return s;
 }

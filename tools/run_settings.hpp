@@ -19,8 +19,9 @@ struct RunSettings {
   std::size_t result_slots = 4;  // perception -> publisher results in flight
   bool lock_memory = true;       // mlockall at start-up
   int cpu_wake_latency_us = -1;  // >= 0: a PM QoS request held while running (rt::CpuLatencyRequest)
-  bool classify_after_publish = true;  // a scan's tracks are published before its segments are
-                                       // classified (classes one scan later, docs/run.md)
+  // Published tracks are classified before their scan is published until it is this old (from
+  // its last firing); the others, and the accumulated clouds, after it (docs/run.md).
+  std::int64_t classify_budget_ns = 8'000'000;
   rt::ThreadSchedule receiver, perception, publisher, pose;
   InsTransport ins = InsTransport::kTcp;
   std::string ins_address;  // tcp: the POS computer (IPv4); port: ego.ins_port

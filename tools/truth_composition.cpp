@@ -14,7 +14,7 @@ pipeline::PipelineConfig offline_pipeline_config(
           .classifier = settings.classification.classifier,
           .model = std::move(model),
           .describe = describe,
-          .defer_classification = false,
+          .split_classification = false,
           .trailer = velodyne::traits(settings.velodyne.assembler.decoder.model).trailer,
           .clock = pipeline::StageClock::kThreadCpu};
 }

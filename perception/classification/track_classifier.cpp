@@ -4,6 +4,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "rt/clock.hpp"
+
 namespace stac::classification {
 
 const char* validate(const TrackClassifierConfig& c) noexcept {
@@ -37,16 +39,39 @@ TrackClassifier::TrackClassifier(const TrackClassifierConfig& config,
     throw std::invalid_argument(
         "classification: the model's descriptor sizes are not this build's (retrain it)");
   }
-  deferred_tracks_ = rt::FixedVector<tracking::Track>(config.max_tracks);
-  deferred_ = segmentation::Segments(config.max_tracks, config.max_points);
+  kept_tracks_ = rt::FixedVector<Kept>(config.max_tracks);
+  kept_segments_ = segmentation::Segments(config.max_tracks, config.max_points);
   batch_.resize(config.max_tracks);
   pending_ = rt::FixedVector<Pending>(config.max_tracks);
   rows_.resize(config.max_tracks);
   sums_.resize(config.max_tracks);
   segment_log_odds_.resize(config.max_tracks);
+  slots_to_sum_.reserve(config.max_tracks);
+  slot_scan_.assign(config.max_tracks, 0);
+  slot_kept_.assign(config.max_tracks, 0);
   slots_.reserve(config.max_tracks);
   for (std::size_t i = 0; i < config.max_tracks; ++i)
     slots_.emplace_back(config.accumulated_points);
+}
+
+void TrackClassifier::sum_accumulated() noexcept {
+  // A description with no point (kEmpty) would be NaN elements, which add nothing: its part
+  // stays zero.
+  const GridClassifier& holistic = model_->holistic;
+  std::size_t n = 0;
+  for (Slot* s : slots_to_sum_) {
+    s->accumulated_sum = LogOdds{};
+    if (s->accumulated.status != descriptors::Status::kOk) continue;
+    rows_[n] = s->accumulated.values.data();
+    sums_[n] = LogOdds{};
+    ++n;
+  }
+  (void)holistic.partial_batch({rows_.data(), n}, kHolisticMotionDimensions, holistic.dimensions(),
+                               {sums_.data(), n});
+  n = 0;
+  for (Slot* s : slots_to_sum_)
+    if (s->accumulated.status == descriptors::Status::kOk) s->accumulated_sum = sums_[n++];
+  slots_to_sum_.clear();
 }
 
 void TrackClassifier::classify_pending() noexcept {
@@ -54,7 +79,6 @@ void TrackClassifier::classify_pending() noexcept {
   if (n == 0) return;
   const GridClassifier& segment = model_->segment;
   const GridClassifier& holistic = model_->holistic;
-  constexpr std::size_t kMotion = kHolisticMotionDimensions;
   // H_S(z_t) of every pending segment: prior + the sum over its elements, as classify().
   for (std::size_t j = 0; j < n; ++j) {
     rows_[j] = batch_[j].values.data();
@@ -65,30 +89,14 @@ void TrackClassifier::classify_pending() noexcept {
     segment_log_odds_[j] = segment.model().prior;
     for (std::size_t k = 0; k < kClassCount; ++k) segment_log_odds_[j][k] += sums_[j][k];
   }
-  // The accumulated clouds described in this scan: their part of the holistic sum. A cloud with
-  // no descriptors has NaN elements there, which add nothing: its part stays zero.
-  std::size_t refreshed = 0;
-  for (std::size_t j = 0; j < n; ++j) {
-    Slot& s = *pending_[j].slot;
-    if (!pending_[j].refresh) continue;
-    s.accumulated_sum = LogOdds{};
-    if (s.accumulated.status != descriptors::Status::kOk) continue;
-    rows_[refreshed] = s.accumulated.values.data();
-    sums_[refreshed] = LogOdds{};
-    ++refreshed;
-  }
-  (void)holistic.partial_batch({rows_.data(), refreshed}, kMotion, holistic.dimensions(),
-                               {sums_.data(), refreshed});
-  refreshed = 0;
-  for (std::size_t j = 0; j < n; ++j) {
-    Slot& s = *pending_[j].slot;
-    if (pending_[j].refresh && s.accumulated.status == descriptors::Status::kOk)
-      s.accumulated_sum = sums_[refreshed++];
-  }
+  // The tracks first seen in this scan: their segment is their accumulated description.
+  for (std::size_t j = 0; j < n; ++j)
+    if (pending_[j].refresh) slots_to_sum_.push_back(pending_[j].slot);  // room: max_tracks
+  sum_accumulated();
   for (std::size_t j = 0; j < n; ++j) {
     Slot& s = *pending_[j].slot;
     LogOdds hh = s.accumulated_sum;
-    (void)holistic.partial(pending_[j].motion, 0, kMotion, hh);
+    (void)holistic.partial(pending_[j].motion, 0, kHolisticMotionDimensions, hh);
     s.evidence.add_segment(segment_log_odds_[j], segment.model().prior);
     for (std::size_t k = 0; k < kClassCount; ++k) hh[k] += holistic.model().prior[k];
     const LogOdds track = track_log_odds(*model_, s.evidence, hh);
@@ -96,58 +104,129 @@ void TrackClassifier::classify_pending() noexcept {
     s.cls.log_odds = track;
     s.cls.label = predict(track);
     s.cls.segments = s.evidence.segments;
-    s.pending = false;
   }
   pending_.clear();
 }
 
-void TrackClassifier::update(const float* xyzi, std::size_t stride_bytes,
-                             const segmentation::Segments& segments,
-                             std::span<const tracking::Track> tracks) noexcept {
-  for (const tracking::Track& t : tracks) {
+void TrackClassifier::update_one(const float* xyzi, std::size_t stride_bytes, Kept& k) noexcept {
+  k.classified = true;
+  const tracking::Track& t = k.track;
+  Slot& s = slots_[t.slot];  // begin() kept in-range slots, one track each
+  if (s.cls.id != t.id) {    // a new track in this pool slot: forget the one before
+    s.cloud.clear(t.id + 1);
+    s.evidence.reset();
+    s.cls = TrackClass{};
+    s.cls.id = t.id;
+    s.described = 0;
+    s.since_holistic = 0;
+    s.accumulated_ok = false;
+  }
+  const segmentation::Segment& seg = kept_segments_.segments[static_cast<std::size_t>(t.segment)];
+  const descriptors::SegmentView view{xyzi, stride_bytes, kept_segments_.indices(seg), 0};
+  descriptors::Descriptors& described = batch_[pending_.size()];
+  describer_.compute(view, described);
+  ++counters_.segments_described;
+  if (described.status != descriptors::Status::kOk) {
+    ++counters_.segments_empty;
+    return;
+  }
+  k.accumulate = true;
+  ++s.described;
+  const bool first = !s.accumulated_ok;
+  if (first) {  // the accumulated cloud will be this segment: its description is the segment's
+    s.accumulated = described;
+    s.accumulated_ok = true;
+  }
+  holistic_descriptor(t, &s.accumulated, holistic_);
+  if (observer_ != nullptr) observer_->on_update(t, described.values, holistic_);
+  if (model_ == nullptr) return;
+  Pending* p = pending_.append();  // room: pending_ and batch_ hold max_tracks
+  p->slot = &s;
+  p->refresh = first;
+  std::copy(holistic_.begin(), holistic_.begin() + kHolisticMotionDimensions, p->motion.begin());
+  if (pending_.size() == pending_.capacity()) classify_pending();
+}
+
+void TrackClassifier::begin(const segmentation::Segments& segments,
+                            const tracking::TrackerOutput& tracked) noexcept {
+  kept_tracks_.clear();
+  kept_segments_.segments.clear();
+  kept_segments_.point_indices.clear();
+  ++scans_;
+  std::uint32_t position = 0;
+  for (const tracking::Track& t : tracked.tracks) {
+    ++position;
     if (t.slot >= slots_.size()) {
       ++counters_.slot_mismatch;
       continue;
     }
-    Slot& s = slots_[t.slot];
-    if (s.pending) classify_pending();  // a slot twice in one scan (never expected): in order
-    if (s.cls.id != t.id) {             // a new track in this pool slot: forget the one before
-      s.cloud.clear(t.id + 1);
-      s.evidence.reset();
-      s.cls = TrackClass{};
-      s.cls.id = t.id;
-      s.since_holistic = 0;
-      s.accumulated_ok = false;
-    }
     if (t.segment < 0 || static_cast<std::size_t>(t.segment) >= segments.segments.size()) continue;
     const segmentation::Segment& seg = segments.segments[static_cast<std::size_t>(t.segment)];
-    const descriptors::SegmentView view{xyzi, stride_bytes, segments.indices(seg), 0};
-    descriptors::Descriptors& described = batch_[pending_.size()];
-    describer_.compute(view, described);
-    ++counters_.segments_described;
-    if (described.status != descriptors::Status::kOk) {
-      ++counters_.segments_empty;
+    const std::span<const std::uint32_t> indices = segments.indices(seg);
+    const std::size_t first = kept_segments_.point_indices.size();
+    const bool twice = slot_scan_[t.slot] == scans_;  // the later track takes the slot
+    if (twice) ++counters_.slot_mismatch;
+    Kept* k = twice ? &kept_tracks_[slot_kept_[t.slot]] : kept_tracks_.append();
+    segmentation::Segment* copy = k != nullptr ? kept_segments_.segments.append() : nullptr;
+    if (copy == nullptr || !kept_segments_.point_indices.resize(first + indices.size())) {
+      if (copy != nullptr) (void)kept_segments_.segments.resize(kept_segments_.segments.size() - 1);
+      if (k != nullptr && !twice) (void)kept_tracks_.resize(kept_tracks_.size() - 1);
+      ++counters_.kept_overflow;
       continue;
     }
-    s.cloud.add_segment(view);
-    const bool refresh = !s.accumulated_ok || ++s.since_holistic >= config_.holistic_every;
-    if (refresh) {
-      describer_.compute(s.cloud.view(), s.accumulated);
-      ++counters_.holistic_described;
-      s.accumulated_ok = true;
-      s.since_holistic = 0;
+    std::copy(indices.begin(), indices.end(), kept_segments_.point_indices.data() + first);
+    *copy = seg;
+    copy->first = static_cast<std::uint32_t>(first);
+    k->track = t;
+    k->track.segment = static_cast<std::int32_t>(kept_segments_.segments.size() - 1);
+    const Slot& s = slots_[t.slot];
+    k->priority = s.cls.id == t.id ? s.described : 0;
+    k->classified = false;
+    k->accumulate = false;
+    k->position = position;
+    slot_scan_[t.slot] = scans_;
+    slot_kept_[t.slot] = static_cast<std::uint32_t>(k - kept_tracks_.data());
+  }
+  std::sort(kept_tracks_.data(), kept_tracks_.data() + kept_tracks_.size(),
+            [](const Kept& a, const Kept& b) {
+              return a.priority != b.priority ? a.priority < b.priority : a.position < b.position;
+            });
+}
+
+UpdateCount TrackClassifier::update(const float* xyzi, std::size_t stride_bytes,
+                                    const UpdateLimit& limit) noexcept {
+  const bool timed = limit.until_ns != std::numeric_limits<std::int64_t>::max();
+  UpdateCount count;
+  for (Kept& k : std::span<Kept>(kept_tracks_.data(), kept_tracks_.size())) {
+    if (k.classified || (!limit.tentative && k.track.state == tracking::TrackState::kTentative))
+      continue;
+    if (count.late > 0 || (timed && rt::realtime_ns() >= limit.until_ns)) {
+      ++count.late;
+      continue;
     }
-    holistic_descriptor(t, &s.accumulated, holistic_);
-    if (observer_ != nullptr) observer_->on_update(t, described.values, holistic_);
-    if (model_ == nullptr) continue;
-    Pending* p = pending_.append();  // room: pending_ and batch_ hold max_tracks
-    p->slot = &s;
-    p->refresh = refresh;
-    std::copy(holistic_.begin(), holistic_.begin() + kHolisticMotionDimensions, p->motion.begin());
-    s.pending = true;
-    if (pending_.size() == pending_.capacity()) classify_pending();
+    update_one(xyzi, stride_bytes, k);
+    ++count.classified;
   }
   if (model_ != nullptr) classify_pending();
+  return count;
+}
+
+void TrackClassifier::finish(const float* xyzi, std::size_t stride_bytes) noexcept {
+  (void)update(xyzi, stride_bytes, UpdateLimit{});
+  for (const Kept& k : std::span<const Kept>(kept_tracks_.data(), kept_tracks_.size())) {
+    if (!k.accumulate) continue;
+    Slot& s = slots_[k.track.slot];
+    const segmentation::Segment& seg =
+        kept_segments_.segments[static_cast<std::size_t>(k.track.segment)];
+    s.cloud.add_segment({xyzi, stride_bytes, kept_segments_.indices(seg), 0});
+    if (++s.since_holistic < config_.holistic_every) continue;
+    describer_.compute(s.cloud.view(), s.accumulated);
+    ++counters_.holistic_described;
+    s.since_holistic = 0;
+    if (model_ != nullptr) slots_to_sum_.push_back(&s);  // room: max_tracks
+  }
+  if (model_ != nullptr) sum_accumulated();
+  kept_tracks_.clear();
 }
 
 void TrackClassifier::report(const tracking::TrackerOutput& tracked,
@@ -158,7 +237,7 @@ void TrackClassifier::report(const tracking::TrackerOutput& tracked,
     if (c == nullptr) break;
     if (t.slot < slots_.size() && slots_[t.slot].cls.id == t.id) {
       *c = slots_[t.slot].cls;
-    } else {  // not seen by update() yet (deferred), or out of the pool
+    } else {  // not classified yet, or out of the pool
       *c = TrackClass{};
       c->id = t.id;
     }
@@ -169,42 +248,10 @@ void TrackClassifier::classify(const float* xyzi, std::size_t stride_bytes,
                                const segmentation::Segments& segments,
                                const tracking::TrackerOutput& tracked,
                                rt::FixedVector<TrackClass>& out) noexcept {
-  update(xyzi, stride_bytes, segments,
-         std::span<const tracking::Track>(tracked.tracks.data(), tracked.tracks.size()));
+  begin(segments, tracked);
+  (void)update(xyzi, stride_bytes, UpdateLimit{});
+  finish(xyzi, stride_bytes);
   report(tracked, out);
-}
-
-void TrackClassifier::defer(const segmentation::Segments& segments,
-                            const tracking::TrackerOutput& tracked) noexcept {
-  deferred_tracks_.clear();
-  deferred_.segments.clear();
-  deferred_.point_indices.clear();
-  for (const tracking::Track& t : tracked.tracks) {
-    tracking::Track* copy = deferred_tracks_.append();
-    if (copy == nullptr) break;
-    *copy = t;
-    copy->segment = -1;
-    if (t.segment < 0 || static_cast<std::size_t>(t.segment) >= segments.segments.size()) continue;
-    const segmentation::Segment& seg = segments.segments[static_cast<std::size_t>(t.segment)];
-    const std::span<const std::uint32_t> indices = segments.indices(seg);
-    const std::size_t first = deferred_.point_indices.size();
-    segmentation::Segment* kept = deferred_.segments.append();
-    if (kept == nullptr || !deferred_.point_indices.resize(first + indices.size())) {
-      if (kept != nullptr) (void)deferred_.segments.resize(deferred_.segments.size() - 1);
-      ++counters_.deferred_overflow;
-      continue;
-    }
-    std::copy(indices.begin(), indices.end(), deferred_.point_indices.data() + first);
-    *kept = seg;
-    kept->first = static_cast<std::uint32_t>(first);
-    copy->segment = static_cast<std::int32_t>(deferred_.segments.size() - 1);
-  }
-}
-
-void TrackClassifier::update_deferred(const float* xyzi, std::size_t stride_bytes) noexcept {
-  update(xyzi, stride_bytes, deferred_,
-         std::span<const tracking::Track>(deferred_tracks_.data(), deferred_tracks_.size()));
-  deferred_tracks_.clear();
 }
 
 }  // namespace stac::classification

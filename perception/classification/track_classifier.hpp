@@ -1,22 +1,25 @@
 // The per-scan classification stage (thesis ch. 1; docs/classification.md "In the pipeline"):
 // every track updated with a segment this scan has the segment described and classified, its
-// evidence (TrackEvidence) updated, the segment added to the track's accumulated cloud, and its
-// log odds taken from the augmented discrete Bayes filter with the holistic descriptor. Tracks
-// that coast keep their last class. State lives in one slot per tracker pool slot
-// (tracking::Track::slot), all allocated at construction; classify() allocates nothing, throws
-// nothing and does no I/O, so its cost per scan is bounded by the number of tracks.
+// evidence (TrackEvidence) updated and its log odds taken from the augmented discrete Bayes
+// filter with the holistic descriptor; then the segment is added to the track's accumulated
+// cloud. Tracks that coast keep their last class. State lives in one slot per tracker pool slot
+// (tracking::Track::slot), all allocated at construction; nothing here allocates, throws or does
+// I/O after it, so a scan's cost is bounded by the number of tracks.
 //
-// The accumulated cloud's descriptors cost more than a segment's (up to accumulated_points
-// points), so they are recomputed at a track's first segment and then every
-// `holistic_every` segments; the motion elements of the holistic descriptor are current every
-// scan. `stac dataset` runs this same stage (through an Observer), so training sees exactly the
-// descriptors the runtime classifies. The holistic classifier's sum over the accumulated cloud's
-// elements is kept with them, so an update costs the segment classifier and 9 holistic elements.
+// The holistic descriptor is the track's motion now and the descriptors of its accumulated
+// cloud as last described: at a track's first segment, that segment's own descriptors; after
+// every `holistic_every` segments added to the cloud, the cloud's (up to accumulated_points
+// points). So a class needs only its segment described, and the costly cloud descriptions can
+// wait until the scan's tracks are published (stac run, docs/run.md). `stac dataset` runs this
+// same stage (through an Observer), so training sees exactly the descriptors the runtime
+// classifies. The holistic classifier's sum over the accumulated cloud's elements is kept with
+// them, so an update costs the segment classifier and 9 holistic elements.
 #pragma once
 
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <span>
 #include <vector>
@@ -33,10 +36,12 @@ namespace stac::classification {
 
 struct TrackClassifierConfig {
   std::size_t max_tracks = 512;           // = the tracker's max_tracks (one slot per pool slot)
-  std::size_t accumulated_points = 4096;  // points kept per track's accumulated cloud
-  std::uint32_t holistic_every = 5;  // accumulated cloud described every N segments (1: always)
-  std::size_t max_points = 300'000;  // = the segmenter's max_points (defer()'s copy of indices)
-  descriptors::DescriptorConfig descriptors;
+  std::size_t accumulated_points = 1024;  // points kept per track's accumulated cloud
+  std::uint32_t holistic_every = 5;  // accumulated cloud described after every N segments added
+  std::size_t max_points = 300'000;  // = the segmenter's max_points (begin()'s copy of indices)
+  // A segment or accumulated cloud of more points is described from max_points evenly spaced
+  // ones (config/stac.yaml's classification.max_segment_points).
+  descriptors::DescriptorConfig descriptors{.max_points = 1024};
 };
 
 // Empty when usable, else what is wrong (start-up checks).
@@ -55,13 +60,26 @@ struct TrackClassifierCounters {
   std::uint64_t segments_described = 0;
   std::uint64_t holistic_described = 0;  // accumulated clouds described
   std::uint64_t segments_empty = 0;      // no finite point: not classified
-  std::uint64_t slot_mismatch = 0;       // a track whose slot is out of range (never expected)
-  std::uint64_t deferred_overflow = 0;   // segments defer() could not keep (never expected)
+  // A track whose slot is out of range, or that another track of the same scan holds (the
+  // later one is classified): never expected.
+  std::uint64_t slot_mismatch = 0;
+  std::uint64_t kept_overflow = 0;       // segments begin() could not keep (never expected)
+};
+
+// Which of the kept tracks update() classifies.
+struct UpdateLimit {
+  bool tentative = true;  // false: tentative tracks (not published by default) wait for finish()
+  // CLOCK_REALTIME (ns): no track is started at or after this; the ones left wait for finish().
+  std::int64_t until_ns = std::numeric_limits<std::int64_t>::max();
+};
+struct UpdateCount {
+  std::size_t classified = 0;  // tracks update() classified
+  std::size_t late = 0;        // tracks it would have taken but for its time limit
 };
 
 class TrackClassifier {
  public:
-  // Sees every classified update (stac dataset records the descriptors). Called from classify().
+  // Sees every classified update (stac dataset records the descriptors), from update().
   class Observer {
    public:
     virtual ~Observer() = default;
@@ -79,20 +97,26 @@ class TrackClassifier {
 
   // One scan. `xyzi` + `stride_bytes`: the scan's points (x, y, z, intensity first), which
   // `segments` index; `out` gets one TrackClass per tracked.tracks entry (capacity >= max_tracks).
+  // The same as begin(), update(), finish(), report().
   void classify(const float* xyzi, std::size_t stride_bytes, const segmentation::Segments& segments,
                 const tracking::TrackerOutput& tracked, rt::FixedVector<TrackClass>& out) noexcept;
 
-  // The same in two steps, for a loop that publishes a scan's tracks before it classifies the
-  // scan's segments (stac run, docs/run.md): report() gives the tracks' classes as the scans
-  // before left them (a track new in this scan: unclassified), defer() keeps a copy of what the
-  // update needs (tracks, their segments' point indices), and update_deferred() classifies them
-  // later, with the scan's points still valid. Same classes one scan later than classify().
+  // The same in steps, for a loop that publishes a scan's tracks in between (stac run):
+  // begin() keeps the scan's tracks that have a segment and a copy of their segments' point
+  // indices (`segments` may change afterwards; the points must stay until finish()), ordered
+  // by the segments each has been classified with, fewest first. update() classifies the kept
+  // tracks `limit` allows, in that order, and counts them and those its time limit left. finish() classifies every kept track left, then adds their
+  // segments to the accumulated clouds and describes the clouds that are due. report() gives
+  // the tracks' classes as they are: a track not yet classified this scan has the class the
+  // scans before left (a track first seen: unclassified). Whatever the steps' timing, the
+  // classes after finish() are classify()'s.
+  void begin(const segmentation::Segments& segments,
+             const tracking::TrackerOutput& tracked) noexcept;
+  UpdateCount update(const float* xyzi, std::size_t stride_bytes, const UpdateLimit& limit) noexcept;
+  void finish(const float* xyzi, std::size_t stride_bytes) noexcept;
   void report(const tracking::TrackerOutput& tracked,
               rt::FixedVector<TrackClass>& out) const noexcept;
-  void defer(const segmentation::Segments& segments,
-             const tracking::TrackerOutput& tracked) noexcept;
-  void update_deferred(const float* xyzi, std::size_t stride_bytes) noexcept;
-  [[nodiscard]] bool has_deferred() const noexcept { return !deferred_tracks_.empty(); }
+  [[nodiscard]] bool has_kept() const noexcept { return !kept_tracks_.empty(); }
 
   [[nodiscard]] const TrackClassifierCounters& counters() const noexcept { return counters_; }
   [[nodiscard]] const TrackClassifierConfig& config() const noexcept { return config_; }
@@ -102,11 +126,11 @@ class TrackClassifier {
     AccumulatedCloud cloud;
     TrackEvidence evidence;
     TrackClass cls;  // cls.id: the track this slot holds; 0: none yet (track ids start at 1)
+    std::uint32_t described = 0;       // segments of this track described so far
     std::uint32_t since_holistic = 0;  // segments added since the accumulated cloud was described
-    bool accumulated_ok = false;
-    descriptors::Descriptors accumulated;  // the accumulated cloud's last descriptors
+    bool accumulated_ok = false;       // `accumulated` holds a description (first segment's on)
+    descriptors::Descriptors accumulated;  // the holistic descriptor's 931 accumulated elements
     LogOdds accumulated_sum{};  // their part of the holistic log odds (GridClassifier::partial)
-    bool pending = false;       // described in this scan, waiting for classify_pending()
     explicit Slot(std::size_t points) : cloud(points) {}
   };
   // A described update waiting for the model (its segment's descriptors: batch_[index]). No
@@ -117,13 +141,23 @@ class TrackClassifier {
     bool refresh;  // the accumulated part of the holistic descriptor is new
     std::array<float, kHolisticMotionDimensions> motion;
   };
+  // A track kept by begin() (its segment: kept_segments_.segments[track.segment]).
+  struct Kept {
+    tracking::Track track;
+    std::uint32_t priority;  // segments described before this scan (0: a new track)
+    bool classified;         // update() has taken it
+    bool accumulate;         // its segment had a finite point: finish() adds it to the cloud
+    std::uint32_t position;  // in tracked.tracks (ties keep this order)
+  };
 
-  void update(const float* xyzi, std::size_t stride_bytes, const segmentation::Segments& segments,
-              std::span<const tracking::Track> tracks) noexcept;
+  // Describes one kept track's segment and queues the model's update (classify_pending()).
+  void update_one(const float* xyzi, std::size_t stride_bytes, Kept& k) noexcept;
   // The model's update of every pending slot. The classifiers' tables are walked once for all
   // of them (GridClassifier::partial_batch), so they stay in cache; each slot's arithmetic is
   // the same as classifying it alone.
   void classify_pending() noexcept;
+  // The holistic classifier's sums over the accumulated elements of `slots_to_sum_`.
+  void sum_accumulated() noexcept;
 
   TrackClassifierConfig config_;
   std::shared_ptr<const TrackClassifierModel> model_;
@@ -136,8 +170,12 @@ class TrackClassifier {
   std::vector<const float*> rows_;  // partial_batch's inputs and sums (max_tracks each)
   std::vector<LogOdds> sums_;
   std::vector<LogOdds> segment_log_odds_;
-  rt::FixedVector<tracking::Track> deferred_tracks_;
-  segmentation::Segments deferred_;
+  std::vector<Slot*> slots_to_sum_;  // sum_accumulated()'s slots (max_tracks)
+  rt::FixedVector<Kept> kept_tracks_;   // begin()'s tracks, in their order of classification
+  std::vector<std::uint64_t> slot_scan_;  // per slot: begin()'s scan count when it kept it
+  std::vector<std::uint32_t> slot_kept_;  // per slot: its entry in kept_tracks_ then
+  std::uint64_t scans_ = 0;               // begin() calls
+  segmentation::Segments kept_segments_;
   TrackClassifierCounters counters_;
 };
 

@@ -1,6 +1,7 @@
 // The per-scan classification stage: one class per reported track, evidence kept per pool slot
-// and forgotten when the slot holds a new track, the accumulated cloud described every
-// holistic_every segments, the same log odds as the model's own functions, no allocation.
+// and forgotten when the slot holds a new track, the holistic descriptor's accumulated part
+// (the first segment's, then the cloud described after every holistic_every segments), the same
+// log odds as the model's own functions, the steps stac run takes, no allocation.
 #include "perception/classification/track_classifier.hpp"
 
 #include <gtest/gtest.h>
@@ -78,6 +79,15 @@ class Recorder : public TrackClassifier::Observer {
   std::vector<std::vector<float>> segments, holistics;
 };
 
+// A stage without a model (descriptors only) and what it saw.
+struct Observed {
+  TrackClassifier stage{small_config(), nullptr};
+  Recorder seen;
+  tracking::TrackerOutput tracked{4};
+  rt::FixedVector<TrackClass> out{4};
+  Observed() { stage.set_observer(&seen); }
+};
+
 TEST(TrackClassifier, OneClassPerTrackAndTheModelsOwnLogOdds) {
   auto model = std::make_shared<const TrackClassifierModel>(full_size_model());
   TrackClassifier stage(small_config(), model);
@@ -99,10 +109,12 @@ TEST(TrackClassifier, OneClassPerTrackAndTheModelsOwnLogOdds) {
     EXPECT_EQ(out[1].id, 2u);
     EXPECT_TRUE(out[0].classified);
     EXPECT_EQ(out[0].segments, static_cast<std::uint32_t>(frame + 1));
-    ASSERT_EQ(seen.ids[before], 1u);
+    std::size_t mine = before;  // track 1's update (the one with fewer segments comes first)
+    while (mine < seen.ids.size() && seen.ids[mine] != 1u) ++mine;
+    ASSERT_LT(mine, seen.ids.size());
     LogOdds hs{}, expected{};
-    ASSERT_TRUE(add_segment(*model, seen.segments[before], evidence, hs));
-    ASSERT_TRUE(track_log_odds(*model, evidence, seen.holistics[before], expected));
+    ASSERT_TRUE(add_segment(*model, seen.segments[mine], evidence, hs));
+    ASSERT_TRUE(track_log_odds(*model, evidence, seen.holistics[mine], expected));
     // The holistic sum is kept in two parts (motion, accumulated cloud): float rounding only.
     for (std::size_t k = 0; k < kClassCount; ++k)
       EXPECT_NEAR(out[0].log_odds[k], expected[k], 1e-4f * (1.0f + std::fabs(expected[k])));
@@ -150,16 +162,16 @@ TEST(TrackClassifier, TracksClassifiedTogetherGetTheClassesOfEachAlone) {
     EXPECT_TRUE(out[1].classified);
     EXPECT_EQ(out[0].classified, frame != 5);  // frame 5: the slot holds track 7 at the end
   }
-  EXPECT_EQ(together.counters().segments_described, alone.counters().segments_described);
-  EXPECT_EQ(together.counters().holistic_described, alone.counters().holistic_described);
+  // Frame 5's track 1 is not classified together (the later track 7 holds its slot): one
+  // segment less described, and the cloud it would have completed (6 segments) not described.
+  EXPECT_EQ(together.counters().slot_mismatch, 1u);
+  EXPECT_EQ(together.counters().segments_described + 1, alone.counters().segments_described);
+  EXPECT_EQ(together.counters().holistic_described + 1, alone.counters().holistic_described);
 }
 
-TEST(TrackClassifier, AccumulatedCloudIsDescribedAtTheFirstSegmentThenEveryN) {
-  TrackClassifier stage(small_config(), nullptr);  // no model: descriptors only
-  Recorder seen;
-  stage.set_observer(&seen);
-  tracking::TrackerOutput tracked(4);
-  rt::FixedVector<TrackClass> out(4);
+TEST(TrackClassifier, AccumulatedPartIsTheFirstSegmentThenTheCloudDescribedAfterEveryN) {
+  Observed o;
+  auto& [stage, seen, tracked, out] = o;
   for (int frame = 0; frame < 8; ++frame) {
     const Scene scene(frame);
     tracked.tracks.clear();
@@ -177,7 +189,9 @@ TEST(TrackClassifier, AccumulatedCloudIsDescribedAtTheFirstSegmentThenEveryN) {
     return std::vector<float>(seen.holistics[i].begin() + kHolisticMotionDimensions,
                               seen.holistics[i].end());
   };
-  // holistic_every 3: described at segments 1, 4, 7 (indices 0, 3, 6), kept in between.
+  // The first segment's own descriptors, until the cloud of 3 segments is described (after
+  // segments 3 and 6): it serves segments 4-6, the cloud of 6 segments 7 and 8.
+  EXPECT_EQ(accumulated(0), seen.segments[0]);
   for (std::size_t i = 1; i < 8; ++i) {
     if (i == 3 || i == 6)
       EXPECT_NE(accumulated(i), accumulated(i - 1)) << i;
@@ -186,7 +200,7 @@ TEST(TrackClassifier, AccumulatedCloudIsDescribedAtTheFirstSegmentThenEveryN) {
   }
   // The motion part is current every scan: segment count = frame + 1.
   for (std::size_t i = 0; i < 8; ++i) EXPECT_EQ(seen.holistics[i][5], static_cast<float>(i + 1));
-  EXPECT_EQ(stage.counters().holistic_described, 3u);
+  EXPECT_EQ(stage.counters().holistic_described, 2u);
   EXPECT_EQ(seen.segments[0].size(), descriptors::kDimensions);
 }
 
@@ -246,44 +260,86 @@ TEST(TrackClassifier, ClassifyAllocatesNothing) {
   static_assert(noexcept(stage.classify(nullptr, 16, scenes[0].segments, tracked, out)));
 }
 
-TEST(TrackClassifier, DeferredClassesAreTheImmediateOnesOneScanLater) {
+// stac run's steps: begin() keeps what it needs (the scan's Segments change before finish()),
+// update() takes the published tracks (not the tentative one) or, out of time, none and counts
+// them late; report() then gives the tracks it took their classes of one call, the others the
+// scan before's; after finish() every class is one call's.
+TEST(TrackClassifier, StepsGiveTheClassesOfOneCallAndLeaveWhatTheLimitExcludesForFinish) {
   auto model = std::make_shared<const TrackClassifierModel>(full_size_model());
-  TrackClassifier now(small_config(), model), later(small_config(), model);
+  TrackClassifier now(small_config(), model), steps(small_config(), model),
+      timed(small_config(), model);
   tracking::TrackerOutput tracked(4);
-  rt::FixedVector<TrackClass> immediate(4), deferred(4), previous(4);
+  rt::FixedVector<TrackClass> immediate(4), out(4), previous(4);
   for (int frame = 0; frame < 6; ++frame) {
     Scene scene(frame);
     tracked.tracks.clear();
-    (void)tracked.tracks.push_back(track(1, 0, 0));
-    if (frame >= 2) (void)tracked.tracks.push_back(track(3, 2, 1));  // new in frame 2
+    tracking::Track confirmed = track(1, 0, 0);
+    confirmed.state = tracking::TrackState::kConfirmed;
+    (void)tracked.tracks.push_back(confirmed);
+    (void)tracked.tracks.push_back(track(3, 2, 1));  // tentative
     now.classify(scene.xyzi.data(), 16, scene.segments, tracked, immediate);
-    later.report(tracked, deferred);
-    later.defer(scene.segments, tracked);
-    EXPECT_TRUE(later.has_deferred());
-    // The scan's own buffers change before the deferred update: it kept its own copy.
+    steps.begin(scene.segments, tracked);
+    timed.begin(scene.segments, tracked);
+    EXPECT_TRUE(steps.has_kept());
+    const UpdateCount n = steps.update(scene.xyzi.data(), 16, {.tentative = false});
+    EXPECT_EQ(n.classified, 1u);
+    EXPECT_EQ(n.late, 0u);
+    const UpdateCount m = timed.update(scene.xyzi.data(), 16, {.tentative = false, .until_ns = 0});
+    EXPECT_EQ(m.classified, 0u);
+    EXPECT_EQ(m.late, 1u);  // the confirmed track; the tentative one was not asked for
+    steps.report(tracked, out);
+    ASSERT_EQ(out.size(), 2u);
+    EXPECT_EQ(out[0].log_odds, immediate[0].log_odds) << frame;
+    EXPECT_EQ(out[0].segments, static_cast<std::uint32_t>(frame + 1));
+    EXPECT_EQ(out[1].classified, frame > 0) << frame;  // the tentative one: the scan before's
+    if (frame > 0) {
+      EXPECT_EQ(out[1].log_odds, previous[1].log_odds) << frame;
+    }
+    timed.report(tracked, out);
+    for (std::size_t i = 0; i < 2; ++i) {
+      EXPECT_EQ(out[i].classified, frame > 0) << frame;
+      if (frame > 0) {
+        EXPECT_EQ(out[i].log_odds, previous[i].log_odds) << frame;
+      }
+    }
+    // The scan's own buffers change before finish(): begin() kept its own copy.
     std::fill(scene.segments.point_indices.data(),
               scene.segments.point_indices.data() + scene.segments.point_indices.size(), 0u);
     scene.segments.segments.clear();
-    later.update_deferred(scene.xyzi.data(), 16);  // the points themselves are still there
-    ASSERT_EQ(deferred.size(), tracked.tracks.size());
-    EXPECT_EQ(deferred[0].id, 1u);
-    if (frame == 0) {
-      EXPECT_FALSE(deferred[0].classified);
-    }
-    if (frame == 2) {
-      EXPECT_FALSE(deferred[1].classified);  // first seen: not classified yet
-    }
-    for (std::size_t i = 0; i < deferred.size() && frame > 0; ++i) {
-      if (i >= previous.size() || previous[i].id != deferred[i].id) continue;
-      EXPECT_EQ(deferred[i].log_odds, previous[i].log_odds) << frame;
-      EXPECT_EQ(deferred[i].segments, previous[i].segments) << frame;
+    for (TrackClassifier* c : {&steps, &timed}) {
+      c->finish(scene.xyzi.data(), 16);  // the points themselves are still there
+      EXPECT_FALSE(c->has_kept());
+      c->report(tracked, out);
+      for (std::size_t i = 0; i < 2; ++i) {
+        EXPECT_EQ(out[i].log_odds, immediate[i].log_odds) << frame << " " << i;
+        EXPECT_EQ(out[i].segments, immediate[i].segments) << frame << " " << i;
+      }
     }
     previous.clear();
     for (const TrackClass& c : immediate) (void)previous.push_back(c);
   }
-  EXPECT_FALSE(later.has_deferred());
-  EXPECT_EQ(later.counters().deferred_overflow, 0u);
-  EXPECT_EQ(later.counters().segments_described, now.counters().segments_described);
+  for (const TrackClassifier* c : {&steps, &timed}) {
+    EXPECT_EQ(c->counters().kept_overflow, 0u);
+    EXPECT_EQ(c->counters().segments_described, now.counters().segments_described);
+    EXPECT_EQ(c->counters().holistic_described, now.counters().holistic_described);
+  }
+}
+
+// update() takes the tracks with the fewest segments classified first (a new track's class
+// matters most), in their order among equals: what a time limit leaves are the settled ones.
+TEST(TrackClassifier, TracksWithFewerSegmentsAreClassifiedFirst) {
+  Observed o;
+  auto& [stage, seen, tracked, out] = o;
+  for (int frame = 0; frame < 3; ++frame) {
+    const Scene scene(frame);
+    tracked.tracks.clear();
+    (void)tracked.tracks.push_back(track(1, 0, 0));                   // from frame 0
+    if (frame >= 1) (void)tracked.tracks.push_back(track(2, 1, 1));  // from frame 1
+    if (frame == 2) (void)tracked.tracks.push_back(track(4, 3, 1));  // new in frame 2
+    seen.ids.clear();
+    stage.classify(scene.xyzi.data(), 16, scene.segments, tracked, out);
+  }
+  EXPECT_EQ(seen.ids, (std::vector<std::uint64_t>{4, 2, 1}));
 }
 
 TEST(TrackClassifier, AModelForOtherDescriptorsIsRefused) {

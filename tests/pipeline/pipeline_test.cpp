@@ -18,6 +18,7 @@
 #include "drivers/velodyne/calibration.hpp"
 #include "drivers/velodyne/scan_stream.hpp"
 #include "pipeline/scan_pipeline.hpp"
+#include "rt/clock.hpp"
 #include "rt/slot_exchange.hpp"
 #include "rt/testing/alloc_counter.hpp"
 #include "classification/made_up_model.hpp"
@@ -56,7 +57,7 @@ Fixture decoded_drive(const std::string& name) {
               .classifier = {},
               .model = nullptr,
               .describe = false,
-              .defer_classification = false,
+              .split_classification = false,
               .trailer = velodyne::traits(f.velodyne.assembler.decoder.model).trailer,
               .clock = StageClock::kMonotonic};
   auto calibration = velodyne::load_calibration(stac::testing::shared_data(kYaml));
@@ -139,8 +140,8 @@ TEST(ScanPipeline, PerceptionLoopWithHandoverMakesNoAllocationOver1000ScansAfter
   Fixture f = decoded_drive("alloc");
   ASSERT_GE(f.scans.size(), 5u);
   const std::unique_ptr<ego::PoseHistory> poses = straight_drive(f, 1020);
-  f.config.model = made_up_model();  // classification on, after publishing (as stac run)
-  f.config.defer_classification = true;
+  f.config.model = made_up_model();  // classification on, in two steps (as stac run)
+  f.config.split_classification = true;
   f.config.cloud_stride = 8;  // and the point cloud for viewers, as stac run makes it
   ScanPipeline pipeline(f.config);
   rt::SlotExchange<ScanResult> results(4, [&] { return pipeline.make_result(); });
@@ -167,10 +168,10 @@ TEST(ScanPipeline, PerceptionLoopWithHandoverMakesNoAllocationOver1000ScansAfter
   const auto step = [&](std::size_t i) {
     load_scan(f, i, scan);
     ScanResult& r = results.current();
-    pipeline.process(scan, poses.get(), r);
+    pipeline.process(scan, poses.get(), r, rt::realtime_ns() + 2'000'000);  // a 2 ms budget
     deskewed += r.has_pose ? 1 : 0;
     (void)results.publish();
-    pipeline.classify_deferred(scan);
+    pipeline.finish_scan(scan);
   };
   for (std::size_t i = 0; i < 20; ++i) step(i);  // warm-up: the tracker's pool fills
   rt::testing::AllocationCounter counter;
@@ -189,45 +190,86 @@ TEST(ScanPipeline, PerceptionLoopWithHandoverMakesNoAllocationOver1000ScansAfter
   EXPECT_GT(cloud_points.load(), 0u);
   EXPECT_GT(pipeline.classifier()->counters().holistic_described, 0u);
   EXPECT_GT(pipeline.tracker().counters().spawned, 0u);
-  static_assert(noexcept(pipeline.process(scan, nullptr, results.current())));
+  static_assert(noexcept(pipeline.process(scan, nullptr, results.current(), 0)));
+  static_assert(noexcept(pipeline.finish_scan(scan)));
 }
 
-TEST(ScanPipeline, DeferredClassificationGivesTheImmediateClassesOneScanLater) {
+// stac run's two steps against one: process() gives the tracks it publishes (confirmed ones)
+// the classes of one call, the tentative ones the classes the scan before left; with its time
+// up, every class is the scan before's and counted late. After finish_scan() all three agree.
+TEST(ScanPipeline, SplitClassificationGivesPublishedTracksTodaysClassesAndTheRestAfterFinish) {
   STAC_REQUIRE_SHARED_DATA(kYaml);
-  Fixture f = decoded_drive("deferred");
+  Fixture f = decoded_drive("split");
   ASSERT_GE(f.scans.size(), 5u);
   f.config.model = made_up_model();
-  PipelineConfig deferred_config = f.config;
-  deferred_config.defer_classification = true;
-  ScanPipeline now(f.config), later(deferred_config);
-  ScanResult a = now.make_result(), b = later.make_result();
+  PipelineConfig split_config = f.config;
+  split_config.split_classification = true;
+  ScanPipeline whole(f.config), split(split_config), late(split_config);
+  ScanResult a = whole.make_result(), b = split.make_result(), c = late.make_result();
   velodyne::Scan scan(f.scans.front()->points.capacity());
-  std::map<std::uint64_t, classification::TrackClass> before;  // immediate, previous scan
-  std::size_t compared = 0;
+  using Classes = std::map<std::uint64_t, classification::TrackClass>;
+  const auto by_id = [](const ScanResult& r) {
+    Classes m;
+    for (const classification::TrackClass& k : r.classes) m[k.id] = k;
+    return m;
+  };
+  Classes before;  // the whole pipeline's classes after the previous scan
+  std::size_t current = 0, previous = 0, late_total = 0;
   for (std::size_t i = 0; i < f.scans.size(); ++i) {
     load_scan(f, i, scan);
-    now.process(scan, nullptr, a);
+    whole.process(scan, nullptr, a);
     load_scan(f, i, scan);
-    later.process(scan, nullptr, b);
-    later.classify_deferred(scan);
+    split.process(scan, nullptr, b);
+    load_scan(f, i, scan);
+    late.process(scan, nullptr, c, 0);  // no time left at all
+    const Classes now = by_id(a);
     ASSERT_EQ(b.classes.size(), b.tracked.tracks.size());
-    for (const classification::TrackClass& c : b.classes) {
-      const auto it = before.find(c.id);
-      if (it == before.end()) {
-        EXPECT_FALSE(c.classified);
-        continue;
+    std::uint32_t published_with_segment = 0;
+    for (std::size_t t = 0; t < b.tracked.tracks.size(); ++t) {
+      const tracking::Track& track = b.tracked.tracks[t];
+      const bool published = track.state != tracking::TrackState::kTentative;
+      published_with_segment += published && track.segment >= 0 ? 1 : 0;
+      const auto old = before.find(track.id);
+      if (published) {
+        EXPECT_EQ(b.classes[t].log_odds, now.at(track.id).log_odds) << i;
+        EXPECT_EQ(b.classes[t].segments, now.at(track.id).segments) << i;
+        ++current;
+      } else if (old != before.end()) {
+        EXPECT_EQ(b.classes[t].log_odds, old->second.log_odds) << i;
+        ++previous;
+      } else {
+        EXPECT_FALSE(b.classes[t].classified) << i;
       }
-      EXPECT_EQ(c.log_odds, it->second.log_odds);
-      EXPECT_EQ(c.classified, it->second.classified);
-      ++compared;
+      // Out of time: every class as the scan before left it.
+      EXPECT_EQ(c.classes[t].classified, old != before.end() && old->second.classified) << i;
+      if (old != before.end()) {
+        EXPECT_EQ(c.classes[t].log_odds, old->second.log_odds) << i;
+      }
     }
+    EXPECT_EQ(b.classes_late, 0u);
+    EXPECT_EQ(b.classes_current, published_with_segment);
+    EXPECT_EQ(c.classes_late, published_with_segment);
+    EXPECT_EQ(c.classes_current, 0u);
+    late_total += c.classes_late;
+    split.finish_scan(scan);
+    late.finish_scan(scan);
     if (i > 0) {
       EXPECT_GT(b.stage_ns[kClassifyDeferred], 0);
     }
-    before.clear();
-    for (const classification::TrackClass& c : a.classes) before[c.id] = c;
+    // After finish_scan(), the classes of one call.
+    for (ScanPipeline* p : {&split, &late}) {
+      rt::FixedVector<classification::TrackClass> after(b.tracked.tracks.capacity());
+      p->classifier()->report(b.tracked, after);
+      for (const classification::TrackClass& k : after) {
+        EXPECT_EQ(k.log_odds, now.at(k.id).log_odds) << i;
+        EXPECT_EQ(k.classified, now.at(k.id).classified) << i;
+      }
+    }
+    before = now;
   }
-  EXPECT_GT(compared, 10u);
+  EXPECT_GT(current, 10u);
+  EXPECT_GT(previous, 0u);
+  EXPECT_GT(late_total, 10u);
 }
 
 TEST(ScanPipeline, ParkedSensorKeepsTheSensorPoseAndFillsEveryStage) {

@@ -234,7 +234,7 @@ TEST(RunCli, ReplayedDriveGivesOneTrackedObjectsSamplePerScanAndHealthThatAgrees
     if (!h.stages.empty()) return false;
     EXPECT_EQ(h.end_to_end_us, 0u);
     EXPECT_LT(h.scan_index, std::max<std::uint64_t>(published, 1));
-    EXPECT_EQ(h.drops.size(), 26u);
+    EXPECT_EQ(h.drops.size(), 27u);
     return true;
   });
   ASSERT_EQ(healths.size(), published);
@@ -271,6 +271,11 @@ TEST(RunCli, ReplayedDriveGivesOneTrackedObjectsSamplePerScanAndHealthThatAgrees
   EXPECT_TRUE(last.drops.count("velodyne.kernel") && last.drops.count("tracking.pool_full"));
   EXPECT_EQ(last.drops.at("ego.scans_without_pose"),
             summary_number(out, R"((\d+) scans without a pose)"));
+  // Published tracks classified before their scan's publication, and those the budget
+  // (run.classify_budget_ms) left for after it, in health as in the summary.
+  EXPECT_GT(summary_number(out, R"((\d+) published tracks classified before publication)"), 0u);
+  EXPECT_EQ(last.drops.at("classification.late"),
+            summary_number(out, R"((\d+) after it \(run.classify_budget_ms)"));
   EXPECT_LE(last.sensors.at("lidar"), 1u);  // ok, or stale if the last scan waited past the timeout
   EXPECT_EQ(last.sensors.at("can"), 3u);    // not configured
   // CAN's drop causes are there, at 0 without CAN.

@@ -17,7 +17,7 @@ constexpr const char* kRunKeys[] = {"deadline_ms: 100",
                                     "result_slots: 4",
                                     "lock_memory: false",
                                     "cpu_wake_latency_us: 0",
-                                    "classify_after_publish: false",
+                                    "classify_budget_ms: 12.5",
                                     "receiver_priority: 0",
                                     "receiver_cpu: -1",
                                     "perception_priority: 10",
@@ -54,7 +54,7 @@ TEST(RunSettings, ShippedSectionLoadsWithoutRealTimeRequests) {
   EXPECT_EQ(s->deadline.budget_ns, 100'000'000);
   EXPECT_EQ(s->deadline.histogram_bins, 10'000u);  // 0.1 ms bins over 1 s
   EXPECT_EQ(s->result_slots, 4u);
-  EXPECT_TRUE(s->classify_after_publish);
+  EXPECT_EQ(s->classify_budget_ns, 8'000'000);
   EXPECT_EQ(s->cpu_wake_latency_us, -1);  // no PM QoS request unless asked
   EXPECT_EQ(s->ins, InsTransport::kTcp);
   EXPECT_EQ(s->perception.fifo_priority, 0);
@@ -66,7 +66,7 @@ TEST(RunSettings, EveryKeyIsReadIntoItsField) {
   ASSERT_TRUE(s) << s.error().message;
   EXPECT_FALSE(s->lock_memory);
   EXPECT_EQ(s->cpu_wake_latency_us, 0);
-  EXPECT_FALSE(s->classify_after_publish);
+  EXPECT_EQ(s->classify_budget_ns, 12'500'000);
   EXPECT_EQ(s->perception.fifo_priority, 10);
   EXPECT_EQ(s->perception.cpu, 1);
   EXPECT_EQ(s->ins_address, "127.0.0.1");
@@ -75,7 +75,7 @@ TEST(RunSettings, EveryKeyIsReadIntoItsField) {
 
 TEST(RunSettings, MissingOrInvalidKeysAreNamed) {
   for (const std::string key :
-       {"deadline_ms", "result_slots", "cpu_wake_latency_us", "classify_after_publish", "pose_cpu", "ins",
+       {"deadline_ms", "result_slots", "cpu_wake_latency_us", "classify_budget_ms", "pose_cpu", "ins",
         "velodyne_timeout_s"}) {
     auto missing = load_run_settings(run_section("missing_" + key, key, ""));
     ASSERT_FALSE(missing) << key;
@@ -87,6 +87,8 @@ TEST(RunSettings, MissingOrInvalidKeysAreNamed) {
       {"deadline_ms", "deadline_ms: 0"},
       {"latency_histogram_max_ms", "latency_histogram_max_ms: 50"},
       {"result_slots", "result_slots: 1"},
+      {"classify_budget_ms", "classify_budget_ms: -1"},
+      {"classify_budget_ms", "classify_budget_ms: 101"},  // over deadline_ms
       {"cpu_wake_latency_us", "cpu_wake_latency_us: -2"},
       {"perception_priority", "perception_priority: 100"},
       {"receiver_cpu", "receiver_cpu: -2"},

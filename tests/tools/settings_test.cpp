@@ -140,7 +140,7 @@ TEST(ConfigFile, AKeyWrittenTwiceIsAnError) {
 
 TEST(ConfigFile, CapacitiesOfTwoSectionsAreCheckedTogether) {
   auto s =
-      load_pipeline_settings(with_line("accumulated_points: 4096", "accumulated_points: 1000000"));
+      load_pipeline_settings(with_line("accumulated_points: 1024", "accumulated_points: 1000000"));
   ASSERT_FALSE(s);
   EXPECT_NE(s.error().message.find(
                 "'tracking.max_tracks' and 'classification:': max_tracks x accumulated_points"),
@@ -158,9 +158,9 @@ const char* const kModelLine = R"(model: \S+( +# track classifier))";
 TEST(ClassificationSettings, TheShippedConfigLoadsAndPathsAreRelativeToTheFile) {
   auto s = load_classification_settings(kShipped);
   ASSERT_TRUE(s) << s.error().message;
-  EXPECT_EQ(s->classifier.accumulated_points, 4096u);
+  EXPECT_EQ(s->classifier.accumulated_points, 1024u);
   EXPECT_EQ(s->classifier.holistic_every, 5u);
-  EXPECT_EQ(s->classifier.descriptors.max_points, 30000u);
+  EXPECT_EQ(s->classifier.descriptors.max_points, 1024u);
   const auto edited = with_line(kModelLine, "model: models/x.stacmodel$1");
   auto m = load_classification_settings(edited);
   ASSERT_TRUE(m) << m.error().message;
@@ -173,10 +173,10 @@ TEST(ClassificationSettings, TheShippedConfigLoadsAndPathsAreRelativeToTheFile) 
 TEST(ClassificationSettings, EveryBrokenKeyIsNamed) {
   const std::pair<std::string, std::string> cases[] = {
       {kModelLine, "model: \"\"$1"},
-      {"accumulated_points: 4096", "accumulated_points: 0"},
+      {"accumulated_points: 1024", "accumulated_points: 0"},
       {"holistic_every: 5", "holistic_every: 0"},
       {"holistic_every: 5", "holistic_every: often"},
-      {"max_segment_points: 30000", "max_segment_pts: 30000"},
+      {"max_segment_points: 1024", "max_segment_pts: 1024"},
   };
   for (const auto& [pattern, replacement] : cases) {
     auto s = load_classification_settings(with_line(pattern, replacement));
