@@ -347,18 +347,25 @@ int watch_drive(const DemoOptions& o, const std::filesystem::path& dir, const st
   std::vector<double> confirmed(w.confirmed_per_scan_.begin(), w.confirmed_per_scan_.end());
   std::string drops;
   for (const auto& [cause, count] : w.drops_)
-    if (count > 0) drops += " " + cause + "=" + std::to_string(count);
+    if (count > 0 && cause != "classification.late") drops += " " + cause + "=" + std::to_string(count);
+  // Published tracks classified before their scan's publication, and those left for after it.
+  const std::uint64_t current =
+      summary_number(run_log, R"((\d+) published tracks classified before publication)").value_or(0);
+  const std::uint64_t late = summary_number(run_log, R"((\d+) after it \(run)").value_or(0);
   std::printf(
       "\nSTAC demo: %.0f s simulated urban drive (seed %llu) -> loopback UDP + INS -> stac run -> DDS\n"
       "  scans       %zu received on tracked_objects of %llu published by stac run (%llu missing)\n"
       "  tracks      %zu ids; per scan median %.0f (%.0f confirmed), max %.0f\n"
       "  deadline    %llu misses (run.deadline_ms)\n"
       "  drops      %s\n"
+      "  classes     %llu published tracks classified before publication, %llu one scan late "
+      "(run.classify_budget_ms)\n"
       "  end to end  last firing -> published: median %.1f ms, p99 %.1f ms (%zu scans, health)\n"
       "  DDS         publish -> receive (tracked_objects): median %.2f ms, p99 %.2f ms, max %.2f ms\n",
       o.seconds, u(o.seed), w.scans_.size(), u(published), u(missing), w.ids_.size(),
       percentile(per_scan, 0.5), percentile(confirmed, 0.5), percentile(per_scan, 1.0),
-      u(w.deadline_misses_), drops.empty() ? " none" : drops.c_str(), percentile(w.end_to_end_ms_, 0.5),
+      u(w.deadline_misses_), drops.empty() ? " none" : drops.c_str(), u(current), u(late),
+      percentile(w.end_to_end_ms_, 0.5),
       percentile(w.end_to_end_ms_, 0.99), w.end_to_end_ms_.size(), percentile(w.latency_ms_, 0.5),
       percentile(w.latency_ms_, 0.99), percentile(w.latency_ms_, 1.0));
   DriveView view = w.view();

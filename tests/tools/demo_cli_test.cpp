@@ -89,6 +89,13 @@ TEST(DemoCli, ShortDriveGivesALinePerPublishedScanWithTracksASummaryThatAgreesAn
   EXPECT_TRUE(std::regex_search(out, std::regex(R"(DDS +publish -> receive \(tracked_objects\): median [0-9.]+ ms, p99 [0-9.]+ ms)")))
       << out;
   EXPECT_NE(out.find("drops "), std::string::npos) << out;
+  // Published tracks classified before publication and one scan late, as stac run counted them.
+  EXPECT_EQ(number(out, R"(classes +(\d+) published tracks classified before publication, \d+ one)"),
+            number(out, R"((\d+) published tracks classified before publication, \d+ after)"))
+      << out;
+  EXPECT_EQ(number(out, R"((\d+) one scan late)"), number(out, R"((\d+) after it \(run)")) << out;
+  EXPECT_GT(number(out, R"((\d+) published tracks classified before publication, \d+ one)"), 0u)
+      << out;
 
   // The files: the drive, the children's logs and two pictures of 1000 x 1000 pixels.
   for (const char* f : {"drive.pcap", "drive.truth.jsonl", "run.log", "replay.log"})
