@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# End-to-end latency of `stac run` with classification on, and DDS publish -> receive latency,
+# End-to-end latency of `stac run` with classification on (the published tracks classified before
+# publication within run.classify_budget_ms: the summary's `classes` line), and DDS publish -> receive latency,
 # over loopback (docs/benchmarks.md, "stac run: end to end"): a simulated 20 s urban drive
 # replayed at the sensor's pace into `stac run`, `stac echo --latency` as the subscriber.
 #
@@ -54,5 +55,6 @@ sleep 3
 wait "$echo_pid" || true
 kill -INT "$run_pid"; wait "$run_pid" || true
 echo "$0: $MODE, load $(cut -d' ' -f1-3 /proc/loadavg)"
+grep '^  classes' "$OUT/run.log" || true
 sed -n '/^  deadline/,$p' "$OUT/run.log"
 grep "latency over" "$OUT/echo.log" || { echo "$0: the subscriber saw too few samples:"; tail -3 "$OUT/echo.log"; }
