@@ -209,6 +209,7 @@ class TypedPublisher final : public Publisher {
     d.object_id = o.object_id;
     d.existence_probability = o.existence_probability;
     std::copy(o.class_log_odds.begin(), o.class_log_odds.end(), d.class_log_odds);
+    d.class_age = o.class_age;
     // classification[]: every class with its probability (logistic of its log odds), most probable
     // first; labels 1 car, 2 pedestrian, 3 bicyclist, 4 background. Unclassified: one entry,
     // label 0 (unknown), probability 1.

@@ -39,6 +39,7 @@ struct TrackedObjectIn {
   float existence_probability = 0;               // 0..1
   bool classified = false;                       // false: classification[] = {unknown, 1}
   std::array<float, 4> class_log_odds{};         // car, pedestrian, bicyclist, background
+  std::uint32_t class_age = 0;                   // scans since the class took a segment
   Vec3 position, velocity;                       // world (m, m/s)
   std::array<float, 9> position_covariance{};    // x,y,z row-major (m^2)
   std::array<float, 9> velocity_covariance{};    // ((m/s)^2)

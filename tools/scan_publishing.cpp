@@ -57,6 +57,7 @@ rt::Result<bool> ScanPublishing::publish(const pipeline::ScanResult& r, std::uin
       const classification::LogOdds& l = r.classes[i].log_odds;
       o.classified = true;
       o.class_log_odds = {l[0], l[1], l[2], -std::max({l[0], l[1], l[2]})};
+      o.class_age = r.classes[i].age;
     }
   }
   rt::Result<bool> status = publisher_.publish_tracked_objects(stamp, {objects_.data(), n_tracks});

@@ -104,6 +104,7 @@ void TrackClassifier::classify_pending() noexcept {
     s.cls.log_odds = track;
     s.cls.label = predict(track);
     s.cls.segments = s.evidence.segments;
+    s.class_scan = scans_;
   }
   pending_.clear();
 }
@@ -237,6 +238,7 @@ void TrackClassifier::report(const tracking::TrackerOutput& tracked,
     if (c == nullptr) break;
     if (t.slot < slots_.size() && slots_[t.slot].cls.id == t.id) {
       *c = slots_[t.slot].cls;
+      c->age = c->classified ? static_cast<std::uint32_t>(scans_ - slots_[t.slot].class_scan) : 0;
     } else {  // not classified yet, or out of the pool
       *c = TrackClass{};
       c->id = t.id;

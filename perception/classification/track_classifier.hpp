@@ -54,6 +54,10 @@ struct TrackClass {
   ObjectClass label = ObjectClass::kBackground;
   LogOdds log_odds{};          // augmented DBF, per foreground class (natural log odds)
   std::uint32_t segments = 0;  // segments classified so far
+  // Scans since the class last took a segment of the track (report()): 0 when this scan's
+  // segment is in it; 1 when it waits for finish() (stac run's budget, a tentative track) or the
+  // track coasted one scan; n after n scans without a segment.
+  std::uint32_t age = 0;
 };
 
 struct TrackClassifierCounters {
@@ -131,6 +135,7 @@ class TrackClassifier {
     bool accumulated_ok = false;       // `accumulated` holds a description (first segment's on)
     descriptors::Descriptors accumulated;  // the holistic descriptor's 931 accumulated elements
     LogOdds accumulated_sum{};  // their part of the holistic log odds (GridClassifier::partial)
+    std::uint64_t class_scan = 0;  // scans_ when cls last took a segment
     explicit Slot(std::size_t points) : cloud(points) {}
   };
   // A described update waiting for the model (its segment's descriptors: batch_[index]). No

@@ -123,6 +123,7 @@ TEST(TrackClassifier, OneClassPerTrackAndTheModelsOwnLogOdds) {
       EXPECT_EQ(seen.ids.size(), before + 1);
       EXPECT_EQ(out[1].segments, 3u);
     }
+    EXPECT_EQ(out[1].age, frame == 3 ? 1u : frame == 4 ? 2u : 0u);  // scans since its segment
   }
   EXPECT_EQ(stage.counters().segments_described, 12u);
   EXPECT_EQ(stage.counters().slot_mismatch, 0u);
@@ -291,6 +292,8 @@ TEST(TrackClassifier, StepsGiveTheClassesOfOneCallAndLeaveWhatTheLimitExcludesFo
     ASSERT_EQ(out.size(), 2u);
     EXPECT_EQ(out[0].log_odds, immediate[0].log_odds) << frame;
     EXPECT_EQ(out[0].segments, static_cast<std::uint32_t>(frame + 1));
+    EXPECT_EQ(out[0].age, 0u);                 // this scan's segment is in it
+    EXPECT_EQ(out[1].age, frame > 0 ? 1u : 0u);  // the scan before's
     EXPECT_EQ(out[1].classified, frame > 0) << frame;  // the tentative one: the scan before's
     if (frame > 0) {
       EXPECT_EQ(out[1].log_odds, previous[1].log_odds) << frame;
@@ -298,6 +301,7 @@ TEST(TrackClassifier, StepsGiveTheClassesOfOneCallAndLeaveWhatTheLimitExcludesFo
     timed.report(tracked, out);
     for (std::size_t i = 0; i < 2; ++i) {
       EXPECT_EQ(out[i].classified, frame > 0) << frame;
+      EXPECT_EQ(out[i].age, frame > 0 ? 1u : 0u) << frame;
       if (frame > 0) {
         EXPECT_EQ(out[i].log_odds, previous[i].log_odds) << frame;
       }
@@ -313,6 +317,7 @@ TEST(TrackClassifier, StepsGiveTheClassesOfOneCallAndLeaveWhatTheLimitExcludesFo
       for (std::size_t i = 0; i < 2; ++i) {
         EXPECT_EQ(out[i].log_odds, immediate[i].log_odds) << frame << " " << i;
         EXPECT_EQ(out[i].segments, immediate[i].segments) << frame << " " << i;
+        EXPECT_EQ(out[i].age, 0u);
       }
     }
     previous.clear();

@@ -32,6 +32,7 @@ TrackedObjectIn object(std::uint64_t id) {
   o.existence_probability = 0.75f;
   o.classified = true;
   o.class_log_odds = {2.0f, -1.0f, -3.0f, 0.5f};
+  o.class_age = 1;
   o.position = {10.5, -3.25, 0.75};
   o.velocity = {4.0, 1.5, 0.0};
   for (int i = 0; i < 9; ++i) {
@@ -76,6 +77,7 @@ TEST(DdsPublisher, TrackedObjectsRoundTripEveryFieldWithSequencesAtTheirBounds) 
   EXPECT_FLOAT_EQ(o.existence_probability, 0.75f);
   EXPECT_FLOAT_EQ(o.class_log_odds[0], 2.0f);
   EXPECT_FLOAT_EQ(o.class_log_odds[3], 0.5f);
+  EXPECT_EQ(o.class_age, 1u);
   ASSERT_EQ(o.classification._length, 4u);
   EXPECT_EQ(o.classification._buffer[0].label, 1);  // car, log odds 2
   EXPECT_NEAR(o.classification._buffer[0].probability, 0.8808f, 1e-4);

@@ -245,6 +245,14 @@ TEST(ScanPipeline, SplitClassificationGivesPublishedTracksTodaysClassesAndTheRes
       if (old != before.end()) {
         EXPECT_EQ(c.classes[t].log_odds, old->second.log_odds) << i;
       }
+      // A class is as old as the scans since it took a segment: this scan's is in b's
+      // published ones, never in c's.
+      if (published && track.segment >= 0 && b.classes[t].classified) {
+        EXPECT_EQ(b.classes[t].age, 0u) << i;
+      }
+      if (c.classes[t].classified) {
+        EXPECT_GE(c.classes[t].age, 1u) << i;
+      }
     }
     EXPECT_EQ(b.classes_late, 0u);
     EXPECT_EQ(b.classes_current, published_with_segment);

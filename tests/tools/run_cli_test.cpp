@@ -170,9 +170,15 @@ TEST(RunCli, ReplayedDriveGivesOneTrackedObjectsSamplePerScanAndHealthThatAgrees
   };
   std::vector<CloudSeen> clouds;
   std::size_t healths_before = 0;
+  std::uint64_t confirmed_current = 0, confirmed_late = 0;  // by class_age, confirmed objects
   for (int quiet = 0; quiet < 200;) {
     const int n = tracked.drain<Types::TrackedObjects>([&](const Types::TrackedObjects& s) {
       indices.push_back(s.scan_index);
+      for (std::uint32_t i = 0; i < s.objects._length; ++i) {
+        const auto& o = s.objects._buffer[i];
+        if (o.state != 1 || o.classification._buffer[0].label == 0) continue;  // unclassified
+        (o.class_age == 0 ? confirmed_current : confirmed_late) += 1;
+      }
     }) + health.drain<Types::Health>([&](const Types::Health& s) {
       HealthSeen h{s.scan_index, s.deadline_misses, s.end_to_end_latency_us, {}, {}, {}};
       for (std::uint32_t i = 0; i < s.stages._length; ++i)
@@ -276,6 +282,10 @@ TEST(RunCli, ReplayedDriveGivesOneTrackedObjectsSamplePerScanAndHealthThatAgrees
   EXPECT_GT(summary_number(out, R"((\d+) published tracks classified before publication)"), 0u);
   EXPECT_EQ(last.drops.at("classification.late"),
             summary_number(out, R"((\d+) after it \(run.classify_budget_ms)"));
+  // On DDS, a confirmed track (updated with a segment this scan) has class_age 0 when classified
+  // before publication, and more when the budget left it: as many as were counted late.
+  EXPECT_GT(confirmed_current, 0u);
+  EXPECT_EQ(confirmed_late, last.drops.at("classification.late"));
   EXPECT_LE(last.sensors.at("lidar"), 1u);  // ok, or stale if the last scan waited past the timeout
   EXPECT_EQ(last.sensors.at("can"), 3u);    // not configured
   // CAN's drop causes are there, at 0 without CAN.
