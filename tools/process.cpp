@@ -167,6 +167,8 @@ int run_process(const ProcessOptions& o) {
     const std::int64_t finish_start = cpu_ns();
     pipeline.finish_scan(scan);
     const std::int64_t finish_ns = cpu_ns() - finish_start;
+    // Offline nothing waits: every track's class after both steps (the tentative ones too).
+    if (pipeline.classifier() != nullptr) pipeline.classifier()->report(result.tracked, result.classes);
     const std::int64_t* ns = result.stage_ns;
     stages[0].ms.push_back(static_cast<double>(decode_ns) * 1e-6);
     stages[1].ms.push_back(static_cast<double>(ns[pipeline::kDeskew]) * 1e-6);
