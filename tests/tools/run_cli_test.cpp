@@ -283,9 +283,14 @@ TEST(RunCli, ReplayedDriveGivesOneTrackedObjectsSamplePerScanAndHealthThatAgrees
   EXPECT_EQ(last.drops.at("classification.late"),
             summary_number(out, R"((\d+) after it \(run.classify_budget_ms)"));
   // On DDS, a confirmed track (updated with a segment this scan) has class_age 0 when classified
-  // before publication, and more when the budget left it: as many as were counted late.
+  // before publication, and more when the budget left it: as many as were counted late (fewer
+  // when results were dropped with full slots: their late classes were counted, never sent).
   EXPECT_GT(confirmed_current, 0u);
-  EXPECT_EQ(confirmed_late, last.drops.at("classification.late"));
+  if (results_full == 0) {
+    EXPECT_EQ(confirmed_late, last.drops.at("classification.late"));
+  } else {
+    EXPECT_LE(confirmed_late, last.drops.at("classification.late"));
+  }
   EXPECT_LE(last.sensors.at("lidar"), 1u);  // ok, or stale if the last scan waited past the timeout
   EXPECT_EQ(last.sensors.at("can"), 3u);    // not configured
   // CAN's drop causes are there, at 0 without CAN.
