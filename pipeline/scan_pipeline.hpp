@@ -9,7 +9,6 @@
 
 #include <atomic>
 #include <cstdint>
-#include <limits>
 #include <memory>
 
 #include "drivers/velodyne/model.hpp"
@@ -113,9 +112,8 @@ class ScanPipeline {
   // One scan (deskewed in place). `poses` may be nullptr: no deskew, the sensor parked at
   // vehicle_T_sensor in the world. With split_classification, no track is classified from
   // `classify_until_ns` on (CLOCK_REALTIME; the scan's last firing + a budget).
-  static constexpr std::int64_t kNoLimit = std::numeric_limits<std::int64_t>::max();
   void process(velodyne::Scan& scan, const ego::PoseHistory* poses, ScanResult& out,
-               std::int64_t classify_until_ns = kNoLimit) noexcept;
+               std::int64_t classify_until_ns = classification::UpdateLimit::kNoLimit) noexcept;
 
   // With split_classification: the classification process() left of the last scan, which must
   // be `scan`, its points unchanged (its Segments may have changed); its time is the next

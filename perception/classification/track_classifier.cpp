@@ -120,7 +120,6 @@ void TrackClassifier::update_one(const float* xyzi, std::size_t stride_bytes, Ke
     s.cls.id = t.id;
     s.described = 0;
     s.since_holistic = 0;
-    s.accumulated_ok = false;
   }
   const segmentation::Segment& seg = kept_segments_.segments[static_cast<std::size_t>(t.segment)];
   const descriptors::SegmentView view{xyzi, stride_bytes, kept_segments_.indices(seg), 0};
@@ -132,12 +131,8 @@ void TrackClassifier::update_one(const float* xyzi, std::size_t stride_bytes, Ke
     return;
   }
   k.accumulate = true;
-  ++s.described;
-  const bool first = !s.accumulated_ok;
-  if (first) {  // the accumulated cloud will be this segment: its description is the segment's
-    s.accumulated = described;
-    s.accumulated_ok = true;
-  }
+  const bool first = ++s.described == 1;
+  if (first) s.accumulated = described;  // the cloud will be this segment: its description
   holistic_descriptor(t, &s.accumulated, holistic_);
   if (observer_ != nullptr) observer_->on_update(t, described.values, holistic_);
   if (model_ == nullptr) return;
@@ -196,7 +191,7 @@ void TrackClassifier::begin(const segmentation::Segments& segments,
 
 UpdateCount TrackClassifier::update(const float* xyzi, std::size_t stride_bytes,
                                     const UpdateLimit& limit) noexcept {
-  const bool timed = limit.until_ns != std::numeric_limits<std::int64_t>::max();
+  const bool timed = limit.until_ns != UpdateLimit::kNoLimit;
   UpdateCount count;
   for (Kept& k : std::span<Kept>(kept_tracks_.data(), kept_tracks_.size())) {
     if (k.classified || (!limit.tentative && k.track.state == tracking::TrackState::kTentative))

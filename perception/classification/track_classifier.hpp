@@ -72,9 +72,10 @@ struct TrackClassifierCounters {
 
 // Which of the kept tracks update() classifies.
 struct UpdateLimit {
+  static constexpr std::int64_t kNoLimit = std::numeric_limits<std::int64_t>::max();
   bool tentative = true;  // false: tentative tracks (not published by default) wait for finish()
   // CLOCK_REALTIME (ns): no track is started at or after this; the ones left wait for finish().
-  std::int64_t until_ns = std::numeric_limits<std::int64_t>::max();
+  std::int64_t until_ns = kNoLimit;
 };
 struct UpdateCount {
   std::size_t classified = 0;  // tracks update() classified
@@ -109,8 +110,9 @@ class TrackClassifier {
   // begin() keeps the scan's tracks that have a segment and a copy of their segments' point
   // indices (`segments` may change afterwards; the points must stay until finish()), ordered
   // by the segments each has been classified with, fewest first. update() classifies the kept
-  // tracks `limit` allows, in that order, and counts them and those its time limit left. finish() classifies every kept track left, then adds their
-  // segments to the accumulated clouds and describes the clouds that are due. report() gives
+  // tracks `limit` allows, in that order, and counts them and those its time limit left.
+  // finish() classifies every kept track left, then adds their segments to the accumulated
+  // clouds and describes the clouds that are due. report() gives
   // the tracks' classes as they are: a track not yet classified this scan has the class the
   // scans before left (a track first seen: unclassified). Whatever the steps' timing, the
   // classes after finish() are classify()'s.
@@ -130,10 +132,10 @@ class TrackClassifier {
     AccumulatedCloud cloud;
     TrackEvidence evidence;
     TrackClass cls;  // cls.id: the track this slot holds; 0: none yet (track ids start at 1)
-    std::uint32_t described = 0;       // segments of this track described so far
+    std::uint32_t described = 0;  // segments of this track described (with a finite point)
     std::uint32_t since_holistic = 0;  // segments added since the accumulated cloud was described
-    bool accumulated_ok = false;       // `accumulated` holds a description (first segment's on)
-    descriptors::Descriptors accumulated;  // the holistic descriptor's 931 accumulated elements
+    // The holistic descriptor's 931 accumulated elements (valid once described > 0).
+    descriptors::Descriptors accumulated;
     LogOdds accumulated_sum{};  // their part of the holistic log odds (GridClassifier::partial)
     std::uint64_t class_scan = 0;  // scans_ when cls last took a segment
     explicit Slot(std::size_t points) : cloud(points) {}
