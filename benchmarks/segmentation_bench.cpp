@@ -4,6 +4,7 @@
 // wraps) on the SAME obstacle points STAC found, raw or after a 0.1 / 0.2 m voxel grid. Each
 // iteration segments one scan (round robin); per-iteration times give the median, p99 and max.
 // BM_StacSegmentAndTrack: segmentation + tracking per scan as the perception thread runs them.
+// BM_StacSegmenterBesideMemoryProbe: how the segmenter's time follows the machine's memory speed.
 #include <benchmark/benchmark.h>
 #include <pcl/filters/voxel_grid.h>
 #include <pcl/point_cloud.h>
@@ -14,6 +15,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -22,6 +24,7 @@
 #include <vector>
 
 #include "benchmarks/kitti_scans.hpp"
+#include "benchmarks/slow_blocks.hpp"
 #include "perception/segmentation/segmenter.hpp"
 #include "pipeline/scan_pipeline.hpp"
 
@@ -86,6 +89,7 @@ struct Times {
 };
 
 void report(benchmark::State& state, Times& t, double points, double segments) {
+  const std::vector<double> wall_in_order = t.wall;
   for (auto* v : {&t.wall, &t.cpu}) std::sort(v->begin(), v->end());
   const auto at = [](const std::vector<double>& v, double q) {
     return v[std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size())))];
@@ -95,6 +99,7 @@ void report(benchmark::State& state, Times& t, double points, double segments) {
   state.counters["max_ms"] = t.wall.back();
   state.counters["cpu_median_ms"] = at(t.cpu, 0.5);
   state.counters["cpu_p99_ms"] = at(t.cpu, 0.99);
+  state.counters["slow_blocks"] = stac::benchmarks::slow_blocks(wall_in_order, at(t.wall, 0.5));
   state.counters["points"] = points;
   state.counters["segments"] = segments;
 }
@@ -123,6 +128,68 @@ void BM_StacSegmenter(benchmark::State& state) {
   report(state, t, points / n, segments / n);
 }
 BENCHMARK(BM_StacSegmenter)->Arg(1)->Arg(0)->Iterations(1200)->Unit(benchmark::kMillisecond);
+
+// How much of the segmenter's spread is the machine's: one scan (the first) segmented again and
+// again, each time right after a fixed probe that reads 8 MB of memory (every 64-byte line once).
+// The same work each iteration, so on a steady machine both times would barely vary. Reports the
+// segmenter's median and p99, the probe's median and p99, their correlation over the iterations,
+// and the segmenter's mean time after the probe's fastest half and after its slowest tenth
+// (docs/benchmarks.md, "The host's steadiness").
+void BM_StacSegmenterBesideMemoryProbe(benchmark::State& state) {
+  Segmenter segmenter{SegmenterConfig{}};
+  Segments out = segmenter.make_segments();
+  const PointView scan = view(scans()[0]);
+  segmenter.segment(scan, out);  // warm-up
+  std::vector<std::uint64_t> probe(std::size_t{1} << 20);
+  for (std::size_t i = 0; i < probe.size(); ++i) probe[i] = i;
+  std::vector<double> seg_ms, probe_ms;
+  std::uint64_t sum = 0;
+  const auto ms_since = [](std::chrono::steady_clock::time_point t0) {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  };
+  for (auto _ : state) {
+    auto t0 = std::chrono::steady_clock::now();
+    for (std::size_t i = 0; i < probe.size(); i += 8) sum += probe[i];
+    probe_ms.push_back(ms_since(t0));
+    t0 = std::chrono::steady_clock::now();
+    segmenter.segment(scan, out);
+    seg_ms.push_back(ms_since(t0));
+  }
+  benchmark::DoNotOptimize(sum);
+  const auto n = static_cast<double>(seg_ms.size());
+  double mean_s = 0, mean_p = 0;
+  for (std::size_t i = 0; i < seg_ms.size(); ++i) {
+    mean_s += seg_ms[i] / n;
+    mean_p += probe_ms[i] / n;
+  }
+  double cov = 0, var_s = 0, var_p = 0;
+  for (std::size_t i = 0; i < seg_ms.size(); ++i) {
+    cov += (seg_ms[i] - mean_s) * (probe_ms[i] - mean_p);
+    var_s += (seg_ms[i] - mean_s) * (seg_ms[i] - mean_s);
+    var_p += (probe_ms[i] - mean_p) * (probe_ms[i] - mean_p);
+  }
+  std::vector<double> seg_sorted = seg_ms, probe_sorted = probe_ms;
+  std::sort(seg_sorted.begin(), seg_sorted.end());
+  std::sort(probe_sorted.begin(), probe_sorted.end());
+  const auto at = [](const std::vector<double>& v, double q) {
+    return v[static_cast<std::size_t>(q * static_cast<double>(v.size()))];
+  };
+  const double probe_median = at(probe_sorted, 0.5), probe_p90 = at(probe_sorted, 0.9);
+  double fast = 0, slow = 0;
+  std::size_t fast_n = 0, slow_n = 0;
+  for (std::size_t i = 0; i < seg_ms.size(); ++i) {
+    if (probe_ms[i] < probe_median) fast += seg_ms[i], ++fast_n;
+    if (probe_ms[i] > probe_p90) slow += seg_ms[i], ++slow_n;
+  }
+  state.counters["median_ms"] = at(seg_sorted, 0.5);
+  state.counters["p99_ms"] = at(seg_sorted, 0.99);
+  state.counters["probe_median_ms"] = probe_median;
+  state.counters["probe_p99_ms"] = at(probe_sorted, 0.99);
+  state.counters["correlation"] = var_s > 0 && var_p > 0 ? cov / std::sqrt(var_s * var_p) : 0.0;
+  state.counters["after_fast_probe_ms"] = fast_n > 0 ? fast / static_cast<double>(fast_n) : 0.0;
+  state.counters["after_slow_probe_ms"] = slow_n > 0 ? slow / static_cast<double>(slow_n) : 0.0;
+}
+BENCHMARK(BM_StacSegmenterBesideMemoryProbe)->Iterations(2000)->Unit(benchmark::kMillisecond);
 
 // Segmentation + tracking of one scan per iteration, as the perception thread runs them:
 // ScanPipeline::process without poses (no deskew, the sensor parked: segment, detections with
