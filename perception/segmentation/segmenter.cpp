@@ -115,6 +115,8 @@ struct Segmenter::State {
         ground_min2(std::size_t{mp} * mp, 0.0f),
         ground(std::size_t{mp} * mp, 0.0f),
         ground_cells(std::size_t{mp} * mp),
+        coarse_column(n),
+        coarse_row(n),
         point_slot(c.max_points),
         point_z(c.max_points),
         cell_id(c.max_occupied_cells),
@@ -173,6 +175,9 @@ struct Segmenter::State {
   };
   std::vector<Neighbour> window;                // the coarse cells within ground_radius_m
   rt::FixedVector<std::uint32_t> ground_cells;  // coarse cells hit this scan
+  // Per fine column ix: gx + pad of the coarse cell that holds its centre; per fine row iy:
+  // (gy + pad) * mp. A fine cell's coarse cell is their sum.
+  std::vector<std::uint32_t> coarse_column, coarse_row;
   rt::FixedVector<std::uint32_t> point_slot;    // per point: its slot, or kNone
   rt::FixedVector<float> point_z;  // per binned point: its z, for the passes after the first
   // Per slot (occupied fine cell).
@@ -197,6 +202,13 @@ Segmenter::Segmenter(const SegmenterConfig& config) : config_(config) {
     throw std::invalid_argument(std::string("segmentation: ") + why);
   }
   state_ = std::make_unique<State>(config);
+  for (std::uint32_t i = 0; i < state_->n; ++i) {
+    const double centre = (i + 0.5) * config.cell_m;
+    const auto g =
+        std::min(static_cast<std::uint32_t>(centre / config.ground_cell_m), state_->m - 1);
+    state_->coarse_column[i] = g + state_->pad;
+    state_->coarse_row[i] = (g + state_->pad) * state_->mp;
+  }
   const int r = static_cast<int>(std::ceil(config.ground_radius_m / config.ground_cell_m));
   for (int dy = -r; dy <= r; ++dy) {
     for (int dx = -r; dx <= r; ++dx) {
@@ -331,7 +343,6 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
   const float range = static_cast<float>(c.range_m);
   const float min_range2 = static_cast<float>(c.min_range_m * c.min_range_m);
   const float inv_cell = static_cast<float>(1.0 / c.cell_m);
-  const float inv_ground_cell = static_cast<float>(1.0 / c.ground_cell_m);
   const std::size_t count = std::min(points.count, std::min(c.max_points, s.point_slot.capacity()));
   k.ignored_over_capacity = points.count - count;
   s.ground_cells.clear();
@@ -388,17 +399,14 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
         continue;
       }
       cell = static_cast<std::uint32_t>(slots++);
-      // A new cell: its ix, iy and coarse cell from the point again (a cell's first point only;
-      // cheaper than keeping two more per-point arrays from the first pass).
-      float x, y, z_again;
-      points.read(i, x, y, z_again);
-      const auto ix = std::min(static_cast<std::uint32_t>((x + range) * inv_cell), s.n - 1);
-      const auto iy = std::min(static_cast<std::uint32_t>((y + range) * inv_cell), s.n - 1);
+      // A new cell: its ix, iy from its dense index (not from the point again: its record was
+      // streamed long ago and is a cache miss), its coarse cell the one holding its centre.
+      const std::uint32_t tile = d >> 6;
+      const std::uint32_t ix = (tile % s.tiles) << 3 | (d & 7u);
+      const std::uint32_t iy = (tile / s.tiles) << 3 | (d >> 3 & 7u);
       s.cell_id[cell] = iy << 16 | ix;
       State::set(s.seen, d);
-      const auto gx = std::min(static_cast<std::uint32_t>((x + range) * inv_ground_cell), s.m - 1);
-      const auto gy = std::min(static_cast<std::uint32_t>((y + range) * inv_ground_cell), s.m - 1);
-      s.coarse_id[cell] = (gy + s.pad) * s.mp + gx + s.pad;
+      s.coarse_id[cell] = s.coarse_row[iy] + s.coarse_column[ix];
       s.z_min[cell] = z;
     }
     s.point_slot[i] = cell;

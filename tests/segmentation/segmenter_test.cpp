@@ -505,6 +505,31 @@ TEST(Segmenter, ReturnsFromBelowTheRoadDoNotLowerTheGround) {
   EXPECT_EQ(accounted(out.counters), scene.size());
 }
 
+// A fine cell that straddles two coarse cells (ground_cell_m not a multiple of cell_m) takes the
+// ground of the one holding its centre, whichever of its points comes first. Here the fine cell
+// x in [9.9, 10.05) m straddles x = 10 m, with a platform 0.5 m high on its centre's side
+// ([9.5, 10) m) and the road beyond; its two points, 0.55 m up, are 5 cm above the platform:
+// ground, in either order (taking the road's ground from a first point past 10 m made them a
+// 0.55 m obstacle).
+TEST(Segmenter, AFineCellTakesTheGroundOfTheCoarseCellHoldingItsCentre) {
+  SegmenterConfig c = test_config();
+  c.ground_cell_m = 0.5;
+  c.ground_radius_m = 0.0;  // each coarse cell its own ground
+  const float road = -testing::kSensorHeight, platform = road + 0.5f;
+  for (const bool road_side_first : {true, false}) {
+    Scene scene;
+    for (float y = 0.02f; y < 0.5f; y += 0.05f) {
+      for (float x = 9.52f; x < 9.89f; x += 0.05f) scene.add(x, y, platform);
+      for (float x = 10.06f; x < 10.49f; x += 0.05f) scene.add(x, y, road);
+    }
+    const float xs[2] = {road_side_first ? 10.02f : 9.95f, road_side_first ? 9.95f : 10.02f};
+    for (const float x : xs) scene.add(x, 0.07f, platform + 0.05f);
+    const Segments out = run(scene, c);
+    EXPECT_EQ(out.counters.obstacle_points, 0u) << "road side first: " << road_side_first;
+    EXPECT_EQ(out.counters.ground_points, scene.size());
+  }
+}
+
 TEST(Segmenter, CountsEveryCapacityOverflow) {
   Scene scene;
   scene.flat_ground();
