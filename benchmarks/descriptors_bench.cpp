@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "benchmarks/kitti_scans.hpp"
+#include "benchmarks/timing_stats.hpp"
 #include "tests/classification/made_up_model.hpp"
 #include "perception/classification/track_classifier.hpp"
 #include "perception/descriptors/descriptors.hpp"
@@ -53,11 +54,8 @@ const Corpus& corpus() {
 // Median, p99 and max of per-call times (us) as counters.
 void report_percentiles(benchmark::State& state, std::vector<double>& us) {
   std::sort(us.begin(), us.end());
-  const auto at = [&](double q) {
-    return us[std::min(us.size() - 1, static_cast<std::size_t>(q * static_cast<double>(us.size())))];
-  };
-  state.counters["median_us"] = at(0.5);
-  state.counters["p99_us"] = at(0.99);
+  state.counters["median_us"] = stac::benchmarks::quantile(us, 0.5);
+  state.counters["p99_us"] = stac::benchmarks::quantile(us, 0.99);
   state.counters["max_us"] = us.back();
 }
 

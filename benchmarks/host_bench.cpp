@@ -5,7 +5,7 @@
 //   BM_HostRandomReads   reads at random over a 4.5 MB table (the segmenter's fine grid's size)
 //   BM_HostStream        reads six 4 MB blocks (six scans of 32-byte points) three times
 // Each reports median_ms, p99_ms, max_ms, p99_over_median (wall clock; 2000 iterations) and
-// slow_blocks (slow_blocks.hpp: the machine slowed down for stretches, not single iterations).
+// slow_blocks (timing_stats.hpp: the machine slowed down for stretches, not single iterations).
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -13,22 +13,19 @@
 #include <cstdint>
 #include <vector>
 
-#include "benchmarks/slow_blocks.hpp"
+#include "benchmarks/timing_stats.hpp"
 
 namespace {
 
 void report(benchmark::State& state, std::vector<double> times) {
+  using stac::benchmarks::quantile;
   std::vector<double> sorted = times;
   std::sort(sorted.begin(), sorted.end());
-  const auto at = [&](double q) {
-    return sorted[std::min(sorted.size() - 1,
-                           static_cast<std::size_t>(q * static_cast<double>(sorted.size())))];
-  };
-  const double median = at(0.5);
+  const double median = quantile(sorted, 0.5);
   state.counters["median_ms"] = median;
-  state.counters["p99_ms"] = at(0.99);
+  state.counters["p99_ms"] = quantile(sorted, 0.99);
   state.counters["max_ms"] = sorted.back();
-  state.counters["p99_over_median"] = at(0.99) / median;
+  state.counters["p99_over_median"] = quantile(sorted, 0.99) / median;
   state.counters["slow_blocks"] = stac::benchmarks::slow_blocks(std::move(times), median);
 }
 

@@ -24,13 +24,14 @@
 #include <vector>
 
 #include "benchmarks/kitti_scans.hpp"
-#include "benchmarks/slow_blocks.hpp"
+#include "benchmarks/timing_stats.hpp"
 #include "perception/segmentation/segmenter.hpp"
 #include "pipeline/scan_pipeline.hpp"
 
 namespace {
 
 using namespace stac::segmentation;
+using stac::benchmarks::quantile;
 
 const std::vector<std::vector<float>>& scans() { return stac::benchmarks::kitti_scans(); }
 
@@ -89,17 +90,15 @@ struct Times {
 };
 
 void report(benchmark::State& state, Times& t, double points, double segments) {
-  const std::vector<double> wall_in_order = t.wall;
+  std::vector<double> wall_in_order = t.wall;
   for (auto* v : {&t.wall, &t.cpu}) std::sort(v->begin(), v->end());
-  const auto at = [](const std::vector<double>& v, double q) {
-    return v[std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size())))];
-  };
-  state.counters["median_ms"] = at(t.wall, 0.5);
-  state.counters["p99_ms"] = at(t.wall, 0.99);
+  state.counters["median_ms"] = quantile(t.wall, 0.5);
+  state.counters["p99_ms"] = quantile(t.wall, 0.99);
   state.counters["max_ms"] = t.wall.back();
-  state.counters["cpu_median_ms"] = at(t.cpu, 0.5);
-  state.counters["cpu_p99_ms"] = at(t.cpu, 0.99);
-  state.counters["slow_blocks"] = stac::benchmarks::slow_blocks(wall_in_order, at(t.wall, 0.5));
+  state.counters["cpu_median_ms"] = quantile(t.cpu, 0.5);
+  state.counters["cpu_p99_ms"] = quantile(t.cpu, 0.99);
+  state.counters["slow_blocks"] =
+      stac::benchmarks::slow_blocks(std::move(wall_in_order), quantile(t.wall, 0.5));
   state.counters["points"] = points;
   state.counters["segments"] = segments;
 }
@@ -171,20 +170,17 @@ void BM_StacSegmenterBesideMemoryProbe(benchmark::State& state) {
   std::vector<double> seg_sorted = seg_ms, probe_sorted = probe_ms;
   std::sort(seg_sorted.begin(), seg_sorted.end());
   std::sort(probe_sorted.begin(), probe_sorted.end());
-  const auto at = [](const std::vector<double>& v, double q) {
-    return v[static_cast<std::size_t>(q * static_cast<double>(v.size()))];
-  };
-  const double probe_median = at(probe_sorted, 0.5), probe_p90 = at(probe_sorted, 0.9);
+  const double probe_median = quantile(probe_sorted, 0.5), probe_p90 = quantile(probe_sorted, 0.9);
   double fast = 0, slow = 0;
   std::size_t fast_n = 0, slow_n = 0;
   for (std::size_t i = 0; i < seg_ms.size(); ++i) {
     if (probe_ms[i] < probe_median) fast += seg_ms[i], ++fast_n;
     if (probe_ms[i] > probe_p90) slow += seg_ms[i], ++slow_n;
   }
-  state.counters["median_ms"] = at(seg_sorted, 0.5);
-  state.counters["p99_ms"] = at(seg_sorted, 0.99);
+  state.counters["median_ms"] = quantile(seg_sorted, 0.5);
+  state.counters["p99_ms"] = quantile(seg_sorted, 0.99);
   state.counters["probe_median_ms"] = probe_median;
-  state.counters["probe_p99_ms"] = at(probe_sorted, 0.99);
+  state.counters["probe_p99_ms"] = quantile(probe_sorted, 0.99);
   state.counters["correlation"] = var_s > 0 && var_p > 0 ? cov / std::sqrt(var_s * var_p) : 0.0;
   state.counters["after_fast_probe_ms"] = fast_n > 0 ? fast / static_cast<double>(fast_n) : 0.0;
   state.counters["after_slow_probe_ms"] = slow_n > 0 ? slow / static_cast<double>(slow_n) : 0.0;
@@ -237,11 +233,10 @@ void BM_StacSegmentAndTrack(benchmark::State& state) {
   report(state, t, points / n, segments / n);
   state.counters["tracks"] = tracks / n;
   for (auto* v : {&segment_ms, &track_ms}) std::sort(v->begin(), v->end());
-  const auto p99 = [](const std::vector<double>& v) { return v[v.size() * 99 / 100]; };
-  state.counters["segment_median_ms"] = segment_ms[segment_ms.size() / 2];
-  state.counters["segment_p99_ms"] = p99(segment_ms);
-  state.counters["track_median_ms"] = track_ms[track_ms.size() / 2];
-  state.counters["track_p99_ms"] = p99(track_ms);
+  state.counters["segment_median_ms"] = quantile(segment_ms, 0.5);
+  state.counters["segment_p99_ms"] = quantile(segment_ms, 0.99);
+  state.counters["track_median_ms"] = quantile(track_ms, 0.5);
+  state.counters["track_p99_ms"] = quantile(track_ms, 0.99);
 }
 BENCHMARK(BM_StacSegmentAndTrack)->Iterations(1200)->Unit(benchmark::kMillisecond);
 
