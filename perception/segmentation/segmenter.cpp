@@ -143,6 +143,11 @@ struct Segmenter::State {
   [[nodiscard]] std::size_t dense(std::uint32_t ix, std::uint32_t iy) const noexcept {
     return ((std::size_t{iy >> 3} * tiles + (ix >> 3)) << 6) | ((iy & 7u) << 3) | (ix & 7u);
   }
+  // The inverse of dense(): iy << 16 | ix (as in cell_id).
+  [[nodiscard]] std::uint32_t cell_of_dense(std::uint32_t d) const noexcept {
+    const std::uint32_t tile = d >> 6;
+    return ((tile / tiles) << 3 | (d >> 3 & 7u)) << 16 | (tile % tiles) << 3 | (d & 7u);
+  }
   std::vector<std::uint32_t> slot_of;  // fine grid, tiled
   [[nodiscard]] std::size_t dense_of(std::uint32_t slot) const noexcept {
     return dense(cell_id[slot] & 0xFFFFu, cell_id[slot] >> 16);
@@ -401,12 +406,10 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
       cell = static_cast<std::uint32_t>(slots++);
       // A new cell: its ix, iy from its dense index (not from the point again: its record was
       // streamed long ago and is a cache miss), its coarse cell the one holding its centre.
-      const std::uint32_t tile = d >> 6;
-      const std::uint32_t ix = (tile % s.tiles) << 3 | (d & 7u);
-      const std::uint32_t iy = (tile / s.tiles) << 3 | (d >> 3 & 7u);
-      s.cell_id[cell] = iy << 16 | ix;
+      const std::uint32_t id = s.cell_of_dense(d);
+      s.cell_id[cell] = id;
       State::set(s.seen, d);
-      s.coarse_id[cell] = s.coarse_row[iy] + s.coarse_column[ix];
+      s.coarse_id[cell] = s.coarse_row[id >> 16] + s.coarse_column[id & 0xFFFFu];
       s.z_min[cell] = z;
     }
     s.point_slot[i] = cell;
