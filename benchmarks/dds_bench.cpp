@@ -54,9 +54,11 @@ void BM_PublishAndTakeInProcess(benchmark::State& state) {
   static auto pub = publisher(151);
   static const dds_entity_t reader = [] {
     const dds_entity_t participant = dds_create_participant(151, nullptr, nullptr);
-    const dds_entity_t topic = dds_create_topic(participant, stac::dds::IdlTypes<false>::tracked_objects(),
-                                                "stac/tracked_objects", nullptr, nullptr);
-    return dds_create_reader(participant, topic, stac::dds::reader_qos(stac::dds::Topic::kTrackedObjects).get(),
+    const dds_entity_t topic =
+        dds_create_topic(participant, stac::dds::IdlTypes<false>::tracked_objects(),
+                         "stac/tracked_objects", nullptr, nullptr);
+    return dds_create_reader(participant, topic,
+                             stac::dds::reader_qos(stac::dds::Topic::kTrackedObjects).get(),
                              nullptr);
   }();
   const auto in = objects(static_cast<int>(state.range(0)));

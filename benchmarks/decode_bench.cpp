@@ -16,8 +16,8 @@ using namespace stac::velodyne;
 constexpr double kSensorPointsPerSecond = 1'333'312.0;
 
 Calibration benchmark_calibration() {
-  const std::filesystem::path path =
-      std::filesystem::path(STAC_SHARED_DATA_DIR) / "velodyne/calib/rosdrivers_64e_s2.1-sztaki.yaml";
+  const std::filesystem::path path = std::filesystem::path(STAC_SHARED_DATA_DIR) /
+                                     "velodyne/calib/rosdrivers_64e_s2.1-sztaki.yaml";
   auto c = load_calibration(path);
   if (!c) {
     std::fprintf(stderr, "decode_bench: %s\n", c.error().message.c_str());
@@ -66,7 +66,8 @@ void BM_DecodeAndFrameScans(benchmark::State& state) {
   }
   const double seconds_per_iteration = 1.0;
   state.SetItemsProcessed(static_cast<std::int64_t>(points));
-  state.counters["points_per_s"] = benchmark::Counter(static_cast<double>(points), benchmark::Counter::kIsRate);
+  state.counters["points_per_s"] =
+      benchmark::Counter(static_cast<double>(points), benchmark::Counter::kIsRate);
   state.counters["x_realtime"] = benchmark::Counter(
       static_cast<double>(points) / kSensorPointsPerSecond, benchmark::Counter::kIsRate);
   state.counters["sensor_s_per_iter"] = seconds_per_iteration;
@@ -81,7 +82,8 @@ void BM_DecodeBlock(benchmark::State& state) {
   std::int64_t points = 0;
   for (auto _ : state) {
     const RawPacket* p = as_packet(packets[i].bytes);
-    for (int b = 0; b < kBlocksPerPacket; ++b) points += decoder.decode_block(p->blocks[b], b, false, 0, out);
+    for (int b = 0; b < kBlocksPerPacket; ++b)
+      points += decoder.decode_block(p->blocks[b], b, false, 0, out);
     benchmark::DoNotOptimize(out);
     i = (i + 1) % packets.size();
   }

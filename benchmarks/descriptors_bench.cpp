@@ -18,10 +18,10 @@
 
 #include "benchmarks/kitti_scans.hpp"
 #include "benchmarks/timing_stats.hpp"
-#include "tests/classification/made_up_model.hpp"
 #include "perception/classification/track_classifier.hpp"
 #include "perception/descriptors/descriptors.hpp"
 #include "perception/segmentation/segmenter.hpp"
+#include "tests/classification/made_up_model.hpp"
 
 namespace {
 

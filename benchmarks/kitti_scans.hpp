@@ -15,15 +15,18 @@ inline const std::vector<std::vector<float>>& kitti_scans() {
   static const std::vector<std::vector<float>> all = [] {
     std::vector<std::vector<float>> out;
     for (int i = 0; i < 6; ++i) {
-      const auto path = std::filesystem::path(STAC_SHARED_DATA_DIR) / ("kitti/00000" + std::to_string(i) + ".bin");
+      const auto path = std::filesystem::path(STAC_SHARED_DATA_DIR) /
+                        ("kitti/00000" + std::to_string(i) + ".bin");
       std::ifstream f(path, std::ios::binary | std::ios::ate);
       if (!f) {
-        std::fprintf(stderr, "%s is absent (shared/data must sit beside the checkout)\n", path.c_str());
+        std::fprintf(stderr, "%s is absent (shared/data must sit beside the checkout)\n",
+                     path.c_str());
         std::exit(1);
       }
       std::vector<float> v(static_cast<std::size_t>(f.tellg()) / sizeof(float));
       f.seekg(0);
-      f.read(reinterpret_cast<char*>(v.data()), static_cast<std::streamsize>(v.size() * sizeof(float)));
+      f.read(reinterpret_cast<char*>(v.data()),
+             static_cast<std::streamsize>(v.size() * sizeof(float)));
       out.push_back(std::move(v));
     }
     return out;

@@ -33,7 +33,9 @@ namespace {
 using namespace stac::segmentation;
 using stac::benchmarks::quantile;
 
-const std::vector<std::vector<float>>& scans() { return stac::benchmarks::kitti_scans(); }
+const std::vector<std::vector<float>>& scans() {
+  return stac::benchmarks::kitti_scans();
+}
 
 PointView view(const std::vector<float>& xyzi) {
   return {xyzi.data(), xyzi.size() / 4, 16};
@@ -199,7 +201,8 @@ void BM_StacSegmentAndTrack(benchmark::State& state) {
     velodyne::Scan& scan = driver_scans.emplace_back(xyzi.size() / 4);
     for (std::size_t i = 0; i < xyzi.size() / 4; ++i) {
       velodyne::Point p{};
-      p.x = xyzi[4 * i], p.y = xyzi[4 * i + 1], p.z = xyzi[4 * i + 2], p.intensity = xyzi[4 * i + 3];
+      p.x = xyzi[4 * i], p.y = xyzi[4 * i + 1], p.z = xyzi[4 * i + 2],
+      p.intensity = xyzi[4 * i + 3];
       (void)scan.points.push_back(p);
     }
   }

@@ -36,11 +36,15 @@ struct IdlTypes<false> {
   using SensorStatus = stac_msgs_msg_SensorStatus;
   using LabeledPointCloud = stac_msgs_msg_LabeledPointCloud;
   using LabeledPoint = stac_msgs_msg_LabeledPoint;
-  static const dds_topic_descriptor_t* tracked_objects() { return &stac_msgs_msg_TrackedObjects_desc; }
+  static const dds_topic_descriptor_t* tracked_objects() {
+    return &stac_msgs_msg_TrackedObjects_desc;
+  }
   static const dds_topic_descriptor_t* segments() { return &stac_msgs_msg_ScanSegments_desc; }
   static const dds_topic_descriptor_t* ego_pose() { return &stac_msgs_msg_EgoPose_desc; }
   static const dds_topic_descriptor_t* health() { return &stac_msgs_msg_Health_desc; }
-  static const dds_topic_descriptor_t* point_cloud() { return &stac_msgs_msg_LabeledPointCloud_desc; }
+  static const dds_topic_descriptor_t* point_cloud() {
+    return &stac_msgs_msg_LabeledPointCloud_desc;
+  }
 };
 
 template <>
@@ -58,11 +62,15 @@ struct IdlTypes<true> {
   using SensorStatus = stac_msgs_msg_dds__SensorStatus_;
   using LabeledPointCloud = stac_msgs_msg_dds__LabeledPointCloud_;
   using LabeledPoint = stac_msgs_msg_dds__LabeledPoint_;
-  static const dds_topic_descriptor_t* tracked_objects() { return &stac_msgs_msg_dds__TrackedObjects__desc; }
+  static const dds_topic_descriptor_t* tracked_objects() {
+    return &stac_msgs_msg_dds__TrackedObjects__desc;
+  }
   static const dds_topic_descriptor_t* segments() { return &stac_msgs_msg_dds__ScanSegments__desc; }
   static const dds_topic_descriptor_t* ego_pose() { return &stac_msgs_msg_dds__EgoPose__desc; }
   static const dds_topic_descriptor_t* health() { return &stac_msgs_msg_dds__Health__desc; }
-  static const dds_topic_descriptor_t* point_cloud() { return &stac_msgs_msg_dds__LabeledPointCloud__desc; }
+  static const dds_topic_descriptor_t* point_cloud() {
+    return &stac_msgs_msg_dds__LabeledPointCloud__desc;
+  }
 };
 
 }  // namespace stac::dds

@@ -24,7 +24,8 @@ static_assert(sizeof(stac_msgs_msg_TrackedObjects) == sizeof(stac_msgs_msg_dds__
 static_assert(sizeof(stac_msgs_msg_Health) == sizeof(stac_msgs_msg_dds__Health_));
 // A point cloud is copied as it is: the input's layout is the IDL's.
 static_assert(sizeof(LabeledPointIn) == sizeof(stac_msgs_msg_LabeledPoint) &&
-              offsetof(LabeledPointIn, intensity) == offsetof(stac_msgs_msg_LabeledPoint, intensity) &&
+              offsetof(LabeledPointIn, intensity) ==
+                  offsetof(stac_msgs_msg_LabeledPoint, intensity) &&
               offsetof(LabeledPointIn, label) == offsetof(stac_msgs_msg_LabeledPoint, label));
 static_assert(sizeof(stac_msgs_msg_LabeledPoint) == sizeof(stac_msgs_msg_dds__LabeledPoint_));
 
@@ -51,8 +52,9 @@ Status copy_string(char (&dst)[N], const char* src, const char* field) {
 
 Status check_bound(std::size_t n, std::uint32_t bound, const char* field) {
   if (n <= bound) return true;
-  return rt::make_error(std::string(field) + ": " + std::to_string(n) + " elements exceed the bound of " +
-                        std::to_string(bound) + " (idl/stac.idl); nothing was published");
+  return rt::make_error(std::string(field) + ": " + std::to_string(n) +
+                        " elements exceed the bound of " + std::to_string(bound) +
+                        " (idl/stac.idl); nothing was published");
 }
 
 template <class Time>
@@ -64,7 +66,8 @@ Status to_time(std::int64_t stamp_ns, Time& t) {
     --sec;
   }
   if (sec < INT32_MIN || sec > INT32_MAX) {
-    return rt::make_error("stamp " + std::to_string(stamp_ns) + " ns does not fit ROS time (int32 s)");
+    return rt::make_error("stamp " + std::to_string(stamp_ns) +
+                          " ns does not fit ROS time (int32 s)");
   }
   t.sec = static_cast<std::int32_t>(sec);
   t.nanosec = static_cast<std::uint32_t>(ns);
@@ -85,13 +88,21 @@ class TypedPublisher final : public Publisher {
 
  public:
   TypedPublisher(const PublisherConfig& config, dds_entity_t domain, dds_entity_t participant)
-      : config_(config), domain_(domain), participant_(participant),
-        objects_(kMaxObjects), classifications_(kMaxObjects * kMaxClassifications),
-        footprints_(kMaxObjects * kMaxFootprint), segment_items_(kMaxSegments),
-        stages_(kMaxStages), drops_(kMaxDrops), sensors_(kMaxSensors), cloud_points_(kMaxCloudPoints) {
+      : config_(config),
+        domain_(domain),
+        participant_(participant),
+        objects_(kMaxObjects),
+        classifications_(kMaxObjects * kMaxClassifications),
+        footprints_(kMaxObjects * kMaxFootprint),
+        segment_items_(kMaxSegments),
+        stages_(kMaxStages),
+        drops_(kMaxDrops),
+        sensors_(kMaxSensors),
+        cloud_points_(kMaxCloudPoints) {
     attach(tracked_.objects, objects_, 0, kMaxObjects);
     for (std::size_t i = 0; i < kMaxObjects; ++i) {
-      attach(objects_[i].classification, classifications_, i * kMaxClassifications, kMaxClassifications);
+      attach(objects_[i].classification, classifications_, i * kMaxClassifications,
+             kMaxClassifications);
       attach(objects_[i].shape.footprint, footprints_, i * kMaxFootprint, kMaxFootprint);
     }
     attach(segments_.segments, segment_items_, 0, kMaxSegments);
@@ -106,28 +117,33 @@ class TypedPublisher final : public Publisher {
   }
 
   Status init() {
-    if (auto s = copy_string(tracked_.frame_id, config_.frame_id.c_str(), "dds frame_id"); !s) return s;
+    if (auto s = copy_string(tracked_.frame_id, config_.frame_id.c_str(), "dds frame_id"); !s)
+      return s;
     std::memcpy(segments_.frame_id, tracked_.frame_id, sizeof(tracked_.frame_id));
     std::memcpy(pose_.frame_id, tracked_.frame_id, sizeof(tracked_.frame_id));
     std::memcpy(cloud_.frame_id, tracked_.frame_id, sizeof(tracked_.frame_id));
-    const dds_topic_descriptor_t* descriptors[] = {T::tracked_objects(), T::segments(), T::ego_pose(),
-                                                   T::health(), T::point_cloud()};
+    const dds_topic_descriptor_t* descriptors[] = {T::tracked_objects(), T::segments(),
+                                                   T::ego_pose(), T::health(), T::point_cloud()};
     static_assert(std::size(descriptors) == std::size(kAllTopics));
     for (Topic t : kAllTopics) {
       const auto i = static_cast<std::size_t>(t);
       const std::string name = topic_name(t, config_.topic_prefix, config_.ros2_names);
-      const dds_entity_t topic = dds_create_topic(participant_, descriptors[i], name.c_str(), nullptr, nullptr);
+      const dds_entity_t topic =
+          dds_create_topic(participant_, descriptors[i], name.c_str(), nullptr, nullptr);
       if (topic < 0) return dds_error("creating DDS topic '" + name + "'", topic);
       writers_[i] = dds_create_writer(participant_, topic, writer_qos(t).get(), nullptr);
-      if (writers_[i] < 0) return dds_error("creating the DDS writer of '" + name + "'", writers_[i]);
+      if (writers_[i] < 0)
+        return dds_error("creating the DDS writer of '" + name + "'", writers_[i]);
     }
     return true;
   }
 
-  Status publish_tracked_objects(const ScanStamp& scan, std::span<const TrackedObjectIn> in) override {
+  Status publish_tracked_objects(const ScanStamp& scan,
+                                 std::span<const TrackedObjectIn> in) override {
     if (auto s = check_bound(in.size(), kMaxObjects, "tracked objects"); !s) return s;
     for (const TrackedObjectIn& o : in) {
-      if (auto s = check_bound(o.footprint.size(), kMaxFootprint, "tracked object footprint"); !s) return s;
+      if (auto s = check_bound(o.footprint.size(), kMaxFootprint, "tracked object footprint"); !s)
+        return s;
     }
     if (auto s = to_time(scan.stamp_ns, tracked_.stamp); !s) return s;
     tracked_.scan_index = scan.scan_index;
@@ -171,11 +187,13 @@ class TypedPublisher final : public Publisher {
       stages_[i].latency_us = in.stages[i].latency_us;
     }
     for (std::size_t i = 0; i < in.drops.size(); ++i) {
-      if (auto s = copy_string(drops_[i].cause, in.drops[i].cause, "health drop cause"); !s) return s;
+      if (auto s = copy_string(drops_[i].cause, in.drops[i].cause, "health drop cause"); !s)
+        return s;
       drops_[i].count = in.drops[i].count;
     }
     for (std::size_t i = 0; i < in.sensors.size(); ++i) {
-      if (auto s = copy_string(sensors_[i].name, in.sensors[i].name, "health sensor name"); !s) return s;
+      if (auto s = copy_string(sensors_[i].name, in.sensors[i].name, "health sensor name"); !s)
+        return s;
       sensors_[i].status = in.sensors[i].status;
       sensors_[i].age_s = in.sensors[i].age_s;
     }
@@ -196,12 +214,15 @@ class TypedPublisher final : public Publisher {
     set(cloud_.origin, in.origin);
     cloud_.resolution = in.resolution;
     if (!in.points.empty())
-      std::memcpy(cloud_points_.data(), in.points.data(), in.points.size() * sizeof(LabeledPointIn));
+      std::memcpy(cloud_points_.data(), in.points.data(),
+                  in.points.size() * sizeof(LabeledPointIn));
     cloud_.points._length = static_cast<std::uint32_t>(in.points.size());
     return write(Topic::kPointCloud, &cloud_);
   }
 
-  dds_entity_t writer(Topic t) const noexcept override { return writers_[static_cast<std::size_t>(t)]; }
+  dds_entity_t writer(Topic t) const noexcept override {
+    return writers_[static_cast<std::size_t>(t)];
+  }
   dds_entity_t participant() const noexcept override { return participant_; }
 
  private:
@@ -220,7 +241,8 @@ class TypedPublisher final : public Publisher {
         c[k].probability = 1.0f / (1.0f + std::exp(-o.class_log_odds[k]));
       }
       for (int k = 1; k < 4; ++k) {  // insertion sort: stable, and never allocates
-        for (int j = k; j > 0 && c[j].probability > c[j - 1].probability; --j) std::swap(c[j], c[j - 1]);
+        for (int j = k; j > 0 && c[j].probability > c[j - 1].probability; --j)
+          std::swap(c[j], c[j - 1]);
       }
       d.classification._length = 4;
     } else {
@@ -230,12 +252,15 @@ class TypedPublisher final : public Publisher {
     }
     set(d.kinematics.position, o.position);
     set(d.kinematics.velocity, o.velocity);
-    std::copy(o.position_covariance.begin(), o.position_covariance.end(), d.kinematics.position_covariance);
-    std::copy(o.velocity_covariance.begin(), o.velocity_covariance.end(), d.kinematics.velocity_covariance);
+    std::copy(o.position_covariance.begin(), o.position_covariance.end(),
+              d.kinematics.position_covariance);
+    std::copy(o.velocity_covariance.begin(), o.velocity_covariance.end(),
+              d.kinematics.velocity_covariance);
     set(d.shape.dimensions, o.dimensions);
     d.shape.yaw = o.yaw;
     auto* f = d.shape.footprint._buffer;
-    if (o.footprint.empty()) {  // the box: corners counter-clockwise from front-left... of length x width
+    if (o.footprint
+            .empty()) {  // the box: corners counter-clockwise from front-left... of length x width
       const double c0 = std::cos(o.yaw), s0 = std::sin(o.yaw);
       const double hl = o.dimensions.x / 2, hw = o.dimensions.y / 2;
       const double corners[4][2] = {{hl, hw}, {-hl, hw}, {-hl, -hw}, {hl, -hw}};
@@ -286,15 +311,17 @@ rt::Result<std::unique_ptr<Publisher>> make(const PublisherConfig& config) {
   if (!config.config_uri.empty()) {
     domain = dds_create_domain(config.domain_id, config.config_uri.c_str());
     if (domain < 0) {
-      return dds_error("creating DDS domain " + std::to_string(config.domain_id) + " with configuration " +
-                           config.config_uri + " (is the file there, and is the domain not yet in use here?)",
+      return dds_error("creating DDS domain " + std::to_string(config.domain_id) +
+                           " with configuration " + config.config_uri +
+                           " (is the file there, and is the domain not yet in use here?)",
                        domain);
     }
   }
   const dds_entity_t participant = dds_create_participant(config.domain_id, nullptr, nullptr);
   if (participant < 0) {
     if (domain > 0) dds_delete(domain);
-    return dds_error("creating a DDS participant on domain " + std::to_string(config.domain_id), participant);
+    return dds_error("creating a DDS participant on domain " + std::to_string(config.domain_id),
+                     participant);
   }
   auto p = std::make_unique<TypedPublisher<Ros2>>(config, domain, participant);
   if (auto s = p->init(); !s) return rt::Unexpected<rt::Error>{s.error()};
@@ -304,7 +331,8 @@ rt::Result<std::unique_ptr<Publisher>> make(const PublisherConfig& config) {
 }  // namespace
 
 rt::Result<std::unique_ptr<Publisher>> Publisher::create(const PublisherConfig& config) {
-  if (config.domain_id > 230) return rt::make_error("dds domain id " + std::to_string(config.domain_id) + " must be 0..230");
+  if (config.domain_id > 230)
+    return rt::make_error("dds domain id " + std::to_string(config.domain_id) + " must be 0..230");
   if (config.topic_prefix.empty()) return rt::make_error("dds topic prefix must not be empty");
   return config.ros2_names ? make<true>(config) : make<false>(config);
 }

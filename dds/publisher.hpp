@@ -36,18 +36,18 @@ struct ScanStamp {
 
 struct TrackedObjectIn {
   std::uint64_t object_id = 0;
-  float existence_probability = 0;               // 0..1
-  bool classified = false;                       // false: classification[] = {unknown, 1}
-  std::array<float, 4> class_log_odds{};         // car, pedestrian, bicyclist, background
-  std::uint32_t class_age = 0;                   // scans since the class took a segment
-  Vec3 position, velocity;                       // world (m, m/s)
-  std::array<float, 9> position_covariance{};    // x,y,z row-major (m^2)
-  std::array<float, 9> velocity_covariance{};    // ((m/s)^2)
-  Vec3 dimensions;                               // length, width, height (m)
-  float yaw = 0;                                 // rad
-  std::span<const Point2> footprint;             // empty: the box's 4 corners are published
+  float existence_probability = 0;             // 0..1
+  bool classified = false;                     // false: classification[] = {unknown, 1}
+  std::array<float, 4> class_log_odds{};       // car, pedestrian, bicyclist, background
+  std::uint32_t class_age = 0;                 // scans since the class took a segment
+  Vec3 position, velocity;                     // world (m, m/s)
+  std::array<float, 9> position_covariance{};  // x,y,z row-major (m^2)
+  std::array<float, 9> velocity_covariance{};  // ((m/s)^2)
+  Vec3 dimensions;                             // length, width, height (m)
+  float yaw = 0;                               // rad
+  std::span<const Point2> footprint;           // empty: the box's 4 corners are published
   std::uint32_t point_count = 0, age = 0;
-  std::uint8_t state = 0;                        // 0 tentative, 1 confirmed, 2 coasting
+  std::uint8_t state = 0;  // 0 tentative, 1 confirmed, 2 coasting
 };
 
 // A tracker's track as an object (the edge may read perception; perception never reads DDS).
@@ -67,22 +67,23 @@ struct SegmentIn {
 struct LabeledPointIn {
   std::int16_t x = 0, y = 0, z = 0;  // from the origin, in units of the resolution
   std::uint8_t intensity = 0;
-  std::uint8_t label = 0;  // 0 no object, 1 car, 2 pedestrian, 3 bicyclist, 4 background, 5 unclassified
+  std::uint8_t label =
+      0;  // 0 no object, 1 car, 2 pedestrian, 3 bicyclist, 4 background, 5 unclassified
 };
 struct PointCloudIn {
   ScanStamp scan;
-  Vec3 origin;              // world (m)
+  Vec3 origin;               // world (m)
   float resolution = 0.01f;  // m per unit
   std::span<const LabeledPointIn> points;
 };
 
 struct EgoPoseIn {
   std::int64_t stamp_ns = 0;
-  Vec3 position;                            // world (m)
+  Vec3 position;                                  // world (m)
   std::array<double, 4> orientation{0, 0, 0, 1};  // quaternion x, y, z, w
-  Vec3 velocity;                            // world (m/s)
-  float yaw_rate = 0;                       // rad/s
-  std::uint8_t source = 0;                  // 0 none, 1 INS, 2 CAN
+  Vec3 velocity;                                  // world (m/s)
+  float yaw_rate = 0;                             // rad/s
+  std::uint8_t source = 0;                        // 0 none, 1 INS, 2 CAN
 };
 
 struct StageLatencyIn {
@@ -94,7 +95,7 @@ struct DropCountIn {
   std::uint64_t count = 0;
 };
 struct SensorStatusIn {
-  const char* name = "";  // at most 15 characters
+  const char* name = "";    // at most 15 characters
   std::uint8_t status = 0;  // 0 ok, 1 stale, 2 error, 3 not configured
   float age_s = 0;
 };
@@ -111,10 +112,10 @@ struct PublisherConfig {
   std::uint32_t domain_id = 0;
   std::string topic_prefix = "stac";  // topics "<prefix>/tracked_objects", ...
   bool ros2_names = false;            // stac_msgs::msg::dds_::Name_ types, "rt/" topics
-  std::string config_uri;             // Cyclone XML ("file://...") or empty: CYCLONEDDS_URI/defaults
-  std::string frame_id = "map";       // frame_id of every sample, at most 31 characters
-  bool tentative_tracks = false;      // publish tentative tracks too (not yet confirmed: mostly
-                                      // clutter that lives a scan or two)
+  std::string config_uri;         // Cyclone XML ("file://...") or empty: CYCLONEDDS_URI/defaults
+  std::string frame_id = "map";   // frame_id of every sample, at most 31 characters
+  bool tentative_tracks = false;  // publish tentative tracks too (not yet confirmed: mostly
+                                  // clutter that lives a scan or two)
   std::uint32_t point_cloud_stride = 8;  // point_cloud: every return in a segment and every Nth
                                          // other one; 0: the topic is not published
 };

@@ -4,11 +4,16 @@ namespace stac::dds {
 
 const char* topic_suffix(Topic t) noexcept {
   switch (t) {
-    case Topic::kTrackedObjects: return "tracked_objects";
-    case Topic::kSegments: return "segments";
-    case Topic::kEgoPose: return "ego_pose";
-    case Topic::kHealth: return "health";
-    case Topic::kPointCloud: return "point_cloud";
+    case Topic::kTrackedObjects:
+      return "tracked_objects";
+    case Topic::kSegments:
+      return "segments";
+    case Topic::kEgoPose:
+      return "ego_pose";
+    case Topic::kHealth:
+      return "health";
+    case Topic::kPointCloud:
+      return "point_cloud";
   }
   return "?";
 }
@@ -55,11 +60,14 @@ QosPtr base_qos(Topic t) {
 
 QosPtr writer_qos(Topic t) {
   QosPtr q = base_qos(t);
-  if (t == Topic::kTrackedObjects || t == Topic::kEgoPose) dds_qset_deadline(q.get(), kTrackDeadline);
+  if (t == Topic::kTrackedObjects || t == Topic::kEgoPose)
+    dds_qset_deadline(q.get(), kTrackDeadline);
   return q;
 }
 
-QosPtr reader_qos(Topic t) { return base_qos(t); }
+QosPtr reader_qos(Topic t) {
+  return base_qos(t);
+}
 
 rt::Unexpected<rt::Error> dds_error(const std::string& what, dds_return_t rc) {
   return rt::make_error(what + ": " + dds_strretcode(rc));

@@ -6,8 +6,9 @@ namespace stac::ego {
 
 Deskewer::Deskewer(const DeskewConfig& config) : config_(config) {
   if (config_.bucket_ns <= 0) config_.bucket_ns = 100'000;
-  const auto n = static_cast<std::size_t>(
-      std::ceil(config_.max_scan_duration_s * 1e9 / static_cast<double>(config_.bucket_ns))) + 2;
+  const auto n = static_cast<std::size_t>(std::ceil(config_.max_scan_duration_s * 1e9 /
+                                                    static_cast<double>(config_.bucket_ns))) +
+                 2;
   buckets_.resize(n);
 }
 
@@ -35,7 +36,8 @@ DeskewResult Deskewer::apply(velodyne::Scan& scan, const PoseHistory& poses,
       const PoseLookup at = poses.at(base + index * config_.bucket_ns + config_.bucket_ns / 2);
       b.state = at.ok() ? 1 : 2;
       if (at.ok()) {
-        const Eigen::Isometry3d ref_T_sensor = ref_T_world * to_isometry(at.pose) * config_.vehicle_T_sensor;
+        const Eigen::Isometry3d ref_T_sensor =
+            ref_T_world * to_isometry(at.pose) * config_.vehicle_T_sensor;
         b.rotation = ref_T_sensor.linear().cast<float>();
         b.translation = ref_T_sensor.translation().cast<float>();
       }

@@ -26,7 +26,7 @@ struct DeskewResult {
                                            // points are left as they were
   std::int64_t reference_ns = 0;           // pose clock: the scan's last firing
   Eigen::Isometry3d world_T_sensor = Eigen::Isometry3d::Identity();  // at reference_ns
-  std::uint32_t points_without_pose = 0;   // firing time without a usable pose: left in place
+  std::uint32_t points_without_pose = 0;  // firing time without a usable pose: left in place
   [[nodiscard]] bool ok() const noexcept {
     return status == PoseStatus::kInterpolated || status == PoseStatus::kExtrapolated;
   }

@@ -23,10 +23,14 @@ std::int64_t gps_to_utc_ns(std::int64_t gps_ns, double gps_utc_offset_s) noexcep
 
 const char* to_string(EgoSource s) noexcept {
   switch (s) {
-    case EgoSource::kIns: return "ins";
-    case EgoSource::kDeadReckoning: return "dead reckoning";
-    case EgoSource::kLost: return "lost";
-    case EgoSource::kNone: break;
+    case EgoSource::kIns:
+      return "ins";
+    case EgoSource::kDeadReckoning:
+      return "dead reckoning";
+    case EgoSource::kLost:
+      return "lost";
+    case EgoSource::kNone:
+      break;
   }
   return "none";
 }
@@ -112,8 +116,8 @@ void EgoEstimator::accept(const PoseSample& pose) noexcept {
   have_ins_ = true;
   last_pushed_ns_ = pose.stamp_ns;
   // Dead reckoning restarts from every fix, so it continues from the last one if the INS goes.
-  odometry_.reset(can::Pose2{pose.stamp_ns, pose.position_m.x(), pose.position_m.y(),
-                             yaw_of(pose.attitude)});
+  odometry_.reset(
+      can::Pose2{pose.stamp_ns, pose.position_m.x(), pose.position_m.y(), yaw_of(pose.attitude)});
 }
 
 void EgoEstimator::add_odometry(const can::OdometryUpdate& update) noexcept {
@@ -130,9 +134,11 @@ void EgoEstimator::add_odometry(const can::OdometryUpdate& update) noexcept {
   s.stamp_ns = p.stamp_ns;
   s.position_m = {p.x_m, p.y_m, last_ins_.position_m.z()};
   s.attitude = from_roll_pitch_yaw(roll, pitch, p.yaw_rad);
-  const double speed = update.has_speed ? update.speed_mps : last_ins_.velocity_mps.head<2>().norm();
+  const double speed =
+      update.has_speed ? update.speed_mps : last_ins_.velocity_mps.head<2>().norm();
   s.velocity_mps = {speed * std::cos(p.yaw_rad), speed * std::sin(p.yaw_rad), 0.0};
-  if (update.has_yaw_rate) s.angular_rate_rps = {0.0, 0.0, update.yaw_rate_dps * std::numbers::pi / 180.0};
+  if (update.has_yaw_rate)
+    s.angular_rate_rps = {0.0, 0.0, update.yaw_rate_dps * std::numbers::pi / 180.0};
   if (!history_.push(s)) {
     ++counters_.rejected;
     return;

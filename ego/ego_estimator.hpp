@@ -18,10 +18,10 @@ namespace stac::ego {
 std::int64_t gps_to_utc_ns(std::int64_t gps_ns, double gps_utc_offset_s) noexcept;
 
 enum class EgoSource : std::uint8_t {
-  kNone,            // nothing received yet
-  kIns,             // the last pose came from the INS
-  kDeadReckoning,   // the INS is silent; poses come from CAN odometry
-  kLost,            // the INS is silent and odometry is stale or absent
+  kNone,           // nothing received yet
+  kIns,            // the last pose came from the INS
+  kDeadReckoning,  // the INS is silent; poses come from CAN odometry
+  kLost,           // the INS is silent and odometry is stale or absent
 };
 const char* to_string(EgoSource s) noexcept;
 
@@ -34,17 +34,17 @@ struct EgoEstimatorConfig {
 };
 
 struct EgoCounters {
-  std::uint64_t ins_fixes = 0;        // Group 1 turned into poses
-  std::uint64_t no_absolute_time = 0; // Group 1 before a Group 3 gave the GPS week: skipped
-  std::uint64_t not_aligned = 0;      // alignment status above the limit: skipped
-  std::uint64_t impossible = 0;       // a value no vehicle has (NaN, |lat| > 90, |lon| > 360, alt
-                                      // outside -1..20 km, speed over 200 m/s): skipped, never
-                                      // the origin
-  std::uint64_t dead_reckoned = 0;    // poses pushed from odometry
-  std::uint64_t rejected = 0;         // poses the history refused (out of order)
-  std::uint64_t time_jumps = 0;       // a fix over 1 s after the last that no fix within 0.1 s
-                                      // followed: a corrupted time, dropped (else every later
-                                      // fix would be "out of order")
+  std::uint64_t ins_fixes = 0;         // Group 1 turned into poses
+  std::uint64_t no_absolute_time = 0;  // Group 1 before a Group 3 gave the GPS week: skipped
+  std::uint64_t not_aligned = 0;       // alignment status above the limit: skipped
+  std::uint64_t impossible = 0;        // a value no vehicle has (NaN, |lat| > 90, |lon| > 360, alt
+                                       // outside -1..20 km, speed over 200 m/s): skipped, never
+                                       // the origin
+  std::uint64_t dead_reckoned = 0;     // poses pushed from odometry
+  std::uint64_t rejected = 0;          // poses the history refused (out of order)
+  std::uint64_t time_jumps = 0;        // a fix over 1 s after the last that no fix within 0.1 s
+                                       // followed: a corrupted time, dropped (else every later
+                                       // fix would be "out of order")
 };
 
 class EgoEstimator {

@@ -57,13 +57,16 @@ PoseSample LocalFrame::pose(const InsFix& fix) {
   frame_.Forward(fix.position.lat_deg, fix.position.lon_deg, fix.position.alt_m, p.position_m.x(),
                  p.position_m.y(), p.position_m.z(), rotation_);
   // Rows of M rotate the ENU at the fix into the ENU at the origin.
-  const Eigen::Matrix3d origin_from_fix = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(rotation_.data());
-  p.attitude = Eigen::Quaterniond(origin_from_fix *
-                                  attitude_enu(fix.roll_deg, fix.pitch_deg, fix.heading_deg).toRotationMatrix())
+  const Eigen::Matrix3d origin_from_fix =
+      Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(rotation_.data());
+  p.attitude = Eigen::Quaterniond(
+                   origin_from_fix *
+                   attitude_enu(fix.roll_deg, fix.pitch_deg, fix.heading_deg).toRotationMatrix())
                    .normalized();
   p.velocity_mps = origin_from_fix * enu_from_ned() * fix.velocity_ned_mps;
   p.angular_rate_rps = Eigen::Vector3d(fix.angular_rate_frd_dps.x(), -fix.angular_rate_frd_dps.y(),
-                                       -fix.angular_rate_frd_dps.z()) * kDegToRad;
+                                       -fix.angular_rate_frd_dps.z()) *
+                       kDegToRad;
   return p;
 }
 

@@ -22,7 +22,8 @@ struct Geodetic {
 struct InsFix {
   std::int64_t stamp_ns = 0;  // pose clock
   Geodetic position;
-  double roll_deg = 0, pitch_deg = 0, heading_deg = 0;  // Tate-Bryant, NED, body x fwd y right z down
+  double roll_deg = 0, pitch_deg = 0,
+         heading_deg = 0;  // Tate-Bryant, NED, body x fwd y right z down
   Eigen::Vector3d velocity_ned_mps = Eigen::Vector3d::Zero();
   Eigen::Vector3d angular_rate_frd_dps = Eigen::Vector3d::Zero();  // longitudinal, transverse, down
 };
@@ -40,7 +41,8 @@ class LocalFrame {
   PoseSample pose(const InsFix& fix);
 
   // Vehicle (x fwd, y left, z up) -> local ENU at the fix, from NED Tate-Bryant angles (deg).
-  static Eigen::Quaterniond attitude_enu(double roll_deg, double pitch_deg, double heading_deg) noexcept;
+  static Eigen::Quaterniond attitude_enu(double roll_deg, double pitch_deg,
+                                         double heading_deg) noexcept;
 
  private:
   GeographicLib::LocalCartesian frame_;

@@ -10,11 +10,11 @@
 namespace stac::ego {
 
 struct PoseSample {
-  std::int64_t stamp_ns = 0;                                      // pose clock (GPS or UTC), ns
-  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();           // vehicle origin, world frame
-  Eigen::Quaterniond attitude = Eigen::Quaterniond::Identity();   // vehicle -> world
-  Eigen::Vector3d velocity_mps = Eigen::Vector3d::Zero();         // world frame
-  Eigen::Vector3d angular_rate_rps = Eigen::Vector3d::Zero();     // vehicle frame
+  std::int64_t stamp_ns = 0;                                     // pose clock (GPS or UTC), ns
+  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();          // vehicle origin, world frame
+  Eigen::Quaterniond attitude = Eigen::Quaterniond::Identity();  // vehicle -> world
+  Eigen::Vector3d velocity_mps = Eigen::Vector3d::Zero();        // world frame
+  Eigen::Vector3d angular_rate_rps = Eigen::Vector3d::Zero();    // vehicle frame
 };
 
 // world_T_vehicle of a sample.

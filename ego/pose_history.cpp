@@ -10,20 +10,25 @@ constexpr int kAttempts = 8;  // reads raced by the writer are retried this ofte
 
 bool finite(const PoseSample& s) noexcept {
   return s.position_m.allFinite() && s.attitude.coeffs().allFinite() &&
-         s.velocity_mps.allFinite() && s.angular_rate_rps.allFinite() &&
-         s.attitude.norm() > 0.5;
+         s.velocity_mps.allFinite() && s.angular_rate_rps.allFinite() && s.attitude.norm() > 0.5;
 }
 
 }  // namespace
 
 const char* to_string(PoseStatus s) noexcept {
   switch (s) {
-    case PoseStatus::kInterpolated: return "interpolated";
-    case PoseStatus::kExtrapolated: return "extrapolated";
-    case PoseStatus::kTooOld: return "too old";
-    case PoseStatus::kTooNew: return "too new";
-    case PoseStatus::kGap: return "gap";
-    case PoseStatus::kEmpty: break;
+    case PoseStatus::kInterpolated:
+      return "interpolated";
+    case PoseStatus::kExtrapolated:
+      return "extrapolated";
+    case PoseStatus::kTooOld:
+      return "too old";
+    case PoseStatus::kTooNew:
+      return "too new";
+    case PoseStatus::kGap:
+      return "gap";
+    case PoseStatus::kEmpty:
+      break;
   }
   return "empty";
 }
@@ -40,20 +45,29 @@ bool PoseHistory::push(const PoseSample& sample) noexcept {
     return false;
   }
   const Eigen::Quaterniond q = sample.attitude.normalized();
-  const double v[kFields] = {sample.position_m.x(),       sample.position_m.y(),
-                             sample.position_m.z(),       q.w(),
-                             q.x(),                       q.y(),
-                             q.z(),                       sample.velocity_mps.x(),
-                             sample.velocity_mps.y(),     sample.velocity_mps.z(),
-                             sample.angular_rate_rps.x(), sample.angular_rate_rps.y(),
-                             sample.angular_rate_rps.z(), 0.0,
-                             0.0,                         0.0};
+  const double v[kFields] = {sample.position_m.x(),
+                             sample.position_m.y(),
+                             sample.position_m.z(),
+                             q.w(),
+                             q.x(),
+                             q.y(),
+                             q.z(),
+                             sample.velocity_mps.x(),
+                             sample.velocity_mps.y(),
+                             sample.velocity_mps.z(),
+                             sample.angular_rate_rps.x(),
+                             sample.angular_rate_rps.y(),
+                             sample.angular_rate_rps.z(),
+                             0.0,
+                             0.0,
+                             0.0};
   // Seqlock without fences (which ThreadSanitizer cannot follow): every field is stored with
   // release, so a reader that sees any new field also sees the odd sequence stored before it.
   Slot& slot = slots_[i % config_.capacity];
   slot.sequence.store(2 * i + 1, std::memory_order_relaxed);
   slot.stamp_ns.store(sample.stamp_ns, std::memory_order_release);
-  for (int k = 0; k < kFields; ++k) slot.v[static_cast<std::size_t>(k)].store(v[k], std::memory_order_release);
+  for (int k = 0; k < kFields; ++k)
+    slot.v[static_cast<std::size_t>(k)].store(v[k], std::memory_order_release);
   slot.sequence.store(2 * i + 2, std::memory_order_release);
   head_.store(i + 1, std::memory_order_release);
   last_stamp_ns_ = sample.stamp_ns;
@@ -63,7 +77,7 @@ bool PoseHistory::push(const PoseSample& sample) noexcept {
 bool PoseHistory::read_stamp(std::uint64_t index, std::int64_t& out) const noexcept {
   const Slot& slot = slots_[index % config_.capacity];
   const std::uint64_t s1 = slot.sequence.load(std::memory_order_acquire);
-  if (s1 != 2 * index + 2) return false;  // being written, or already another sample
+  if (s1 != 2 * index + 2) return false;                // being written, or already another sample
   out = slot.stamp_ns.load(std::memory_order_acquire);  // acquire: the check below stays after it
   return slot.sequence.load(std::memory_order_relaxed) == s1;
 }
@@ -74,7 +88,8 @@ bool PoseHistory::read(std::uint64_t index, PoseSample& out) const noexcept {
   if (s1 != 2 * index + 2) return false;
   double v[kFields];
   out.stamp_ns = slot.stamp_ns.load(std::memory_order_acquire);
-  for (int k = 0; k < kFields; ++k) v[k] = slot.v[static_cast<std::size_t>(k)].load(std::memory_order_acquire);
+  for (int k = 0; k < kFields; ++k)
+    v[k] = slot.v[static_cast<std::size_t>(k)].load(std::memory_order_acquire);
   if (slot.sequence.load(std::memory_order_relaxed) != s1) return false;
   out.position_m = {v[0], v[1], v[2]};
   out.attitude = Eigen::Quaterniond(v[3], v[4], v[5], v[6]);
@@ -103,7 +118,7 @@ PoseLookup PoseHistory::at(std::int64_t stamp_ns) const noexcept {
     if (stamp_ns >= newest.stamp_ns) {
       const std::int64_t ahead = stamp_ns - newest.stamp_ns;
       out.pose = extrapolate(newest, stamp_ns);
-      out.status = ahead == 0 ? PoseStatus::kInterpolated
+      out.status = ahead == 0                              ? PoseStatus::kInterpolated
                    : ahead <= config_.max_extrapolation_ns ? PoseStatus::kExtrapolated
                                                            : PoseStatus::kTooNew;
       return out;
@@ -130,8 +145,8 @@ PoseLookup PoseHistory::at(std::int64_t stamp_ns) const noexcept {
     PoseSample a, b;
     if (raced || !read(lo, a) || !read(hi, b)) continue;
     out.pose = interpolate(a, b, stamp_ns);
-    out.status = b.stamp_ns - a.stamp_ns > config_.max_gap_ns ? PoseStatus::kGap
-                                                               : PoseStatus::kInterpolated;
+    out.status =
+        b.stamp_ns - a.stamp_ns > config_.max_gap_ns ? PoseStatus::kGap : PoseStatus::kInterpolated;
     return out;
   }
   out.status = PoseStatus::kTooOld;  // the writer kept overwriting what we read
@@ -158,7 +173,8 @@ PoseSample extrapolate(const PoseSample& p, std::int64_t stamp_ns) noexcept {
   out.position_m += p.velocity_mps * dt;
   const double angle = p.angular_rate_rps.norm() * dt;
   if (angle > 0) {
-    out.attitude = (p.attitude * Eigen::AngleAxisd(angle, p.angular_rate_rps.normalized())).normalized();
+    out.attitude =
+        (p.attitude * Eigen::AngleAxisd(angle, p.angular_rate_rps.normalized())).normalized();
   }
   return out;
 }

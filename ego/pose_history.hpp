@@ -19,9 +19,9 @@
 namespace stac::ego {
 
 struct PoseHistoryConfig {
-  std::size_t capacity = 2000;                  // samples kept (10 s at 200 Hz)
+  std::size_t capacity = 2000;                     // samples kept (10 s at 200 Hz)
   std::int64_t max_extrapolation_ns = 50'000'000;  // beyond the newest sample, by its velocity
-  std::int64_t max_gap_ns = 100'000'000;        // bracketing samples farther apart: a gap
+  std::int64_t max_gap_ns = 100'000'000;           // bracketing samples farther apart: a gap
 };
 
 enum class PoseStatus : std::uint8_t {
@@ -52,8 +52,12 @@ class PoseHistory {
 
   // Any thread.
   [[nodiscard]] PoseLookup at(std::int64_t stamp_ns) const noexcept;
-  [[nodiscard]] std::uint64_t pushed() const noexcept { return head_.load(std::memory_order_acquire); }
-  [[nodiscard]] std::uint64_t rejected() const noexcept { return rejected_.load(std::memory_order_relaxed); }
+  [[nodiscard]] std::uint64_t pushed() const noexcept {
+    return head_.load(std::memory_order_acquire);
+  }
+  [[nodiscard]] std::uint64_t rejected() const noexcept {
+    return rejected_.load(std::memory_order_relaxed);
+  }
   // The newest sample's stamp, or INT64_MIN when empty.
   [[nodiscard]] std::int64_t newest_stamp_ns() const noexcept;
 

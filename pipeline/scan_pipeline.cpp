@@ -17,7 +17,9 @@ std::int64_t now_ns(StageClock c) noexcept {
 
 }  // namespace
 
-double yaw_of(const Eigen::Matrix3d& r) noexcept { return std::atan2(r(1, 0), r(0, 0)); }
+double yaw_of(const Eigen::Matrix3d& r) noexcept {
+  return std::atan2(r(1, 0), r(0, 0));
+}
 
 const char* stage_name(Stage s) noexcept {
   switch (s) {
@@ -166,9 +168,9 @@ void ScanPipeline::process(velodyne::Scan& scan, const ego::PoseHistory* poses, 
   out.classes_late = out.classes_current = 0;
   if (classifier_ != nullptr && config_.split_classification) {
     classifier_->begin(out.segments, out.tracked);
-    const classification::UpdateCount n =
-        classifier_->update(&scan.points.data()->x, sizeof(velodyne::Point),
-                            {.tentative = config_.publish_tentative, .until_ns = classify_until_ns});
+    const classification::UpdateCount n = classifier_->update(
+        &scan.points.data()->x, sizeof(velodyne::Point),
+        {.tentative = config_.publish_tentative, .until_ns = classify_until_ns});
     out.classes_late = static_cast<std::uint32_t>(n.late);
     out.classes_current = static_cast<std::uint32_t>(n.classified);
     classifier_->report(out.tracked, out.classes);

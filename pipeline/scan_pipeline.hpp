@@ -1,7 +1,7 @@
 // One scan through perception, in fixed memory: deskew (with the pose history, when there is
-// one) -> segment -> detections in the world frame -> track -> classify (with a model). The constructor allocates
-// everything; process() allocates nothing and throws nothing. The caller owns the ScanResult
-// (from make_result()), so results can live in the slots of a thread handover.
+// one) -> segment -> detections in the world frame -> track -> classify (with a model). The
+// constructor allocates everything; process() allocates nothing and throws nothing. The caller owns
+// the ScanResult (from make_result()), so results can live in the slots of a thread handover.
 //
 //   ScanPipeline pipeline(config);  ScanResult r = pipeline.make_result();
 //   pipeline.process(scan, poses, r);   // poses: nullptr for a parked sensor (world = vehicle)
@@ -75,7 +75,9 @@ struct WorldBox {
 struct ScanResult {
   ScanResult(std::size_t max_segments, std::size_t max_points, std::size_t max_tracks,
              std::size_t max_cloud = 0)
-      : segments(max_segments, max_points), tracked(max_tracks), classes(max_tracks),
+      : segments(max_segments, max_points),
+        tracked(max_tracks),
+        classes(max_tracks),
         cloud(max_cloud) {}
 
   std::uint64_t sequence = 0;         // the scan's sequence number (ScanHeader)
@@ -85,17 +87,17 @@ struct ScanResult {
   bool has_pose = false;  // deskewed and placed in the world by the pose history
   Eigen::Isometry3d world_T_sensor = Eigen::Isometry3d::Identity();         // at the last firing
   Eigen::Isometry3d world_T_vehicle_start = Eigen::Isometry3d::Identity();  // at the scan's stamp
-  ego::PoseLookup pose;                     // the vehicle pose at stamp_ns (status kEmpty: none)
-  segmentation::Segments segments;          // sensor frame (see world_box())
-  tracking::TrackerOutput tracked;          // world frame
+  ego::PoseLookup pose;             // the vehicle pose at stamp_ns (status kEmpty: none)
+  segmentation::Segments segments;  // sensor frame (see world_box())
+  tracking::TrackerOutput tracked;  // world frame
   rt::FixedVector<classification::TrackClass> classes;  // classes[i]: tracked.tracks[i]'s class
                                                         // (empty when the stage does not run)
-  std::int64_t stage_ns[kStageCount] = {};  // on PipelineConfig::clock
+  std::int64_t stage_ns[kStageCount] = {};              // on PipelineConfig::clock
   // split_classification: tracks to publish whose segment process() left to finish_scan() when
   // its time was up (their class is the one the scans before left).
   std::uint32_t classes_late = 0;
   std::uint32_t classes_current = 0;  // tracks to publish that process() classified
-  rt::FixedVector<CloudPoint> cloud;        // PipelineConfig::cloud_stride > 0; origin below
+  rt::FixedVector<CloudPoint> cloud;  // PipelineConfig::cloud_stride > 0; origin below
   bool has_cloud = false;  // the cloud was built for this scan (cloud_stride > 0 and wanted)
   Eigen::Vector3d cloud_origin = Eigen::Vector3d::Zero();  // world (m): world_T_sensor's
   std::uint64_t cloud_dropped = 0;  // returns for the cloud beyond its capacity or +-327 m

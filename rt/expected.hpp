@@ -27,16 +27,31 @@ class [[nodiscard]] Expected {
   [[nodiscard]] bool has_value() const noexcept { return storage_.index() == 0; }
   explicit operator bool() const noexcept { return has_value(); }
 
-  T& value() & noexcept { assert(has_value()); return *std::get_if<0>(&storage_); }
-  const T& value() const& noexcept { assert(has_value()); return *std::get_if<0>(&storage_); }
-  T&& value() && noexcept { assert(has_value()); return std::move(*std::get_if<0>(&storage_)); }
+  T& value() & noexcept {
+    assert(has_value());
+    return *std::get_if<0>(&storage_);
+  }
+  const T& value() const& noexcept {
+    assert(has_value());
+    return *std::get_if<0>(&storage_);
+  }
+  T&& value() && noexcept {
+    assert(has_value());
+    return std::move(*std::get_if<0>(&storage_));
+  }
   T& operator*() & noexcept { return value(); }
   const T& operator*() const& noexcept { return value(); }
   T* operator->() noexcept { return &value(); }
   const T* operator->() const noexcept { return &value(); }
 
-  const E& error() const& noexcept { assert(!has_value()); return *std::get_if<1>(&storage_); }
-  E&& error() && noexcept { assert(!has_value()); return std::move(*std::get_if<1>(&storage_)); }
+  const E& error() const& noexcept {
+    assert(!has_value());
+    return *std::get_if<1>(&storage_);
+  }
+  E&& error() && noexcept {
+    assert(!has_value());
+    return std::move(*std::get_if<1>(&storage_));
+  }
 
  private:
   std::variant<T, E> storage_;
@@ -50,6 +65,8 @@ struct Error {
 template <class T>
 using Result = Expected<T, Error>;
 
-inline Unexpected<Error> make_error(std::string message) { return {Error{std::move(message)}}; }
+inline Unexpected<Error> make_error(std::string message) {
+  return {Error{std::move(message)}};
+}
 
 }  // namespace stac::rt

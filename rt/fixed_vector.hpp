@@ -23,7 +23,8 @@ class FixedVector {
   FixedVector(const FixedVector&) = delete;
   FixedVector& operator=(const FixedVector&) = delete;
   FixedVector(FixedVector&& o) noexcept
-      : data_(std::move(o.data_)), capacity_(std::exchange(o.capacity_, 0)),
+      : data_(std::move(o.data_)),
+        capacity_(std::exchange(o.capacity_, 0)),
         size_(std::exchange(o.size_, 0)) {}
   FixedVector& operator=(FixedVector&& o) noexcept {
     data_ = std::move(o.data_);

@@ -13,7 +13,11 @@ std::int64_t read(clockid_t id) noexcept {
 
 }  // namespace
 
-std::int64_t monotonic_ns() noexcept { return read(CLOCK_MONOTONIC); }
-std::int64_t realtime_ns() noexcept { return read(CLOCK_REALTIME); }
+std::int64_t monotonic_ns() noexcept {
+  return read(CLOCK_MONOTONIC);
+}
+std::int64_t realtime_ns() noexcept {
+  return read(CLOCK_REALTIME);
+}
 
 }  // namespace stac::rt

@@ -1,8 +1,8 @@
 #include "rt/scheduling.hpp"
 
+#include <fcntl.h>
 #include <pthread.h>
 #include <sched.h>
-#include <fcntl.h>
 #include <sys/mman.h>
 #include <unistd.h>
 
@@ -74,8 +74,8 @@ Result<CpuLatencyRequest> CpuLatencyRequest::hold(int max_us, const char* device
   if (write(fd.get(), &value, sizeof(value)) != static_cast<ssize_t>(sizeof(value))) {
     const int e = errno;
     return make_error(std::string("CPU wake-up latency request: writing ") +
-                      std::to_string(max_us) + " us to " + device + " failed (" +
-                      std::strerror(e) + ")");
+                      std::to_string(max_us) + " us to " + device + " failed (" + std::strerror(e) +
+                      ")");
   }
   return CpuLatencyRequest(std::move(fd));
 }

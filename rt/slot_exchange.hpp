@@ -24,8 +24,7 @@ template <class T>
 class SlotExchange {
  public:
   // `slots` >= 2 objects, each made by `make()` now, at start-up.
-  SlotExchange(std::size_t slots, const std::function<T()>& make)
-      : full_(slots), free_(slots) {
+  SlotExchange(std::size_t slots, const std::function<T()>& make) : full_(slots), free_(slots) {
     storage_.reserve(slots);
     for (std::size_t i = 0; i < slots; ++i) storage_.push_back(std::make_unique<T>(make()));
     for (std::uint32_t i = 1; i < slots; ++i) (void)free_.try_push(i);
@@ -63,8 +62,12 @@ class SlotExchange {
     holding_ = false;
   }
 
-  [[nodiscard]] std::uint64_t published() const noexcept { return published_.load(std::memory_order_relaxed); }
-  [[nodiscard]] std::uint64_t dropped() const noexcept { return dropped_.load(std::memory_order_relaxed); }
+  [[nodiscard]] std::uint64_t published() const noexcept {
+    return published_.load(std::memory_order_relaxed);
+  }
+  [[nodiscard]] std::uint64_t dropped() const noexcept {
+    return dropped_.load(std::memory_order_relaxed);
+  }
   [[nodiscard]] std::size_t slots() const noexcept { return storage_.size(); }
 
  private:

@@ -7,7 +7,9 @@ namespace {
 
 constexpr double kEps = 1e-6;
 
-V3 facing(V3 n, const Ray& r) { return dot(n, r.direction) > 0 ? n * -1.0 : n; }
+V3 facing(V3 n, const Ray& r) {
+  return dot(n, r.direction) > 0 ? n * -1.0 : n;
+}
 
 }  // namespace
 

@@ -16,11 +16,16 @@ constexpr double kRateStepS = 0.05;    // central differences for rates and acce
 constexpr double kClimbStepS = 0.005;  // central difference of the terrain height
 
 // ENU <- NED and FRD <- FLU are their own inverses.
-Eigen::Matrix3d enu_from_ned() { return (Eigen::Matrix3d() << 0, 1, 0, 1, 0, 0, 0, 0, -1).finished(); }
-Eigen::Matrix3d frd_from_flu() { return Eigen::Vector3d(1, -1, -1).asDiagonal(); }
+Eigen::Matrix3d enu_from_ned() {
+  return (Eigen::Matrix3d() << 0, 1, 0, 1, 0, 0, 0, 0, -1).finished();
+}
+Eigen::Matrix3d frd_from_flu() {
+  return Eigen::Vector3d(1, -1, -1).asDiagonal();
+}
 
 Eigen::Matrix3d attitude(const EgoState& e) {  // vehicle (FLU) -> sim world (ENU at the origin)
-  return (Eigen::AngleAxisd(e.yaw, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(e.pitch, Eigen::Vector3d::UnitY()) *
+  return (Eigen::AngleAxisd(e.yaw, Eigen::Vector3d::UnitZ()) *
+          Eigen::AngleAxisd(e.pitch, Eigen::Vector3d::UnitY()) *
           Eigen::AngleAxisd(e.roll, Eigen::Vector3d::UnitX()))
       .toRotationMatrix();
 }
@@ -117,7 +122,8 @@ applanix::Group1 InsSim::group1_at(double t) const {
   applanix::Group1 g;
   std::vector<double> m(9);  // GeographicLib's rotation: ENU at the fix -> ENU at the origin
   frame_.Reverse(e.x, e.y, e.z, g.latitude_deg, g.longitude_deg, g.altitude_m, m);
-  const Eigen::Matrix3d origin_from_fix = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(m.data());
+  const Eigen::Matrix3d origin_from_fix =
+      Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(m.data());
   const Eigen::Matrix3d fix_from_origin = origin_from_fix.transpose();
 
   const Eigen::Matrix3d r = attitude(e);
@@ -133,12 +139,13 @@ applanix::Group1 InsSim::group1_at(double t) const {
   g.down_velocity_mps = static_cast<float>(v_ned.z());
   const double speed = std::hypot(v_ned.x(), v_ned.y());
   g.speed_mps = static_cast<float>(speed);
-  g.track_deg = static_cast<float>(speed > 1e-3 ? wrap_360(std::atan2(v_ned.y(), v_ned.x()) * kRadToDeg)
-                                                : g.heading_deg);
+  g.track_deg = static_cast<float>(
+      speed > 1e-3 ? wrap_360(std::atan2(v_ned.y(), v_ned.x()) * kRadToDeg) : g.heading_deg);
 
   // Body rates: the rotation from t - h to t + h in the body frame.
   const Eigen::AngleAxisd turn(attitude(before).transpose() * attitude(after));
-  const Eigen::Vector3d rate_frd = frd_from_flu() * turn.axis() * (turn.angle() / (t_after - t_before)) * kRadToDeg;
+  const Eigen::Vector3d rate_frd =
+      frd_from_flu() * turn.axis() * (turn.angle() / (t_after - t_before)) * kRadToDeg;
   g.rate_longitudinal_dps = static_cast<float>(rate_frd.x());
   g.rate_transverse_dps = static_cast<float>(rate_frd.y());
   g.rate_down_dps = static_cast<float>(rate_frd.z());
@@ -164,7 +171,9 @@ InsMessage InsSim::next() {
   std::size_t n = 0;
   if (pending_ == 0) {
     const applanix::Group1 g = group1_at(t);
-    if (!first_) distance_m_ += 0.5 * (last_speed_ + g.speed_mps) * static_cast<double>(config_.group1_period_ns) * 1e-9;
+    if (!first_)
+      distance_m_ +=
+          0.5 * (last_speed_ + g.speed_mps) * static_cast<double>(config_.group1_period_ns) * 1e-9;
     first_ = false;
     last_speed_ = g.speed_mps;
     td.distance_tag_m = distance_m_;

@@ -40,15 +40,15 @@ GpsTime gps_time_of_gps_ns(std::int64_t gps_ns) noexcept;
 struct InsConfig {
   // The sim world's geodetic anchor (default: the real Applanix capture's last fix, Kingston ON).
   ego::Geodetic origin{44.2449408681, -76.5096210157, 77.0};
-  std::int64_t start_ns = 0;            // UTC of sim time 0 (ns since the Unix epoch)
+  std::int64_t start_ns = 0;                  // UTC of sim time 0 (ns since the Unix epoch)
   std::int64_t group1_period_ns = 5'000'000;  // 200 Hz, on multiples of GPS time
-  double pos_time_at_start_s = 600.0;   // time2: the POS was switched on 10 min before
+  double pos_time_at_start_s = 600.0;         // time2: the POS was switched on 10 min before
 };
 
 struct InsMessage {
   std::uint16_t group = 0;
-  std::int64_t stamp_ns = 0;              // UTC ns: the solution's time (sent without latency)
-  std::span<const std::uint8_t> bytes;    // valid until the next call to next()
+  std::int64_t stamp_ns = 0;            // UTC ns: the solution's time (sent without latency)
+  std::span<const std::uint8_t> bytes;  // valid until the next call to next()
 };
 
 class InsSim {

@@ -18,7 +18,9 @@ std::uint64_t mix(std::uint64_t x) {  // splitmix64
   x = (x ^ (x >> 27)) * 0x94D049BB133111EBULL;
   return x ^ (x >> 31);
 }
-double uniform(std::uint64_t h) { return static_cast<double>(h >> 11) * 0x1.0p-53; }
+double uniform(std::uint64_t h) {
+  return static_cast<double>(h >> 11) * 0x1.0p-53;
+}
 double normal(std::uint64_t h) {  // Box-Muller from two hashes
   const double u1 = std::max(uniform(mix(h)), 1e-300), u2 = uniform(mix(h ^ 0xABCDEF));
   return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * std::numbers::pi * u2);
@@ -30,7 +32,8 @@ struct Frame {
   V3 t;
   V3 apply(V3 p) const { return rotate(p) + t; }
   V3 rotate(V3 p) const {
-    return {r[0][0] * p.x + r[0][1] * p.y + r[0][2] * p.z, r[1][0] * p.x + r[1][1] * p.y + r[1][2] * p.z,
+    return {r[0][0] * p.x + r[0][1] * p.y + r[0][2] * p.z,
+            r[1][0] * p.x + r[1][1] * p.y + r[1][2] * p.z,
             r[2][0] * p.x + r[2][1] * p.y + r[2][2] * p.z};
   }
 };
@@ -39,9 +42,15 @@ Frame sensor_frame(const EgoState& e, double mount_height) {
   const double cr = std::cos(e.roll), sr = std::sin(e.roll), cp = std::cos(e.pitch),
                sp = std::sin(e.pitch), cy = std::cos(e.yaw), sy = std::sin(e.yaw);
   Frame f{};
-  f.r[0][0] = cy * cp; f.r[0][1] = cy * sp * sr - sy * cr; f.r[0][2] = cy * sp * cr + sy * sr;
-  f.r[1][0] = sy * cp; f.r[1][1] = sy * sp * sr + cy * cr; f.r[1][2] = sy * sp * cr - cy * sr;
-  f.r[2][0] = -sp;     f.r[2][1] = cp * sr;                f.r[2][2] = cp * cr;
+  f.r[0][0] = cy * cp;
+  f.r[0][1] = cy * sp * sr - sy * cr;
+  f.r[0][2] = cy * sp * cr + sy * sr;
+  f.r[1][0] = sy * cp;
+  f.r[1][1] = sy * sp * sr + cy * cr;
+  f.r[1][2] = sy * sp * cr - cy * sr;
+  f.r[2][0] = -sp;
+  f.r[2][1] = cp * sr;
+  f.r[2][2] = cp * cr;
   f.t = V3{e.x, e.y, e.z} + f.rotate(V3{0, 0, mount_height});
   return f;
 }
@@ -140,8 +149,10 @@ void LidarSim::refresh_candidates(double t) {
     }
     const double centre = std::atan2(dy, dx) * 180.0 / std::numbers::pi;
     const double half = std::asin(std::min(1.0, r / dist)) * 180.0 / std::numbers::pi + 0.5;
-    for (int d = static_cast<int>(std::floor(centre - half)); d <= static_cast<int>(std::ceil(centre + half)); ++d) {
-      bins_[static_cast<std::size_t>(((d % 360) + 360) % 360)].push_back(static_cast<std::uint32_t>(i));
+    for (int d = static_cast<int>(std::floor(centre - half));
+         d <= static_cast<int>(std::ceil(centre + half)); ++d) {
+      bins_[static_cast<std::size_t>(((d % 360) + 360) % 360)].push_back(
+          static_cast<std::uint32_t>(i));
     }
   }
 }
@@ -166,14 +177,17 @@ void LidarSim::make_packet(std::uint32_t k, std::array<std::uint8_t, velodyne::k
     for (int bank = 0; bank < 2; ++bank) {
       const int strongest_block = first_block + bank;
       builder.set_block(strongest_block, bank == 0 ? kUpperBank : kLowerBank, rotation);
-      if (dual) builder.set_block(strongest_block + 2, bank == 0 ? kUpperBank : kLowerBank, rotation);
+      if (dual)
+        builder.set_block(strongest_block + 2, bank == 0 ? kUpperBank : kLowerBank, rotation);
       for (int j = 0; j < 32; ++j) {
         const int laser = bank * 32 + j;
         const LaserCalibration& l = calibration_.lasers[static_cast<std::size_t>(laser)];
-        const double t = t0 + firing_offset_s_[static_cast<std::size_t>(strongest_block)][static_cast<std::size_t>(j)];
+        const double t = t0 + firing_offset_s_[static_cast<std::size_t>(strongest_block)]
+                                              [static_cast<std::size_t>(j)];
         if (t >= window_end_ || t < window_start_) refresh_candidates(t);
-        const std::uint64_t h = mix(config_.seed ^ mix((static_cast<std::uint64_t>(k) << 16) |
-                                                       static_cast<std::uint64_t>(strongest_block * 64 + laser)));
+        const std::uint64_t h =
+            mix(config_.seed ^ mix((static_cast<std::uint64_t>(k) << 16) |
+                                   static_cast<std::uint64_t>(strongest_block * 64 + laser)));
         Frame f = f0;
         f.t = f0.t + (f1.t - f0.t) * ((t - tf) / 50e-6);
         BeamRecord rec{k,
@@ -257,12 +271,14 @@ void LidarSim::make_packet(std::uint32_t k, std::array<std::uint8_t, velodyne::k
           // Returns: lost when too far for the target's brightness, grazing, or at random.
           const double range = hit.t;
           const double incidence = std::abs(dot(hit.normal, main.dir));
-          const double reach = config_.max_range_m * std::sqrt(std::clamp(hit.reflectivity, 0.02, 1.0));
+          const double reach =
+              config_.max_range_m * std::sqrt(std::clamp(hit.reflectivity, 0.02, 1.0));
           const bool lost = range > reach || range < 0.5 || incidence < 0.06 ||
                             uniform(mix(h ^ 0x99)) < config_.dropout;
           if (!lost) {
             const double noisy = main.d + config_.range_noise_m * normal(mix(h ^ 0x55));
-            const double raw = std::round((noisy - l.dist_correction_m) / calibration_.distance_resolution_m);
+            const double raw =
+                std::round((noisy - l.dist_correction_m) / calibration_.distance_resolution_m);
             if (raw >= 1.0 && raw <= 65535.0) {
               const std::uint8_t intensity =
                   raw_intensity(intensity_of(hit.reflectivity, incidence, range, h), l, raw);

@@ -38,11 +38,11 @@ struct LidarConfig {
   velodyne::Model model = velodyne::Model::kS2_1;
   double rpm = 600.0;
   double start_azimuth_deg = 0.0;
-  bool dual_return = false;       // S3 only
-  double mount_height_m = 1.73;   // sensor origin above the ground under the ego origin
-  double range_noise_m = 0.012;   // 1 sigma (HDL-64E: < 2 cm)
-  double max_range_m = 120.0;     // for a white target; dark ones are lost sooner
-  double dropout = 0.004;         // returns lost at random
+  bool dual_return = false;      // S3 only
+  double mount_height_m = 1.73;  // sensor origin above the ground under the ego origin
+  double range_noise_m = 0.012;  // 1 sigma (HDL-64E: < 2 cm)
+  double max_range_m = 120.0;    // for a white target; dark ones are lost sooner
+  double dropout = 0.004;        // returns lost at random
   EgoBody body;
   std::uint64_t seed = 1;
 };
@@ -50,7 +50,7 @@ struct LidarConfig {
 // The ego vehicle: where it is, its attitude follows the ground under it.
 struct EgoState {
   double x = 0, y = 0, z = 0, roll = 0, pitch = 0, yaw = 0;  // world frame, rad
-  double speed = 0, yaw_rate = 0;                             // m/s, rad/s
+  double speed = 0, yaw_rate = 0;                            // m/s, rad/s
 };
 
 // What happened to one beam, for truth and tests.
@@ -62,7 +62,7 @@ struct BeamRecord {
   double time_s;              // firing time
   double sensor_xyz[3];       // exact hit in the sensor frame at firing time, before noise
   double world_xyz[3];
-  bool returned;              // a return was written (not lost, in range)
+  bool returned;  // a return was written (not lost, in range)
 };
 
 class LidarSim {

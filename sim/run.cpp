@@ -6,7 +6,9 @@
 namespace stac::sim {
 namespace {
 
-int forward(int from, int to) { return (to - from + 36000) % 36000; }
+int forward(int from, int to) {
+  return (to - from + 36000) % 36000;
+}
 
 }  // namespace
 
@@ -14,7 +16,8 @@ std::string to_json(const TruthScan& s, const double* origin) {
   std::string out;
   char buf[512];
   if (origin != nullptr) {
-    std::snprintf(buf, sizeof(buf), "{\"origin\":[%.10f,%.10f,%.4f],", origin[0], origin[1], origin[2]);
+    std::snprintf(buf, sizeof(buf), "{\"origin\":[%.10f,%.10f,%.4f],", origin[0], origin[1],
+                  origin[2]);
     out += buf;
   }
   std::snprintf(buf, sizeof(buf),
@@ -23,9 +26,11 @@ std::string to_json(const TruthScan& s, const double* origin) {
                 "\"pitch\":%.6f,\"yaw\":%.6f,\"speed\":%.4f,\"yaw_rate\":%.6f},\"objects\":[",
                 origin != nullptr ? "" : "{", static_cast<unsigned long long>(s.scan),
                 static_cast<long long>(s.start_ns / 1'000'000'000),
-                static_cast<long long>(s.start_ns % 1'000'000'000), static_cast<long long>(s.end_ns / 1'000'000'000),
-                static_cast<long long>(s.end_ns % 1'000'000'000), s.points, s.ground_points, s.ego.x, s.ego.y,
-                s.ego.z, s.ego.roll, s.ego.pitch, s.ego.yaw, s.ego.speed, s.ego.yaw_rate);
+                static_cast<long long>(s.start_ns % 1'000'000'000),
+                static_cast<long long>(s.end_ns / 1'000'000'000),
+                static_cast<long long>(s.end_ns % 1'000'000'000), s.points, s.ground_points,
+                s.ego.x, s.ego.y, s.ego.z, s.ego.roll, s.ego.pitch, s.ego.yaw, s.ego.speed,
+                s.ego.yaw_rate);
   out += buf;
   for (std::size_t i = 0; i < s.objects.size(); ++i) {
     const TruthObject& o = s.objects[i];
@@ -33,8 +38,8 @@ std::string to_json(const TruthScan& s, const double* origin) {
                   "%s{\"id\":%u,\"class\":\"%s\",\"box\":{\"x\":%.4f,\"y\":%.4f,\"z\":%.4f,"
                   "\"length\":%.3f,\"width\":%.3f,\"height\":%.3f,\"yaw\":%.5f},"
                   "\"velocity\":{\"x\":%.4f,\"y\":%.4f},\"points\":%u,\"time\":%.6f}",
-                  i == 0 ? "" : ",", o.id, std::string(class_name(o.cls)).c_str(), o.x, o.y, o.z, o.length,
-                  o.width, o.height, o.yaw, o.vx, o.vy, o.points, o.time_s);
+                  i == 0 ? "" : ",", o.id, std::string(class_name(o.cls)).c_str(), o.x, o.y, o.z,
+                  o.length, o.width, o.height, o.yaw, o.vx, o.vy, o.points, o.time_s);
     out += buf;
   }
   out += "]}";
@@ -81,8 +86,8 @@ void SimRun::close_scan(const std::function<void(const TruthScan&)>& on_scan) {
     }
     const Pose p = world_->actor_pose(i, t);
     const V3 v = a.path.velocity_at(t);
-    current_.objects.push_back({a.id, a.cls, p.x, p.y, p.z + a.size.z / 2, a.size.x, a.size.y, a.size.z,
-                                p.yaw, v.x, v.y, hits_[i], t});
+    current_.objects.push_back({a.id, a.cls, p.x, p.y, p.z + a.size.z / 2, a.size.x, a.size.y,
+                                a.size.z, p.yaw, v.x, v.y, hits_[i], t});
     hits_[i] = 0;
     hit_time_sum_[i] = 0.0;
   }
@@ -93,7 +98,8 @@ void SimRun::close_scan(const std::function<void(const TruthScan&)>& on_scan) {
 }
 
 void SimRun::packet(std::uint32_t k, std::array<std::uint8_t, velodyne::kPacketSize>& bytes,
-                    std::int64_t& first_firing_ns, const std::function<void(const TruthScan&)>& on_scan,
+                    std::int64_t& first_firing_ns,
+                    const std::function<void(const TruthScan&)>& on_scan,
                     const std::function<void(const BeamRecord&)>& on_beam) {
   double t0 = 0;
   lidar_->make_packet(k, bytes, t0, [&](const BeamRecord& b) {

@@ -20,8 +20,8 @@ struct RunConfig {
   std::uint64_t seed = 1;
   double duration_s = 10.0;
   LidarConfig lidar;
-  std::uint16_t cut_angle = 0;                           // 0.01 deg, as the driver's config
-  std::int64_t start_ns = 1'767'268'800'000'000'000;     // 2026-01-01 12:00:00 UTC
+  std::uint16_t cut_angle = 0;                        // 0.01 deg, as the driver's config
+  std::int64_t start_ns = 1'767'268'800'000'000'000;  // 2026-01-01 12:00:00 UTC
 };
 
 struct TruthObject {
@@ -76,8 +76,8 @@ class SimRun {
   bool have_prev_ = false;
   std::uint16_t prev_rotation_ = 0;
   TruthScan current_;
-  std::vector<std::uint32_t> hits_;       // per actor
-  std::vector<double> hit_time_sum_;      // per actor
+  std::vector<std::uint32_t> hits_;   // per actor
+  std::vector<double> hit_time_sum_;  // per actor
   std::uint64_t next_scan_ = 0;
 };
 

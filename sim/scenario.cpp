@@ -21,9 +21,13 @@ class Rng {
     z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
     return z ^ (z >> 31);
   }
-  double uniform(double lo, double hi) { return lo + (hi - lo) * static_cast<double>(next() >> 11) * 0x1.0p-53; }
+  double uniform(double lo, double hi) {
+    return lo + (hi - lo) * static_cast<double>(next() >> 11) * 0x1.0p-53;
+  }
   bool chance(double p) { return uniform(0, 1) < p; }
-  int integer(int lo, int hi) { return lo + static_cast<int>(next() % static_cast<std::uint64_t>(hi - lo + 1)); }
+  int integer(int lo, int hi) {
+    return lo + static_cast<int>(next() % static_cast<std::uint64_t>(hi - lo + 1));
+  }
 
  private:
   std::uint64_t state_;
@@ -172,8 +176,8 @@ TimedPath with_pauses(const Trajectory& path, const std::vector<Pause>& pauses, 
   out.own.push_back(own.front());
   auto emit = [&](std::size_t i, double d, double at) {
     const double f = len[i] > 0 ? d / len[i] : 1.0;
-    out.path.points.push_back({in[i].x + (in[i + 1].x - in[i].x) * f,
-                               in[i].y + (in[i + 1].y - in[i].y) * f, at});
+    out.path.points.push_back(
+        {in[i].x + (in[i + 1].x - in[i].x) * f, in[i].y + (in[i + 1].y - in[i].y) * f, at});
     out.own.push_back(own[i] + (own[i + 1] - own[i]) * f);
   };
   for (std::size_t i = 0; i + 1 < n; ++i) {
@@ -193,12 +197,14 @@ TimedPath with_pauses(const Trajectory& path, const std::vector<Pause>& pauses, 
       continue;
     }
     const double peak = std::min(v, std::sqrt(0.5 * (2 * accel * len[i] + u0 * u0 + u1 * u1)));
-    const double d_up = (peak * peak - u0 * u0) / (2 * accel), d_down = (peak * peak - u1 * u1) / (2 * accel);
+    const double d_up = (peak * peak - u0 * u0) / (2 * accel),
+                 d_down = (peak * peak - u1 * u1) / (2 * accel);
     // (Phases shorter than a microsecond are rounding: none.)
     const double t_up = peak - u0 > 1e-6 ? (peak - u0) / accel : 0.0;
     const double t_down = peak - u1 > 1e-6 ? (peak - u1) / accel : 0.0;
     const double d_cruise = std::max(0.0, len[i] - d_up - d_down);
-    const int n_up = static_cast<int>(std::ceil(t_up / 0.05)), n_down = static_cast<int>(std::ceil(t_down / 0.05));
+    const int n_up = static_cast<int>(std::ceil(t_up / 0.05)),
+              n_down = static_cast<int>(std::ceil(t_down / 0.05));
     for (int q = 1; q <= n_up; ++q) {
       const double tau = t_up * q / n_up;
       emit(i, u0 * tau + 0.5 * accel * tau * tau, t + tau);
@@ -320,24 +326,34 @@ class Builder {
   Actor& vehicle(double x, double y, double yaw, bool trucks = true) {
     const double u = rng_.uniform(0, trucks ? 1.0 : 0.88);
     const double refl = rng_.uniform(0.15, 0.8);
-    if (u < 0.65) return place(ObjectClass::kCar, Shape::kSedan, {rng_.uniform(4.1, 4.9), rng_.uniform(1.72, 1.9), rng_.uniform(1.38, 1.55)}, refl, x, y, yaw);
-    if (u < 0.88) return place(ObjectClass::kCar, Shape::kVan, {rng_.uniform(4.9, 5.6), rng_.uniform(1.9, 2.05), rng_.uniform(1.9, 2.4)}, refl, x, y, yaw);
+    if (u < 0.65)
+      return place(ObjectClass::kCar, Shape::kSedan,
+                   {rng_.uniform(4.1, 4.9), rng_.uniform(1.72, 1.9), rng_.uniform(1.38, 1.55)},
+                   refl, x, y, yaw);
+    if (u < 0.88)
+      return place(ObjectClass::kCar, Shape::kVan,
+                   {rng_.uniform(4.9, 5.6), rng_.uniform(1.9, 2.05), rng_.uniform(1.9, 2.4)}, refl,
+                   x, y, yaw);
     const double length = rng_.chance(0.3) ? rng_.uniform(13.0, 16.0) : rng_.uniform(7.0, 10.0);
-    return place(ObjectClass::kCar, Shape::kTruck, {length, rng_.uniform(2.4, 2.55), rng_.uniform(3.2, 3.9)}, refl, x, y, yaw);
+    return place(ObjectClass::kCar, Shape::kTruck,
+                 {length, rng_.uniform(2.4, 2.55), rng_.uniform(3.2, 3.9)}, refl, x, y, yaw);
   }
   Actor& pedestrian(double x, double y) {
     const double u = rng_.uniform(0, 1);
-    const Shape shape = u < 0.82 ? Shape::kWalker : u < 0.91 ? Shape::kWalkerWithSuitcase : Shape::kWalkerWithBike;
+    const Shape shape = u < 0.82   ? Shape::kWalker
+                        : u < 0.91 ? Shape::kWalkerWithSuitcase
+                                   : Shape::kWalkerWithBike;
     const double h = rng_.uniform(1.5, 1.95);
     // Truth boxes hold the swinging limbs (stride 0.39 m), a trailing suitcase, or the bike
     // pushed beside the walker (walker at y = -0.3, bike at y = +0.35).
-    const V3 size = shape == Shape::kWalkerWithBike      ? V3{1.85, 1.3, h}
+    const V3 size = shape == Shape::kWalkerWithBike       ? V3{1.85, 1.3, h}
                     : shape == Shape::kWalkerWithSuitcase ? V3{0.95, 0.9, h}
                                                           : V3{0.8, 0.65, h};
     return place(ObjectClass::kPedestrian, shape, size, rng_.uniform(0.15, 0.6), x, y, 0);
   }
   Actor& cyclist(double x, double y) {
-    return place(ObjectClass::kBicyclist, Shape::kCyclist, {1.8, 0.7, 1.8}, rng_.uniform(0.2, 0.6), x, y, 0);
+    return place(ObjectClass::kBicyclist, Shape::kCyclist, {1.8, 0.7, 1.8}, rng_.uniform(0.2, 0.6),
+                 x, y, 0);
   }
   // Moves `a` from (x0, y0) in direction yaw at speed v, with an optional stop of `stop_s`
   // seconds at distance `stop_at` along the way (a pause, braked into when committed).
@@ -354,8 +370,8 @@ class Builder {
   // A turn: straight to the corner, a quarter circle of radius r, then straight on. The corner
   // is taken at most at the speed of 3 m/s^2 sideways, braked into and pulled away from at the
   // ramp rate of cars (ramp_accel).
-  void turn(Actor& a, double x0, double y0, double yaw, double v, double to_corner, double r, int dir,
-            double duration) {
+  void turn(Actor& a, double x0, double y0, double yaw, double v, double to_corner, double r,
+            int dir, double duration) {
     const double accel = ramp_accel(a.cls), v_arc = std::min(v, std::sqrt(3.0 * r));
     a.path.points.clear();
     double x = x0, y = y0, t = 0;
@@ -403,7 +419,8 @@ class Builder {
       const double walk_in = g.road_half_width, walk_out = g.road_half_width + g.sidewalk_width;
       double x = x0;
       while (x < x1) {  // building frontage with gaps
-        const double len = rng_.uniform(8, 30), depth = rng_.uniform(8, 20), gap = rng_.uniform(0, 9);
+        const double len = rng_.uniform(8, 30), depth = rng_.uniform(8, 20),
+                     gap = rng_.uniform(0, 9);
         const double setback = rng_.uniform(0.5, 5.0);
         const double cx = x + len / 2;
         if (std::abs(cx - g.cross_road_x) > g.cross_half_width + g.sidewalk_width + len / 2) {
@@ -412,9 +429,11 @@ class Builder {
                 {len, depth, rng_.uniform(4, 18)}, rng_.uniform(0.2, 0.7), cx, cy, 0);
           if (gap > 4 && rng_.chance(0.5)) {  // a fence or bushes in the gap
             if (rng_.chance(0.5)) {
-              place(ObjectClass::kFence, Shape::kFence, {gap, 0.06, rng_.uniform(1.0, 1.8)}, 0.3, x + len + gap / 2, side * (walk_out + 0.3), 0);
+              place(ObjectClass::kFence, Shape::kFence, {gap, 0.06, rng_.uniform(1.0, 1.8)}, 0.3,
+                    x + len + gap / 2, side * (walk_out + 0.3), 0);
             } else {
-              place(ObjectClass::kBush, Shape::kBush, {gap * 0.8, 1.5, rng_.uniform(0.8, 1.6)}, 0.25, x + len + gap / 2, side * (walk_out + 1.2), 0);
+              place(ObjectClass::kBush, Shape::kBush, {gap * 0.8, 1.5, rng_.uniform(0.8, 1.6)},
+                    0.25, x + len + gap / 2, side * (walk_out + 1.2), 0);
             }
           }
         }
@@ -425,15 +444,21 @@ class Builder {
         const double py = side * (walk_in + rng_.uniform(0.4, 0.9));
         const double u = rng_.uniform(0, 1);
         if (u < 0.35) {
-          place(ObjectClass::kTree, Shape::kTree, {rng_.uniform(2.5, 5), rng_.uniform(2.5, 5), rng_.uniform(5, 9)}, 0.3, px, py, 0);
+          place(ObjectClass::kTree, Shape::kTree,
+                {rng_.uniform(2.5, 5), rng_.uniform(2.5, 5), rng_.uniform(5, 9)}, 0.3, px, py, 0);
         } else if (u < 0.55) {
-          place(ObjectClass::kPole, Shape::kPole, {0.22, 0.22, rng_.uniform(5, 9)}, 0.45, px, py, 0);
+          place(ObjectClass::kPole, Shape::kPole, {0.22, 0.22, rng_.uniform(5, 9)}, 0.45, px, py,
+                0);
         } else if (u < 0.68) {
-          place(ObjectClass::kSign, Shape::kSign, {0.1, rng_.uniform(0.6, 1.0), rng_.uniform(2.2, 3.2)}, 0.9, px, py, 0);
+          place(ObjectClass::kSign, Shape::kSign,
+                {0.1, rng_.uniform(0.6, 1.0), rng_.uniform(2.2, 3.2)}, 0.9, px, py, 0);
         } else if (u < 0.8) {
-          place(ObjectClass::kBin, Shape::kBox, {0.6, 0.6, rng_.uniform(0.8, 1.2)}, 0.35, px, py, rng_.uniform(0, 3));
+          place(ObjectClass::kBin, Shape::kBox, {0.6, 0.6, rng_.uniform(0.8, 1.2)}, 0.35, px, py,
+                rng_.uniform(0, 3));
         } else if (u < 0.9) {
-          place(ObjectClass::kClutter, Shape::kBox, {rng_.uniform(0.3, 1.5), rng_.uniform(0.3, 1.0), rng_.uniform(0.3, 1.2)}, rng_.uniform(0.1, 0.6), px, side * (walk_out - 0.5), rng_.uniform(0, 3));
+          place(ObjectClass::kClutter, Shape::kBox,
+                {rng_.uniform(0.3, 1.5), rng_.uniform(0.3, 1.0), rng_.uniform(0.3, 1.2)},
+                rng_.uniform(0.1, 0.6), px, side * (walk_out - 0.5), rng_.uniform(0, 3));
         }
       }
     }
@@ -543,8 +568,8 @@ class Builder {
 // a parked van fit side by side.
 constexpr double kRoadHalfWidth = 9.5, kParking = 8.2, kBikeLane = 6.6, kInner = 1.8, kOuter = 4.6;
 
-void traffic(Builder& b, double x0, double x1, double cross_x, double duration, int cars, int walkers,
-             int cyclists, const GroundConfig& g) {
+void traffic(Builder& b, double x0, double x1, double cross_x, double duration, int cars,
+             int walkers, int cyclists, const GroundConfig& g) {
   Rng& r = b.rng();
   for (double x = x0 + r.uniform(0, 6); x < x1; x += r.uniform(5.5, 14)) {  // parked cars
     for (int side : {-1, 1}) {
@@ -629,8 +654,8 @@ void traffic(Builder& b, double x0, double x1, double cross_x, double duration, 
     Actor& p = b.pedestrian(0, 0);
     const int line = lines[static_cast<std::size_t>(i) % lines.size()];
     const double x = cross_x + (line % 2 ? -1 : 1) * (g.cross_half_width + 0.5 + (line / 2));
-    b.drive(p, x, -dir * (g.road_half_width + 2), dir * std::numbers::pi / 2, r.uniform(1.0, 1.6), duration,
-            r.uniform(0.5, 3), r.uniform(0, 8));
+    b.drive(p, x, -dir * (g.road_half_width + 2), dir * std::numbers::pi / 2, r.uniform(1.0, 1.6),
+            duration, r.uniform(0.5, 3), r.uniform(0, 8));
   }
   for (int i = 0; i < cyclists; ++i) {
     Actor& c = b.cyclist(0, 0);
@@ -643,7 +668,8 @@ void traffic(Builder& b, double x0, double x1, double cross_x, double duration, 
 }  // namespace
 
 const std::vector<std::string>& scenario_names() {
-  static const std::vector<std::string> names = {"urban", "intersection", "highway", "parking-lot", "crowd", "empty"};
+  static const std::vector<std::string> names = {"urban",       "intersection", "highway",
+                                                 "parking-lot", "crowd",        "empty"};
   return names;
 }
 
@@ -707,7 +733,8 @@ rt::Result<Scenario> make_scenario(const std::string& name, std::uint64_t seed, 
     for (int side : {-1, 1}) {  // concrete barriers and the occasional sign
       for (double x = -150; x < x1; x += 30) {
         b.place(ObjectClass::kWall, Shape::kBox, {30, 0.5, 0.9}, 0.4, x + 15, side * 12.6, 0);
-        if (r.chance(0.08)) b.place(ObjectClass::kSign, Shape::kSign, {0.1, 2.5, 5}, 0.9, x, side * 13.5, 0);
+        if (r.chance(0.08))
+          b.place(ObjectClass::kSign, Shape::kSign, {0.1, 2.5, 5}, 0.9, x, side * 13.5, 0);
       }
     }
     for (int i = 0; i < 40; ++i) {
@@ -753,7 +780,9 @@ rt::Result<Scenario> make_scenario(const std::string& name, std::uint64_t seed, 
     }
     for (int i = 0, placed = 0; placed < 18 && i < 60; ++i) {
       Actor& p = b.pedestrian(r.uniform(-35, 35), r.uniform(-20, 20));
-      if (r.chance(0.7)) b.drive(p, p.path.points[0].x, p.path.points[0].y, r.uniform(0, 2 * std::numbers::pi), r.uniform(0.8, 1.5), duration);
+      if (r.chance(0.7))
+        b.drive(p, p.path.points[0].x, p.path.points[0].y, r.uniform(0, 2 * std::numbers::pi),
+                r.uniform(0.8, 1.5), duration);
       if (b.commit()) ++placed;
     }
     for (int i = 0, placed = 0; placed < 2 && i < 10; ++i) {
@@ -775,7 +804,8 @@ rt::Result<Scenario> make_scenario(const std::string& name, std::uint64_t seed, 
          ++i) {  // pedestrians everywhere, no traffic
       Actor& p = b.pedestrian(r.uniform(-40, 60), r.uniform(-11, 11));
       if (r.chance(0.8)) {
-        b.drive(p, p.path.points[0].x, p.path.points[0].y, r.uniform(0, 2 * std::numbers::pi), r.uniform(0.6, 1.6), duration);
+        b.drive(p, p.path.points[0].x, p.path.points[0].y, r.uniform(0, 2 * std::numbers::pi),
+                r.uniform(0.6, 1.6), duration);
       }
       if (b.commit()) ++placed;
     }

@@ -5,7 +5,8 @@
 
 namespace stac::sim {
 
-rt::Result<VehicleCanSim> VehicleCanSim::create(const can::Database& db, const can::OdometrySignalMap& map,
+rt::Result<VehicleCanSim> VehicleCanSim::create(const can::Database& db,
+                                                const can::OdometrySignalMap& map,
                                                 const VehicleCanConfig& config, EgoFn ego) {
   if (!(config.speed_rate_hz > 0) || !(config.yaw_rate_rate_hz > 0)) {
     return rt::make_error("CAN message rates must be positive");
@@ -27,7 +28,8 @@ rt::Result<VehicleCanSim> VehicleCanSim::create(const can::Database& db, const c
     s.phase_s = phase_s;
     return s;
   };
-  const bool shared = sim.speed_.id == sim.yaw_rate_.id && sim.speed_.extended == sim.yaw_rate_.extended;
+  const bool shared =
+      sim.speed_.id == sim.yaw_rate_.id && sim.speed_.extended == sim.yaw_rate_.extended;
   if (shared) {
     Stream s = stream_for(sim.speed_, std::max(config.speed_rate_hz, config.yaw_rate_rate_hz),
                           config.yaw_rate_phase_s);
@@ -65,7 +67,9 @@ bool VehicleCanSim::next(can::Frame& out) {
   // Physical value in the signal's unit: the decoder multiplies by `scale` to get m/s or deg/s.
   if (s->speed) ok = speed_.signal.encode(e.speed / speed_.scale, out.data) && ok;
   if (s->yaw_rate) {
-    ok = yaw_rate_.signal.encode(e.yaw_rate * 180.0 / std::numbers::pi / yaw_rate_.scale, out.data) && ok;
+    ok = yaw_rate_.signal.encode(e.yaw_rate * 180.0 / std::numbers::pi / yaw_rate_.scale,
+                                 out.data) &&
+         ok;
   }
   if (!ok) {
     ++counters_.unencodable;

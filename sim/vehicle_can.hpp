@@ -17,10 +17,10 @@
 namespace stac::sim {
 
 struct VehicleCanConfig {
-  std::int64_t start_ns = 0;      // UTC of sim time 0 (ns since the Unix epoch)
-  double speed_rate_hz = 50.0;    // wheel-speed message
+  std::int64_t start_ns = 0;        // UTC of sim time 0 (ns since the Unix epoch)
+  double speed_rate_hz = 50.0;      // wheel-speed message
   double yaw_rate_rate_hz = 100.0;  // yaw-rate sensor message
-  double speed_phase_s = 0.0013;  // first frame after start: ECUs are not in phase
+  double speed_phase_s = 0.0013;    // first frame after start: ECUs are not in phase
   double yaw_rate_phase_s = 0.0007;
 };
 
@@ -33,7 +33,8 @@ class VehicleCanSim {
  public:
   using EgoFn = std::function<EgoState(double)>;
   // Fails when the map does not fit the DBC (as OdometryDecoder::create) or a rate is not positive.
-  static rt::Result<VehicleCanSim> create(const can::Database& db, const can::OdometrySignalMap& map,
+  static rt::Result<VehicleCanSim> create(const can::Database& db,
+                                          const can::OdometrySignalMap& map,
                                           const VehicleCanConfig& config, EgoFn ego);
 
   // UTC ns of the frame next() gives next.

@@ -9,17 +9,20 @@ namespace {
 
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
 
-Hit nearer(Hit a, Hit b) { return b.t < a.t ? b : a; }
+Hit nearer(Hit a, Hit b) {
+  return b.t < a.t ? b : a;
+}
 
 // Legs and arms of a walking person of height h, phase in radians, swing 0..1 (0 standing).
 Hit hit_walker(const Ray& r, double h, double phase, double swing) {
-  Hit best = hit_ellipsoid(r, {0, 0, 0.70 * h}, {0.13, 0.21, 0.17 * h});  // torso
+  Hit best = hit_ellipsoid(r, {0, 0, 0.70 * h}, {0.13, 0.21, 0.17 * h});            // torso
   best = nearer(best, hit_ellipsoid(r, {0, 0, 0.93 * h}, {0.10, 0.09, 0.07 * h}));  // head
   const double stride = 0.32 * swing;
   const double sin_phase = std::sin(phase);
   for (int side : {-1, 1}) {
     const double s = side * sin_phase;
-    best = nearer(best, hit_segment(r, {0, side * 0.1, 0.52 * h}, {stride * s, side * 0.1, 0.04}, 0.07));
+    best = nearer(best,
+                  hit_segment(r, {0, side * 0.1, 0.52 * h}, {stride * s, side * 0.1, 0.04}, 0.07));
     best = nearer(best, hit_segment(r, {0, side * 0.22, 0.80 * h},
                                     {-0.7 * stride * s, side * 0.25, 0.46 * h}, 0.045));
   }
@@ -30,8 +33,8 @@ Hit hit_walker(const Ray& r, double h, double phase, double swing) {
 Hit hit_bicycle(const Ray& r, double y) {
   Hit best = hit_ellipsoid(r, {0.53, y, 0.35}, {0.35, 0.025, 0.35});
   best = nearer(best, hit_ellipsoid(r, {-0.53, y, 0.35}, {0.35, 0.025, 0.35}));
-  best = nearer(best, hit_segment(r, {-0.53, y, 0.35}, {0.05, y, 0.85}, 0.03));   // seat stay
-  best = nearer(best, hit_segment(r, {0.05, y, 0.85}, {0.45, y, 0.85}, 0.03));    // top tube
+  best = nearer(best, hit_segment(r, {-0.53, y, 0.35}, {0.05, y, 0.85}, 0.03));  // seat stay
+  best = nearer(best, hit_segment(r, {0.05, y, 0.85}, {0.45, y, 0.85}, 0.03));   // top tube
   best = nearer(best, hit_segment(r, {0.45, y - 0.25, 1.0}, {0.45, y + 0.25, 1.0}, 0.02));  // bars
   return best;
 }
@@ -51,18 +54,30 @@ Hit hit_wheels(const Ray& r, double length, double width, double radius) {
 
 std::string_view class_name(ObjectClass c) noexcept {
   switch (c) {
-    case ObjectClass::kCar: return "car";
-    case ObjectClass::kPedestrian: return "pedestrian";
-    case ObjectClass::kBicyclist: return "bicyclist";
-    case ObjectClass::kBuilding: return "building";
-    case ObjectClass::kWall: return "wall";
-    case ObjectClass::kFence: return "fence";
-    case ObjectClass::kTree: return "tree";
-    case ObjectClass::kBush: return "bush";
-    case ObjectClass::kPole: return "pole";
-    case ObjectClass::kSign: return "sign";
-    case ObjectClass::kBin: return "bin";
-    case ObjectClass::kClutter: break;
+    case ObjectClass::kCar:
+      return "car";
+    case ObjectClass::kPedestrian:
+      return "pedestrian";
+    case ObjectClass::kBicyclist:
+      return "bicyclist";
+    case ObjectClass::kBuilding:
+      return "building";
+    case ObjectClass::kWall:
+      return "wall";
+    case ObjectClass::kFence:
+      return "fence";
+    case ObjectClass::kTree:
+      return "tree";
+    case ObjectClass::kBush:
+      return "bush";
+    case ObjectClass::kPole:
+      return "pole";
+    case ObjectClass::kSign:
+      return "sign";
+    case ObjectClass::kBin:
+      return "bin";
+    case ObjectClass::kClutter:
+      break;
   }
   return "clutter";
 }
@@ -124,7 +139,9 @@ World::World(GroundConfig ground, std::vector<Actor> actors)
   }
 }
 
-double World::actor_radius(std::size_t i) const noexcept { return radius_[i]; }
+double World::actor_radius(std::size_t i) const noexcept {
+  return radius_[i];
+}
 
 double World::terrain_height(double x, double y) const noexcept {
   return ground_.slope_x * x + ground_.slope_y * y +
@@ -132,7 +149,8 @@ double World::terrain_height(double x, double y) const noexcept {
 }
 
 double World::ground_height(double x, double y) const noexcept {
-  const bool on_road = !ground_.has_road || std::abs(y - ground_.road_y) < ground_.road_half_width ||
+  const bool on_road = !ground_.has_road ||
+                       std::abs(y - ground_.road_y) < ground_.road_half_width ||
                        std::abs(x - ground_.cross_road_x) < ground_.cross_half_width;
   return terrain_height(x, y) + (on_road ? 0.0 : ground_.curb_height);
 }
@@ -176,7 +194,8 @@ Hit World::hit_ground(const Ray& r) const {
   };
   Hit best;
   const double t_road = solve(0.0);
-  if (t_road < kNoHit && on_road(r.origin + r.direction * t_road)) best = {t_road, normal_at(r.origin + r.direction * t_road)};
+  if (t_road < kNoHit && on_road(r.origin + r.direction * t_road))
+    best = {t_road, normal_at(r.origin + r.direction * t_road)};
   if (!g.has_road) return best;
   const double t_walk = solve(g.curb_height);
   if (t_walk < best.t && !on_road(r.origin + r.direction * t_walk)) {
@@ -220,7 +239,7 @@ Hit World::hit_actor_local(const Actor& a, const Ray& r, double t, bool& translu
       return nearer(h, hit_wheels(r, L, W, 0.34));
     }
     case Shape::kTruck: {
-      Hit h = hit_box(r, {L / 2 - 2.3, -W / 2, 0.5}, {L / 2, W / 2, 3.0});   // cab
+      Hit h = hit_box(r, {L / 2 - 2.3, -W / 2, 0.5}, {L / 2, W / 2, 3.0});        // cab
       h = nearer(h, hit_box(r, {-L / 2, -W / 2, 1.0}, {L / 2 - 2.5, W / 2, H}));  // cargo
       return nearer(h, hit_wheels(r, L, W, 0.5));
     }
@@ -286,7 +305,7 @@ Hit World::hit_actor_local(const Actor& a, const Ray& r, double t, bool& translu
 }
 
 WorldHit World::cast(const Ray& ray, double t, const std::vector<std::uint32_t>& candidates,
-                      PoseCache& cache) const {
+                     PoseCache& cache) const {
   if (cache.t != t || cache.pose.size() != actors_.size()) {
     cache.t = t;
     cache.pose.resize(actors_.size());
@@ -321,8 +340,9 @@ WorldHit World::cast(const Ray& ray, double t, const std::vector<std::uint32_t>&
     if (bound.t >= best.t) {
       // Missed, or behind what is already hit; a ray starting inside the box still counts.
       const V3 o = local.origin;
-      const bool inside = std::abs(o.x) <= a.size.x / 2 + kMargin && std::abs(o.y) <= a.size.y / 2 + kMargin &&
-                          o.z >= -kMargin && o.z <= a.size.z + kMargin;
+      const bool inside = std::abs(o.x) <= a.size.x / 2 + kMargin &&
+                          std::abs(o.y) <= a.size.y / 2 + kMargin && o.z >= -kMargin &&
+                          o.z <= a.size.z + kMargin;
       if (!inside) continue;
     }
     bool translucent = false;

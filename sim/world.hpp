@@ -13,20 +13,37 @@
 namespace stac::sim {
 
 enum class ObjectClass : std::uint8_t {
-  kCar, kPedestrian, kBicyclist,
+  kCar,
+  kPedestrian,
+  kBicyclist,
   // Background kinds: everything that is none of the three.
-  kBuilding, kWall, kFence, kTree, kBush, kPole, kSign, kBin, kClutter,
+  kBuilding,
+  kWall,
+  kFence,
+  kTree,
+  kBush,
+  kPole,
+  kSign,
+  kBin,
+  kClutter,
 };
 std::string_view class_name(ObjectClass c) noexcept;
 bool is_foreground(ObjectClass c) noexcept;  // car, pedestrian or bicyclist
 
 enum class Shape : std::uint8_t {
-  kBox,         // one box: buildings, walls, bins, clutter
-  kSedan, kVan, kTruck,  // vehicles (truck with trailer: a longer truck)
-  kWalker,      // pedestrian, limbs swinging while moving
-  kWalkerWithBike, kWalkerWithSuitcase,
-  kCyclist,     // bicycle and pedalling rider
-  kTree, kBush, kPole, kSign, kFence,
+  kBox,  // one box: buildings, walls, bins, clutter
+  kSedan,
+  kVan,
+  kTruck,   // vehicles (truck with trailer: a longer truck)
+  kWalker,  // pedestrian, limbs swinging while moving
+  kWalkerWithBike,
+  kWalkerWithSuitcase,
+  kCyclist,  // bicycle and pedalling rider
+  kTree,
+  kBush,
+  kPole,
+  kSign,
+  kFence,
 };
 
 // Where an actor is over time: waypoints (x, y, t) followed linearly; before the first and
@@ -46,14 +63,14 @@ struct Actor {
   std::uint32_t id = 0;
   ObjectClass cls = ObjectClass::kClutter;
   Shape shape = Shape::kBox;
-  V3 size;                // truth box: length (x), width (y), height (z), m
+  V3 size;                    // truth box: length (x), width (y), height (z), m
   double reflectivity = 0.3;  // 0..1, diffuse
-  double phase = 0.0;     // gait / pedalling phase offset
+  double phase = 0.0;         // gait / pedalling phase offset
   Trajectory path;
 };
 
 struct GroundConfig {
-  double slope_x = 0.01;       // rise per metre along x
+  double slope_x = 0.01;  // rise per metre along x
   double slope_y = -0.005;
   double wave_amplitude = 0.3;  // m, a long gentle undulation along x
   double wave_length = 120.0;   // m
@@ -63,7 +80,7 @@ struct GroundConfig {
   double sidewalk_width = 3.5;
   double curb_height = 0.15;
   bool has_road = true;
-  double cross_road_x = 1e9;   // a crossing road along y at this x (no sidewalk there)
+  double cross_road_x = 1e9;  // a crossing road along y at this x (no sidewalk there)
   double cross_half_width = 7.0;
 };
 
@@ -71,8 +88,8 @@ struct WorldHit {
   double t = kNoHit;
   V3 normal;
   double reflectivity = 0.0;
-  std::int64_t actor = -1;  // index into actors, -1 = ground
-  bool translucent = false; // vegetation: a beam may pass through
+  std::int64_t actor = -1;   // index into actors, -1 = ground
+  bool translucent = false;  // vegetation: a beam may pass through
 };
 
 class World {
@@ -81,7 +98,7 @@ class World {
 
   const std::vector<Actor>& actors() const noexcept { return actors_; }
   const GroundConfig& ground() const noexcept { return ground_; }
-  double ground_height(double x, double y) const noexcept;  // road surface or sidewalk top
+  double ground_height(double x, double y) const noexcept;   // road surface or sidewalk top
   double terrain_height(double x, double y) const noexcept;  // without curbs
 
   // Poses of actors at one instant, computed on first use (one per firing of the sensor: the

@@ -5,8 +5,8 @@
 
 #include <filesystem>
 #include <fstream>
-#include <vector>
 #include <string>
+#include <vector>
 
 namespace stac::testing {
 
@@ -27,10 +27,10 @@ inline std::vector<float> read_kitti_bin(const std::string& relative) {
 }  // namespace stac::testing
 
 // Skips the current test, naming the missing file, when shared/data is not beside the checkout.
-#define STAC_REQUIRE_SHARED_DATA(relative_path)                                             \
-  do {                                                                                      \
-    if (!std::filesystem::exists(::stac::testing::shared_data(relative_path))) {            \
-      GTEST_SKIP() << "SKIPPED: " << ::stac::testing::shared_data(relative_path)            \
-                   << " is absent (shared/data must sit beside the checkout)";              \
-    }                                                                                       \
+#define STAC_REQUIRE_SHARED_DATA(relative_path)                                  \
+  do {                                                                           \
+    if (!std::filesystem::exists(::stac::testing::shared_data(relative_path))) { \
+      GTEST_SKIP() << "SKIPPED: " << ::stac::testing::shared_data(relative_path) \
+                   << " is absent (shared/data must sit beside the checkout)";   \
+    }                                                                            \
   } while (0)

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -54,10 +53,11 @@ cv::Point BirdsEye::pixel(double x, double y) const noexcept {
           static_cast<int>(std::lround(options_.size_px / 2.0 - x * px_per_m_))};
 }
 
-void BirdsEye::add_path(std::span<const cv::Point2f> points_m, const cv::Scalar& bgr, int thickness_px) {
+void BirdsEye::add_path(std::span<const cv::Point2f> points_m, const cv::Scalar& bgr,
+                        int thickness_px) {
   for (std::size_t i = 1; i < points_m.size(); ++i) {
-    cv::line(image_, pixel(points_m[i - 1].x, points_m[i - 1].y), pixel(points_m[i].x, points_m[i].y),
-             bgr, thickness_px, cv::LINE_AA);
+    cv::line(image_, pixel(points_m[i - 1].x, points_m[i - 1].y),
+             pixel(points_m[i].x, points_m[i].y), bgr, thickness_px, cv::LINE_AA);
   }
 }
 
@@ -66,10 +66,13 @@ void BirdsEye::add_label(float x, float y, const std::string& text, const cv::Sc
               cv::LINE_AA);
 }
 
-void BirdsEye::add_box(float cx, float cy, float length, float width, float yaw, const cv::Scalar& bgr) {
+void BirdsEye::add_box(float cx, float cy, float length, float width, float yaw,
+                       const cv::Scalar& bgr) {
   const double c = std::cos(yaw), s = std::sin(yaw);
-  const double corners[4][2] = {{length / 2.0, width / 2.0}, {-length / 2.0, width / 2.0},
-                                {-length / 2.0, -width / 2.0}, {length / 2.0, -width / 2.0}};
+  const double corners[4][2] = {{length / 2.0, width / 2.0},
+                                {-length / 2.0, width / 2.0},
+                                {-length / 2.0, -width / 2.0},
+                                {length / 2.0, -width / 2.0}};
   cv::Point px[4];
   for (int i = 0; i < 4; ++i) {
     const double x = cx + c * corners[i][0] - s * corners[i][1];
@@ -80,8 +83,8 @@ void BirdsEye::add_box(float cx, float cy, float length, float width, float yaw,
 }
 
 void BirdsEye::add_legend(const std::string& line) {
-  cv::putText(image_, line, cv::Point(10, 20 + 18 * legend_lines_++), cv::FONT_HERSHEY_SIMPLEX,
-              0.5, cv::Scalar(230, 230, 230), 1, cv::LINE_AA);
+  cv::putText(image_, line, cv::Point(10, 20 + 18 * legend_lines_++), cv::FONT_HERSHEY_SIMPLEX, 0.5,
+              cv::Scalar(230, 230, 230), 1, cv::LINE_AA);
 }
 
 rt::Result<bool> BirdsEye::save(const std::filesystem::path& png) const {

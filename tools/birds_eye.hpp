@@ -4,10 +4,9 @@
 #pragma once
 
 #include <filesystem>
+#include <opencv2/core.hpp>
 #include <span>
 #include <string>
-
-#include <opencv2/core.hpp>
 
 #include "rt/expected.hpp"
 

@@ -38,7 +38,8 @@ rt::Result<can::CanConfig> load_can_settings(const std::filesystem::path& config
   } else if (transport == "gs_usb") {
     cfg.transport = Transport::kGsUsb;
   } else {
-    return rt::make_error(file + ": 'can.transport' is '" + transport + "'; use socketcan or gs_usb");
+    return rt::make_error(file + ": 'can.transport' is '" + transport +
+                          "'; use socketcan or gs_usb");
   }
   if (cfg.socketcan.interface.empty() || cfg.socketcan.interface.size() > 15) {
     return rt::make_error(file + ": 'can.interface' must have 1..15 characters");
@@ -47,12 +48,14 @@ rt::Result<can::CanConfig> load_can_settings(const std::filesystem::path& config
     return rt::make_error(file + ": 'can.bitrate_bps' must be in 10000..1000000 (classic CAN)");
   }
   cfg.gs_usb.bitrate_bps = static_cast<std::uint32_t>(bitrate);
-  if (channel < 0 || channel > 7) return rt::make_error(file + ": 'can.gs_usb_channel' must be in 0..7");
+  if (channel < 0 || channel > 7)
+    return rt::make_error(file + ": 'can.gs_usb_channel' must be in 0..7");
   cfg.gs_usb.channel = static_cast<std::uint8_t>(channel);
   if (cfg.signals.yaw_rate_sign != 1.0 && cfg.signals.yaw_rate_sign != -1.0) {
     return rt::make_error(file + ": 'can.yaw_rate_sign' must be 1 or -1");
   }
-  if (!(stale_s > 0 && stale_s <= 10)) return rt::make_error(file + ": 'can.stale_timeout_s' must be in (0, 10]");
+  if (!(stale_s > 0 && stale_s <= 10))
+    return rt::make_error(file + ": 'can.stale_timeout_s' must be in (0, 10]");
   cfg.dead_reckoning.stale_timeout_ns = std::llround(stale_s * 1e9);
   if (dbc.empty()) return rt::make_error(file + ": 'can.dbc' must name a DBC file");
   cfg.dbc = c.path(dbc);

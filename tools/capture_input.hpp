@@ -11,9 +11,10 @@
 namespace stac::tools {
 
 // "N frames: P to port X, T truncated (...), ..." (the causes that are not zero).
-std::string capture_frames_summary(const io::PcapCounters& pc, std::uint64_t packets, std::uint16_t port);
-// "wrong size N, invalid block N, duplicate N, late firings N, points over capacity N; estimated packets
-// lost N, ..." (every cause, zero or not).
+std::string capture_frames_summary(const io::PcapCounters& pc, std::uint64_t packets,
+                                   std::uint16_t port);
+// "wrong size N, invalid block N, duplicate N, late firings N, points over capacity N; estimated
+// packets lost N, ..." (every cause, zero or not).
 std::string packet_drops_summary(const velodyne::AssemblerCounters& a);
 // Why a capture gave no complete scan: no packet to the port (and the likely reason: truncated
 // frames, datagrams to other ports), or packets that were all dropped (by cause), or too few.

@@ -5,11 +5,11 @@
 
 namespace stac::tools {
 
-rt::Result<std::uint64_t> for_each_complete_scan(const std::filesystem::path& capture,
-                                                 const velodyne::Calibration& calibration,
-                                                 const VelodyneSettings& settings,
-                                                 const std::function<bool(const velodyne::Scan&)>& on_scan) {
-  auto reader = io::PcapReader::open(capture, io::PcapFilter{.udp_dst_port = settings.port, .udp_src_port = {}});
+rt::Result<std::uint64_t> for_each_complete_scan(
+    const std::filesystem::path& capture, const velodyne::Calibration& calibration,
+    const VelodyneSettings& settings, const std::function<bool(const velodyne::Scan&)>& on_scan) {
+  auto reader = io::PcapReader::open(
+      capture, io::PcapFilter{.udp_dst_port = settings.port, .udp_src_port = {}});
   if (!reader) return rt::Unexpected<rt::Error>{reader.error()};
   velodyne::ScanStream stream(calibration, settings.assembler, 2);
   std::uint64_t complete = 0;

@@ -15,9 +15,8 @@ namespace stac::tools {
 
 // Calls on_scan(scan) for each complete scan until it returns false; returns how many were passed
 // (an error when the capture cannot be opened or holds no complete scan, saying why).
-rt::Result<std::uint64_t> for_each_complete_scan(const std::filesystem::path& capture,
-                                                 const velodyne::Calibration& calibration,
-                                                 const VelodyneSettings& settings,
-                                                 const std::function<bool(const velodyne::Scan&)>& on_scan);
+rt::Result<std::uint64_t> for_each_complete_scan(
+    const std::filesystem::path& capture, const velodyne::Calibration& calibration,
+    const VelodyneSettings& settings, const std::function<bool(const velodyne::Scan&)>& on_scan);
 
 }  // namespace stac::tools

@@ -1,8 +1,8 @@
 // The `classification:` section of config/stac.yaml (see tools/settings.hpp).
+#include <string>
+
 #include "tools/config_section.hpp"
 #include "tools/settings.hpp"
-
-#include <string>
 
 namespace stac::tools {
 

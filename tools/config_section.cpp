@@ -90,7 +90,8 @@ rt::Result<bool> check_keys(const std::string& file, const YAML::Node& map,
 
 }  // namespace
 
-rt::Result<ConfigSection> ConfigSection::open(const std::filesystem::path& file, const std::string& name) {
+rt::Result<ConfigSection> ConfigSection::open(const std::filesystem::path& file,
+                                              const std::string& name) {
   ConfigSection s;
   s.file_ = file.string();
   s.name_ = name;

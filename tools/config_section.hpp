@@ -66,9 +66,9 @@ class ConfigSection {
 }  // namespace stac::tools
 
 // Reads `key` of section `s` into `dst`, returning the error from the enclosing function.
-#define STAC_CONFIG_GET(s, type, key, dst)                  \
-  do {                                                      \
-    auto stac_value_ = (s).get<type>(key);                  \
+#define STAC_CONFIG_GET(s, type, key, dst)                                   \
+  do {                                                                       \
+    auto stac_value_ = (s).get<type>(key);                                   \
     if (!stac_value_) return rt::Unexpected<rt::Error>{stac_value_.error()}; \
-    dst = *stac_value_;                                     \
+    dst = *stac_value_;                                                      \
   } while (0)

@@ -9,11 +9,16 @@ template <bool Ros2>
 const dds_topic_descriptor_t* descriptor(dds::Topic t) {
   using T = dds::IdlTypes<Ros2>;
   switch (t) {
-    case dds::Topic::kTrackedObjects: return T::tracked_objects();
-    case dds::Topic::kSegments: return T::segments();
-    case dds::Topic::kEgoPose: return T::ego_pose();
-    case dds::Topic::kHealth: return T::health();
-    case dds::Topic::kPointCloud: return T::point_cloud();
+    case dds::Topic::kTrackedObjects:
+      return T::tracked_objects();
+    case dds::Topic::kSegments:
+      return T::segments();
+    case dds::Topic::kEgoPose:
+      return T::ego_pose();
+    case dds::Topic::kHealth:
+      return T::health();
+    case dds::Topic::kPointCloud:
+      return T::point_cloud();
   }
   return nullptr;
 }
@@ -21,7 +26,8 @@ const dds_topic_descriptor_t* descriptor(dds::Topic t) {
 }  // namespace
 
 rt::Result<std::unique_ptr<TopicReaders>> TopicReaders::create(const dds::PublisherConfig& c) {
-  if (c.domain_id > 230) return rt::make_error("DDS domain " + std::to_string(c.domain_id) + ": must be 0..230");
+  if (c.domain_id > 230)
+    return rt::make_error("DDS domain " + std::to_string(c.domain_id) + ": must be 0..230");
   if (!c.config_uri.empty()) {
     const dds_entity_t domain = dds_create_domain(c.domain_id, c.config_uri.c_str());
     if (domain < 0) return dds::dds_error("creating DDS domain with " + c.config_uri, domain);
@@ -35,9 +41,11 @@ TopicReaders::~TopicReaders() {
   dds_delete(participant_);
 }
 
-rt::Result<dds_entity_t> TopicReaders::add(dds::Topic t, int depth, std::function<void(dds_entity_t)> take) {
+rt::Result<dds_entity_t> TopicReaders::add(dds::Topic t, int depth,
+                                           std::function<void(dds_entity_t)> take) {
   const std::string name = topic_name(t);
-  const dds_topic_descriptor_t* type = config_.ros2_names ? descriptor<true>(t) : descriptor<false>(t);
+  const dds_topic_descriptor_t* type =
+      config_.ros2_names ? descriptor<true>(t) : descriptor<false>(t);
   const dds_entity_t topic = dds_create_topic(participant_, type, name.c_str(), nullptr, nullptr);
   if (topic < 0) return dds::dds_error("creating DDS topic " + name, topic);
   dds::QosPtr qos = dds::reader_qos(t);

@@ -54,7 +54,8 @@ class TopicReaders {
 
 template <class T, class F>
 rt::Result<dds_entity_t> TopicReaders::listen(dds::Topic t, int depth, F on_sample) {
-  return add(t, depth, [f = std::move(on_sample)](dds_entity_t reader) mutable { take<T>(reader, f); });
+  return add(t, depth,
+             [f = std::move(on_sample)](dds_entity_t reader) mutable { take<T>(reader, f); });
 }
 
 template <class T, class F>

@@ -24,7 +24,8 @@ rt::Result<VelodyneSettings> settings_for(const DecodeOptions& o) {
   const std::filesystem::path config = config_path(o.config);
   auto s = load_velodyne_settings(config);
   if (!s) return s;
-  if (!o.calib.empty()) s->calibration = o.calib == "stream" ? std::filesystem::path{} : std::filesystem::path(o.calib);
+  if (!o.calib.empty())
+    s->calibration = o.calib == "stream" ? std::filesystem::path{} : std::filesystem::path(o.calib);
   if (!o.model.empty()) {
     const auto m = velodyne::parse_model(o.model);
     if (!m) return rt::make_error("--model '" + o.model + "': use S2, S2.1 or S3");
@@ -36,7 +37,8 @@ rt::Result<VelodyneSettings> settings_for(const DecodeOptions& o) {
   }
   if (o.cut_angle_deg >= 0.0) {
     if (o.cut_angle_deg >= 360.0) return rt::make_error("--cut-angle must be in [0, 360)");
-    s->assembler.cut_angle = static_cast<std::uint16_t>(std::lround(o.cut_angle_deg * 100.0) % 36000);
+    s->assembler.cut_angle =
+        static_cast<std::uint16_t>(std::lround(o.cut_angle_deg * 100.0) % 36000);
   }
   return s;
 }
@@ -51,7 +53,8 @@ int run_decode(const DecodeOptions& o) {
   if (!calibration) return fail(calibration.error().message);
   auto writer = make_scan_writer(o.format, o.out);
   if (!writer) return fail(writer.error().message);
-  auto reader = io::PcapReader::open(o.in, io::PcapFilter{.udp_dst_port = s.port, .udp_src_port = {}});
+  auto reader =
+      io::PcapReader::open(o.in, io::PcapFilter{.udp_dst_port = s.port, .udp_src_port = {}});
   if (!reader) return fail(reader.error().message);
 
   velodyne::ScanStream stream(*calibration, s.assembler, 2);
@@ -83,7 +86,8 @@ int run_decode(const DecodeOptions& o) {
     progress.update(static_cast<double>(reader->bytes_read()));
   }
   progress.finish();
-  if (!reader->error().empty()) std::fprintf(stderr, "stac decode: warning: %s\n", reader->error().c_str());
+  if (!reader->error().empty())
+    std::fprintf(stderr, "stac decode: warning: %s\n", reader->error().c_str());
   (void)stream.finish();
   if (auto r = drain(); !r) return fail(r.error().message);
   if (auto r = (*writer)->close(); !r) return fail(r.error().message);
@@ -124,17 +128,21 @@ void add_decode_command(CLI::App& app) {
       "intensity,time (s). kitti: one float32 x,y,z,reflectance(0..1) file per scan in --out/.");
   // --in/--out are checked in the callback, not marked required, so that the `applanix`
   // subcommand (stac decode applanix --in ...) parses without them.
-  cmd->add_option("--in", o->in, "pcap capture to read (Ethernet, Linux cooked or raw IP) (required)")
+  cmd->add_option("--in", o->in,
+                  "pcap capture to read (Ethernet, Linux cooked or raw IP) (required)")
       ->check(CLI::ExistingFile);
-  cmd->add_option("--out", o->out, "output: a .csv file, or a folder for --format kitti (required)");
+  cmd->add_option("--out", o->out,
+                  "output: a .csv file, or a folder for --format kitti (required)");
   cmd->add_option("--calib", o->calib,
                   "calibration of the unit: Velodyne db.xml, ROS yaml, or 'stream' for the one an "
                   "S2.1/S3 sends in its status bytes. Default: the config's");
   cmd->add_option("--format", o->format, "csv or kitti")->check(CLI::IsMember({"csv", "kitti"}));
-  cmd->add_option("--config", o->config, "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
+  cmd->add_option("--config", o->config,
+                  "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
   cmd->add_option("--model", o->model, "S2, S2.1 or S3 (default: the config's)");
   cmd->add_option("--port", o->port, "UDP data port in the capture (default: the config's, 2368)");
-  cmd->add_option("--cut-angle", o->cut_angle_deg, "scan cut angle in degrees (default: the config's)");
+  cmd->add_option("--cut-angle", o->cut_angle_deg,
+                  "scan cut angle in degrees (default: the config's)");
   cmd->add_option("--png", o->png, "also draw the first complete scan from above into this PNG");
   CLI::App* applanix = add_decode_applanix_command(*cmd);
   cmd->callback([o, applanix] {

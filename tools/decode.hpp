@@ -11,9 +11,9 @@ struct DecodeOptions {
   std::string in;      // pcap capture
   std::string out;     // csv file or kitti folder
   std::string format = "csv";
-  std::string model;   // empty: the config's
-  std::string png;     // empty: no picture
-  int port = -1;       // < 0: the config's
+  std::string model;            // empty: the config's
+  std::string png;              // empty: no picture
+  int port = -1;                // < 0: the config's
   double cut_angle_deg = -1.0;  // < 0: the config's
 };
 

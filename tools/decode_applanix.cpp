@@ -34,14 +34,17 @@ void write_row(std::FILE* f, const applanix::TimeDistance& t, const applanix::Gr
                "%.17g,%u,%.17g,%.17g,%.17g,%.9g,%.9g,%.9g,%.17g,%.17g,%.17g,%.17g,%.9g,%.9g,"
                "%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%u\n",
                t.time1_s, unsigned{t.time_types}, g.latitude_deg, g.longitude_deg, g.altitude_m,
-               double{g.north_velocity_mps}, double{g.east_velocity_mps}, double{g.down_velocity_mps},
-               g.roll_deg, g.pitch_deg, g.heading_deg, g.wander_deg, double{g.track_deg},
-               double{g.speed_mps}, double{g.rate_longitudinal_dps}, double{g.rate_transverse_dps},
-               double{g.rate_down_dps}, double{g.accel_longitudinal_mps2},
-               double{g.accel_transverse_mps2}, double{g.accel_down_mps2}, unsigned{g.alignment_status});
+               double{g.north_velocity_mps}, double{g.east_velocity_mps},
+               double{g.down_velocity_mps}, g.roll_deg, g.pitch_deg, g.heading_deg, g.wander_deg,
+               double{g.track_deg}, double{g.speed_mps}, double{g.rate_longitudinal_dps},
+               double{g.rate_transverse_dps}, double{g.rate_down_dps},
+               double{g.accel_longitudinal_mps2}, double{g.accel_transverse_mps2},
+               double{g.accel_down_mps2}, unsigned{g.alignment_status});
 }
 
-unsigned long long ull(std::uint64_t v) { return static_cast<unsigned long long>(v); }
+unsigned long long ull(std::uint64_t v) {
+  return static_cast<unsigned long long>(v);
+}
 
 int run_decode_applanix(const ApplanixDecodeOptions& o) {
   if (o.port < 0 || o.port > 65535) return fail("--port must be 1..65535");
@@ -64,8 +67,10 @@ int run_decode_applanix(const ApplanixDecodeOptions& o) {
   }
   week = reader->parser().gps_week();
   const bool write_failed = std::ferror(out.get()) != 0;
-  if (std::fclose(out.release()) != 0 || write_failed) return fail(o.out + ": write failed (disk full?)");
-  if (!reader->error().empty()) std::fprintf(stderr, "stac decode applanix: warning: %s\n", reader->error().c_str());
+  if (std::fclose(out.release()) != 0 || write_failed)
+    return fail(o.out + ": write failed (disk full?)");
+  if (!reader->error().empty())
+    std::fprintf(stderr, "stac decode applanix: warning: %s\n", reader->error().c_str());
 
   const auto& pc = reader->parser().counters();
   const auto& cc = reader->counters();
@@ -74,7 +79,8 @@ int run_decode_applanix(const ApplanixDecodeOptions& o) {
   if (reader->is_pcap()) {
     std::fprintf(stderr,
                  "  capture   %llu frames, %llu UDP datagrams and %llu TCP segments on %s\n"
-                 "  tcp       %llu streams, %llu bytes, %llu retransmitted, %llu out of order, %llu gaps (%llu bytes)\n",
+                 "  tcp       %llu streams, %llu bytes, %llu retransmitted, %llu out of order, "
+                 "%llu gaps (%llu bytes)\n",
                  ull(reader->pcap_counters().frames), ull(cc.datagrams), ull(cc.segments),
                  port ? ("port " + std::to_string(*port)).c_str() : "ports 5600-5603",
                  ull(tc.streams), ull(tc.bytes), ull(tc.retransmitted), ull(tc.out_of_order),
@@ -83,8 +89,8 @@ int run_decode_applanix(const ApplanixDecodeOptions& o) {
     std::fprintf(stderr, "  raw stream %llu bytes\n", ull(cc.raw_bytes));
   }
   std::string ids;
-  auto counts = std::vector<applanix::StreamParser::IdCount>(reader->parser().group_counts().begin(),
-                                                              reader->parser().group_counts().end());
+  auto counts = std::vector<applanix::StreamParser::IdCount>(
+      reader->parser().group_counts().begin(), reader->parser().group_counts().end());
   std::sort(counts.begin(), counts.end(), [](const auto& a, const auto& b) { return a.id < b.id; });
   for (const auto& c : counts) {
     ids += " " + std::to_string(c.id) + ":" + std::to_string(c.count);
@@ -113,7 +119,8 @@ CLI::App* add_decode_applanix_command(CLI::App& decode) {
   CLI::App* cmd = decode.add_subcommand(
       "applanix", "Decode an Applanix POS LV capture into one csv row per Group 1 solution");
   cmd->description(
-      "Decode an Applanix POS LV capture (pcap with UDP or TCP, or a raw stream file) into one csv\n"
+      "Decode an Applanix POS LV capture (pcap with UDP or TCP, or a raw stream file) into one "
+      "csv\n"
       "row per Group 1: time1 (s; of the week for GPS/UTC time types), time_types (raw byte),\n"
       "lat, lon (deg), alt (m), vn, ve, vd (m/s), roll, pitch, heading, wander, track (deg),\n"
       "speed (m/s), rate_lon, rate_tra, rate_down (deg/s), acc_lon, acc_tra, acc_down (m/s^2),\n"

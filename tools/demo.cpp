@@ -48,8 +48,8 @@ struct DemoOptions {
 };
 
 constexpr double kMatchTimeoutS = 30;  // stac run up and its writers matched
-constexpr double kQuietS = 2;          // after the replay: nothing more for this long ends the drive
-constexpr double kStopTimeoutS = 20;   // stac run's shutdown after SIGINT
+constexpr double kQuietS = 2;         // after the replay: nothing more for this long ends the drive
+constexpr double kStopTimeoutS = 20;  // stac run's shutdown after SIGINT
 
 volatile std::sig_atomic_t g_interrupted = 0;
 extern "C" void on_interrupt(int) {
@@ -98,7 +98,8 @@ double percentile(std::vector<double> v, double q) {
 template <class T>
 class DriveWatch {
  public:
-  void on_tracked(const typename T::TrackedObjects& s, dds_time_t now, const dds_sample_info_t& info) {
+  void on_tracked(const typename T::TrackedObjects& s, dds_time_t now,
+                  const dds_sample_info_t& info) {
     const double t = seconds(s.stamp);
     if (scans_.empty()) first_stamp_s_ = t;
     latency_ms_.push_back(static_cast<double>(now - info.source_timestamp) * 1e-6);
@@ -122,23 +123,27 @@ class DriveWatch {
       classes_[o.object_id] = c.name;
       shown.push_back(&o);
     }
-    for (std::uint32_t i = 0; i < s.objects._length; ++i) ids_.insert(s.objects._buffer[i].object_id);
+    for (std::uint32_t i = 0; i < s.objects._length; ++i)
+      ids_.insert(s.objects._buffer[i].object_id);
     confirmed_per_scan_.push_back(confirmed);
     tracks_per_scan_.push_back(s.objects._length);
     // The three confirmed tracks nearest the vehicle (its last pose), nearest first.
     const auto distance = [&](const typename T::TrackedObject* o) {
       return std::hypot(o->kinematics.position.x - ego_x_, o->kinematics.position.y - ego_y_);
     };
-    std::sort(shown.begin(), shown.end(), [&](auto* a, auto* b) { return distance(a) < distance(b); });
+    std::sort(shown.begin(), shown.end(),
+              [&](auto* a, auto* b) { return distance(a) < distance(b); });
     char text[512];
     int at = std::snprintf(text, sizeof(text), "scan %4llu  +%5.1f s  tracks %3u (%3u confirmed)",
                            static_cast<unsigned long long>(s.scan_index), t - first_stamp_s_,
                            s.objects._length, confirmed);
-    for (std::size_t i = 0; i < shown.size() && i < 3 && at > 0 && at < static_cast<int>(sizeof(text)); ++i) {
+    for (std::size_t i = 0;
+         i < shown.size() && i < 3 && at > 0 && at < static_cast<int>(sizeof(text)); ++i) {
       const auto& o = *shown[i];
       at += std::snprintf(text + at, sizeof(text) - static_cast<std::size_t>(at),
-                          "  | #%llu %s (%.1f, %.1f) %.1f m/s", static_cast<unsigned long long>(o.object_id),
-                          shown_class(o).name, o.kinematics.position.x, o.kinematics.position.y,
+                          "  | #%llu %s (%.1f, %.1f) %.1f m/s",
+                          static_cast<unsigned long long>(o.object_id), shown_class(o).name,
+                          o.kinematics.position.x, o.kinematics.position.y,
                           std::hypot(o.kinematics.velocity.x, o.kinematics.velocity.y));
     }
     pending_.emplace_back(text);
@@ -164,7 +169,8 @@ class DriveWatch {
     ego_x_ = s.position.x;
     ego_y_ = s.position.y;
     const double* q = s.orientation;  // x, y, z, w
-    ego_yaw_ = std::atan2(2.0 * (q[3] * q[2] + q[0] * q[1]), 1.0 - 2.0 * (q[1] * q[1] + q[2] * q[2]));
+    ego_yaw_ =
+        std::atan2(2.0 * (q[3] * q[2] + q[0] * q[1]), 1.0 - 2.0 * (q[1] * q[1] + q[2] * q[2]));
     ego_path_.emplace_back(static_cast<float>(ego_x_), static_cast<float>(ego_y_));
   }
 
@@ -211,7 +217,8 @@ class DriveWatch {
 
 // The points of complete scan `index` of the capture (the scan stac run published as that index
 // when no packet was lost), in the vehicle frame (the sensor's extrinsics; not deskewed).
-rt::Result<std::vector<cv::Point3f>> last_scan_points(const std::string& config, const std::string& pcap,
+rt::Result<std::vector<cv::Point3f>> last_scan_points(const std::string& config,
+                                                      const std::string& pcap,
                                                       std::uint64_t index) {
   auto vs = load_velodyne_settings(config);
   if (!vs) return rt::Unexpected<rt::Error>{vs.error()};
@@ -232,7 +239,8 @@ rt::Result<std::vector<cv::Point3f>> last_scan_points(const std::string& config,
     return false;
   });
   if (!n) return rt::Unexpected<rt::Error>{n.error()};
-  if (points.empty()) return rt::make_error(pcap + " holds no complete scan " + std::to_string(index));
+  if (points.empty())
+    return rt::make_error(pcap + " holds no complete scan " + std::to_string(index));
   return points;
 }
 
@@ -264,19 +272,23 @@ int watch_drive(const DemoOptions& o, const std::filesystem::path& dir, const st
   auto readers = TopicReaders::create(dds_config);  // after what its callbacks use: deleted first
   if (!readers) return fail(readers.error().message);
   TopicReaders& r = **readers;
-  auto tracked = r.listen<typename T::TrackedObjects>(dds::Topic::kTrackedObjects, 64, record(&DriveWatch<T>::on_tracked));
-  auto health = r.listen<typename T::Health>(dds::Topic::kHealth, 64, record(&DriveWatch<T>::on_health));
-  auto pose = r.listen<typename T::EgoPose>(dds::Topic::kEgoPose, 64, record(&DriveWatch<T>::on_pose));
-  auto segments = r.listen<typename T::ScanSegments>(dds::Topic::kSegments, 4, record(&DriveWatch<T>::on_segments));
+  auto tracked = r.listen<typename T::TrackedObjects>(dds::Topic::kTrackedObjects, 64,
+                                                      record(&DriveWatch<T>::on_tracked));
+  auto health =
+      r.listen<typename T::Health>(dds::Topic::kHealth, 64, record(&DriveWatch<T>::on_health));
+  auto pose =
+      r.listen<typename T::EgoPose>(dds::Topic::kEgoPose, 64, record(&DriveWatch<T>::on_pose));
+  auto segments = r.listen<typename T::ScanSegments>(dds::Topic::kSegments, 4,
+                                                     record(&DriveWatch<T>::on_segments));
   for (const auto* e : {&tracked, &health, &pose, &segments})
     if (!*e) return fail(e->error().message);
 
   const std::string domain = std::to_string(dds_config.domain_id);
-  auto run = ChildProcess::start({"run", "--config", config, "--dds-config", loopback_xml, "--domain",
-                                  domain, "--bind", "127.0.0.1", "--port", std::to_string(ports.udp),
-                                  "--ins", "tcp", "--ins-address", "127.0.0.1", "--ins-port",
-                                  std::to_string(ports.tcp)},
-                                 dir / "run.log");
+  auto run = ChildProcess::start(
+      {"run", "--config", config, "--dds-config", loopback_xml, "--domain", domain, "--bind",
+       "127.0.0.1", "--port", std::to_string(ports.udp), "--ins", "tcp", "--ins-address",
+       "127.0.0.1", "--ins-port", std::to_string(ports.tcp)},
+      dir / "run.log");
   if (!run) return fail(run.error().message);
   std::fprintf(stderr,
                "stac demo: 2/4 stac run on 127.0.0.1 (Velodyne UDP %u, INS TCP %u, DDS domain %u, "
@@ -293,15 +305,16 @@ int watch_drive(const DemoOptions& o, const std::filesystem::path& dir, const st
     dds_sleepfor(DDS_MSECS(20));
   }
 
-  auto replay = ChildProcess::start({"replay", "--in", pcap, "--to", "127.0.0.1", "--port",
-                                     std::to_string(ports.udp), "--tcp-port", "5602:" + std::to_string(ports.tcp),
-                                     "--wait-tcp"},
-                                    dir / "replay.log");
+  auto replay = ChildProcess::start(
+      {"replay", "--in", pcap, "--to", "127.0.0.1", "--port", std::to_string(ports.udp),
+       "--tcp-port", "5602:" + std::to_string(ports.tcp), "--wait-tcp"},
+      dir / "replay.log");
   if (!replay) return fail(replay.error().message);
-  std::fprintf(stderr,
-               "stac demo: 3/4 replaying the drive at its recorded pace; tracks as they arrive on DDS "
-               "(another terminal: DDS_TEST_TAG=%s stac echo tracked_objects --domain %u)\n",
-               std::getenv("DDS_TEST_TAG"), dds_config.domain_id);
+  std::fprintf(
+      stderr,
+      "stac demo: 3/4 replaying the drive at its recorded pace; tracks as they arrive on DDS "
+      "(another terminal: DDS_TEST_TAG=%s stac echo tracked_objects --domain %u)\n",
+      std::getenv("DDS_TEST_TAG"), dds_config.domain_id);
 
   // Until the replay has ended and nothing more arrived for kQuietS (or a child fails, or Ctrl-C).
   const dds_time_t deadline = dds_time() + DDS_SECS(static_cast<long>(3 * o.seconds + 60));
@@ -332,7 +345,8 @@ int watch_drive(const DemoOptions& o, const std::filesystem::path& dir, const st
   readers->reset();              // no callback runs after this
   w.print_lines();
   const std::string run_log = run->log();
-  if (run_code != 0) return run_failed("stac run did not stop cleanly (exit " + std::to_string(run_code) + ")");
+  if (run_code != 0)
+    return run_failed("stac run did not stop cleanly (exit " + std::to_string(run_code) + ")");
 
   // 4. The summary and the pictures.
   const std::uint64_t published = summary_number(run_log, R"((\d+) published,)").value_or(0);
@@ -347,13 +361,16 @@ int watch_drive(const DemoOptions& o, const std::filesystem::path& dir, const st
   std::vector<double> confirmed(w.confirmed_per_scan_.begin(), w.confirmed_per_scan_.end());
   std::string drops;
   for (const auto& [cause, count] : w.drops_)
-    if (count > 0 && cause != "classification.late") drops += " " + cause + "=" + std::to_string(count);
+    if (count > 0 && cause != "classification.late")
+      drops += " " + cause + "=" + std::to_string(count);
   // Published tracks classified before their scan's publication, and those left for after it.
   const std::uint64_t current =
-      summary_number(run_log, R"((\d+) published tracks classified before publication)").value_or(0);
+      summary_number(run_log, R"((\d+) published tracks classified before publication)")
+          .value_or(0);
   const std::uint64_t late = summary_number(run_log, R"((\d+) after it \(run)").value_or(0);
   std::printf(
-      "\nSTAC demo: %.0f s simulated urban drive (seed %llu) -> loopback UDP + INS -> stac run -> DDS\n"
+      "\nSTAC demo: %.0f s simulated urban drive (seed %llu) -> loopback UDP + INS -> stac run -> "
+      "DDS\n"
       "  scans       %zu received on tracked_objects of %llu published by stac run (%llu missing)\n"
       "  tracks      %zu ids; per scan median %.0f (%.0f confirmed), max %.0f\n"
       "  deadline    %llu misses (run.deadline_ms)\n"
@@ -361,18 +378,20 @@ int watch_drive(const DemoOptions& o, const std::filesystem::path& dir, const st
       "  classes     %llu published tracks classified before publication, %llu one scan late "
       "(run.classify_budget_ms)\n"
       "  end to end  last firing -> published: median %.1f ms, p99 %.1f ms (%zu scans, health)\n"
-      "  DDS         publish -> receive (tracked_objects): median %.2f ms, p99 %.2f ms, max %.2f ms\n",
+      "  DDS         publish -> receive (tracked_objects): median %.2f ms, p99 %.2f ms, max %.2f "
+      "ms\n",
       o.seconds, u(o.seed), w.scans_.size(), u(published), u(missing), w.ids_.size(),
       percentile(per_scan, 0.5), percentile(confirmed, 0.5), percentile(per_scan, 1.0),
       u(w.deadline_misses_), drops.empty() ? " none" : drops.c_str(), u(current), u(late),
-      percentile(w.end_to_end_ms_, 0.5),
-      percentile(w.end_to_end_ms_, 0.99), w.end_to_end_ms_.size(), percentile(w.latency_ms_, 0.5),
-      percentile(w.latency_ms_, 0.99), percentile(w.latency_ms_, 1.0));
+      percentile(w.end_to_end_ms_, 0.5), percentile(w.end_to_end_ms_, 0.99),
+      w.end_to_end_ms_.size(), percentile(w.latency_ms_, 0.5), percentile(w.latency_ms_, 0.99),
+      percentile(w.latency_ms_, 1.0));
   DriveView view = w.view();
   if (auto p = last_scan_points(config, pcap, view.last.scan_index); p) {
     view.points = std::move(*p);
   } else {
-    std::fprintf(stderr, "stac demo: warning: no points in the picture: %s\n", p.error().message.c_str());
+    std::fprintf(stderr, "stac demo: warning: no points in the picture: %s\n",
+                 p.error().message.c_str());
   }
   for (auto [name, picture] : {std::pair{"demo_last_scan.png", DrivePicture::kLastScan},
                                {"demo_tracks.png", DrivePicture::kWholeDrive}}) {
@@ -428,23 +447,25 @@ int run_demo(const DemoOptions& o) {
   if (const int code = run_sim(sim); code != 0) return code;
 
   return dds_config->ros2_names
-             ? watch_drive<dds::IdlTypes<true>>(o, dir, config.string(), loopback_xml, *dds_config, sim.out,
-                                                {*udp, *tcp})
-             : watch_drive<dds::IdlTypes<false>>(o, dir, config.string(), loopback_xml, *dds_config, sim.out,
-                                                 {*udp, *tcp});
+             ? watch_drive<dds::IdlTypes<true>>(o, dir, config.string(), loopback_xml, *dds_config,
+                                                sim.out, {*udp, *tcp})
+             : watch_drive<dds::IdlTypes<false>>(o, dir, config.string(), loopback_xml, *dds_config,
+                                                 sim.out, {*udp, *tcp});
 }
 
 }  // namespace
 
 void add_demo_command(CLI::App& app) {
   auto o = std::make_shared<DemoOptions>();
-  CLI::App* cmd = app.add_subcommand(
-      "demo", "The full pipeline on a built-in simulated drive, live over loopback to DDS (no sensor needed)");
+  CLI::App* cmd = app.add_subcommand("demo",
+                                     "The full pipeline on a built-in simulated drive, live over "
+                                     "loopback to DDS (no sensor needed)");
   cmd->description(
       "The full pipeline on a built-in default, no sensor needed: simulates an urban drive\n"
       "(OUT/drive.pcap + OUT/drive.truth.jsonl), replays it over loopback (HDL-64E UDP and the\n"
       "Applanix TCP stream, at the recorded pace) into `stac run` (Cyclone DDS on loopback only),\n"
-      "prints a line per scan as the tracks arrive on DDS, then a summary (scans, tracks, deadline\n"
+      "prints a line per scan as the tracks arrive on DDS, then a summary (scans, tracks, "
+      "deadline\n"
       "misses, drops, end-to-end and DDS latency) and draws OUT/demo_last_scan.png and\n"
       "OUT/demo_tracks.png. Logs of the children: OUT/run.log, OUT/replay.log.");
   cmd->add_option("--out", o->out, "output folder")->capture_default_str();
@@ -458,8 +479,10 @@ void add_demo_command(CLI::App& app) {
   cmd->add_option("--ins-port", o->ins_port, "INS TCP port on 127.0.0.1 (0: any free one)")
       ->check(CLI::Range(0, 65535))
       ->capture_default_str();
-  cmd->add_option("--domain", o->domain, "DDS domain (default: dds.domain_id)")->check(CLI::Range(0, 230));
-  cmd->add_option("--config", o->config, "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
+  cmd->add_option("--domain", o->domain, "DDS domain (default: dds.domain_id)")
+      ->check(CLI::Range(0, 230));
+  cmd->add_option("--config", o->config,
+                  "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
   cmd->callback([o] {
     if (const int code = run_demo(*o); code != 0) throw CLI::RuntimeError(code);
   });

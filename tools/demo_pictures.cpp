@@ -42,7 +42,8 @@ std::vector<cv::Point2f> in_vehicle(const std::vector<cv::Point2f>& world, const
 
 }  // namespace
 
-rt::Result<bool> draw_drive(const DriveView& v, DrivePicture picture, const std::filesystem::path& png) {
+rt::Result<bool> draw_drive(const DriveView& v, DrivePicture picture,
+                            const std::filesystem::path& png) {
   const ToVehicle to(v);
   BirdsEyeOptions o;
   o.height_bar = false;
@@ -104,12 +105,15 @@ rt::Result<bool> draw_drive(const DriveView& v, DrivePicture picture, const std:
   const cv::Point2f ego = shift({0, 0});
   bev.add_box(ego.x, ego.y, 4.5f, 1.8f, 0, cv::Scalar(255, 255, 255));  // the vehicle
   char line[160];
-  std::snprintf(line, sizeof(line), "stac demo: scan %llu, %zu confirmed tracks (boxes, ids, class)",
+  std::snprintf(line, sizeof(line),
+                "stac demo: scan %llu, %zu confirmed tracks (boxes, ids, class)",
                 static_cast<unsigned long long>(v.last.scan_index), confirmed);
   bev.add_legend(line);
   bev.add_legend(picture == DrivePicture::kLastScan
-                     ? "points by height (not deskewed); grey: segments; coloured: tracks, #id (class once classified), paths"
-                     : "the whole drive: the vehicle's path (white), paths of the tracks that moved (not background)");
+                     ? "points by height (not deskewed); grey: segments; coloured: tracks, #id "
+                       "(class once classified), paths"
+                     : "the whole drive: the vehicle's path (white), paths of the tracks that "
+                       "moved (not background)");
   bev.add_legend("frame of the vehicle's last pose: x forward = up, y left = left");
   return bev.save(png);
 }

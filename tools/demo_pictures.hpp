@@ -6,10 +6,9 @@
 #include <cstdint>
 #include <filesystem>
 #include <map>
+#include <opencv2/core.hpp>
 #include <string>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 #include "rt/expected.hpp"
 
@@ -31,19 +30,21 @@ struct ScanView {
 };
 struct DriveView {
   ScanView last;
-  std::vector<BoxView> segments;  // the last segments sample
+  std::vector<BoxView> segments;    // the last segments sample
   std::vector<cv::Point3f> points;  // the last scan's points, vehicle frame of the last pose (m)
-  float ego_x = 0, ego_y = 0, ego_yaw = 0;  // the last pose (world)
-  std::vector<cv::Point2f> ego_path;        // world
+  float ego_x = 0, ego_y = 0, ego_yaw = 0;                  // the last pose (world)
+  std::vector<cv::Point2f> ego_path;                        // world
   std::map<std::uint64_t, std::vector<cv::Point2f>> paths;  // confirmed tracks' positions, world
   std::map<std::uint64_t, std::string> classes;  // their latest class ("unknown" before one)
 };
 
 enum class DrivePicture {
-  kLastScan,    // 40 m around the vehicle: points by height, segments (grey), tracks (boxes, ids), paths
+  kLastScan,    // 40 m around the vehicle: points by height, segments (grey), tracks (boxes, ids),
+                // paths
   kWholeDrive,  // the whole drive's extent: the vehicle's path and every confirmed track's path
 };
 
-rt::Result<bool> draw_drive(const DriveView& view, DrivePicture picture, const std::filesystem::path& png);
+rt::Result<bool> draw_drive(const DriveView& view, DrivePicture picture,
+                            const std::filesystem::path& png);
 
 }  // namespace stac::tools

@@ -26,12 +26,13 @@ struct EchoOptions {
 
 template <class S>
 void print_tracked(const S& s) {
-  std::printf("tracked_objects scan %llu t=%.6f objects=%u", static_cast<unsigned long long>(s.scan_index),
-              seconds(s.stamp), s.objects._length);
+  std::printf("tracked_objects scan %llu t=%.6f objects=%u",
+              static_cast<unsigned long long>(s.scan_index), seconds(s.stamp), s.objects._length);
   for (std::uint32_t i = 0; i < s.objects._length && i < 5; ++i) {
     const auto& o = s.objects._buffer[i];
-    std::printf(" | #%llu %s x=%.2f y=%.2f v=(%.2f,%.2f) age=%u", static_cast<unsigned long long>(o.object_id),
-                shown_class(o).name, o.kinematics.position.x, o.kinematics.position.y, o.kinematics.velocity.x,
+    std::printf(" | #%llu %s x=%.2f y=%.2f v=(%.2f,%.2f) age=%u",
+                static_cast<unsigned long long>(o.object_id), shown_class(o).name,
+                o.kinematics.position.x, o.kinematics.position.y, o.kinematics.velocity.x,
                 o.kinematics.velocity.y, o.age);
   }
   std::printf("%s\n", s.objects._length > 5 ? " | ..." : "");
@@ -39,27 +40,30 @@ void print_tracked(const S& s) {
 
 template <class S>
 void print_segments(const S& s) {
-  std::printf("segments scan %llu t=%.6f segments=%u\n", static_cast<unsigned long long>(s.scan_index),
-              seconds(s.stamp), s.segments._length);
+  std::printf("segments scan %llu t=%.6f segments=%u\n",
+              static_cast<unsigned long long>(s.scan_index), seconds(s.stamp), s.segments._length);
 }
 
 template <class S>
 void print_pose(const S& s) {
-  std::printf("ego_pose t=%.6f x=%.3f y=%.3f z=%.3f v=(%.2f,%.2f) yaw_rate=%.3f source=%u\n", seconds(s.stamp),
-              s.position.x, s.position.y, s.position.z, s.velocity.x, s.velocity.y,
-              static_cast<double>(s.yaw_rate), static_cast<unsigned>(s.source));
+  std::printf("ego_pose t=%.6f x=%.3f y=%.3f z=%.3f v=(%.2f,%.2f) yaw_rate=%.3f source=%u\n",
+              seconds(s.stamp), s.position.x, s.position.y, s.position.z, s.velocity.x,
+              s.velocity.y, static_cast<double>(s.yaw_rate), static_cast<unsigned>(s.source));
 }
 
 template <class S>
 void print_health(const S& s) {
-  std::printf("health scan %llu t=%.6f e2e=%uus misses=%llu", static_cast<unsigned long long>(s.scan_index),
-              seconds(s.stamp), s.end_to_end_latency_us, static_cast<unsigned long long>(s.deadline_misses));
+  std::printf("health scan %llu t=%.6f e2e=%uus misses=%llu",
+              static_cast<unsigned long long>(s.scan_index), seconds(s.stamp),
+              s.end_to_end_latency_us, static_cast<unsigned long long>(s.deadline_misses));
   for (std::uint32_t i = 0; i < s.stages._length; ++i)
     std::printf(" %s=%uus", s.stages._buffer[i].stage, s.stages._buffer[i].latency_us);
   for (std::uint32_t i = 0; i < s.drops._length; ++i)
-    std::printf(" drop:%s=%llu", s.drops._buffer[i].cause, static_cast<unsigned long long>(s.drops._buffer[i].count));
+    std::printf(" drop:%s=%llu", s.drops._buffer[i].cause,
+                static_cast<unsigned long long>(s.drops._buffer[i].count));
   for (std::uint32_t i = 0; i < s.sensors._length; ++i)
-    std::printf(" %s:%u", s.sensors._buffer[i].name, static_cast<unsigned>(s.sensors._buffer[i].status));
+    std::printf(" %s:%u", s.sensors._buffer[i].name,
+                static_cast<unsigned>(s.sensors._buffer[i].status));
   std::printf("\n");
 }
 
@@ -67,12 +71,15 @@ void print_health(const S& s) {
 template <class S>
 void print_cloud(const S& s) {
   unsigned by_label[6] = {};
-  for (std::uint32_t i = 0; i < s.points._length; ++i) ++by_label[std::min<unsigned>(s.points._buffer[i].label, 5)];
-  std::printf("point_cloud scan %llu t=%.6f points=%u origin=(%.2f,%.2f,%.2f) resolution=%.3f none=%u car=%u "
-              "pedestrian=%u bicyclist=%u background=%u unclassified=%u\n",
-              static_cast<unsigned long long>(s.scan_index), seconds(s.stamp), s.points._length, s.origin.x,
-              s.origin.y, s.origin.z, static_cast<double>(s.resolution), by_label[0], by_label[1], by_label[2],
-              by_label[3], by_label[4], by_label[5]);
+  for (std::uint32_t i = 0; i < s.points._length; ++i)
+    ++by_label[std::min<unsigned>(s.points._buffer[i].label, 5)];
+  std::printf(
+      "point_cloud scan %llu t=%.6f points=%u origin=(%.2f,%.2f,%.2f) resolution=%.3f none=%u "
+      "car=%u "
+      "pedestrian=%u bicyclist=%u background=%u unclassified=%u\n",
+      static_cast<unsigned long long>(s.scan_index), seconds(s.stamp), s.points._length, s.origin.x,
+      s.origin.y, s.origin.z, static_cast<double>(s.resolution), by_label[0], by_label[1],
+      by_label[2], by_label[3], by_label[4], by_label[5]);
 }
 
 // One sample of any topic (native or ROS 2 names), told apart by its fields.
@@ -96,11 +103,16 @@ template <bool Ros2, class F>
 rt::Result<dds_entity_t> listen(TopicReaders& readers, dds::Topic t, int depth, F f) {
   using T = dds::IdlTypes<Ros2>;
   switch (t) {
-    case dds::Topic::kTrackedObjects: return readers.listen<typename T::TrackedObjects>(t, depth, f);
-    case dds::Topic::kSegments: return readers.listen<typename T::ScanSegments>(t, depth, f);
-    case dds::Topic::kEgoPose: return readers.listen<typename T::EgoPose>(t, depth, f);
-    case dds::Topic::kHealth: return readers.listen<typename T::Health>(t, depth, f);
-    case dds::Topic::kPointCloud: return readers.listen<typename T::LabeledPointCloud>(t, depth, f);
+    case dds::Topic::kTrackedObjects:
+      return readers.listen<typename T::TrackedObjects>(t, depth, f);
+    case dds::Topic::kSegments:
+      return readers.listen<typename T::ScanSegments>(t, depth, f);
+    case dds::Topic::kEgoPose:
+      return readers.listen<typename T::EgoPose>(t, depth, f);
+    case dds::Topic::kHealth:
+      return readers.listen<typename T::Health>(t, depth, f);
+    case dds::Topic::kPointCloud:
+      return readers.listen<typename T::LabeledPointCloud>(t, depth, f);
   }
   return rt::make_error("unknown topic");
 }
@@ -112,7 +124,8 @@ int run_echo(const EchoOptions& o) {
   if (!settings) return fail(settings.error().message);
   dds::PublisherConfig c = *settings;
   if (o.domain >= 0) c.domain_id = static_cast<std::uint32_t>(o.domain);
-  if (!o.dds_config.empty()) c.config_uri = "file://" + std::filesystem::absolute(o.dds_config).string();
+  if (!o.dds_config.empty())
+    c.config_uri = "file://" + std::filesystem::absolute(o.dds_config).string();
   auto readers = TopicReaders::create(c);
   if (!readers) return fail(readers.error().message);
   const std::string name = (*readers)->topic_name(*topic);
@@ -141,18 +154,25 @@ int run_echo(const EchoOptions& o) {
     std::fprintf(
         stderr,
         "stac echo: publish -> receive latency over %llu samples: p50 %.0f us, p99 %.0f us, "
-        "max %.0f us (writer's source timestamp to this reader's take on arrival, one host clock)\n",
+        "max %.0f us (writer's source timestamp to this reader's take on arrival, one host "
+        "clock)\n",
         static_cast<unsigned long long>(latency.count()), us(latency.percentile(0.5)),
         us(latency.percentile(0.99)), us(latency.max_ns()));
   }
   if (o.count > 0 && received < o.count) {
-    std::fprintf(stderr, "stac echo: timed out after %.1f s with %d of %d samples on %s (is a publisher running "
-                 "on domain %u with the same dds config?)\n", o.timeout_s, received.load(), o.count, name.c_str(), c.domain_id);
+    std::fprintf(
+        stderr,
+        "stac echo: timed out after %.1f s with %d of %d samples on %s (is a publisher running "
+        "on domain %u with the same dds config?)\n",
+        o.timeout_s, received.load(), o.count, name.c_str(), c.domain_id);
     return 1;
   }
   if (received == 0) {
-    std::fprintf(stderr, "stac echo: no sample on %s within %.1f s (is a publisher running on domain %u with "
-                 "the same dds config?)\n", name.c_str(), o.timeout_s, c.domain_id);
+    std::fprintf(
+        stderr,
+        "stac echo: no sample on %s within %.1f s (is a publisher running on domain %u with "
+        "the same dds config?)\n",
+        name.c_str(), o.timeout_s, c.domain_id);
     return 1;
   }
   std::fprintf(stderr, "stac echo: %d samples on %s\n", received.load(), name.c_str());
@@ -164,12 +184,15 @@ int run_echo(const EchoOptions& o) {
 void add_echo_command(CLI::App& app) {
   auto o = std::make_shared<EchoOptions>();
   auto* cmd = app.add_subcommand("echo", "Print the samples arriving on one of STAC's DDS topics");
-  cmd->add_option("topic", o->topic, "tracked_objects, segments, ego_pose, health or point_cloud")->required();
+  cmd->add_option("topic", o->topic, "tracked_objects, segments, ego_pose, health or point_cloud")
+      ->required();
   cmd->add_option("--count", o->count, "exit after this many samples (0: run until the timeout)")
       ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--timeout", o->timeout_s, "give up after this many seconds")->check(CLI::PositiveNumber);
+  cmd->add_option("--timeout", o->timeout_s, "give up after this many seconds")
+      ->check(CLI::PositiveNumber);
   cmd->add_option("--domain", o->domain, "DDS domain id (default: dds.domain_id of the config)");
-  cmd->add_option("--config", o->config, "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
+  cmd->add_option("--config", o->config,
+                  "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
   cmd->add_option("--dds-config", o->dds_config, "Cyclone DDS XML (default: dds.config_file)")
       ->check(CLI::ExistingFile);
   cmd->add_flag("--latency", o->latency,

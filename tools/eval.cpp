@@ -1,12 +1,11 @@
 // stac eval: segmentation and tracking metrics of a tracks file against the simulator's truth,
 // with a markdown report, metrics.json and plots. Definitions: docs/evaluation.md.
-#include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
-
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <sstream>
 
 #include "tools/class_eval.hpp"
@@ -26,15 +25,20 @@ struct EvalOptions {
 
 std::string band_name(int b, const EvalConfig& c) {
   char buf[48];
-  std::snprintf(buf, sizeof(buf), "%g-%g", b * c.range_band_m, std::min((b + 1) * c.range_band_m, c.max_range_m));
+  std::snprintf(buf, sizeof(buf), "%g-%g", b * c.range_band_m,
+                std::min((b + 1) * c.range_band_m, c.max_range_m));
   return buf;
 }
 
 nlohmann::json clear_json(const ClearCounts& k, bool with_fp) {
-  nlohmann::json j = {{"gt", k.gt},           {"tp", k.tp},
-                      {"fn", k.fn},           {"id_switches", k.id_switches},
-                      {"fragmentations", k.fragmentations}, {"recall", k.recall()},
-                      {"motp", k.motp()},     {"motp_distance_m", k.motp_distance_m()}};
+  nlohmann::json j = {{"gt", k.gt},
+                      {"tp", k.tp},
+                      {"fn", k.fn},
+                      {"id_switches", k.id_switches},
+                      {"fragmentations", k.fragmentations},
+                      {"recall", k.recall()},
+                      {"motp", k.motp()},
+                      {"motp_distance_m", k.motp_distance_m()}};
   if (with_fp) {
     j["fp"] = k.fp;
     j["mota"] = k.mota();
@@ -54,8 +58,12 @@ nlohmann::json hota_json(const HotaCounts& k, bool with_fp) {
 }
 
 nlohmann::json seg_json(const SegCounts& k) {
-  return {{"objects", k.objects}, {"unsegmented", k.unsegmented}, {"over", k.over}, {"under", k.under},
-          {"over_segmentation", k.over_rate()}, {"under_segmentation", k.under_rate()}};
+  return {{"objects", k.objects},
+          {"unsegmented", k.unsegmented},
+          {"over", k.over},
+          {"under", k.under},
+          {"over_segmentation", k.over_rate()},
+          {"under_segmentation", k.under_rate()}};
 }
 
 nlohmann::json metrics_json(const EvalResult& r, const EvalConfig& c) {
@@ -87,25 +95,30 @@ nlohmann::json metrics_json(const EvalResult& r, const EvalConfig& c) {
   }
   for (const auto& [b, k] : r.clear_by_band) {
     j["by_range"][band_name(b, c)] = clear_json(k, true);
-    if (r.hota_by_band.count(b) != 0) j["by_range"][band_name(b, c)].update(hota_json(r.hota_by_band.at(b), true));
+    if (r.hota_by_band.count(b) != 0)
+      j["by_range"][band_name(b, c)].update(hota_json(r.hota_by_band.at(b), true));
   }
   if (r.has_segment_truth) {
-    for (const auto& [cls, k] : r.segmentation_by_class) j["segmentation_by_class"][cls] = seg_json(k);
-    for (const auto& [b, k] : r.segmentation_by_band) j["segmentation_by_range"][band_name(b, c)] = seg_json(k);
+    for (const auto& [cls, k] : r.segmentation_by_class)
+      j["segmentation_by_class"][cls] = seg_json(k);
+    for (const auto& [b, k] : r.segmentation_by_band)
+      j["segmentation_by_range"][band_name(b, c)] = seg_json(k);
   }
-  j["config"] = {{"max_range_m", c.max_range_m}, {"min_points", c.min_points},
-                 {"range_band_m", c.range_band_m}, {"count_coasting", c.count_coasting}, {"piece_share", c.piece_share},
-                 {"foreign_share", c.foreign_share}, {"under_min_points", c.under_min_points},
-                 {"zero_distance_m", c.zero_distance_m}};
+  j["config"] = {{"max_range_m", c.max_range_m},           {"min_points", c.min_points},
+                 {"range_band_m", c.range_band_m},         {"count_coasting", c.count_coasting},
+                 {"piece_share", c.piece_share},           {"foreign_share", c.foreign_share},
+                 {"under_min_points", c.under_min_points}, {"zero_distance_m", c.zero_distance_m}};
   return j;
 }
 
 // A bar chart of named series per group, values in [lo, 1].
-bool bar_chart(const std::filesystem::path& png, const std::string& title, const std::vector<std::string>& groups,
-               const std::vector<std::string>& series, const std::vector<std::vector<double>>& values, double lo) {
+bool bar_chart(const std::filesystem::path& png, const std::string& title,
+               const std::vector<std::string>& groups, const std::vector<std::string>& series,
+               const std::vector<std::vector<double>>& values, double lo) {
   const int w = 900, h = 480, left = 60, right = 20, top = 50, bottom = 70;
   cv::Mat img(h, w, CV_8UC3, cv::Scalar(255, 255, 255));
-  const cv::Scalar palette[] = {{180, 119, 31}, {14, 127, 255}, {44, 160, 44}, {40, 39, 214}, {189, 103, 148}};
+  const cv::Scalar palette[] = {
+      {180, 119, 31}, {14, 127, 255}, {44, 160, 44}, {40, 39, 214}, {189, 103, 148}};
   auto y_of = [&](double v) {
     v = std::clamp(v, lo, 1.0);
     return top + static_cast<int>((1.0 - (v - lo) / (1.0 - lo)) * (h - top - bottom));
@@ -115,9 +128,11 @@ bool bar_chart(const std::filesystem::path& png, const std::string& title, const
     cv::line(img, {left, y_of(v)}, {w - right, y_of(v)}, cv::Scalar(220, 220, 220), 1);
     char buf[16];
     std::snprintf(buf, sizeof(buf), "%.2f", v);
-    cv::putText(img, buf, {5, y_of(v) + 4}, cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(60, 60, 60), 1, cv::LINE_AA);
+    cv::putText(img, buf, {5, y_of(v) + 4}, cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(60, 60, 60),
+                1, cv::LINE_AA);
   }
-  cv::putText(img, title, {left, 30}, cv::FONT_HERSHEY_SIMPLEX, 0.6, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  cv::putText(img, title, {left, 30}, cv::FONT_HERSHEY_SIMPLEX, 0.6, cv::Scalar(0, 0, 0), 1,
+              cv::LINE_AA);
   const int ng = std::max<int>(1, static_cast<int>(groups.size()));
   const int group_w = (w - left - right) / ng;
   const int bar_w = std::max(4, (group_w - 20) / std::max<int>(1, static_cast<int>(series.size())));
@@ -126,16 +141,17 @@ bool bar_chart(const std::filesystem::path& png, const std::string& title, const
     for (int s = 0; s < static_cast<int>(series.size()); ++s) {
       const double v = values[static_cast<std::size_t>(s)][static_cast<std::size_t>(g)];
       if (!std::isfinite(v)) continue;
-      cv::rectangle(img, {x0 + s * bar_w, y_of(v)}, {x0 + (s + 1) * bar_w - 2, y_of(lo)}, palette[s % 5], cv::FILLED);
+      cv::rectangle(img, {x0 + s * bar_w, y_of(v)}, {x0 + (s + 1) * bar_w - 2, y_of(lo)},
+                    palette[s % 5], cv::FILLED);
     }
-    cv::putText(img, groups[static_cast<std::size_t>(g)], {x0, h - bottom + 20}, cv::FONT_HERSHEY_SIMPLEX, 0.45,
-                cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+    cv::putText(img, groups[static_cast<std::size_t>(g)], {x0, h - bottom + 20},
+                cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
   }
   for (int s = 0; s < static_cast<int>(series.size()); ++s) {
     const cv::Point p(left + 150 * s, h - 20);
     cv::rectangle(img, p + cv::Point(0, -10), p + cv::Point(12, 2), palette[s % 5], cv::FILLED);
-    cv::putText(img, series[static_cast<std::size_t>(s)], p + cv::Point(16, 0), cv::FONT_HERSHEY_SIMPLEX, 0.45,
-                cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+    cv::putText(img, series[static_cast<std::size_t>(s)], p + cv::Point(16, 0),
+                cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
   }
   try {
     return cv::imwrite(png.string(), img);
@@ -152,28 +168,30 @@ std::string fmt(double v) {
 
 std::string summary_table(const EvalResult& r, const EvalConfig& c) {
   std::ostringstream s;
-  s << "| group | GT | TP | FN | FP | IDSW | Frag | MOTA | MOTP | HOTA | AssA | under-seg | over-seg |\n"
+  s << "| group | GT | TP | FN | FP | IDSW | Frag | MOTA | MOTP | HOTA | AssA | under-seg | "
+       "over-seg |\n"
     << "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   auto seg = [&](const SegCounts* k) {
     if (!r.has_segment_truth || k == nullptr) return std::string("n/a | n/a");
     return fmt(k->under_rate()) + " | " + fmt(k->over_rate());
   };
-  s << "| all | " << r.clear.gt << " | " << r.clear.tp << " | " << r.clear.fn << " | " << r.clear.fp << " | "
-    << r.clear.id_switches << " | " << r.clear.fragmentations << " | " << fmt(r.clear.mota()) << " | "
-    << fmt(r.clear.motp()) << " | " << fmt(r.hota.hota()) << " | " << fmt(r.hota.assa()) << " | "
-    << seg(&r.segmentation) << " |\n";
+  s << "| all | " << r.clear.gt << " | " << r.clear.tp << " | " << r.clear.fn << " | " << r.clear.fp
+    << " | " << r.clear.id_switches << " | " << r.clear.fragmentations << " | "
+    << fmt(r.clear.mota()) << " | " << fmt(r.clear.motp()) << " | " << fmt(r.hota.hota()) << " | "
+    << fmt(r.hota.assa()) << " | " << seg(&r.segmentation) << " |\n";
   for (const auto& [cls, k] : r.clear_by_class) {
     const auto sk = r.segmentation_by_class.find(cls);
-    s << "| " << cls << " | " << k.gt << " | " << k.tp << " | " << k.fn << " | - | " << k.id_switches << " | "
-      << k.fragmentations << " | " << fmt(k.mota()) << "* | " << fmt(k.motp()) << " | - | "
-      << fmt(r.hota_by_class.at(cls).assa()) << " | "
+    s << "| " << cls << " | " << k.gt << " | " << k.tp << " | " << k.fn << " | - | "
+      << k.id_switches << " | " << k.fragmentations << " | " << fmt(k.mota()) << "* | "
+      << fmt(k.motp()) << " | - | " << fmt(r.hota_by_class.at(cls).assa()) << " | "
       << seg(sk == r.segmentation_by_class.end() ? nullptr : &sk->second) << " |\n";
   }
   for (const auto& [b, k] : r.clear_by_band) {
     const auto sk = r.segmentation_by_band.find(b);
     const auto hk = r.hota_by_band.find(b);
-    s << "| " << band_name(b, c) << " m | " << k.gt << " | " << k.tp << " | " << k.fn << " | " << k.fp << " | "
-      << k.id_switches << " | " << k.fragmentations << " | " << fmt(k.mota()) << " | " << fmt(k.motp()) << " | "
+    s << "| " << band_name(b, c) << " m | " << k.gt << " | " << k.tp << " | " << k.fn << " | "
+      << k.fp << " | " << k.id_switches << " | " << k.fragmentations << " | " << fmt(k.mota())
+      << " | " << fmt(k.motp()) << " | "
       << (hk == r.hota_by_band.end() ? "-" : fmt(hk->second.hota())) << " | "
       << (hk == r.hota_by_band.end() ? "-" : fmt(hk->second.assa())) << " | "
       << seg(sk == r.segmentation_by_band.end() ? nullptr : &sk->second) << " |\n";
@@ -211,39 +229,45 @@ int write_report(const std::filesystem::path& dir, const EvalResult& r, const Ev
     class_values[2].push_back(seg ? sk->second.under_rate() : NAN);
     class_values[3].push_back(seg ? sk->second.over_rate() : NAN);
   }
-  const bool plots = bar_chart(dir / "range.png", "MOTA and HOTA by range band", bands, {"MOTA", "HOTA"},
-                               band_values, 0.0) &&
-                     bar_chart(dir / "classes.png", "Per class: recall, AssA, under- and over-segmentation",
-                               classes, {"recall", "AssA", "under-seg", "over-seg"}, class_values, 0.0);
+  const bool plots =
+      bar_chart(dir / "range.png", "MOTA and HOTA by range band", bands, {"MOTA", "HOTA"},
+                band_values, 0.0) &&
+      bar_chart(dir / "classes.png", "Per class: recall, AssA, under- and over-segmentation",
+                classes, {"recall", "AssA", "under-seg", "over-seg"}, class_values, 0.0);
   if (!plots) return fail(dir.string() + ": cannot write the plots");
   std::ofstream md(dir / "report.md");
   md << "# STAC evaluation\n\n"
      << "- truth: `" << o.truth << "` (" << r.truth_scans << " scans)\n"
-     << "- tracks: `" << o.tracks << "` (" << r.output_scans << " scans, " << r.paired_scans << " paired by time)\n"
-     << "- evaluated: car, pedestrian, bicyclist within " << c.max_range_m << " m of the ego with at least "
-     << c.min_points << " points; " << r.ignored_tracks
-     << " track-scans ignored (on background, unevaluated truth, or out of range); outputs: confirmed"
+     << "- tracks: `" << o.tracks << "` (" << r.output_scans << " scans, " << r.paired_scans
+     << " paired by time)\n"
+     << "- evaluated: car, pedestrian, bicyclist within " << c.max_range_m
+     << " m of the ego with at least " << c.min_points << " points; " << r.ignored_tracks
+     << " track-scans ignored (on background, unevaluated truth, or out of range); outputs: "
+        "confirmed"
      << (c.count_coasting ? " and coasting" : "") << " tracks\n"
      << "- definitions: docs/evaluation.md\n\n"
      << "## Summary\n\n"
      << "MOTA " << fmt(r.clear.mota()) << ", MOTP " << fmt(r.clear.motp()) << " (mean distance "
-     << fmt(r.clear.motp_distance_m()) << " m), HOTA " << fmt(r.hota.hota()) << " (DetA " << fmt(r.hota.deta())
-     << ", AssA " << fmt(r.hota.assa()) << ", LocA " << fmt(r.hota.loca()) << "), ID switches "
-     << r.clear.id_switches << ", fragmentations " << r.clear.fragmentations << ".\n\n";
+     << fmt(r.clear.motp_distance_m()) << " m), HOTA " << fmt(r.hota.hota()) << " (DetA "
+     << fmt(r.hota.deta()) << ", AssA " << fmt(r.hota.assa()) << ", LocA " << fmt(r.hota.loca())
+     << "), ID switches " << r.clear.id_switches << ", fragmentations " << r.clear.fragmentations
+     << ".\n\n";
   if (r.has_segment_truth) {
-    md << "Segmentation (car, pedestrian, bicyclist): under " << fmt(r.segmentation.under_rate()) << ", over "
-       << fmt(r.segmentation.over_rate()) << " of " << r.segmentation.objects << " object-scans ("
-       << r.segmentation.unsegmented << " with no segmented point).\n\n";
+    md << "Segmentation (car, pedestrian, bicyclist): under " << fmt(r.segmentation.under_rate())
+       << ", over " << fmt(r.segmentation.over_rate()) << " of " << r.segmentation.objects
+       << " object-scans (" << r.segmentation.unsegmented << " with no segmented point).\n\n";
   } else {
-    md << "Segmentation: not evaluated (the tracks file's segments carry no truth composition).\n\n";
+    md << "Segmentation: not evaluated (the tracks file's segments carry no truth "
+          "composition).\n\n";
   }
   md << summary_table(r, c) << "\n";
   if (r.has_segment_truth) {
-    md << "## Segmentation by class (background classes included)\n\n| class | object-scans | unsegmented | "
+    md << "## Segmentation by class (background classes included)\n\n| class | object-scans | "
+          "unsegmented | "
           "under | over |\n|---|---|---|---|---|\n";
     for (const auto& [cls, k] : r.segmentation_by_class) {
-      md << "| " << cls << " | " << k.objects << " | " << k.unsegmented << " | " << fmt(k.under_rate()) << " | "
-         << fmt(k.over_rate()) << " |\n";
+      md << "| " << cls << " | " << k.objects << " | " << k.unsegmented << " | "
+         << fmt(k.under_rate()) << " | " << fmt(k.over_rate()) << " |\n";
     }
     md << "\n";
   }
@@ -259,10 +283,12 @@ int run_eval(const EvalOptions& o) {
   const double total = static_cast<double>(std::filesystem::file_size(o.truth, ec)) +
                        static_cast<double>(std::filesystem::file_size(o.tracks, ec));
   Progress progress("eval: reading", ec ? 0.0 : total);
-  auto truth = read_truth_file(o.truth, [&](std::uint64_t b) { progress.update(static_cast<double>(b)); });
+  auto truth =
+      read_truth_file(o.truth, [&](std::uint64_t b) { progress.update(static_cast<double>(b)); });
   if (!truth) return fail(truth.error().message);
   double done = ec ? 0.0 : static_cast<double>(std::filesystem::file_size(o.truth, ec));
-  auto tracks = read_tracks_file(o.tracks, [&](std::uint64_t b) { progress.update(done + static_cast<double>(b)); });
+  auto tracks = read_tracks_file(
+      o.tracks, [&](std::uint64_t b) { progress.update(done + static_cast<double>(b)); });
   if (!tracks) return fail(tracks.error().message);
   progress.finish();
   if (truth->empty()) return fail(o.truth + ": no scans");
@@ -272,7 +298,8 @@ int run_eval(const EvalOptions& o) {
                 " by time: are they from the same run?");
   }
   std::printf("stac eval: %llu scans paired (truth %llu, output %llu)\n",
-              static_cast<unsigned long long>(r.paired_scans), static_cast<unsigned long long>(r.truth_scans),
+              static_cast<unsigned long long>(r.paired_scans),
+              static_cast<unsigned long long>(r.truth_scans),
               static_cast<unsigned long long>(r.output_scans));
   std::printf("%s", summary_table(r, c).c_str());
   if (!o.report.empty()) {
@@ -287,33 +314,46 @@ int run_eval(const EvalOptions& o) {
 void add_eval_command(CLI::App& app) {
   auto o = std::make_shared<EvalOptions>();
   CLI::App* cmd = app.add_subcommand(
-      "eval", "Segmentation and tracking metrics (CLEAR MOT, HOTA) of a tracks file against the truth");
-  cmd->add_option("--truth", o->truth, "truth JSON lines written by `stac sim --truth` (required without --classes)")
+      "eval",
+      "Segmentation and tracking metrics (CLEAR MOT, HOTA) of a tracks file against the truth");
+  cmd->add_option("--truth", o->truth,
+                  "truth JSON lines written by `stac sim --truth` (required without --classes)")
       ->check(CLI::ExistingFile);
-  cmd->add_option("--tracks", o->tracks,
-                  "tracks JSON lines written by `stac process --tracks` (required without --classes)")
+  cmd->add_option(
+         "--tracks", o->tracks,
+         "tracks JSON lines written by `stac process --tracks` (required without --classes)")
       ->check(CLI::ExistingFile);
-  cmd->add_flag("--classes", o->classes,
-                "classification instead (thesis Table 1.2): needs --data and --model, not --truth/--tracks");
-  cmd->add_option("--data", o->class_options.data, "with --classes: a `stac dataset` folder (repeatable)");
-  cmd->add_option("--model", o->class_options.model, "with --classes: the model file of `stac train`");
+  cmd->add_flag(
+      "--classes", o->classes,
+      "classification instead (thesis Table 1.2): needs --data and --model, not --truth/--tracks");
+  cmd->add_option("--data", o->class_options.data,
+                  "with --classes: a `stac dataset` folder (repeatable)");
+  cmd->add_option("--model", o->class_options.model,
+                  "with --classes: the model file of `stac train`");
   cmd->add_option("--report", o->report, "folder for report.md, metrics.json and the plots");
-  cmd->add_option("--max-range", o->config.max_range_m, "evaluate truth objects within this range of the ego (m)")
+  cmd->add_option("--max-range", o->config.max_range_m,
+                  "evaluate truth objects within this range of the ego (m)")
       ->capture_default_str();
-  cmd->add_option("--min-points", o->config.min_points, "evaluate truth objects with at least this many points")
+  cmd->add_option("--min-points", o->config.min_points,
+                  "evaluate truth objects with at least this many points")
       ->capture_default_str();
   cmd->add_flag("--with-coasting", o->config.count_coasting,
                 "count coasting tracks (predicted, not updated in the scan) as outputs too");
-  cmd->footer("Metric definitions: docs/evaluation.md.\nExample:\n"
-              "  stac eval --truth run.truth.jsonl --tracks run.tracks.jsonl --report eval/\n"
-              "  stac eval --classes --data test/ --model model.stac --report cls/  # classification");
+  cmd->footer(
+      "Metric definitions: docs/evaluation.md.\nExample:\n"
+      "  stac eval --truth run.truth.jsonl --tracks run.tracks.jsonl --report eval/\n"
+      "  stac eval --classes --data test/ --model model.stac --report cls/  # classification");
   cmd->callback([o] {
     int code = 0;
     if (o->classes) {
       if (!o->truth.empty() || !o->tracks.empty()) {
-        code = fail("--classes evaluates a classifier on --data and --model; --truth/--tracks are for tracking");
+        code = fail(
+            "--classes evaluates a classifier on --data and --model; --truth/--tracks are for "
+            "tracking");
       } else if (o->class_options.data.empty() || o->class_options.model.empty()) {
-        code = fail("--classes needs --data DIR (a `stac dataset` folder) and --model MODEL (`stac train --out`)");
+        code = fail(
+            "--classes needs --data DIR (a `stac dataset` folder) and --model MODEL (`stac train "
+            "--out`)");
       } else {
         o->class_options.report = o->report;
         code = run_class_eval(o->class_options);

@@ -14,9 +14,13 @@ constexpr double kEps = 1e-9;
 constexpr double kMatchSimilarity = 0.5;  // CLEAR MOT: d <= zero_distance / 2
 constexpr double kBackgroundMargin_m = 0.5;
 
-double alpha(int a) { return 0.05 * (a + 1); }
+double alpha(int a) {
+  return 0.05 * (a + 1);
+}
 
-double range_of(double x, double y, const EgoRecord& ego) { return std::hypot(x - ego.x, y - ego.y); }
+double range_of(double x, double y, const EgoRecord& ego) {
+  return std::hypot(x - ego.x, y - ego.y);
+}
 
 bool inside_box_xy(const TruthObjectRecord& o, double x, double y, double margin) {
   const double c = std::cos(o.yaw), s = std::sin(o.yaw);
@@ -100,7 +104,8 @@ void segmentation_of_scan(const TruthScanRecord& truth, const TracksScan& out, c
       for (const auto& [id, m] : out.segments[s].truth) {
         if (id >= 0 && id != static_cast<std::int64_t>(o.id)) foreign += m;
       }
-      if (foreign >= c.under_min_points && static_cast<double>(foreign) > c.foreign_share * n) under = true;
+      if (foreign >= c.under_min_points && static_cast<double>(foreign) > c.foreign_share * n)
+        under = true;
     }
     for (SegCounts* k : counts) {
       if (k == nullptr) continue;
@@ -118,11 +123,18 @@ bool is_tracked_class(const EvalConfig& config, const std::string& cls) {
 }
 
 double ClearCounts::mota() const {
-  return 1.0 - static_cast<double>(fn + fp + id_switches) / static_cast<double>(std::max<std::uint64_t>(1, gt));
+  return 1.0 - static_cast<double>(fn + fp + id_switches) /
+                   static_cast<double>(std::max<std::uint64_t>(1, gt));
 }
-double ClearCounts::motp() const { return tp == 0 ? 0.0 : similarity_sum / static_cast<double>(tp); }
-double ClearCounts::motp_distance_m() const { return tp == 0 ? 0.0 : distance_sum_m / static_cast<double>(tp); }
-double ClearCounts::recall() const { return gt == 0 ? 0.0 : static_cast<double>(tp) / static_cast<double>(gt); }
+double ClearCounts::motp() const {
+  return tp == 0 ? 0.0 : similarity_sum / static_cast<double>(tp);
+}
+double ClearCounts::motp_distance_m() const {
+  return tp == 0 ? 0.0 : distance_sum_m / static_cast<double>(tp);
+}
+double ClearCounts::recall() const {
+  return gt == 0 ? 0.0 : static_cast<double>(tp) / static_cast<double>(gt);
+}
 
 double HotaCounts::deta() const {
   double sum = 0;
@@ -160,8 +172,8 @@ double SegCounts::under_rate() const {
   return objects == 0 ? 0.0 : static_cast<double>(under) / static_cast<double>(objects);
 }
 
-EvalResult evaluate(const std::vector<TruthScanRecord>& truth_in, const std::vector<TracksScan>& tracks_in,
-                    const EvalConfig& c) {
+EvalResult evaluate(const std::vector<TruthScanRecord>& truth_in,
+                    const std::vector<TracksScan>& tracks_in, const EvalConfig& c) {
   EvalResult r;
   r.truth_scans = truth_in.size();
   r.output_scans = tracks_in.size();
@@ -172,7 +184,8 @@ EvalResult evaluate(const std::vector<TruthScanRecord>& truth_in, const std::vec
   std::sort(truth.begin(), truth.end(), [](auto* a, auto* b) { return a->stamp_ns < b->stamp_ns; });
   std::vector<const TracksScan*> outputs;
   for (const auto& o : tracks_in) outputs.push_back(&o);
-  std::stable_sort(outputs.begin(), outputs.end(), [](auto* a, auto* b) { return a->stamp_ns < b->stamp_ns; });
+  std::stable_sort(outputs.begin(), outputs.end(),
+                   [](auto* a, auto* b) { return a->stamp_ns < b->stamp_ns; });
   const auto tolerance_ns = static_cast<std::int64_t>(c.max_time_offset_s * 1e9);
   std::vector<std::pair<const TruthScanRecord*, const TracksScan*>> pairs;
   const TruthScanRecord* last_used = nullptr;
@@ -183,7 +196,9 @@ EvalResult evaluate(const std::vector<TruthScanRecord>& truth_in, const std::vec
     for (auto cand : {it, it == truth.begin() ? truth.end() : it - 1}) {
       if (cand == truth.end()) continue;
       const std::int64_t off = std::llabs((*cand)->stamp_ns - o->stamp_ns);
-      if (off <= tolerance_ns && (best == nullptr || off < std::llabs(best->stamp_ns - o->stamp_ns))) best = *cand;
+      if (off <= tolerance_ns &&
+          (best == nullptr || off < std::llabs(best->stamp_ns - o->stamp_ns)))
+        best = *cand;
     }
     if (best == nullptr || best == last_used) continue;  // no truth, or a duplicate output scan
     last_used = best;
@@ -214,7 +229,8 @@ EvalResult evaluate(const std::vector<TruthScanRecord>& truth_in, const std::vec
     }
     std::vector<const TrackRecord*> cands;
     for (const TrackRecord& t : os->tracks) {
-      if (t.state == "confirmed" || (c.count_coasting && t.state == "coasting")) cands.push_back(&t);
+      if (t.state == "confirmed" || (c.count_coasting && t.state == "coasting"))
+        cands.push_back(&t);
     }
     auto similarity = [&](const TruthObjectRecord& g, const TrackRecord& t, double* d_out) {
       const double d = std::hypot(g.x - t.x, g.y - t.y);
@@ -239,13 +255,16 @@ EvalResult evaluate(const std::vector<TruthScanRecord>& truth_in, const std::vec
     for (std::size_t i = 0; i < cands.size(); ++i) {
       const TrackRecord& t = *cands[i];
       if (pre[i] >= 0) {
-        if (static_cast<std::size_t>(pre[i]) < evaluated) kept.push_back(&t);
-        else ++r.ignored_tracks;  // on a distractor
+        if (static_cast<std::size_t>(pre[i]) < evaluated)
+          kept.push_back(&t);
+        else
+          ++r.ignored_tracks;  // on a distractor
         continue;
       }
       bool ignore = range_of(t.x, t.y, ts->ego) > c.max_range_m;
       for (const TruthObjectRecord& o : ts->objects) {
-        if (!is_tracked_class(c, o.cls) && inside_box_xy(o, t.x, t.y, kBackgroundMargin_m)) ignore = true;
+        if (!is_tracked_class(c, o.cls) && inside_box_xy(o, t.x, t.y, kBackgroundMargin_m))
+          ignore = true;
       }
       if (const auto s = segment_by_id.find(static_cast<std::uint32_t>(t.segment));
           t.segment >= 0 && s != segment_by_id.end() && !s->second->truth.empty()) {
@@ -254,23 +273,28 @@ EvalResult evaluate(const std::vector<TruthScanRecord>& truth_in, const std::vec
         const auto o = by_id.find(major->first);
         if (o != by_id.end()) {
           const auto g = std::find(gts.begin(), gts.end(), o->second);
-          const bool evaluated_gt = g != gts.end() && static_cast<std::size_t>(g - gts.begin()) < evaluated;
+          const bool evaluated_gt =
+              g != gts.end() && static_cast<std::size_t>(g - gts.begin()) < evaluated;
           if (!evaluated_gt) ignore = true;  // mostly background or an unevaluated object
         }
       }
-      if (ignore) ++r.ignored_tracks;
-      else kept.push_back(&t);
+      if (ignore)
+        ++r.ignored_tracks;
+      else
+        kept.push_back(&t);
     }
 
     Frame f;
     for (std::size_t j = 0; j < evaluated; ++j) {
-      const auto [it, fresh] = gt_index.try_emplace(gts[j]->id, static_cast<std::uint32_t>(gt_index.size()));
+      const auto [it, fresh] =
+          gt_index.try_emplace(gts[j]->id, static_cast<std::uint32_t>(gt_index.size()));
       f.gt.push_back(it->second);
       f.gt_class.push_back(gts[j]->cls);
       f.gt_band.push_back(band_of(range_of(gts[j]->x, gts[j]->y, ts->ego), c));
     }
     for (const TrackRecord* t : kept) {
-      const auto [it, fresh] = trk_index.try_emplace(t->id, static_cast<std::uint32_t>(trk_index.size()));
+      const auto [it, fresh] =
+          trk_index.try_emplace(t->id, static_cast<std::uint32_t>(trk_index.size()));
       f.trk.push_back(it->second);
       f.trk_band.push_back(band_of(range_of(t->x, t->y, ts->ego), c));
     }
@@ -306,7 +330,8 @@ EvalResult evaluate(const std::vector<TruthScanRecord>& truth_in, const std::vec
     for (std::size_t j = 0; j < ng; ++j) {
       for (std::size_t i = 0; i < nt; ++i) {
         score[j * nt + i] = f.sim[j * nt + i];
-        allowed[j * nt + i] = match[j] < 0 && !trk_taken[i] && f.sim[j * nt + i] >= kMatchSimilarity - kEps;
+        allowed[j * nt + i] =
+            match[j] < 0 && !trk_taken[i] && f.sim[j * nt + i] >= kMatchSimilarity - kEps;
       }
     }
     const std::vector<int> fresh = matcher.maximise(score, allowed, ng, nt);
@@ -314,7 +339,8 @@ EvalResult evaluate(const std::vector<TruthScanRecord>& truth_in, const std::vec
     for (std::size_t j = 0; j < ng; ++j) {
       if (match[j] < 0) match[j] = fresh[j];
       const std::uint32_t g = f.gt[j];
-      ClearCounts* counts[3] = {&r.clear, &r.clear_by_class[f.gt_class[j]], &r.clear_by_band[f.gt_band[j]]};
+      ClearCounts* counts[3] = {&r.clear, &r.clear_by_class[f.gt_class[j]],
+                                &r.clear_by_band[f.gt_band[j]]};
       for (ClearCounts* k : counts) ++k->gt;
       if (match[j] < 0) {
         for (ClearCounts* k : counts) ++k->fn;
@@ -394,8 +420,10 @@ EvalResult evaluate(const std::vector<TruthScanRecord>& truth_in, const std::vec
     for (int a = 0; a < kHotaAlphas; ++a) {
       std::vector<bool> trk_matched(nt, false);
       for (std::size_t j = 0; j < ng; ++j) {
-        const bool hit = m[j] >= 0 && f.sim[j * nt + static_cast<std::size_t>(m[j])] >= alpha(a) - kEps;
-        HotaCounts* counts[3] = {&r.hota, &r.hota_by_class[f.gt_class[j]], &r.hota_by_band[f.gt_band[j]]};
+        const bool hit =
+            m[j] >= 0 && f.sim[j * nt + static_cast<std::size_t>(m[j])] >= alpha(a) - kEps;
+        HotaCounts* counts[3] = {&r.hota, &r.hota_by_class[f.gt_class[j]],
+                                 &r.hota_by_band[f.gt_band[j]]};
         if (!hit) {
           for (HotaCounts* k : counts) ++k->fn[a];
           continue;

@@ -13,9 +13,9 @@
 namespace stac::tools {
 
 struct EvalConfig {
-  double max_range_m = 50.0;      // truth objects farther from the ego (x,y) are not evaluated
-  std::uint32_t min_points = 20;  // truth objects with fewer returns are not evaluated
-  double range_band_m = 10.0;     // width of the range bands of the breakdown
+  double max_range_m = 50.0;         // truth objects farther from the ego (x,y) are not evaluated
+  std::uint32_t min_points = 20;     // truth objects with fewer returns are not evaluated
+  double range_band_m = 10.0;        // width of the range bands of the breakdown
   double max_time_offset_s = 0.001;  // a truth scan and an output scan pair when this close
   // Outputs are confirmed tracks (updated in the scan); coasting ones (predictions) only when set.
   bool count_coasting = false;
@@ -28,7 +28,8 @@ struct EvalConfig {
   std::uint32_t under_min_points = 3;
   // Tracking similarity s = max(0, 1 - d / zero_distance(class)), d = x,y centre distance (m).
   // CLEAR MOT matches need s >= 0.5, i.e. d <= zero_distance / 2.
-  std::map<std::string, double> zero_distance_m = {{"car", 4.0}, {"pedestrian", 2.0}, {"bicyclist", 3.0}};
+  std::map<std::string, double> zero_distance_m = {
+      {"car", 4.0}, {"pedestrian", 2.0}, {"bicyclist", 3.0}};
 };
 
 // Classes tracking is evaluated on (zero_distance_m's keys); the rest is background.
@@ -37,8 +38,8 @@ bool is_tracked_class(const EvalConfig& config, const std::string& cls);
 struct ClearCounts {
   std::uint64_t gt = 0, tp = 0, fn = 0, fp = 0, id_switches = 0, fragmentations = 0;
   double similarity_sum = 0, distance_sum_m = 0;
-  [[nodiscard]] double mota() const;           // 1 - (fn + fp + idsw) / gt (gt = 0: 1 if no errors)
-  [[nodiscard]] double motp() const;           // mean similarity of matches (0 when none)
+  [[nodiscard]] double mota() const;  // 1 - (fn + fp + idsw) / gt (gt = 0: 1 if no errors)
+  [[nodiscard]] double motp() const;  // mean similarity of matches (0 when none)
   [[nodiscard]] double motp_distance_m() const;
   [[nodiscard]] double recall() const;
 };
@@ -55,7 +56,7 @@ struct HotaCounts {
 };
 
 struct SegCounts {
-  std::uint64_t objects = 0;     // evaluated object-scans with at least one segmented point
+  std::uint64_t objects = 0;      // evaluated object-scans with at least one segmented point
   std::uint64_t unsegmented = 0;  // evaluated object-scans with none (not in a rate)
   std::uint64_t over = 0, under = 0;
   [[nodiscard]] double over_rate() const;
@@ -68,16 +69,16 @@ struct EvalResult {
   bool has_segment_truth = false;    // segments carried truth compositions
   ClearCounts clear;                 // tracked classes
   HotaCounts hota;
-  SegCounts segmentation;            // tracked classes
-  std::map<std::string, ClearCounts> clear_by_class;  // fp unattributed (tracks have no class)
-  std::map<std::string, HotaCounts> hota_by_class;    // fp unattributed
+  SegCounts segmentation;                                  // tracked classes
+  std::map<std::string, ClearCounts> clear_by_class;       // fp unattributed (tracks have no class)
+  std::map<std::string, HotaCounts> hota_by_class;         // fp unattributed
   std::map<std::string, SegCounts> segmentation_by_class;  // every class, background included
   std::map<int, ClearCounts> clear_by_band;  // band index b: [b * range_band_m, (b + 1) * ...)
   std::map<int, HotaCounts> hota_by_band;
   std::map<int, SegCounts> segmentation_by_band;  // tracked classes
 };
 
-EvalResult evaluate(const std::vector<TruthScanRecord>& truth, const std::vector<TracksScan>& tracks,
-                    const EvalConfig& config);
+EvalResult evaluate(const std::vector<TruthScanRecord>& truth,
+                    const std::vector<TracksScan>& tracks, const EvalConfig& config);
 
 }  // namespace stac::tools

@@ -18,12 +18,12 @@ rt::Result<Eigen::Isometry3d> load_kitti_rect_T_velo(const std::string& calib_pa
 
 // One object of a label_2 file (camera coordinates: x right, y down, z forward).
 struct KittiObject {
-  std::string type;              // Car, Van, Truck, Pedestrian, Person_sitting, Cyclist, Tram, Misc
-  double truncated = 0;          // 0..1
-  int occluded = 0;              // 0 visible, 1 partly, 2 largely occluded, 3 unknown
-  double height = 0, width = 0, length = 0;  // m
+  std::string type;      // Car, Van, Truck, Pedestrian, Person_sitting, Cyclist, Tram, Misc
+  double truncated = 0;  // 0..1
+  int occluded = 0;      // 0 visible, 1 partly, 2 largely occluded, 3 unknown
+  double height = 0, width = 0, length = 0;                 // m
   Eigen::Vector3d bottom_centre = Eigen::Vector3d::Zero();  // rectified camera frame (m)
-  double rotation_y = 0;         // rad, about the camera's y axis
+  double rotation_y = 0;                                    // rad, about the camera's y axis
   // Whether a point of the rectified camera frame lies in the box grown by `margin` (m).
   [[nodiscard]] bool contains(const Eigen::Vector3d& p_rect, double margin) const noexcept;
 };

@@ -3,14 +3,13 @@
 // segment holding most of its obstacle points, mostly its own) and what was it classified as
 // (the segment classifier alone, and the ADBF after that one segment, as a track's first update
 // would be). Single frames: no motion, so the holistic evidence is that of a standing object.
-#include <nlohmann/json.hpp>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -36,11 +35,11 @@ struct ObjectResult {
   std::string frame, type;
   int occluded = 0;
   double range_m = 0;
-  std::uint32_t points = 0;           // scan points in its box
-  std::uint32_t segment_points = 0;   // of those, points in some segment
-  std::uint32_t best_inside = 0;      // the best segment's points in the box
-  std::uint32_t best_size = 0;        // the best segment's points
-  std::string status;                 // segmented, under-segmented, over-segmented, missed, no points
+  std::uint32_t points = 0;          // scan points in its box
+  std::uint32_t segment_points = 0;  // of those, points in some segment
+  std::uint32_t best_inside = 0;     // the best segment's points in the box
+  std::uint32_t best_size = 0;       // the best segment's points
+  std::string status;  // segmented, under-segmented, over-segmented, missed, no points
   std::string segment_class = "-", track_class = "-";
   classification::LogOdds track_log_odds{};
 };
@@ -56,7 +55,7 @@ const char* expected_class(const std::string& type) {
 std::string status_of(const ObjectResult& r) {
   if (r.points == 0) return "no points";
   if (r.segment_points == 0) return "missed";
-  if (2 * r.best_inside < r.best_size) return "under-segmented";  // mostly something else
+  if (2 * r.best_inside < r.best_size) return "under-segmented";      // mostly something else
   if (2 * r.best_inside < r.segment_points) return "over-segmented";  // split in several
   return "segmented";
 }
@@ -89,8 +88,9 @@ int run_kitti_objects(const KittiObjectsOptions& o) {
     if (e.path().extension() == ".bin") frames.push_back(e.path().stem().string());
   }
   if (ec || frames.empty()) {
-    return fail(o.dir + ": no velodyne/*.bin (a KITTI object folder has velodyne/, calib/, "
-                        "label_2/)");
+    return fail(o.dir +
+                ": no velodyne/*.bin (a KITTI object folder has velodyne/, calib/, "
+                "label_2/)");
   }
   std::sort(frames.begin(), frames.end());
 
@@ -127,14 +127,15 @@ int run_kitti_objects(const KittiObjectsOptions& o) {
     segmenter.segment({v.data(), n, 16}, segments);
     std::vector<int> owner(n, -1);
     for (std::size_t s = 0; s < segments.segments.size(); ++s)
-      for (const std::uint32_t p : segments.indices(segments.segments[s])) owner[p] = static_cast<int>(s);
+      for (const std::uint32_t p : segments.indices(segments.segments[s]))
+        owner[p] = static_cast<int>(s);
     std::vector<Eigen::Vector3d> rect(n);
     for (std::size_t i = 0; i < n; ++i)
       rect[i] = *rect_T_velo * Eigen::Vector3d(v[4 * i], v[4 * i + 1], v[4 * i + 2]);
     const Eigen::Isometry3d velo_T_rect = rect_T_velo->inverse();
 
-    BirdsEye picture(BirdsEyeOptions{.range_m = o.max_range_m + 5, .size_px = 1000,
-                                     .height_bar = false});
+    BirdsEye picture(
+        BirdsEyeOptions{.range_m = o.max_range_m + 5, .size_px = 1000, .height_bar = false});
     for (std::size_t i = 0; i < n; ++i) {
       picture.add_point(v[4 * i], v[4 * i + 1],
                         owner[i] < 0 ? cv::Vec3b(80, 80, 80) : cv::Vec3b(200, 200, 200));
@@ -186,7 +187,7 @@ int run_kitti_objects(const KittiObjectsOptions& o) {
       }
       r.status = status_of(r);
       const double yaw = -obj.rotation_y - M_PI / 2;  // about the velodyne's z
-      const cv::Scalar colour = r.status == "segmented" ? cv::Scalar(80, 220, 80)
+      const cv::Scalar colour = r.status == "segmented"   ? cv::Scalar(80, 220, 80)
                                 : r.status == "no points" ? cv::Scalar(120, 120, 120)
                                                           : cv::Scalar(60, 60, 240);
       picture.add_box(static_cast<float>(c.x()), static_cast<float>(c.y()),
@@ -214,9 +215,9 @@ int run_kitti_objects(const KittiObjectsOptions& o) {
   std::printf("%-7s %-15s %5s %6s %4s %6s %-15s %-11s %-11s\n", "frame", "type", "range", "points",
               "occl", "in seg", "status", "segment", "track");
   for (const ObjectResult& r : results) {
-    std::printf("%-7s %-15s %5.1f %6u %4d %6u %-15s %-11s %-11s\n", r.frame.c_str(),
-                r.type.c_str(), r.range_m, r.points, r.occluded, r.segment_points,
-                r.status.c_str(), r.segment_class.c_str(), r.track_class.c_str());
+    std::printf("%-7s %-15s %5.1f %6u %4d %6u %-15s %-11s %-11s\n", r.frame.c_str(), r.type.c_str(),
+                r.range_m, r.points, r.occluded, r.segment_points, r.status.c_str(),
+                r.segment_class.c_str(), r.track_class.c_str());
   }
   struct Tally {
     int objects = 0, segmented = 0, with_points = 0, segment_right = 0, track_right = 0;
@@ -259,10 +260,10 @@ int run_kitti_objects(const KittiObjectsOptions& o) {
     for (const ObjectResult& r : results) {
       char line[512];
       std::snprintf(line, sizeof(line), "%s,%s,%s,%.2f,%d,%u,%u,%u,%u,%s,%s,%s,%.3f,%.3f,%.3f\n",
-                    r.frame.c_str(), r.type.c_str(), expected_class(r.type), r.range_m,
-                    r.occluded, r.points, r.segment_points, r.best_inside, r.best_size,
-                    r.status.c_str(), r.segment_class.c_str(), r.track_class.c_str(),
-                    r.track_log_odds[0], r.track_log_odds[1], r.track_log_odds[2]);
+                    r.frame.c_str(), r.type.c_str(), expected_class(r.type), r.range_m, r.occluded,
+                    r.points, r.segment_points, r.best_inside, r.best_size, r.status.c_str(),
+                    r.segment_class.c_str(), r.track_class.c_str(), r.track_log_odds[0],
+                    r.track_log_odds[1], r.track_log_odds[2]);
       csv << line;
     }
     std::ofstream js(report / "metrics.json");
@@ -288,8 +289,11 @@ void add_kitti_objects_command(CLI::App& app) {
       "model's segment classifier and by the ADBF as a track's first update (single frames: no\n"
       "motion). Prints a table per object and per KITTI type; --report writes objects.csv,\n"
       "metrics.json and a picture from above per frame (docs/classification.md).");
-  cmd->add_option("--dir", o->dir, "KITTI object folder")->required()->check(CLI::ExistingDirectory);
-  cmd->add_option("--config", o->config, "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
+  cmd->add_option("--dir", o->dir, "KITTI object folder")
+      ->required()
+      ->check(CLI::ExistingDirectory);
+  cmd->add_option("--config", o->config,
+                  "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
   cmd->add_option("--model", o->model, "track classifier model (default: classification.model)");
   cmd->add_option("--max-range", o->max_range_m, "objects within this range of the sensor (m)")
       ->check(CLI::PositiveNumber);

@@ -25,7 +25,8 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.footer(
       "Examples:\n"
-      "  stac demo                                   # a simulated drive, live over loopback to DDS\n"
+      "  stac demo                                   # a simulated drive, live over loopback to "
+      "DDS\n"
       "  stac decode --calib db.xml --in run.pcap --out run.csv\n"
       "  stac decode --calib db.xml --in run.pcap --out scans/ --format kitti\n"
       "  stac record --out live.pcap --duration 10   # capture the sensor's UDP stream\n"

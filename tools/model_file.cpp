@@ -64,7 +64,7 @@ rt::Result<classification::TrackClassifierModel> read_model_file(
 
 rt::Result<std::shared_ptr<const classification::TrackClassifierModel>> job_model(
     const std::string& option, const std::filesystem::path& configured) {
-  const std::filesystem::path path = option.empty() ? configured
+  const std::filesystem::path path = option.empty()     ? configured
                                      : option == "none" ? std::filesystem::path{}
                                                         : std::filesystem::path(option);
   if (path.empty()) return std::shared_ptr<const classification::TrackClassifierModel>{};

@@ -74,12 +74,15 @@ struct Stage {
 };
 
 void print_stats(const std::vector<Stage>& stages) {
-  std::fprintf(stderr, "  %-17s %9s %9s %9s   (CPU ms per scan, one core)\n", "stage", "median", "p99", "max");
+  std::fprintf(stderr, "  %-17s %9s %9s %9s   (CPU ms per scan, one core)\n", "stage", "median",
+               "p99", "max");
   for (const Stage& s : stages) {
     if (s.ms.empty()) continue;
     std::vector<double> v = s.ms;
     std::sort(v.begin(), v.end());
-    const auto at = [&](double q) { return v[std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size())))]; };
+    const auto at = [&](double q) {
+      return v[std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size())))];
+    };
     std::fprintf(stderr, "  %-17s %9.3f %9.3f %9.3f\n", s.name, at(0.5), at(0.99), v.back());
   }
 }
@@ -90,7 +93,8 @@ int run_process(const ProcessOptions& o) {
   if (!settings) return fail(settings.error().message);
   VelodyneSettings& vs = settings->velodyne;
   EgoSettings& ego_settings = settings->ego;
-  if (!o.calib.empty()) vs.calibration = o.calib == "stream" ? std::filesystem::path{} : std::filesystem::path(o.calib);
+  if (!o.calib.empty())
+    vs.calibration = o.calib == "stream" ? std::filesystem::path{} : std::filesystem::path(o.calib);
   auto calibration = capture_calibration(vs.calibration, o.in, vs.port, vs.assembler.decoder.model);
   if (!calibration) return fail(calibration.error().message);
 
@@ -117,7 +121,8 @@ int run_process(const ProcessOptions& o) {
     poses = std::move(*p);
   }
 
-  auto reader = io::PcapReader::open(o.in, io::PcapFilter{.udp_dst_port = vs.port, .udp_src_port = {}});
+  auto reader =
+      io::PcapReader::open(o.in, io::PcapFilter{.udp_dst_port = vs.port, .udp_src_port = {}});
   if (!reader) return fail(reader.error().message);
   auto model = job_model(o.model, settings->classification.model);
   if (!model) return fail(model.error().message);
@@ -135,7 +140,8 @@ int run_process(const ProcessOptions& o) {
     auto ds = load_dds_settings(config);
     if (!ds) return fail(ds.error().message);
     if (o.domain >= 0) ds->domain_id = static_cast<std::uint32_t>(o.domain);
-    if (o.point_cloud_stride >= 0) ds->point_cloud_stride = static_cast<std::uint32_t>(o.point_cloud_stride);
+    if (o.point_cloud_stride >= 0)
+      ds->point_cloud_stride = static_cast<std::uint32_t>(o.point_cloud_stride);
     dds_settings = std::move(*ds);
     pc.cloud_stride = dds_settings->point_cloud_stride;  // as stac run publishes the cloud
     pc.publish_tentative = dds_settings->tentative_tracks;
@@ -154,9 +160,9 @@ int run_process(const ProcessOptions& o) {
   // seg+track: the two stages of issue 5's per-scan budget, summed per scan.
   // classify: the tracks stac run publishes (before publication there); classify_deferred: the
   // others and the tracks' accumulated clouds (after it).
-  std::vector<Stage> stages{{"decode", {}},   {"deskew", {}},   {"segment", {}},
-                            {"track", {}},    {"seg+track", {}}, {"classify", {}},
-                            {"classify_deferred", {}}, {"total", {}}};
+  std::vector<Stage> stages{
+      {"decode", {}},    {"deskew", {}},   {"segment", {}},           {"track", {}},
+      {"seg+track", {}}, {"classify", {}}, {"classify_deferred", {}}, {"total", {}}};
   std::uint64_t scans = 0, truth_matched = 0;
   std::size_t truth_next = 0;
   std::string line;
@@ -168,7 +174,8 @@ int run_process(const ProcessOptions& o) {
     pipeline.finish_scan(scan);
     const std::int64_t finish_ns = cpu_ns() - finish_start;
     // Offline nothing waits: every track's class after both steps (the tentative ones too).
-    if (pipeline.classifier() != nullptr) pipeline.classifier()->report(result.tracked, result.classes);
+    if (pipeline.classifier() != nullptr)
+      pipeline.classifier()->report(result.tracked, result.classes);
     const std::int64_t* ns = result.stage_ns;
     stages[0].ms.push_back(static_cast<double>(decode_ns) * 1e-6);
     stages[1].ms.push_back(static_cast<double>(ns[pipeline::kDeskew]) * 1e-6);
@@ -219,8 +226,7 @@ int run_process(const ProcessOptions& o) {
     }
     if (!truth.empty()) {
       if (const TruthScanRecord* ts = nearest_truth_scan(truth, truth_next, result.stamp_ns)) {
-        truth_composition(*ts, scan, result.segments, result.world_T_sensor,
-                          rec.segments);
+        truth_composition(*ts, scan, result.segments, result.world_T_sensor, rec.segments);
         ++truth_matched;
       }
     }
@@ -254,10 +260,11 @@ int run_process(const ProcessOptions& o) {
   progress.finish();
   out.close();
   if (!out) return fail(o.tracks + ": write failed");
-  if (!reader->error().empty()) std::fprintf(stderr, "stac process: warning: %s\n", reader->error().c_str());
+  if (!reader->error().empty())
+    std::fprintf(stderr, "stac process: warning: %s\n", reader->error().c_str());
 
-  std::fprintf(stderr, "stac process: %s -> %s: %llu complete scans\n", o.in.c_str(), o.tracks.c_str(),
-               static_cast<unsigned long long>(scans));
+  std::fprintf(stderr, "stac process: %s -> %s: %llu complete scans\n", o.in.c_str(),
+               o.tracks.c_str(), static_cast<unsigned long long>(scans));
   const velodyne::AssemblerCounters& ac = stream.assembler().counters();
   std::fprintf(stderr, "  capture     %s\n  dropped     %s\n",
                capture_frames_summary(reader->counters(), ac.packets, vs.port).c_str(),
@@ -289,8 +296,10 @@ int run_process(const ProcessOptions& o) {
                static_cast<unsigned long long>(tc.pool_overflow),
                static_cast<unsigned long long>(tc.dropped_detections));
   if (!truth.empty()) {
-    std::fprintf(stderr, "  truth       %llu of %llu scans matched to a truth scan (segment composition written)\n",
-                 static_cast<unsigned long long>(truth_matched), static_cast<unsigned long long>(scans));
+    std::fprintf(
+        stderr,
+        "  truth       %llu of %llu scans matched to a truth scan (segment composition written)\n",
+        static_cast<unsigned long long>(truth_matched), static_cast<unsigned long long>(scans));
   }
   if (dds_out) {
     std::fprintf(
@@ -308,11 +317,13 @@ int run_process(const ProcessOptions& o) {
 
 void add_process_command(CLI::App& app) {
   auto o = std::make_shared<ProcessOptions>();
-  CLI::App* cmd = app.add_subcommand("process", "Run a capture through decode, deskew, segmentation and tracking");
+  CLI::App* cmd = app.add_subcommand(
+      "process", "Run a capture through decode, deskew, segmentation and tracking");
   cmd->description(
       "Runs a capture through the per-scan pipeline as fast as possible, deterministically:\n"
       "decode -> deskew (with the capture's Applanix INS stream, when it has one) -> segment ->\n"
-      "track -> classify (with a model), and writes one JSON line per scan (segments and tracks in the world frame,\n"
+      "track -> classify (with a model), and writes one JSON line per scan (segments and tracks in "
+      "the world frame,\n"
       "docs/evaluation.md). With --truth (a `stac sim` truth file) each segment also says which\n"
       "truth objects its points fall in, for `stac eval`. Prints CPU time per stage at the end.");
   cmd->add_option("capture", o->in, "pcap capture (HDL-64E UDP, optionally the POS LV stream)")
@@ -321,17 +332,21 @@ void add_process_command(CLI::App& app) {
   cmd->add_option("--tracks", o->tracks, "output: the tracks file (JSON lines)")->required();
   cmd->add_option("--truth", o->truth, "truth file of a simulated drive (adds segment composition)")
       ->check(CLI::ExistingFile);
-  cmd->add_option("--config", o->config, "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
+  cmd->add_option("--config", o->config,
+                  "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
   cmd->add_option("--calib", o->calib, "calibration file or 'stream' (default: the config's)");
-  cmd->add_option("--origin", o->origin,
-                  "LAT,LON,ALT of the world frame (default: the truth's, else the config's ego.origin)");
-  cmd->add_flag("--no-deskew", o->no_deskew, "ignore the INS stream: no deskew, sensor frame = world");
+  cmd->add_option(
+      "--origin", o->origin,
+      "LAT,LON,ALT of the world frame (default: the truth's, else the config's ego.origin)");
+  cmd->add_flag("--no-deskew", o->no_deskew,
+                "ignore the INS stream: no deskew, sensor frame = world");
   cmd->add_option("--model", o->model,
                   "track classifier model (`stac train`) or 'none' (default: the config's "
                   "classification.model): every track gets a class and log odds (ADBF)");
-  cmd->add_flag("--dds", o->dds,
-                "also publish every scan's tracked_objects, segments, ego_pose (and point_cloud) on "
-                "DDS (the config's dds:)");
+  cmd->add_flag(
+      "--dds", o->dds,
+      "also publish every scan's tracked_objects, segments, ego_pose (and point_cloud) on "
+      "DDS (the config's dds:)");
   cmd->add_option("--domain", o->domain, "DDS domain with --dds (default: dds.domain_id)")
       ->check(CLI::Range(0, 230));
   cmd->add_option("--point-cloud-stride", o->point_cloud_stride,

@@ -26,7 +26,8 @@ class Progress {
     const double f = done / total_ > 1.0 ? 1.0 : done / total_;
     const int width = 40;
     const int filled = static_cast<int>(f * width);
-    std::fprintf(stderr, "\r%s [%s%s] %5.1f%%", label_.c_str(), std::string(static_cast<std::size_t>(filled), '#').c_str(),
+    std::fprintf(stderr, "\r%s [%s%s] %5.1f%%", label_.c_str(),
+                 std::string(static_cast<std::size_t>(filled), '#').c_str(),
                  std::string(static_cast<std::size_t>(width - filled), '.').c_str(), 100.0 * f);
     std::fflush(stderr);
     drawn_ = true;

@@ -22,7 +22,9 @@ struct RecordOptions {
 };
 
 volatile std::sig_atomic_t g_stop = 0;
-void on_signal(int) { g_stop = 1; }
+void on_signal(int) {
+  g_stop = 1;
+}
 
 int run_record(const RecordOptions& o) {
   const std::filesystem::path config = config_path(o.config);
@@ -43,7 +45,8 @@ int run_record(const RecordOptions& o) {
   std::fprintf(stderr, "stac record: listening on %s:%u, writing %s (Ctrl-C to stop)\n",
                rc.bind_address.c_str(), receiver->port(), o.out.c_str());
   const std::int64_t start = rt::monotonic_ns();
-  const std::int64_t end = o.duration_s > 0 ? start + static_cast<std::int64_t>(o.duration_s * 1e9) : 0;
+  const std::int64_t end =
+      o.duration_s > 0 ? start + static_cast<std::int64_t>(o.duration_s * 1e9) : 0;
   std::uint64_t packets = 0, bytes = 0;
   std::int64_t last_report = start;
   std::array<io::Datagram, 64> batch{};
@@ -84,11 +87,14 @@ int run_record(const RecordOptions& o) {
 
 void add_record_command(CLI::App& app) {
   auto o = std::make_shared<RecordOptions>();
-  CLI::App* cmd = app.add_subcommand("record", "Record the sensor's live UDP packets to a pcap file");
+  CLI::App* cmd =
+      app.add_subcommand("record", "Record the sensor's live UDP packets to a pcap file");
   cmd->add_option("--out", o->out, "pcap file to write (nanosecond timestamps)")->required();
-  cmd->add_option("--config", o->config, "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
+  cmd->add_option("--config", o->config,
+                  "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
   cmd->add_option("--bind", o->bind, "address to listen on (default: the config's bind_address)");
-  cmd->add_option("--port", o->port, "UDP port (default: the config's, 2368)")->check(CLI::Range(0, 65535));
+  cmd->add_option("--port", o->port, "UDP port (default: the config's, 2368)")
+      ->check(CLI::Range(0, 65535));
   cmd->add_option("--duration", o->duration_s, "stop after this many seconds (default: Ctrl-C)");
   cmd->add_option("--packets", o->max_packets, "stop after this many packets");
   cmd->callback([o] {

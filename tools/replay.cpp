@@ -120,10 +120,9 @@ void print_tcp_report(const ReplayOptions& o, const io::TcpReplay& t, io::TcpRep
       port, o.tcp_listen.c_str(), t.listen_port(), static_cast<unsigned long long>(r.bytes),
       static_cast<unsigned long long>(r.segments), elapsed_s,
       static_cast<unsigned long long>(r.passes), r.stopped ? ", stopped" : "",
-      static_cast<unsigned long long>(r.unserved_bytes),
-      static_cast<unsigned long long>(r.clients), static_cast<unsigned long long>(r.disconnects),
-      static_cast<unsigned long long>(r.stalls), sps, mbps, recorded_mbps,
-      o.fast ? "--fast" : rate_text(o.rate).c_str());
+      static_cast<unsigned long long>(r.unserved_bytes), static_cast<unsigned long long>(r.clients),
+      static_cast<unsigned long long>(r.disconnects), static_cast<unsigned long long>(r.stalls),
+      sps, mbps, recorded_mbps, o.fast ? "--fast" : rate_text(o.rate).c_str());
   if (o.fast) {
     std::fprintf(stderr, "  pacing     none (--fast)\n");
   } else if (r.error_max_ns >= 0) {
@@ -225,15 +224,14 @@ int run_replay(const ReplayOptions& o) {
   }
   for (std::size_t i = 0; i < tcp.size(); ++i) {
     const io::TcpReplayPlan& tp = tcp[i].plan();
-    std::fprintf(stderr,
-                 "stac replay: TCP stream of port %u: %llu bytes in %llu segments over %.3f s "
-                 "recorded (%llu retransmitted, %llu gaps); listening on %s:%u\n",
-                 tcp_port_of[i], static_cast<unsigned long long>(tp.bytes),
-                 static_cast<unsigned long long>(tp.segments),
-                 static_cast<double>(tp.span_ns) * 1e-9,
-                 static_cast<unsigned long long>(tp.retransmitted),
-                 static_cast<unsigned long long>(tp.gaps), o.tcp_listen.c_str(),
-                 tcp[i].listen_port());
+    std::fprintf(
+        stderr,
+        "stac replay: TCP stream of port %u: %llu bytes in %llu segments over %.3f s "
+        "recorded (%llu retransmitted, %llu gaps); listening on %s:%u\n",
+        tcp_port_of[i], static_cast<unsigned long long>(tp.bytes),
+        static_cast<unsigned long long>(tp.segments), static_cast<double>(tp.span_ns) * 1e-9,
+        static_cast<unsigned long long>(tp.retransmitted), static_cast<unsigned long long>(tp.gaps),
+        o.tcp_listen.c_str(), tcp[i].listen_port());
   }
 
   g_stop = false;
@@ -263,8 +261,7 @@ int run_replay(const ReplayOptions& o) {
   }
   clock.start_ns = rt::monotonic_ns() + 2'000'000;
 
-  std::vector<rt::Result<io::TcpReplayReport>> tcp_reports(tcp.size(),
-                                                           rt::make_error("not run"));
+  std::vector<rt::Result<io::TcpReplayReport>> tcp_reports(tcp.size(), rt::make_error("not run"));
   std::vector<std::thread> threads;
   for (std::size_t i = 0; i < tcp.size(); ++i) {
     threads.emplace_back([&, i] { tcp_reports[i] = tcp[i].run(g_stop, &clock); });
@@ -294,9 +291,8 @@ int run_replay(const ReplayOptions& o) {
 
 void add_replay_command(CLI::App& app) {
   auto o = std::make_shared<ReplayOptions>();
-  CLI::App* cmd =
-      app.add_subcommand("replay",
-                         "Send a capture's UDP packets and serve its TCP streams at the recorded pace");
+  CLI::App* cmd = app.add_subcommand(
+      "replay", "Send a capture's UDP packets and serve its TCP streams at the recorded pace");
   cmd->description(
       "Send the UDP payloads of a pcap capture to an address (default 127.0.0.1), each at its\n"
       "recorded time divided by --rate (or as fast as possible with --fast), optionally looping.\n"
@@ -327,7 +323,8 @@ void add_replay_command(CLI::App& app) {
                                    "(0: any free one); repeatable (default: every captured one)");
   cmd->add_option("--tcp-listen", o->tcp_listen, "IPv4 address the TCP servers listen on")
       ->capture_default_str();
-  cmd->add_flag("--no-tcp", o->no_tcp, "do not serve the capture's TCP streams")->excludes(tcp_port);
+  cmd->add_flag("--no-tcp", o->no_tcp, "do not serve the capture's TCP streams")
+      ->excludes(tcp_port);
   cmd->add_flag("--wait-tcp", o->wait_tcp,
                 "start the replay once a client is connected to every served TCP port");
   cmd->callback([o] {

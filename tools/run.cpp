@@ -4,7 +4,8 @@
 //              EgoEstimator -> PoseHistory
 //   can        gs_usb only: GsUsbDevice (blocking libusb reads) -> odometry ring -> pose
 //   perception ScanStream -> ScanPipeline -> result slots (full: the newest result is dropped)
-//   publisher  result slots -> DDS tracked_objects, segments, ego_pose, point_cloud, health; deadline monitor
+//   publisher  result slots -> DDS tracked_objects, segments, ego_pose, point_cloud, health;
+//   deadline monitor
 // Everything is allocated before the threads start. SIGINT/SIGTERM (or --seconds/--scans) stop
 // the receivers; perception and the publisher drain what was received, then a summary is printed.
 #include <pthread.h>
@@ -74,9 +75,8 @@ enum HealthStage : std::size_t {
   kPublish,
   kHealthStages
 };
-constexpr const char* kStageNames[] = {"wait",     "deskew",   "segment",
-                                       "track",    "classify", "classify_deferred",
-                                       "handover", "publish"};
+constexpr const char* kStageNames[] = {
+    "wait", "deskew", "segment", "track", "classify", "classify_deferred", "handover", "publish"};
 
 // One perception result in a slot of the perception -> publisher exchange.
 struct Frame {
@@ -294,7 +294,8 @@ int run_live(const RunOptions& o) {
   if (o.domain >= 0) dds_config->domain_id = static_cast<std::uint32_t>(o.domain);
   if (o.point_cloud_stride >= 0)
     dds_config->point_cloud_stride = static_cast<std::uint32_t>(o.point_cloud_stride);
-  if (!o.dds_config.empty()) dds_config->config_uri = "file://" + std::filesystem::absolute(o.dds_config).string();
+  if (!o.dds_config.empty())
+    dds_config->config_uri = "file://" + std::filesystem::absolute(o.dds_config).string();
   if (!o.ins.empty()) {
     auto t = parse_ins_transport(o.ins);
     if (!t) return fail("--ins: " + t.error().message);
@@ -493,7 +494,7 @@ int run_live(const RunOptions& o) {
       shared.classes_current.store(classes_current, std::memory_order_relaxed);
       f.finished_ns = rt::realtime_ns();
       shared.scans.fetch_add(1, std::memory_order_relaxed);
-      (void)results.publish();  // full: dropped and counted by the exchange; perception goes on
+      (void)results.publish();      // full: dropped and counted by the exchange; perception goes on
       pipeline.finish_scan(*scan);  // the other tracks and the accumulated clouds: off the latency
       stream.release();
     }
@@ -601,9 +602,8 @@ int run_live(const RunOptions& o) {
       for (std::size_t i = 0; i < kHealthStages; ++i)
         stages[i] = {kStageNames[i], to_us(stage_ns[i])};
       const tracking::TrackerCounters& tc = f->result.tracked.counters;
-      frame_drops = {f->incomplete,      f->packets_lost,       f->segment_overflow,
-                     f->without_pose,    tc.pool_overflow,      tc.dropped_detections,
-                     f->classes_late};
+      frame_drops = {f->incomplete,    f->packets_lost,       f->segment_overflow, f->without_pose,
+                     tc.pool_overflow, tc.dropped_detections, f->classes_late};
       const dds::HealthIn health = health_sample(f->result.stamp_ns, index, stages, end_to_end);
       if (auto h = (*publisher)->publish_health(health); !h && status) status = h;
       last_health_ns = rt::monotonic_ns();
@@ -754,8 +754,9 @@ void add_run_command(CLI::App& app) {
   cmd->add_option("--bind", o->bind,
                   "Velodyne UDP address to bind (default: velodyne.bind_address)");
   cmd->add_option("--calib", o->calib, "calibration file (default: velodyne.calibration)");
-  cmd->add_option("--model", o->model,
-                  "track classifier model (`stac train`) or 'none' (default: classification.model)");
+  cmd->add_option(
+      "--model", o->model,
+      "track classifier model (`stac train`) or 'none' (default: classification.model)");
   cmd->add_option("--ins", o->ins, "INS transport: tcp, udp or none (default: run.ins)");
   cmd->add_option("--ins-address", o->ins_address,
                   "INS TCP server IPv4 address (default: run.ins_address)");

@@ -18,7 +18,8 @@ struct RunSettings {
   rt::DeadlineConfig deadline;   // budget and histogram range
   std::size_t result_slots = 4;  // perception -> publisher results in flight
   bool lock_memory = true;       // mlockall at start-up
-  int cpu_wake_latency_us = -1;  // >= 0: a PM QoS request held while running (rt::CpuLatencyRequest)
+  int cpu_wake_latency_us =
+      -1;  // >= 0: a PM QoS request held while running (rt::CpuLatencyRequest)
   // Published tracks are classified before their scan is published until it is this old (from
   // its last firing); the others, and the accumulated clouds, after it (docs/run.md).
   std::int64_t classify_budget_ns = 8'000'000;

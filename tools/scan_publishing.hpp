@@ -21,7 +21,8 @@ class ScanPublishing {
   // The point cloud's label of each segment of a result: the class of the track it updated
   // (1 car .. 4 background, its TrackClass label), 5 when that track is not
   // classified or no track took it. Fills labels[0, segments).
-  static void segment_labels(const pipeline::ScanResult& result, std::span<std::uint8_t> labels) noexcept;
+  static void segment_labels(const pipeline::ScanResult& result,
+                             std::span<std::uint8_t> labels) noexcept;
 
   // Checks at start-up that the pipeline's capacities fit the IDL bounds (errors name the key).
   static rt::Result<bool> check_capacities(const pipeline::PipelineConfig& config);

@@ -20,7 +20,10 @@ class CsvWriter final : public ScanWriter {
     for (const velodyne::Point& p : scan.points) {
       char* o = line;
       char* end = line + sizeof(line);
-      auto put_int = [&](long long v) { o = std::to_chars(o, end, v).ptr; *o++ = ','; };
+      auto put_int = [&](long long v) {
+        o = std::to_chars(o, end, v).ptr;
+        *o++ = ',';
+      };
       auto put_f = [&](float v, int digits) {
         o = std::to_chars(o, end, v, std::chars_format::fixed, digits).ptr;
         *o++ = ',';
@@ -69,10 +72,12 @@ class KittiWriter final : public ScanWriter {
   explicit KittiWriter(std::filesystem::path dir) : dir_(std::move(dir)) {}
   rt::Result<bool> write(const velodyne::Scan& scan) override {
     char name[32];
-    std::snprintf(name, sizeof(name), "%06llu.bin", static_cast<unsigned long long>(scan.header.sequence));
+    std::snprintf(name, sizeof(name), "%06llu.bin",
+                  static_cast<unsigned long long>(scan.header.sequence));
     const auto path = dir_ / name;
     std::FILE* f = std::fopen(path.c_str(), "wb");
-    if (f == nullptr) return rt::make_error(path.string() + ": cannot create: " + std::strerror(errno));
+    if (f == nullptr)
+      return rt::make_error(path.string() + ": cannot create: " + std::strerror(errno));
     buffer_.resize(scan.points.size() * 4);
     std::size_t i = 0;
     for (const velodyne::Point& p : scan.points) {
@@ -98,7 +103,8 @@ rt::Result<std::unique_ptr<ScanWriter>> make_scan_writer(const std::string& form
                                                          const std::filesystem::path& out) {
   if (format == "csv") {
     std::FILE* f = std::fopen(out.c_str(), "w");
-    if (f == nullptr) return rt::make_error(out.string() + ": cannot create: " + std::strerror(errno));
+    if (f == nullptr)
+      return rt::make_error(out.string() + ": cannot create: " + std::strerror(errno));
     return std::unique_ptr<ScanWriter>(new CsvWriter(f, out));
   }
   if (format == "kitti") {

@@ -8,8 +8,8 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
-#include <optional>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -19,7 +19,6 @@
 #include "tools/capture_scans.hpp"
 #include "tools/commands.hpp"
 #include "tools/kitti_files.hpp"
-#include "tools/settings.hpp"
 #include "tools/sensor_status.hpp"
 #include "tools/settings.hpp"
 
@@ -153,9 +152,11 @@ int segment_capture(const SegmentOptions& o, const segmentation::SegmenterConfig
   std::uint64_t n_seen = 0;
   auto complete = for_each_complete_scan(o.in, *calibration, s, [&](const velodyne::Scan& scan) {
     if (static_cast<int>(n_seen++) != o.scan) return true;
-    const segmentation::PointView view{&scan.points.data()->x, scan.points.size(), sizeof(velodyne::Point)};
+    const segmentation::PointView view{&scan.points.data()->x, scan.points.size(),
+                                       sizeof(velodyne::Point)};
     code = report(o, config, view,
-                  o.in + " scan " + std::to_string(o.scan) + " (sequence " + std::to_string(scan.header.sequence) + ")");
+                  o.in + " scan " + std::to_string(o.scan) + " (sequence " +
+                      std::to_string(scan.header.sequence) + ")");
     return false;
   });
   if (!complete) return fail(complete.error().message);
@@ -206,7 +207,8 @@ void add_segment_command(CLI::App& app) {
       "scan).\n"
       "csv: one row per segment: id,points,centroid_x,centroid_y,centroid_z,box_x,box_y,length,\n"
       "width,height,yaw (rad, from x, counter-clockwise),z_min,z_max (m, sensor frame).");
-  cmd->add_option("--in", o->in, "KITTI .bin scan, or a pcap/pcapng capture (told apart by their first bytes)")
+  cmd->add_option("--in", o->in,
+                  "KITTI .bin scan, or a pcap/pcapng capture (told apart by their first bytes)")
       ->required()
       ->check(CLI::ExistingFile);
   cmd->add_option("--out", o->out, "write the segments as csv");

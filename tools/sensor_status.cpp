@@ -18,7 +18,8 @@ rt::Result<CaptureStatus> read_capture_status(const std::filesystem::path& captu
                           " sends no status cycle (only the S2.1 and S3 do); set --model or "
                           "'velodyne.model'");
   }
-  auto reader = io::PcapReader::open(capture, io::PcapFilter{.udp_dst_port = port, .udp_src_port = {}});
+  auto reader =
+      io::PcapReader::open(capture, io::PcapFilter{.udp_dst_port = port, .udp_src_port = {}});
   if (!reader) return rt::Unexpected<rt::Error>{reader.error()};
   CaptureStatus out{velodyne::StatusDecoder(model), 0, {}};
   io::Datagram d;
@@ -29,7 +30,8 @@ rt::Result<CaptureStatus> read_capture_status(const std::filesystem::path& captu
     out.status.add(packet->trailer[4], packet->trailer[5]);
     if (until_calibration && out.status.has_calibration()) break;
   }
-  if (!reader->error().empty()) std::fprintf(stderr, "stac: warning: %s\n", reader->error().c_str());
+  if (!reader->error().empty())
+    std::fprintf(stderr, "stac: warning: %s\n", reader->error().c_str());
   out.pcap = reader->counters();
   return out;
 }
@@ -92,18 +94,19 @@ int run_status(const StatusOptions& o) {
               static_cast<unsigned long long>(c.cycles),
               static_cast<unsigned long long>(c.out_of_sequence));
   if (s.valid) {
-    std::printf("last cycle   %04d-%02d-%02d %02d:%02d:%02d UTC, GPS %s, %d deg C, firmware %d.%02x\n",
-                s.time.year, s.time.month, s.time.day, s.time.hour, s.time.minute, s.time.second,
-                velodyne::to_string(s.gps), s.temperature_c, s.firmware >> 4, s.firmware & 0x0F);
+    std::printf(
+        "last cycle   %04d-%02d-%02d %02d:%02d:%02d UTC, GPS %s, %d deg C, firmware %d.%02x\n",
+        s.time.year, s.time.month, s.time.day, s.time.hour, s.time.minute, s.time.second,
+        velodyne::to_string(s.gps), s.temperature_c, s.firmware >> 4, s.firmware & 0x0F);
   } else {
     std::printf("last cycle   no complete H..V sequence with a valid date\n");
   }
-  std::printf("calibration  %llu dumps accepted, %llu broken by lost/reordered packets, %llu bad "
-              "checksum, %llu bad layout\n",
-              static_cast<unsigned long long>(c.dumps),
-              static_cast<unsigned long long>(c.dumps_broken),
-              static_cast<unsigned long long>(c.bad_checksum),
-              static_cast<unsigned long long>(c.bad_layout));
+  std::printf(
+      "calibration  %llu dumps accepted, %llu broken by lost/reordered packets, %llu bad "
+      "checksum, %llu bad layout\n",
+      static_cast<unsigned long long>(c.dumps), static_cast<unsigned long long>(c.dumps_broken),
+      static_cast<unsigned long long>(c.bad_checksum),
+      static_cast<unsigned long long>(c.bad_layout));
   if (st.has_calibration()) {
     const velodyne::UnitParameters& u = st.unit();
     std::string date = "not set";
@@ -113,18 +116,20 @@ int run_status(const StatusOptions& o) {
                     u.calibration_date->month, u.calibration_date->day);
       date = buf;
     }
-    std::printf("unit         %u rpm, FOV %.2f..%.2f deg, return mode %s, power 0x%02X, "
-                "%u run hours, calibrated %s\n"
-                "             %s -> %s, noise thresholds %u/%u, warnings 0x%02X%s\n",
-                u.rpm, u.fov_start / 100.0, u.fov_end / 100.0, velodyne::to_string(u.return_mode),
-                u.power_level, u.run_hours, date.c_str(), ip(u.ip_source).c_str(),
-                ip(u.ip_destination).c_str(), u.upper_noise_threshold, u.lower_noise_threshold,
-                u.warnings, u.crc_checked ? ", CRC ok" : "");
+    std::printf(
+        "unit         %u rpm, FOV %.2f..%.2f deg, return mode %s, power 0x%02X, "
+        "%u run hours, calibrated %s\n"
+        "             %s -> %s, noise thresholds %u/%u, warnings 0x%02X%s\n",
+        u.rpm, u.fov_start / 100.0, u.fov_end / 100.0, velodyne::to_string(u.return_mode),
+        u.power_level, u.run_hours, date.c_str(), ip(u.ip_source).c_str(),
+        ip(u.ip_destination).c_str(), u.upper_noise_threshold, u.lower_noise_threshold, u.warnings,
+        u.crc_checked ? ", CRC ok" : "");
   }
   if (!o.calib_out.empty()) {
     auto calibration = st.calibration();
     if (!calibration) return fail(o.in + ": " + calibration.error().message);
-    if (auto w = velodyne::save_ros_yaml(*calibration, o.calib_out); !w) return fail(w.error().message);
+    if (auto w = velodyne::save_ros_yaml(*calibration, o.calib_out); !w)
+      return fail(w.error().message);
     std::printf("calibration  written to %s (ROS yaml)\n", o.calib_out.c_str());
   }
   return 0;
@@ -135,17 +140,22 @@ int run_status(const StatusOptions& o) {
 void add_status_command(CLI::App& app) {
   auto o = std::make_shared<StatusOptions>();
   CLI::App* cmd = app.add_subcommand(
-      "status", "Show what an HDL-64E S2.1/S3 reports in its status bytes; extract its calibration");
+      "status",
+      "Show what an HDL-64E S2.1/S3 reports in its status bytes; extract its calibration");
   cmd->description(
       "Reads the status cycle in the last two bytes of every packet of a capture: GPS date and\n"
-      "time, GPS state, temperature and firmware every 16 packets, and the calibration dump (lasers,\n"
+      "time, GPS state, temperature and firmware every 16 packets, and the calibration dump "
+      "(lasers,\n"
       "RPM, FOV, addresses, return mode) every 4160. --calib-out writes the calibration the unit\n"
       "sent as a ROS yaml file; 'stac decode --calib stream' uses it directly.");
-  cmd->add_option("--in", o->in, "pcap capture of the sensor's packets")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--in", o->in, "pcap capture of the sensor's packets")
+      ->required()
+      ->check(CLI::ExistingFile);
   cmd->add_option("--calib-out", o->calib_out, "write the unit's calibration here (ROS yaml)");
   cmd->add_option("--model", o->model, "S2.1 or S3 (default: the config's)");
   cmd->add_option("--port", o->port, "UDP data port in the capture (default: the config's, 2368)");
-  cmd->add_option("--config", o->config, "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
+  cmd->add_option("--config", o->config,
+                  "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
   cmd->callback([o] {
     if (const int code = run_status(*o); code != 0) throw CLI::RuntimeError(code);
   });

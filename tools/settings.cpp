@@ -1,9 +1,9 @@
 #include "tools/settings.hpp"
 
-#include "tools/config_section.hpp"
-
 #include <cmath>
 #include <cstdlib>
+
+#include "tools/config_section.hpp"
 
 namespace stac::tools {
 
@@ -48,7 +48,8 @@ rt::Result<VelodyneSettings> load_velodyne_settings(const std::filesystem::path&
 #undef STAC_GET
 
   const auto parsed = velodyne::parse_model(model);
-  if (!parsed) return rt::make_error(file + ": 'velodyne.model' is '" + model + "'; use S2, S2.1 or S3");
+  if (!parsed)
+    return rt::make_error(file + ": 'velodyne.model' is '" + model + "'; use S2, S2.1 or S3");
   a.decoder.model = *parsed;
   if (calibration != "stream") {
     s.calibration = v.path(calibration);
@@ -58,18 +59,22 @@ rt::Result<VelodyneSettings> load_velodyne_settings(const std::filesystem::path&
   }
   if (port <= 0 || port > 65535) return rt::make_error(file + ": 'velodyne.port' must be 1..65535");
   s.port = static_cast<std::uint16_t>(port);
-  if (cut_deg < 0 || cut_deg >= 360) return rt::make_error(file + ": 'velodyne.cut_angle_deg' must be in [0, 360)");
+  if (cut_deg < 0 || cut_deg >= 360)
+    return rt::make_error(file + ": 'velodyne.cut_angle_deg' must be in [0, 360)");
   a.cut_angle = static_cast<std::uint16_t>(std::lround(cut_deg * 100.0) % 36000);
-  if (a.min_rpm < 60 || a.min_rpm > 1200) return rt::make_error(file + ": 'velodyne.min_rpm' must be in 60..1200");
+  if (a.min_rpm < 60 || a.min_rpm > 1200)
+    return rt::make_error(file + ": 'velodyne.min_rpm' must be in 60..1200");
   if (min_range < 0 || max_range <= min_range) {
     return rt::make_error(file + ": need 0 <= 'velodyne.min_range_m' < 'velodyne.max_range_m'");
   }
   a.decoder.min_range_m = static_cast<float>(min_range);
   a.decoder.max_range_m = static_cast<float>(max_range);
   if (a.max_gap_s <= 0 || a.max_scan_duration_s <= 0) {
-    return rt::make_error(file + ": 'velodyne.max_gap_s' and 'velodyne.max_scan_duration_s' must be > 0");
+    return rt::make_error(file +
+                          ": 'velodyne.max_gap_s' and 'velodyne.max_scan_duration_s' must be > 0");
   }
-  if (s.scan_slots < 2 || s.scan_slots > 64) return rt::make_error(file + ": 'velodyne.scan_slots' must be in 2..64");
+  if (s.scan_slots < 2 || s.scan_slots > 64)
+    return rt::make_error(file + ": 'velodyne.scan_slots' must be in 2..64");
   if (s.receive_buffer_bytes < 65536) {
     return rt::make_error(file + ": 'velodyne.receive_buffer_bytes' must be at least 65536");
   }

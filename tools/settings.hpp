@@ -24,7 +24,7 @@ struct VelodyneSettings {
   std::filesystem::path calibration;  // empty: from the status stream
   std::string bind_address = "0.0.0.0";
   std::uint16_t port = velodyne::kPortData;
-  std::string sender_address;         // empty: any sender
+  std::string sender_address;  // empty: any sender
   int receive_buffer_bytes = 16 << 20;
   int scan_slots = 4;
 };
@@ -35,7 +35,7 @@ struct EgoSettings {
   std::optional<ego::Geodetic> origin;  // empty: the first INS fix
   ego::PoseHistoryConfig history;
   ego::EgoEstimatorConfig estimator;
-  ego::DeskewConfig deskew;             // vehicle_T_sensor is the extrinsics
+  ego::DeskewConfig deskew;  // vehicle_T_sensor is the extrinsics
   std::uint16_t ins_port = 5602;
 };
 rt::Result<EgoSettings> load_ego_settings(const std::filesystem::path& config_file);
@@ -43,7 +43,8 @@ rt::Result<EgoSettings> load_ego_settings(const std::filesystem::path& config_fi
 rt::Result<ego::Geodetic> parse_origin(const std::string& text);
 
 // The `segmentation:` section, checked by the segmenter's own validation too.
-rt::Result<segmentation::SegmenterConfig> load_segmentation_settings(const std::filesystem::path& config_file);
+rt::Result<segmentation::SegmenterConfig> load_segmentation_settings(
+    const std::filesystem::path& config_file);
 
 // The `tracking:` section, checked by the tracker's own validation too.
 rt::Result<tracking::TrackerConfig> load_tracking_config(const std::filesystem::path& config_file);

@@ -1,4 +1,6 @@
 // stac sim: a simulated drive written as the real devices' bytes (pcap) plus its ground truth.
+#include "tools/sim.hpp"
+
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -16,7 +18,6 @@
 #include "tools/commands.hpp"
 #include "tools/progress.hpp"
 #include "tools/settings.hpp"
-#include "tools/sim.hpp"
 
 namespace stac::tools {
 namespace {
@@ -26,8 +27,8 @@ namespace {
 // from the POS; or with --ins-udp each message as one broadcast datagram to port 5602.
 class InsPcapStream {
  public:
-  static constexpr std::uint32_t kPosIp = 0xC0A83564;       // 192.168.53.100, the POS LV
-  static constexpr std::uint32_t kHostIp = 0xC0A8350A;      // 192.168.53.10, the vehicle computer
+  static constexpr std::uint32_t kPosIp = 0xC0A83564;        // 192.168.53.100, the POS LV
+  static constexpr std::uint32_t kHostIp = 0xC0A8350A;       // 192.168.53.10, the vehicle computer
   static constexpr std::uint32_t kBroadcastIp = 0xC0A835FF;  // 192.168.53.255
   static constexpr std::uint16_t kPort = 5602;               // Real-Time Data
   static constexpr std::uint16_t kHostPort = 50'602;
@@ -48,9 +49,11 @@ class InsPcapStream {
     if (!connected_) {
       connected_ = true;
       const std::uint32_t host_isn = 0x0BADC0DE;
-      for (auto w : {pcap_.write_tcp(segment(m.stamp_ns - 3'000'000, false, host_isn, io::kTcpSyn)),
-                     pcap_.write_tcp(segment(m.stamp_ns - 2'000'000, true, kPosIsn, io::kTcpSyn | io::kTcpAck)),
-                     pcap_.write_tcp(segment(m.stamp_ns - 1'000'000, false, host_isn + 1, io::kTcpAck))}) {
+      for (auto w :
+           {pcap_.write_tcp(segment(m.stamp_ns - 3'000'000, false, host_isn, io::kTcpSyn)),
+            pcap_.write_tcp(
+                segment(m.stamp_ns - 2'000'000, true, kPosIsn, io::kTcpSyn | io::kTcpAck)),
+            pcap_.write_tcp(segment(m.stamp_ns - 1'000'000, false, host_isn + 1, io::kTcpAck))}) {
         if (!w) return w;
       }
     }
@@ -62,7 +65,8 @@ class InsPcapStream {
 
  private:
   static constexpr std::uint32_t kPosIsn = 0x1A2B3C4D;
-  static io::TcpSegment segment(std::int64_t stamp_ns, bool from_pos, std::uint32_t seq, std::uint8_t flags) {
+  static io::TcpSegment segment(std::int64_t stamp_ns, bool from_pos, std::uint32_t seq,
+                                std::uint8_t flags) {
     io::TcpSegment s;
     s.stamp_ns = stamp_ns;
     s.src_ip = from_pos ? kPosIp : kHostIp;
@@ -87,15 +91,19 @@ struct CanLog {
   can::CandumpWriter log;
 };
 
-rt::Result<CanLog> open_can_log(const SimOptions& o, const sim::SimRun& run, const sim::RunConfig& rc) {
+rt::Result<CanLog> open_can_log(const SimOptions& o, const sim::SimRun& run,
+                                const sim::RunConfig& rc) {
   const auto config = load_can_settings(config_path(o.config));
   if (!config) return rt::Unexpected<rt::Error>{config.error()};
   const auto db = can::load_dbc(config->dbc);
   if (!db) return rt::Unexpected<rt::Error>{db.error()};
   sim::VehicleCanConfig vc;
   vc.start_ns = rc.start_ns;
-  auto bus = sim::VehicleCanSim::create(*db, config->signals, vc, [&run](double t) { return run.ego(t); });
-  if (!bus) return rt::make_error(config->dbc.string() + ": " + bus.error().message + " (see can: in the configuration)");
+  auto bus =
+      sim::VehicleCanSim::create(*db, config->signals, vc, [&run](double t) { return run.ego(t); });
+  if (!bus)
+    return rt::make_error(config->dbc.string() + ": " + bus.error().message +
+                          " (see can: in the configuration)");
   auto log = can::CandumpWriter::open(o.can, config->socketcan.interface);
   if (!log) return rt::Unexpected<rt::Error>{log.error()};
   return CanLog{std::move(*bus), std::move(*log)};
@@ -109,8 +117,8 @@ int write_can_log(CanLog& c, const std::string& path, const sim::RunConfig& rc) 
     if (c.bus.next(f) && !c.log.write(f)) return fail(path + ": write failed");
   }
   if (!c.log.close()) return fail(path + ": write failed");
-  std::fprintf(stderr, "  CAN: %llu frames -> %s", static_cast<unsigned long long>(c.bus.counters().frames),
-               path.c_str());
+  std::fprintf(stderr, "  CAN: %llu frames -> %s",
+               static_cast<unsigned long long>(c.bus.counters().frames), path.c_str());
   if (c.bus.counters().unencodable > 0) {
     std::fprintf(stderr, " (%llu values outside their DBC signal's range not sent)",
                  static_cast<unsigned long long>(c.bus.counters().unencodable));
@@ -124,7 +132,8 @@ int write_can_log(CanLog& c, const std::string& path, const sim::RunConfig& rc) 
 int run_sim(const SimOptions& o) {
   auto settings = load_velodyne_settings(config_path(o.config));
   if (!settings) return fail(settings.error().message);
-  const std::filesystem::path calib_path = o.calib.empty() ? settings->calibration : std::filesystem::path(o.calib);
+  const std::filesystem::path calib_path =
+      o.calib.empty() ? settings->calibration : std::filesystem::path(o.calib);
   if (calib_path.empty()) return fail("stac sim needs a calibration file: pass --calib");
   auto calibration = velodyne::load_calibration(calib_path);
   if (!calibration) return fail(calibration.error().message);
@@ -176,9 +185,11 @@ int run_sim(const SimOptions& o) {
   unit.power_level = 0xA8;
   unit.warnings = 0x60;  // PPS and GPS time present
   auto trailer = velodyne::StatusTrailerWriter::create(rc.lidar.model, sensor, unit, *calibration);
-  if (!trailer) return fail("the calibration cannot be sent in the status cycle: " + trailer.error().message);
+  if (!trailer)
+    return fail("the calibration cannot be sent in the status cycle: " + trailer.error().message);
 
-  const velodyne::PacketDecoder timing(*calibration, velodyne::DecoderConfig{.model = rc.lidar.model});
+  const velodyne::PacketDecoder timing(*calibration,
+                                       velodyne::DecoderConfig{.model = rc.lidar.model});
   const std::int64_t span_ns = timing.packet_span_ns(o.dual_return);
   std::uint64_t scans = 0, points = 0;
   const double origin_lat_lon_alt[3] = {ic.origin.lat_deg, ic.origin.lon_deg, ic.origin.alt_m};
@@ -217,30 +228,37 @@ int run_sim(const SimOptions& o) {
     progress.update(k);
   }
   (void)(*run)->finish(on_scan);
-  if (auto w = write_ins_until(rc.start_ns + std::llround(rc.duration_s * 1e9)); !w) return fail(w.error().message);
+  if (auto w = write_ins_until(rc.start_ns + std::llround(rc.duration_s * 1e9)); !w)
+    return fail(w.error().message);
   progress.finish();
   if (auto c = pcap->close(); !c) return fail(c.error().message);
   truth.close();
   if (!truth) return fail(o.truth + ": write failed");
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  const double wall =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   std::fprintf(stderr,
                "stac sim: %s seed %llu, %.1f s: %u packets, %llu scans, %llu points -> %s, %s\n"
                "  %zu objects in the world; simulated %.2fx real time (%.1f s)\n",
                o.scenario.c_str(), static_cast<unsigned long long>(o.seed), o.duration_s, n,
                static_cast<unsigned long long>(scans), static_cast<unsigned long long>(points),
-               o.out.c_str(), o.truth.c_str(), (*run)->world().actors().size(), o.duration_s / wall, wall);
-  std::fprintf(stderr, "  INS: %llu Applanix messages (Group 1 at 200 Hz, Groups 2 and 3 at 1 Hz), GPS week %u, %s port %u\n",
-               static_cast<unsigned long long>(ins_messages), ins.gps_week(), o.ins_udp ? "UDP" : "TCP",
-               static_cast<unsigned>(InsPcapStream::kPort));
+               o.out.c_str(), o.truth.c_str(), (*run)->world().actors().size(), o.duration_s / wall,
+               wall);
+  std::fprintf(stderr,
+               "  INS: %llu Applanix messages (Group 1 at 200 Hz, Groups 2 and 3 at 1 Hz), GPS "
+               "week %u, %s port %u\n",
+               static_cast<unsigned long long>(ins_messages), ins.gps_week(),
+               o.ins_udp ? "UDP" : "TCP", static_cast<unsigned>(InsPcapStream::kPort));
   if (can_log) return write_can_log(*can_log, o.can, rc);
   return 0;
 }
 
 void add_sim_command(CLI::App& app) {
   auto o = std::make_shared<SimOptions>();
-  CLI::App* cmd = app.add_subcommand("sim", "Simulate a drive: HDL-64E packets in a pcap plus ground truth");
+  CLI::App* cmd =
+      app.add_subcommand("sim", "Simulate a drive: HDL-64E packets in a pcap plus ground truth");
   cmd->description(
-      "Simulate a drive: a virtual HDL-64E (each laser cast at its firing time with the angles and\n"
+      "Simulate a drive: a virtual HDL-64E (each laser cast at its firing time with the angles "
+      "and\n"
       "offsets of a real calibration) in a street scene, written as the sensor's UDP packets in a\n"
       "pcap, with the ground truth of every scan as JSON lines (ego pose; per object id, class,\n"
       "box, velocity and points hit). The same pcap carries the Applanix POS LV Real-Time Data\n"
@@ -252,19 +270,26 @@ void add_sim_command(CLI::App& app) {
   cmd->add_option("--scenario", o->scenario, "one of: " + names)
       ->check(CLI::IsMember(sim::scenario_names()))
       ->capture_default_str();
-  cmd->add_option("--seed", o->seed, "random seed of the world and the sensor noise")->capture_default_str();
-  cmd->add_option("--duration", o->duration_s, "seconds to simulate")->check(CLI::Range(0.1, 7200.0))->capture_default_str();
+  cmd->add_option("--seed", o->seed, "random seed of the world and the sensor noise")
+      ->capture_default_str();
+  cmd->add_option("--duration", o->duration_s, "seconds to simulate")
+      ->check(CLI::Range(0.1, 7200.0))
+      ->capture_default_str();
   cmd->add_option("--out", o->out, "pcap file to write")->required();
-  cmd->add_option("--truth", o->truth, "truth file to write (JSON lines, one per scan)")->required();
+  cmd->add_option("--truth", o->truth, "truth file to write (JSON lines, one per scan)")
+      ->required();
   cmd->add_option("--calib", o->calib, "calibration of the virtual unit (default: the config's)");
-  cmd->add_option("--config", o->config, "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
+  cmd->add_option("--config", o->config,
+                  "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
   cmd->add_flag("--dual-return", o->dual_return, "an S3 in dual-return mode (strongest and last)");
   cmd->add_option("--origin", o->origin,
                   "geodetic anchor of the sim world LAT,LON,ALT (deg, deg, m ellipsoidal; default "
                   "44.2449408681,-76.5096210157,77)");
-  cmd->add_flag("--ins-udp", o->ins_udp, "send the Applanix stream as UDP datagrams to port 5602 (default: TCP)");
-  cmd->add_option("--can", o->can, "also write the vehicle's speed and yaw-rate CAN frames to this candump log "
-                                   "(DBC signal map of the config's can: section)");
+  cmd->add_flag("--ins-udp", o->ins_udp,
+                "send the Applanix stream as UDP datagrams to port 5602 (default: TCP)");
+  cmd->add_option("--can", o->can,
+                  "also write the vehicle's speed and yaw-rate CAN frames to this candump log "
+                  "(DBC signal map of the config's can: section)");
   cmd->callback([o] {
     if (const int code = run_sim(*o); code != 0) throw CLI::RuntimeError(code);
   });

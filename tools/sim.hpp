@@ -19,7 +19,7 @@ struct SimOptions {
   bool dual_return = false;
   std::string origin;  // "LAT,LON,ALT"; empty: sim::InsConfig's default
   bool ins_udp = false;
-  std::string can;     // candump log to write; empty: none
+  std::string can;  // candump log to write; empty: none
 };
 
 // Prints a summary on stderr; returns the process exit code (0 ok, 1 with a message printed).

@@ -1,9 +1,9 @@
 // The `tracking:` section of config/stac.yaml (see tools/settings.hpp).
-#include "tools/config_section.hpp"
-#include "tools/settings.hpp"
-
 #include <stdexcept>
 #include <string>
+
+#include "tools/config_section.hpp"
+#include "tools/settings.hpp"
 
 namespace stac::tools {
 

@@ -59,11 +59,14 @@ const json& array(const json& j, const char* key) {
   return v;
 }
 
-std::int64_t stamp(const json& j) { return std::llround(number(j, "time") * 1e9); }
+std::int64_t stamp(const json& j) {
+  return std::llround(number(j, "time") * 1e9);
+}
 
 EgoRecord ego(const json& j) {
   const json& e = field(j, "ego", "");
-  return {number(e, "x", "ego."), number(e, "y", "ego."), number(e, "z", "ego."), number(e, "yaw", "ego.")};
+  return {number(e, "x", "ego."), number(e, "y", "ego."), number(e, "z", "ego."),
+          number(e, "yaw", "ego.")};
 }
 
 template <class Record, class Fill>
@@ -94,7 +97,9 @@ rt::Result<std::vector<Record>> read_file(const std::filesystem::path& file, Par
     if (progress && number_of_line % 64 == 0) progress(bytes);
     if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
     auto r = parser(line);
-    if (!r) return rt::make_error(file.string() + ":" + std::to_string(number_of_line) + ": " + r.error().message);
+    if (!r)
+      return rt::make_error(file.string() + ":" + std::to_string(number_of_line) + ": " +
+                            r.error().message);
     if (!out.empty() && r->scan <= out.back().scan) {  // one line per scan, in order
       return rt::make_error(file.string() + ":" + std::to_string(number_of_line) + ": scan " +
                             std::to_string(r->scan) + " after scan " +
@@ -109,9 +114,10 @@ rt::Result<std::vector<Record>> read_file(const std::filesystem::path& file, Par
 
 void append_time(std::int64_t ns, std::string& out) {
   char buf[48];
-  const std::uint64_t mag = ns < 0 ? static_cast<std::uint64_t>(-(ns + 1)) + 1 : static_cast<std::uint64_t>(ns);
-  std::snprintf(buf, sizeof(buf), "%s%" PRIu64 ".%09" PRIu64, ns < 0 ? "-" : "", mag / 1'000'000'000u,
-                mag % 1'000'000'000u);
+  const std::uint64_t mag =
+      ns < 0 ? static_cast<std::uint64_t>(-(ns + 1)) + 1 : static_cast<std::uint64_t>(ns);
+  std::snprintf(buf, sizeof(buf), "%s%" PRIu64 ".%09" PRIu64, ns < 0 ? "-" : "",
+                mag / 1'000'000'000u, mag % 1'000'000'000u);
   out += buf;
 }
 
@@ -141,15 +147,17 @@ void append_json_line(const TracksScan& s, std::string& out) {
   std::snprintf(buf, sizeof(buf), "{\"scan\":%" PRIu64 ",\"time\":", s.scan);
   out += buf;
   append_time(s.stamp_ns, out);
-  std::snprintf(buf, sizeof(buf), ",\"ego\":{\"x\":%.4f,\"y\":%.4f,\"z\":%.4f,\"yaw\":%.6f},\"segments\":[",
-                s.ego.x, s.ego.y, s.ego.z, s.ego.yaw);
+  std::snprintf(buf, sizeof(buf),
+                ",\"ego\":{\"x\":%.4f,\"y\":%.4f,\"z\":%.4f,\"yaw\":%.6f},\"segments\":[", s.ego.x,
+                s.ego.y, s.ego.z, s.ego.yaw);
   out += buf;
   for (std::size_t i = 0; i < s.segments.size(); ++i) {
     const SegmentRecord& g = s.segments[i];
     std::snprintf(buf, sizeof(buf),
                   "%s{\"id\":%u,\"points\":%u,\"x\":%.4f,\"y\":%.4f,\"z\":%.4f,\"length\":%.3f,"
                   "\"width\":%.3f,\"height\":%.3f,\"yaw\":%.5f",
-                  i == 0 ? "" : ",", g.id, g.points, g.x, g.y, g.z, g.length, g.width, g.height, g.yaw);
+                  i == 0 ? "" : ",", g.id, g.points, g.x, g.y, g.z, g.length, g.width, g.height,
+                  g.yaw);
     out += buf;
     if (g.has_truth) {
       out += ",\"truth\":{";
@@ -231,7 +239,8 @@ rt::Result<TracksScan> parse_tracks_line(std::string_view line) {
       r.id = integer<std::uint64_t>(t, "id", w);
       r.state = text(t, "state", w);
       if (r.state != "tentative" && r.state != "confirmed" && r.state != "coasting") {
-        throw FieldError{"'tracks[].state' is '" + r.state + "'; expected tentative, confirmed or coasting"};
+        throw FieldError{"'tracks[].state' is '" + r.state +
+                         "'; expected tentative, confirmed or coasting"};
       }
       r.x = number(t, "x", w);
       r.y = number(t, "y", w);
@@ -287,7 +296,8 @@ rt::Result<TruthScanRecord> parse_truth_line(std::string_view line) {
           !(*o)[2].is_number()) {
         throw FieldError{"'origin' must be [lat, lon, alt]"};
       }
-      s.origin = std::array<double, 3>{(*o)[0].get<double>(), (*o)[1].get<double>(), (*o)[2].get<double>()};
+      s.origin = std::array<double, 3>{(*o)[0].get<double>(), (*o)[1].get<double>(),
+                                       (*o)[2].get<double>()};
     }
     s.scan = integer<std::uint64_t>(j, "scan");
     s.stamp_ns = stamp(j);

@@ -7,8 +7,10 @@ namespace stac::applanix {
 namespace {
 
 bool looks_like_pcap(const std::uint8_t* m) noexcept {
-  static constexpr std::uint8_t kMagics[][4] = {{0xD4, 0xC3, 0xB2, 0xA1}, {0xA1, 0xB2, 0xC3, 0xD4},
-                                                {0x4D, 0x3C, 0xB2, 0xA1}, {0xA1, 0xB2, 0x3C, 0x4D},
+  static constexpr std::uint8_t kMagics[][4] = {{0xD4, 0xC3, 0xB2, 0xA1},
+                                                {0xA1, 0xB2, 0xC3, 0xD4},
+                                                {0x4D, 0x3C, 0xB2, 0xA1},
+                                                {0xA1, 0xB2, 0x3C, 0x4D},
                                                 {0x0A, 0x0D, 0x0D, 0x0A}};
   for (const auto& magic : kMagics) {
     if (std::memcmp(m, magic, 4) == 0) return true;

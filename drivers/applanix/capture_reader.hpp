@@ -19,9 +19,9 @@
 namespace stac::applanix {
 
 struct CaptureCounters {
-  std::uint64_t datagrams = 0;   // UDP payloads parsed
-  std::uint64_t segments = 0;    // TCP segments added to the reassembler
-  std::uint64_t raw_bytes = 0;   // bytes read from a raw stream file
+  std::uint64_t datagrams = 0;  // UDP payloads parsed
+  std::uint64_t segments = 0;   // TCP segments added to the reassembler
+  std::uint64_t raw_bytes = 0;  // bytes read from a raw stream file
 };
 
 class CaptureReader {
@@ -40,7 +40,9 @@ class CaptureReader {
   const std::string& error() const noexcept { return error_; }
   const StreamParser& parser() const noexcept { return parser_; }
   const CaptureCounters& counters() const noexcept { return counters_; }
-  const io::TcpReassemblerCounters& tcp_counters() const noexcept { return reassembler_.counters(); }
+  const io::TcpReassemblerCounters& tcp_counters() const noexcept {
+    return reassembler_.counters();
+  }
   const io::PcapCounters& pcap_counters() const noexcept { return pcap_totals_; }
 
  private:

@@ -23,10 +23,13 @@ T load(const std::uint8_t* p) noexcept {
   return v;
 }
 
-std::size_t padded_total(std::size_t unpadded) noexcept { return (unpadded + 3) & ~std::size_t{3}; }
+std::size_t padded_total(std::size_t unpadded) noexcept {
+  return (unpadded + 3) & ~std::size_t{3};
+}
 
 // Writes header, pad, checksum and "$#" around a body already at out[8..8+body) ; returns total.
-std::size_t seal(const char* start, std::uint16_t id, std::size_t body, std::span<std::uint8_t> out) noexcept {
+std::size_t seal(const char* start, std::uint16_t id, std::size_t body,
+                 std::span<std::uint8_t> out) noexcept {
   const std::size_t total = padded_total(kHeaderBytes + body + kTrailerBytes);
   std::memcpy(out.data(), start, 4);
   store16(out.data() + 4, id);
@@ -75,13 +78,12 @@ bool decode_time_distance(std::span<const std::uint8_t> m, TimeDistance& out) no
 bool decode_group1(std::span<const std::uint8_t> m, Group1& out) noexcept {
   if (m.size() != kGroup1Bytes) return false;
   const auto w = load<WireGroup1>(m.data());
-  out = Group1{w.latitude_deg, w.longitude_deg, w.altitude_m,
-               w.north_velocity_mps, w.east_velocity_mps, w.down_velocity_mps,
-               w.roll_deg, w.pitch_deg, w.heading_deg, w.wander_deg,
-               w.track_deg, w.speed_mps,
-               w.rate_longitudinal_dps, w.rate_transverse_dps, w.rate_down_dps,
-               w.accel_longitudinal_mps2, w.accel_transverse_mps2, w.accel_down_mps2,
-               w.alignment_status};
+  out = Group1{
+      w.latitude_deg,          w.longitude_deg,       w.altitude_m,      w.north_velocity_mps,
+      w.east_velocity_mps,     w.down_velocity_mps,   w.roll_deg,        w.pitch_deg,
+      w.heading_deg,           w.wander_deg,          w.track_deg,       w.speed_mps,
+      w.rate_longitudinal_dps, w.rate_transverse_dps, w.rate_down_dps,   w.accel_longitudinal_mps2,
+      w.accel_transverse_mps2, w.accel_down_mps2,     w.alignment_status};
   return true;
 }
 
@@ -114,8 +116,8 @@ bool decode_group3(std::span<const std::uint8_t> m, Group3& out) noexcept {
   const std::uint8_t* p = m.data() + kTimeEnd + sizeof(WireGroup3Head);
   for (std::size_t i = 0; i < out.channel_count; ++i) {
     const auto c = load<WireGnssChannel>(p + i * sizeof(WireGnssChannel));
-    out.channels[i] = GnssChannel{c.prn, c.tracking_status, c.azimuth_deg, c.elevation_deg,
-                                  c.l1_snr_dbhz, c.l2_snr_dbhz};
+    out.channels[i] = GnssChannel{c.prn,           c.tracking_status, c.azimuth_deg,
+                                  c.elevation_deg, c.l1_snr_dbhz,     c.l2_snr_dbhz};
   }
   const auto t = load<WireGroup3Tail>(p + head.channel_bytes);
   out.hdop = t.hdop;
@@ -139,8 +141,8 @@ bool decode_message(std::span<const std::uint8_t> m, Message& out) noexcept {
   return true;
 }
 
-std::size_t encode_group(std::uint16_t id, const TimeDistance& t, std::span<const std::uint8_t> data,
-                         std::span<std::uint8_t> out) noexcept {
+std::size_t encode_group(std::uint16_t id, const TimeDistance& t,
+                         std::span<const std::uint8_t> data, std::span<std::uint8_t> out) noexcept {
   const std::size_t body = sizeof(WireTimeDistance) + data.size();
   if (!fits(body, out)) return 0;
   put_time(t, out.data() + kHeaderBytes);
@@ -148,7 +150,8 @@ std::size_t encode_group(std::uint16_t id, const TimeDistance& t, std::span<cons
   return seal("$GRP", id, body, out);
 }
 
-std::size_t encode_group1(const Group1& g, const TimeDistance& t, std::span<std::uint8_t> out) noexcept {
+std::size_t encode_group1(const Group1& g, const TimeDistance& t,
+                          std::span<std::uint8_t> out) noexcept {
   WireGroup1 w{};
   w.latitude_deg = g.latitude_deg;
   w.longitude_deg = g.longitude_deg;
@@ -174,7 +177,8 @@ std::size_t encode_group1(const Group1& g, const TimeDistance& t, std::span<std:
   return encode_group(1, t, {data, kData}, out);
 }
 
-std::size_t encode_group2(const Group2& g, const TimeDistance& t, std::span<std::uint8_t> out) noexcept {
+std::size_t encode_group2(const Group2& g, const TimeDistance& t,
+                          std::span<std::uint8_t> out) noexcept {
   WireGroup2Data w{};
   for (std::size_t i = 0; i < 3; ++i) {
     w.position_rms_m[i] = g.position_rms_m[i];
@@ -187,31 +191,42 @@ std::size_t encode_group2(const Group2& g, const TimeDistance& t, std::span<std:
   return encode_group(2, t, {reinterpret_cast<const std::uint8_t*>(&w), sizeof(w)}, out);
 }
 
-std::size_t encode_group3(const Group3& g, const TimeDistance& t, std::span<std::uint8_t> out) noexcept {
-  const std::size_t n = g.channel_count < Group3::kMaxChannels ? g.channel_count : Group3::kMaxChannels;
+std::size_t encode_group3(const Group3& g, const TimeDistance& t,
+                          std::span<std::uint8_t> out) noexcept {
+  const std::size_t n =
+      g.channel_count < Group3::kMaxChannels ? g.channel_count : Group3::kMaxChannels;
   const std::size_t channel_bytes = n * sizeof(WireGnssChannel);
-  const std::size_t body = sizeof(WireTimeDistance) + sizeof(WireGroup3Head) + channel_bytes +
-                           sizeof(WireGroup3Tail);
+  const std::size_t body =
+      sizeof(WireTimeDistance) + sizeof(WireGroup3Head) + channel_bytes + sizeof(WireGroup3Tail);
   if (!fits(body, out)) return 0;
   put_time(t, out.data() + kHeaderBytes);
   std::uint8_t* p = out.data() + kTimeEnd;
-  const WireGroup3Head head{g.solution_status, g.sv_count, static_cast<std::uint16_t>(channel_bytes)};
+  const WireGroup3Head head{g.solution_status, g.sv_count,
+                            static_cast<std::uint16_t>(channel_bytes)};
   std::memcpy(p, &head, sizeof(head));
   p += sizeof(head);
   for (std::size_t i = 0; i < n; ++i, p += sizeof(WireGnssChannel)) {
     const GnssChannel& c = g.channels[i];
-    const WireGnssChannel w{c.prn, c.tracking_status, c.azimuth_deg, c.elevation_deg, c.l1_snr_dbhz,
-                            c.l2_snr_dbhz};
+    const WireGnssChannel w{c.prn,           c.tracking_status, c.azimuth_deg,
+                            c.elevation_deg, c.l1_snr_dbhz,     c.l2_snr_dbhz};
     std::memcpy(p, &w, sizeof(w));
   }
-  const WireGroup3Tail tail{g.hdop, g.vdop, g.dgps_latency_s, g.dgps_reference_id, g.gps_week,
-                            g.gps_utc_offset_s, g.message_latency_s, g.geoid_separation_m,
-                            g.receiver_type, g.status};
+  const WireGroup3Tail tail{g.hdop,
+                            g.vdop,
+                            g.dgps_latency_s,
+                            g.dgps_reference_id,
+                            g.gps_week,
+                            g.gps_utc_offset_s,
+                            g.message_latency_s,
+                            g.geoid_separation_m,
+                            g.receiver_type,
+                            g.status};
   std::memcpy(p, &tail, sizeof(tail));
   return seal("$GRP", 3, body, out);
 }
 
-std::size_t encode_message(std::uint16_t id, std::uint16_t transaction, std::span<const std::uint8_t> body,
+std::size_t encode_message(std::uint16_t id, std::uint16_t transaction,
+                           std::span<const std::uint8_t> body,
                            std::span<std::uint8_t> out) noexcept {
   if (!fits(2 + body.size(), out)) return 0;
   store16(out.data() + kHeaderBytes, transaction);

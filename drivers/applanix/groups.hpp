@@ -18,10 +18,10 @@ namespace stac::applanix {
 enum class TimeType : std::uint8_t { pos = 0, gps = 1, utc = 2, user = 3 };
 
 struct TimeDistance {
-  double time1_s = 0.0;         // per time1_type: POS = s since power-on; GPS/UTC = s of the week
-  double time2_s = 0.0;         // per time2_type (USER: set by the user)
+  double time1_s = 0.0;  // per time1_type: POS = s since power-on; GPS/UTC = s of the week
+  double time2_s = 0.0;  // per time2_type (USER: set by the user)
   double distance_tag_m = 0.0;
-  std::uint8_t time_types = 0;  // raw byte: bits 0-3 time1, bits 4-7 time2
+  std::uint8_t time_types = 0;     // raw byte: bits 0-3 time1, bits 4-7 time2
   std::uint8_t distance_type = 0;  // 0 none, 1 POS, 2 DMI
   TimeType time1_type() const noexcept { return static_cast<TimeType>(time_types & 0x0F); }
   TimeType time2_type() const noexcept { return static_cast<TimeType>(time_types >> 4); }
@@ -38,7 +38,7 @@ struct Group1 {  // vehicle navigation solution
   bool operator==(const Group1&) const = default;
 };
 
-struct Group2 {  // performance metrics, RMS
+struct Group2 {                             // performance metrics, RMS
   std::array<float, 3> position_rms_m{};    // north, east, down
   std::array<float, 3> velocity_rms_mps{};  // north, east, down
   std::array<float, 3> attitude_rms_deg{};  // roll, pitch, heading
@@ -91,12 +91,16 @@ bool decode_group3(std::span<const std::uint8_t> m, Group3& out) noexcept;
 bool decode_message(std::span<const std::uint8_t> m, Message& out) noexcept;
 
 // Encoders.
-std::size_t encode_group(std::uint16_t id, const TimeDistance& t, std::span<const std::uint8_t> data,
-                         std::span<std::uint8_t> out) noexcept;
-std::size_t encode_group1(const Group1& g, const TimeDistance& t, std::span<std::uint8_t> out) noexcept;
-std::size_t encode_group2(const Group2& g, const TimeDistance& t, std::span<std::uint8_t> out) noexcept;
-std::size_t encode_group3(const Group3& g, const TimeDistance& t, std::span<std::uint8_t> out) noexcept;
-std::size_t encode_message(std::uint16_t id, std::uint16_t transaction, std::span<const std::uint8_t> body,
+std::size_t encode_group(std::uint16_t id, const TimeDistance& t,
+                         std::span<const std::uint8_t> data, std::span<std::uint8_t> out) noexcept;
+std::size_t encode_group1(const Group1& g, const TimeDistance& t,
+                          std::span<std::uint8_t> out) noexcept;
+std::size_t encode_group2(const Group2& g, const TimeDistance& t,
+                          std::span<std::uint8_t> out) noexcept;
+std::size_t encode_group3(const Group3& g, const TimeDistance& t,
+                          std::span<std::uint8_t> out) noexcept;
+std::size_t encode_message(std::uint16_t id, std::uint16_t transaction,
+                           std::span<const std::uint8_t> body,
                            std::span<std::uint8_t> out) noexcept;
 
 inline constexpr std::int64_t kSecondsPerWeek = 604'800;

@@ -13,7 +13,9 @@ std::uint16_t load16(const std::uint8_t* p) noexcept {
   return static_cast<std::uint16_t>(p[0] | (p[1] << 8));
 }
 
-bool is_group(const std::uint8_t* p) noexcept { return std::memcmp(p, kGrp, 4) == 0; }
+bool is_group(const std::uint8_t* p) noexcept {
+  return std::memcmp(p, kGrp, 4) == 0;
+}
 
 // True while the first n (<= 4) bytes can still become "$GRP" or "$MSG".
 bool sync_prefix(const std::uint8_t* p, std::size_t n) noexcept {
@@ -27,7 +29,9 @@ constexpr double kHalfWeek = 302'400.0;
 StreamParser::StreamParser(std::size_t max_message_bytes)
     : buffer_(std::clamp(max_message_bytes, kGroup1Bytes, kMaxMessageBytes)) {}
 
-void StreamParser::feed(std::span<const std::uint8_t> chunk) noexcept { input_ = chunk; }
+void StreamParser::feed(std::span<const std::uint8_t> chunk) noexcept {
+  input_ = chunk;
+}
 
 void StreamParser::end_of_stream() noexcept {
   drop_front(emitted_);
@@ -132,8 +136,12 @@ void StreamParser::decode(Parsed& out) noexcept {
   (void)decode_time_distance(m, out.time);
   bool ok = true;
   switch (id) {
-    case 1: ok = decode_group1(m, out.content.emplace<Group1>()); break;
-    case 2: ok = decode_group2(m, out.content.emplace<Group2>()); break;
+    case 1:
+      ok = decode_group1(m, out.content.emplace<Group1>());
+      break;
+    case 2:
+      ok = decode_group2(m, out.content.emplace<Group2>());
+      break;
     case 3: {
       auto& g3 = out.content.emplace<Group3>();
       ok = decode_group3(m, g3);
@@ -158,7 +166,8 @@ void StreamParser::decode(Parsed& out) noexcept {
     return;
   }
   ++counters_.groups;
-  auto* slot = std::find_if(by_id_, by_id_ + id_slots_used_, [id](const IdCount& c) { return c.id == id; });
+  auto* slot =
+      std::find_if(by_id_, by_id_ + id_slots_used_, [id](const IdCount& c) { return c.id == id; });
   if (slot != by_id_ + id_slots_used_) {
     ++slot->count;
   } else if (id_slots_used_ < kIdSlots) {
@@ -170,10 +179,12 @@ void StreamParser::decode(Parsed& out) noexcept {
     // Group 3 comes about once a second: a seconds-of-week far below (above) the one it came
     // with means Sunday midnight has passed since (or had not yet passed).
     std::uint32_t week = *week_;
-    const double sow = out.time.time1_s + (out.time.time1_type() == TimeType::utc ? gps_utc_offset_s_ : 0.0);
+    const double sow =
+        out.time.time1_s + (out.time.time1_type() == TimeType::utc ? gps_utc_offset_s_ : 0.0);
     if (week_start_sow_ > 0.0 && sow < week_start_sow_ - kHalfWeek) ++week;
     if (week_start_sow_ > 0.0 && sow > week_start_sow_ + kHalfWeek && week > 0) --week;
-    out.time1_gps_ns = gps_time_ns(out.time.time1_type(), out.time.time1_s, week, gps_utc_offset_s_);
+    out.time1_gps_ns =
+        gps_time_ns(out.time.time1_type(), out.time.time1_s, week, gps_utc_offset_s_);
   }
 }
 

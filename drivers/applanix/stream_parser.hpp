@@ -25,21 +25,21 @@ struct OtherGroup {  // a valid group this parser does not decode (4, 7, 99, 200
 
 struct Parsed {
   std::variant<Group1, Group2, Group3, OtherGroup, Message> content;
-  TimeDistance time;                   // groups only
+  TimeDistance time;                         // groups only
   std::optional<std::int64_t> time1_gps_ns;  // absolute GPS time of time1 when it is GPS or UTC
                                              // and a Group 3 has given the week
   std::span<const std::uint8_t> bytes;  // the whole message; valid until the next next()/feed()
 };
 
 struct ParserCounters {
-  std::uint64_t groups = 0;         // accepted $GRP
+  std::uint64_t groups = 0;            // accepted $GRP
   std::uint64_t control_messages = 0;  // accepted $MSG
-  std::uint64_t other_groups = 0;   // accepted groups passed through undecoded
-  std::uint64_t bad_checksum = 0;   // word sum not 0
-  std::uint64_t bad_length = 0;     // byte count not a multiple of 4 or below the minimum layout
-  std::uint64_t bad_terminator = 0; // no "$#" where the byte count says
-  std::uint64_t oversize = 0;       // byte count beyond max_message_bytes
-  std::uint64_t malformed = 0;      // valid framing but a Group 1/2/3 layout that does not fit
+  std::uint64_t other_groups = 0;      // accepted groups passed through undecoded
+  std::uint64_t bad_checksum = 0;      // word sum not 0
+  std::uint64_t bad_length = 0;        // byte count not a multiple of 4 or below the minimum layout
+  std::uint64_t bad_terminator = 0;    // no "$#" where the byte count says
+  std::uint64_t oversize = 0;          // byte count beyond max_message_bytes
+  std::uint64_t malformed = 0;         // valid framing but a Group 1/2/3 layout that does not fit
   std::uint64_t garbage_bytes = 0;  // bytes skipped outside accepted messages (incl. rejected ones)
   std::uint64_t truncated = 0;      // partial messages dropped by end_of_stream()
   std::uint64_t gps_week_changes = 0;  // Group 3 gave a different week than before

@@ -35,10 +35,11 @@ rt::Result<TcpClient> TcpClient::open(const TcpClientConfig& config) {
                           "' is not an IPv4 address; set the POS computer's address (a.b.c.d)");
   }
   if (config.port == 0) return rt::make_error(where + ": port must be 1..65535");
-  if (config.connect_timeout_ms < 1 || config.stall_timeout_ms < 1 || config.initial_backoff_ms < 1 ||
-      config.max_backoff_ms < config.initial_backoff_ms) {
-    return rt::make_error(where + ": connect_timeout_ms, stall_timeout_ms and initial_backoff_ms "
-                                  "must be >= 1 and max_backoff_ms >= initial_backoff_ms");
+  if (config.connect_timeout_ms < 1 || config.stall_timeout_ms < 1 ||
+      config.initial_backoff_ms < 1 || config.max_backoff_ms < config.initial_backoff_ms) {
+    return rt::make_error(where +
+                          ": connect_timeout_ms, stall_timeout_ms and initial_backoff_ms "
+                          "must be >= 1 and max_backoff_ms >= initial_backoff_ms");
   }
   c.config_ = config;
   c.wake_fd_.reset(::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC));
@@ -91,7 +92,8 @@ bool TcpClient::try_connect(std::int64_t now_ns) noexcept {
     return true;
   }
   ++counters_.connect_failures;
-  backoff_ms_ = backoff_ms_ == 0 ? config_.initial_backoff_ms : std::min(backoff_ms_ * 2, config_.max_backoff_ms);
+  backoff_ms_ = backoff_ms_ == 0 ? config_.initial_backoff_ms
+                                 : std::min(backoff_ms_ * 2, config_.max_backoff_ms);
   next_attempt_ns_ = now_ns + backoff_ms_ * kMs;
   return false;
 }

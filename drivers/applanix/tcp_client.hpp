@@ -15,11 +15,11 @@
 namespace stac::applanix {
 
 struct TcpClientConfig {
-  std::string address;                     // the POS computer, IPv4 (no default: site-specific)
-  std::uint16_t port = 5602;               // Real-Time Data
-  int connect_timeout_ms = 2000;           // one connection attempt
-  int stall_timeout_ms = 1000;             // connected but silent this long: reconnect
-  int initial_backoff_ms = 100;            // delay after the first failure, doubled per failure
+  std::string address;            // the POS computer, IPv4 (no default: site-specific)
+  std::uint16_t port = 5602;      // Real-Time Data
+  int connect_timeout_ms = 2000;  // one connection attempt
+  int stall_timeout_ms = 1000;    // connected but silent this long: reconnect
+  int initial_backoff_ms = 100;   // delay after the first failure, doubled per failure
   int max_backoff_ms = 5000;
 };
 

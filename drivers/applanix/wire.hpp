@@ -11,28 +11,29 @@
 
 namespace stac::applanix {
 
-static_assert(std::endian::native == std::endian::little, "the wire structs assume a little-endian host");
+static_assert(std::endian::native == std::endian::little,
+              "the wire structs assume a little-endian host");
 
 inline constexpr std::uint16_t kPortDisplay = 5600;   // UDP broadcast, about 1 Hz
 inline constexpr std::uint16_t kPortControl = 5601;   // TCP
 inline constexpr std::uint16_t kPortRealTime = 5602;  // TCP (or UDP), Group 1 up to 200 Hz
 inline constexpr std::uint16_t kPortLogging = 5603;   // TCP
 
-inline constexpr std::size_t kHeaderBytes = 8;      // "$GRP"/"$MSG", id, byte count
-inline constexpr std::size_t kTrailerBytes = 4;     // checksum, "$#"
+inline constexpr std::size_t kHeaderBytes = 8;   // "$GRP"/"$MSG", id, byte count
+inline constexpr std::size_t kTrailerBytes = 4;  // checksum, "$#"
 inline constexpr std::size_t kMaxMessageBytes = 65535 + kHeaderBytes;  // the byte count is a u16
 
 #pragma pack(push, 1)
 struct WireHeader {
-  char start[4];             // "$GRP" or "$MSG"
+  char start[4];  // "$GRP" or "$MSG"
   std::uint16_t id;
   std::uint16_t byte_count;  // total length - 8
 };
 struct WireTimeDistance {
-  double time1;              // s (see time types)
-  double time2;              // s
-  double distance_tag;       // m
-  std::uint8_t time_types;   // bits 0-3 time1, bits 4-7 time2 (TimeType)
+  double time1;                // s (see time types)
+  double time2;                // s
+  double distance_tag;         // m
+  std::uint8_t time_types;     // bits 0-3 time1, bits 4-7 time2 (TimeType)
   std::uint8_t distance_type;  // 0 none, 1 POS, 2 DMI
 };
 struct WireGroup1 {
@@ -47,18 +48,18 @@ struct WireGroup1 {
   std::uint8_t alignment_status;
   std::uint8_t pad;
   std::uint16_t checksum;
-  char end[2];               // "$#"
+  char end[2];  // "$#"
 };
-struct WireGroup2Data {      // 12 RMS values
-  float position_rms_m[3];   // north, east, down
-  float velocity_rms_mps[3]; // north, east, down
-  float attitude_rms_deg[3]; // roll, pitch, heading
+struct WireGroup2Data {       // 12 RMS values
+  float position_rms_m[3];    // north, east, down
+  float velocity_rms_mps[3];  // north, east, down
+  float attitude_rms_deg[3];  // roll, pitch, heading
   float ellipse_major_m, ellipse_minor_m, ellipse_orientation_deg;
 };
 struct WireGroup3Head {
-  std::int8_t solution_status;   // -1 unknown ... 7 narrow-lane RTK
+  std::int8_t solution_status;  // -1 unknown ... 7 narrow-lane RTK
   std::uint8_t sv_count;
-  std::uint16_t channel_bytes;   // 20 per channel record
+  std::uint16_t channel_bytes;  // 20 per channel record
 };
 struct WireGnssChannel {
   std::uint16_t prn;
@@ -70,7 +71,7 @@ struct WireGroup3Tail {
   float dgps_latency_s;
   std::uint16_t dgps_reference_id;
   std::uint32_t gps_week;
-  double gps_utc_offset_s;       // GPS time - UTC, s
+  double gps_utc_offset_s;  // GPS time - UTC, s
   float message_latency_s;
   float geoid_separation_m;
   std::uint16_t receiver_type;

@@ -13,11 +13,14 @@ int hex_value(char c) noexcept {
   return -1;
 }
 
-CandumpLine malformed(const char* reason) noexcept { return {CandumpLineKind::kMalformed, reason, {}}; }
+CandumpLine malformed(const char* reason) noexcept {
+  return {CandumpLineKind::kMalformed, reason, {}};
+}
 
 std::string_view trim(std::string_view s) noexcept {
   while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) s.remove_suffix(1);
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r'))
+    s.remove_suffix(1);
   return s;
 }
 
@@ -35,7 +38,8 @@ bool parse_stamp(std::string_view t, std::int64_t& stamp_ns) noexcept {
   if (t.size() < 4 || t.front() != '(' || t.back() != ')') return false;
   t = t.substr(1, t.size() - 2);
   const std::size_t dot = t.find('.');
-  if (dot == std::string_view::npos || dot == 0 || dot > 12 || t.size() - dot - 1 > 9 || t.size() == dot + 1) {
+  if (dot == std::string_view::npos || dot == 0 || dot > 12 || t.size() - dot - 1 > 9 ||
+      t.size() == dot + 1) {
     return false;
   }
   std::int64_t sec = 0, frac = 0;
@@ -59,7 +63,8 @@ CandumpLine parse_candump_line(std::string_view line, Frame& frame) noexcept {
   std::string_view rest = trim(line);
   if (rest.empty()) return {CandumpLineKind::kBlank, "", {}};
   Frame f;
-  if (!parse_stamp(token(rest), f.stamp_ns)) return malformed("expected a timestamp like (1700000000.123456)");
+  if (!parse_stamp(token(rest), f.stamp_ns))
+    return malformed("expected a timestamp like (1700000000.123456)");
   const std::string_view interface = token(rest);
   if (interface.empty() || interface.find('#') != std::string_view::npos) {
     return malformed("expected an interface name after the timestamp");
@@ -71,9 +76,11 @@ CandumpLine parse_candump_line(std::string_view line, Frame& frame) noexcept {
   }
   const std::size_t hash = body.find('#');
   if (hash == std::string_view::npos) return malformed("expected <id>#<data>");
-  if (hash + 1 < body.size() && body[hash + 1] == '#') return {CandumpLineKind::kCanFd, "", interface};
+  if (hash + 1 < body.size() && body[hash + 1] == '#')
+    return {CandumpLineKind::kCanFd, "", interface};
   const std::string_view id = body.substr(0, hash);
-  if (id.size() != 3 && id.size() != 8) return malformed("the id must have 3 (standard) or 8 (extended) hex digits");
+  if (id.size() != 3 && id.size() != 8)
+    return malformed("the id must have 3 (standard) or 8 (extended) hex digits");
   std::uint32_t value = 0;
   for (const char c : id) {
     const int h = hex_value(c);
@@ -87,7 +94,8 @@ CandumpLine parse_candump_line(std::string_view line, Frame& frame) noexcept {
     f.error = true;
     f.id = value & kExtendedIdMask;
   } else {
-    if (value > kExtendedIdMask) return malformed("an 8-digit id must be at most 1FFFFFFF (or an error frame)");
+    if (value > kExtendedIdMask)
+      return malformed("an 8-digit id must be at most 1FFFFFFF (or an error frame)");
     f.extended = true;
     f.id = value;
   }
@@ -145,13 +153,16 @@ rt::Result<bool> CandumpReader::next(Frame& frame) {
         return rt::make_error(file_ + ":" + std::to_string(counters_.lines) + ": " + l.reason);
     }
   }
-  if (in_.bad()) return rt::make_error(file_ + ": read error after line " + std::to_string(counters_.lines));
+  if (in_.bad())
+    return rt::make_error(file_ + ": read error after line " + std::to_string(counters_.lines));
   return false;
 }
 
-rt::Result<CandumpWriter> CandumpWriter::open(const std::filesystem::path& file, std::string interface) {
+rt::Result<CandumpWriter> CandumpWriter::open(const std::filesystem::path& file,
+                                              std::string interface) {
   if (interface.empty() || interface.find_first_of(" \t#") != std::string::npos) {
-    return rt::make_error("candump writer: interface name '" + interface + "' is empty or has spaces or '#'");
+    return rt::make_error("candump writer: interface name '" + interface +
+                          "' is empty or has spaces or '#'");
   }
   CandumpWriter w;
   w.out_.open(file, std::ios::binary | std::ios::trunc);
@@ -167,7 +178,8 @@ bool CandumpWriter::write(const Frame& f) {
   int n = std::snprintf(buf, sizeof(buf), "(%" PRId64 ".%06" PRId64 ") ", sec, usec);
   out_ << std::string_view(buf, static_cast<std::size_t>(n)) << interface_ << ' ';
   if (f.error) {
-    n = std::snprintf(buf, sizeof(buf), "%08" PRIX32 "#", (f.id & kExtendedIdMask) | kSocketCanErrFlag);
+    n = std::snprintf(buf, sizeof(buf), "%08" PRIX32 "#",
+                      (f.id & kExtendedIdMask) | kSocketCanErrFlag);
   } else if (f.extended) {
     n = std::snprintf(buf, sizeof(buf), "%08" PRIX32 "#", f.id & kExtendedIdMask);
   } else {

@@ -31,7 +31,8 @@ void store_le(std::uint64_t v, std::span<std::uint8_t, 8> p) noexcept {
   for (std::size_t i = 0; i < 8; ++i, v >>= 8) p[i] = static_cast<std::uint8_t>(v);
 }
 void store_be(std::uint64_t v, std::span<std::uint8_t, 8> p) noexcept {
-  for (int i = 7; i >= 0; --i, v >>= 8) p[static_cast<std::size_t>(i)] = static_cast<std::uint8_t>(v);
+  for (int i = 7; i >= 0; --i, v >>= 8)
+    p[static_cast<std::size_t>(i)] = static_cast<std::uint8_t>(v);
 }
 
 // Bit index of the signal's least significant bit in the 64-bit word the payload loads as
@@ -157,7 +158,8 @@ class Parser {
     std::uint64_t raw_id = 0;
     if (!c.number(raw_id, ":")) return where() + "BO_: expected a numeric message id";
     std::string_view name = c.word(":");
-    if (!c.accept(':')) return where() + "BO_ " + std::string(name) + ": expected ':' after the name";
+    if (!c.accept(':'))
+      return where() + "BO_ " + std::string(name) + ": expected ':' after the name";
     unsigned dlc = 0;
     if (!c.number(dlc, "")) return where() + "BO_ " + std::string(name) + ": expected the dlc";
     if (raw_id == kIndependentSignalsId) {  // signals of no message: skipped with it
@@ -166,22 +168,28 @@ class Parser {
       return {};
     }
     skipping_ = false;
-    if (!valid_identifier(name)) return where() + "BO_: '" + std::string(name) + "' is not a valid message name";
-    if (dlc > 8) return where() + "BO_ " + std::string(name) + ": dlc " + std::to_string(dlc) + " > 8 (CAN FD is not supported)";
+    if (!valid_identifier(name))
+      return where() + "BO_: '" + std::string(name) + "' is not a valid message name";
+    if (dlc > 8)
+      return where() + "BO_ " + std::string(name) + ": dlc " + std::to_string(dlc) +
+             " > 8 (CAN FD is not supported)";
     Message m;
     m.extended = (raw_id & kDbcExtendedFlag) != 0;
     const std::uint64_t id = raw_id & ~std::uint64_t{kDbcExtendedFlag};
     if (id > (m.extended ? kExtendedIdMask : kStandardIdMask)) {
       return where() + "BO_ " + std::string(name) + ": id " + std::to_string(raw_id) +
-             (m.extended ? " does not fit 29 bits" : " does not fit 11 bits (extended ids carry 0x80000000)");
+             (m.extended ? " does not fit 29 bits"
+                         : " does not fit 11 bits (extended ids carry 0x80000000)");
     }
     m.id = static_cast<std::uint32_t>(id);
     m.name = name;
     m.dlc = static_cast<std::uint8_t>(dlc);
     for (const Message& other : db_.messages) {
-      if (other.name == m.name) return where() + "BO_: message name '" + m.name + "' is defined twice";
+      if (other.name == m.name)
+        return where() + "BO_: message name '" + m.name + "' is defined twice";
       if (other.id == m.id && other.extended == m.extended) {
-        return where() + "BO_ " + m.name + ": id " + std::to_string(raw_id) + " is already used by " + other.name;
+        return where() + "BO_ " + m.name + ": id " + std::to_string(raw_id) +
+               " is already used by " + other.name;
       }
     }
     db_.messages.push_back(std::move(m));
@@ -195,7 +203,8 @@ class Parser {
     Signal s;
     s.name = c.word(":");
     const std::string what = where() + "SG_ " + current_->name + "." + s.name + ": ";
-    if (!valid_identifier(s.name)) return where() + "SG_: '" + s.name + "' is not a valid signal name";
+    if (!valid_identifier(s.name))
+      return where() + "SG_: '" + s.name + "' is not a valid signal name";
     if (!c.peek(':')) {  // multiplexer indicator
       const std::string_view mux = c.word(":");
       if (mux == "M") {
@@ -208,13 +217,15 @@ class Parser {
           return what + "bad multiplexer indicator '" + std::string(mux) + "'";
         }
       } else {
-        return what + "expected ':' or a multiplexer indicator (M, mN), found '" + std::string(mux) + "'";
+        return what + "expected ':' or a multiplexer indicator (M, mN), found '" +
+               std::string(mux) + "'";
       }
     }
     if (!c.accept(':')) return what + "expected ':'";
     unsigned start = 0, length = 0;
     if (!c.number(start, "|")) return what + "expected the start bit";
-    if (!c.accept('|') || !c.number(length, "@")) return what + "expected '|' and the length in bits";
+    if (!c.accept('|') || !c.number(length, "@"))
+      return what + "expected '|' and the length in bits";
     if (!c.accept('@')) return what + "expected '@' and the byte order";
     if (c.accept('1')) {
       s.order = ByteOrder::kIntel;
@@ -237,7 +248,8 @@ class Parser {
       return what + "expected [min|max]";
     }
     if (!c.quoted(s.unit)) return what + "expected the unit in double quotes";
-    if (length < 1 || length > 64) return what + "length " + std::to_string(length) + " is not in 1..64";
+    if (length < 1 || length > 64)
+      return what + "length " + std::to_string(length) + " is not in 1..64";
     if (start > 63) return what + "start bit " + std::to_string(start) + " is not in 0..63";
     if (s.factor == 0.0 || !std::isfinite(s.factor) || !std::isfinite(s.offset)) {
       return what + "factor must be finite and non-zero, offset finite";
@@ -275,8 +287,8 @@ std::int64_t Signal::raw(std::span<const std::uint8_t, 8> payload) const noexcep
 
 double Signal::decode(std::span<const std::uint8_t, 8> payload) const noexcept {
   const std::int64_t r = raw(payload);
-  const double value = is_signed ? static_cast<double>(r)
-                                 : static_cast<double>(static_cast<std::uint64_t>(r));
+  const double value =
+      is_signed ? static_cast<double>(r) : static_cast<double>(static_cast<std::uint64_t>(r));
   return value * factor + offset;
 }
 
@@ -285,8 +297,8 @@ bool Signal::encode(double physical, std::span<std::uint8_t, 8> payload) const n
   const double lo = is_signed ? -std::ldexp(1.0, length - 1) : 0.0;
   const double hi = is_signed ? std::ldexp(1.0, length - 1) : std::ldexp(1.0, length);
   if (!(r >= lo && r < hi)) return false;  // also rejects NaN
-  const std::uint64_t bits =
-      r < 0 ? static_cast<std::uint64_t>(static_cast<std::int64_t>(r)) : static_cast<std::uint64_t>(r);
+  const std::uint64_t bits = r < 0 ? static_cast<std::uint64_t>(static_cast<std::int64_t>(r))
+                                   : static_cast<std::uint64_t>(r);
   const int lsb = lsb_in_word(*this);
   const std::uint64_t m = mask_of(length) << lsb;
   std::uint64_t word = order == ByteOrder::kIntel ? load_le(payload) : load_be(payload);
@@ -300,7 +312,8 @@ bool Signal::encode(double physical, std::span<std::uint8_t, 8> payload) const n
 }
 
 std::uint8_t Signal::bytes_needed() const noexcept {
-  if (order == ByteOrder::kIntel) return static_cast<std::uint8_t>((start_bit + length - 1) / 8 + 1);
+  if (order == ByteOrder::kIntel)
+    return static_cast<std::uint8_t>((start_bit + length - 1) / 8 + 1);
   const int lsb = lsb_in_word(*this);
   return static_cast<std::uint8_t>(8 - (lsb < 0 ? 0 : lsb / 8));
 }

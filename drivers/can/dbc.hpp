@@ -34,7 +34,7 @@ struct Signal {
   double min = 0.0;  // documented range (physical units); not enforced by decode()
   double max = 0.0;
   std::string unit;
-  bool multiplexer = false;          // "M": selects which multiplexed signals are present
+  bool multiplexer = false;           // "M": selects which multiplexed signals are present
   std::int64_t multiplex_value = -1;  // "mN": present when the multiplexer equals N; -1 = always
 
   // The raw bits (sign-extended when signed) from a payload of at least bytes_needed() bytes.
@@ -49,8 +49,8 @@ struct Signal {
 };
 
 struct Message {
-  std::uint32_t id = 0;    // without the DBC extended flag (0x80000000)
-  bool extended = false;   // the DBC id carried 0x80000000: a 29-bit identifier
+  std::uint32_t id = 0;   // without the DBC extended flag (0x80000000)
+  bool extended = false;  // the DBC id carried 0x80000000: a 29-bit identifier
   std::string name;
   std::uint8_t dlc = 8;
   std::vector<Signal> signals;

@@ -37,18 +37,25 @@ inline constexpr std::uint32_t kFlagLoopBack = 1u << 1;
 inline constexpr std::uint32_t kFlagHwTimestamp = 1u << 4;
 
 // gs_host_frame.flags.
-inline constexpr std::uint8_t kFrameFlagOverflow = 1u << 0;  // the adapter lost frames before this one
+inline constexpr std::uint8_t kFrameFlagOverflow = 1u
+                                                   << 0;  // the adapter lost frames before this one
 inline constexpr std::uint8_t kFrameFlagFd = 1u << 1;
 
 #pragma pack(push, 1)
-struct HostConfig { std::uint32_t byte_order; };
+struct HostConfig {
+  std::uint32_t byte_order;
+};
 struct DeviceConfig {
   std::uint8_t reserved1, reserved2, reserved3;
   std::uint8_t icount;  // number of CAN channels - 1
   std::uint32_t sw_version, hw_version;
 };
-struct DeviceMode { std::uint32_t mode, flags; };
-struct BitTiming { std::uint32_t prop_seg, phase_seg1, phase_seg2, sjw, brp; };
+struct DeviceMode {
+  std::uint32_t mode, flags;
+};
+struct BitTiming {
+  std::uint32_t prop_seg, phase_seg1, phase_seg2, sjw, brp;
+};
 struct BtConst {
   std::uint32_t feature, fclk_can, tseg1_min, tseg1_max, tseg2_min, tseg2_max, sjw_max, brp_min,
       brp_max, brp_inc;
@@ -77,10 +84,10 @@ enum class DecodeStatus : std::uint8_t {
 
 struct DecodedFrame {
   DecodeStatus status = DecodeStatus::kTruncated;
-  Frame frame;                  // stamp_ns left 0: the caller stamps it
+  Frame frame;  // stamp_ns left 0: the caller stamps it
   std::uint32_t echo_id = 0;
   std::uint8_t channel = 0;
-  bool overflow = false;        // kFrameFlagOverflow was set
+  bool overflow = false;  // kFrameFlagOverflow was set
   bool has_timestamp = false;
   std::uint32_t timestamp_us = 0;
 };

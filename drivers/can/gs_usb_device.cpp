@@ -15,13 +15,15 @@ namespace {
 constexpr int kInterface = 0;
 constexpr unsigned kControlTimeoutMs = 1000;
 // bmRequestType: vendor request to the interface, host-to-device (0x41) or device-to-host (0xC1).
-constexpr std::uint8_t kVendorInterface =
-    static_cast<std::uint8_t>(LIBUSB_REQUEST_TYPE_VENDOR) | static_cast<std::uint8_t>(LIBUSB_RECIPIENT_INTERFACE);
+constexpr std::uint8_t kVendorInterface = static_cast<std::uint8_t>(LIBUSB_REQUEST_TYPE_VENDOR) |
+                                          static_cast<std::uint8_t>(LIBUSB_RECIPIENT_INTERFACE);
 constexpr std::uint8_t kOut = static_cast<std::uint8_t>(LIBUSB_ENDPOINT_OUT) | kVendorInterface;
 constexpr std::uint8_t kIn = static_cast<std::uint8_t>(LIBUSB_ENDPOINT_IN) | kVendorInterface;
 static_assert(kOut == 0x41 && kIn == 0xC1);
 
-std::string usb_error(int code) { return std::string(libusb_error_name(code)); }
+std::string usb_error(int code) {
+  return std::string(libusb_error_name(code));
+}
 
 std::string id_text() {
   char buf[16];
@@ -30,10 +32,11 @@ std::string id_text() {
 }
 
 template <class T>
-int control(libusb_device_handle* h, std::uint8_t type, gs_usb::Request request, std::uint16_t value,
-            T& body) {
+int control(libusb_device_handle* h, std::uint8_t type, gs_usb::Request request,
+            std::uint16_t value, T& body) {
   return libusb_control_transfer(h, type, static_cast<std::uint8_t>(request), value, kInterface,
-                                 reinterpret_cast<unsigned char*>(&body), sizeof(T), kControlTimeoutMs);
+                                 reinterpret_cast<unsigned char*>(&body), sizeof(T),
+                                 kControlTimeoutMs);
 }
 
 }  // namespace
@@ -44,17 +47,22 @@ rt::Result<GsUsbDevice> GsUsbDevice::open(const GsUsbConfig& config) {
   const std::string what = "gs_usb (" + id_text() + "): ";
   if (const int rc = libusb_init(&d.context_); rc != 0) {
     d.context_ = nullptr;
-    return rt::make_error(what + "libusb_init failed (" + usb_error(rc) + "); is /dev/bus/usb available?");
+    return rt::make_error(what + "libusb_init failed (" + usb_error(rc) +
+                          "); is /dev/bus/usb available?");
   }
   d.handle_ = libusb_open_device_with_vid_pid(d.context_, gs_usb::kVendorId, gs_usb::kProductId);
   if (d.handle_ == nullptr) {
-    return rt::make_error(what + "no gs_usb/candleLight adapter found, or no permission to open it: "
-                                 "check `lsusb -d " + id_text() + "` and a udev rule granting access "
-                                 "(deploy/60-stac-gs-usb.rules, docs/can.md)");
+    return rt::make_error(what +
+                          "no gs_usb/candleLight adapter found, or no permission to open it: "
+                          "check `lsusb -d " +
+                          id_text() +
+                          "` and a udev rule granting access "
+                          "(deploy/60-stac-gs-usb.rules, docs/can.md)");
   }
   libusb_set_auto_detach_kernel_driver(d.handle_, 1);  // unbind the kernel gs_usb driver if bound
   if (const int rc = libusb_claim_interface(d.handle_, kInterface); rc != 0) {
-    return rt::make_error(what + "cannot claim interface 0 (" + usb_error(rc) + "); another program uses it?");
+    return rt::make_error(what + "cannot claim interface 0 (" + usb_error(rc) +
+                          "); another program uses it?");
   }
   d.claimed_ = true;
   gs_usb::HostConfig host{gs_usb::kHostFormatLittleEndian};
@@ -66,19 +74,22 @@ rt::Result<GsUsbDevice> GsUsbDevice::open(const GsUsbConfig& config) {
     return rt::make_error(what + "DEVICE_CONFIG request failed (" + usb_error(rc) + ")");
   }
   if (config.channel > dc.icount) {
-    return rt::make_error(what + "channel " + std::to_string(config.channel) + " requested, the adapter has " +
-                          std::to_string(dc.icount + 1));
+    return rt::make_error(what + "channel " + std::to_string(config.channel) +
+                          " requested, the adapter has " + std::to_string(dc.icount + 1));
   }
   gs_usb::BtConst bt{};
-  if (const int rc = control(d.handle_, kIn, gs_usb::Request::kBtConst, config.channel, bt); rc < 0) {
+  if (const int rc = control(d.handle_, kIn, gs_usb::Request::kBtConst, config.channel, bt);
+      rc < 0) {
     return rt::make_error(what + "BT_CONST request failed (" + usb_error(rc) + ")");
   }
   if (!gs_usb::compute_bit_timing(bt, config.bitrate_bps, d.timing_)) {
     return rt::make_error(what + "bitrate " + std::to_string(config.bitrate_bps) +
-                          " bit/s cannot be made exactly from the adapter's " + std::to_string(bt.fclk_can) +
-                          " Hz clock");
+                          " bit/s cannot be made exactly from the adapter's " +
+                          std::to_string(bt.fclk_can) + " Hz clock");
   }
-  if (const int rc = control(d.handle_, kOut, gs_usb::Request::kBitTiming, config.channel, d.timing_); rc < 0) {
+  if (const int rc =
+          control(d.handle_, kOut, gs_usb::Request::kBitTiming, config.channel, d.timing_);
+      rc < 0) {
     return rt::make_error(what + "BITTIMING request failed (" + usb_error(rc) + ")");
   }
   d.config_.hw_timestamp = config.hw_timestamp && (bt.feature & gs_usb::kFlagHwTimestamp) != 0;
@@ -86,10 +97,13 @@ rt::Result<GsUsbDevice> GsUsbDevice::open(const GsUsbConfig& config) {
                           (config.listen_only ? gs_usb::kFlagListenOnly : 0u) |
                               (d.config_.hw_timestamp ? gs_usb::kFlagHwTimestamp : 0u)};
   if (config.listen_only && (bt.feature & gs_usb::kFlagListenOnly) == 0) {
-    return rt::make_error(what + "the adapter cannot listen only; set can.gs_usb_listen_only: false to allow "
-                                 "acknowledging frames on the bus");
+    return rt::make_error(
+        what +
+        "the adapter cannot listen only; set can.gs_usb_listen_only: false to allow "
+        "acknowledging frames on the bus");
   }
-  if (const int rc = control(d.handle_, kOut, gs_usb::Request::kMode, config.channel, mode); rc < 0) {
+  if (const int rc = control(d.handle_, kOut, gs_usb::Request::kMode, config.channel, mode);
+      rc < 0) {
     return rt::make_error(what + "MODE start failed (" + usb_error(rc) + ")");
   }
   return d;
@@ -104,7 +118,9 @@ GsUsbDevice::GsUsbDevice(GsUsbDevice&& o) noexcept
       stop_(o.stop_.load()),
       counters_(o.counters_) {}
 
-GsUsbDevice::~GsUsbDevice() { close(); }
+GsUsbDevice::~GsUsbDevice() {
+  close();
+}
 
 void GsUsbDevice::close() noexcept {
   if (handle_ != nullptr) {
@@ -136,14 +152,21 @@ int GsUsbDevice::read(std::span<Frame> out, int timeout_ms) noexcept {
     waited += slice;
     if (rc == LIBUSB_ERROR_TIMEOUT && got == 0) continue;
     if (rc != 0 && rc != LIBUSB_ERROR_TIMEOUT) return kError;
-    const auto d = gs_usb::decode_frame(std::span<const std::uint8_t>(buffer, static_cast<std::size_t>(got)),
-                                        config_.hw_timestamp);
+    const auto d = gs_usb::decode_frame(
+        std::span<const std::uint8_t>(buffer, static_cast<std::size_t>(got)), config_.hw_timestamp);
     if (d.overflow) ++counters_.overflows;
     switch (d.status) {
-      case gs_usb::DecodeStatus::kTruncated: ++counters_.truncated; continue;
-      case gs_usb::DecodeStatus::kCanFd: ++counters_.can_fd; continue;
-      case gs_usb::DecodeStatus::kEcho: ++counters_.echoes; continue;
-      case gs_usb::DecodeStatus::kReceived: break;
+      case gs_usb::DecodeStatus::kTruncated:
+        ++counters_.truncated;
+        continue;
+      case gs_usb::DecodeStatus::kCanFd:
+        ++counters_.can_fd;
+        continue;
+      case gs_usb::DecodeStatus::kEcho:
+        ++counters_.echoes;
+        continue;
+      case gs_usb::DecodeStatus::kReceived:
+        break;
     }
     if (d.channel != config_.channel) {
       ++counters_.other_channel;

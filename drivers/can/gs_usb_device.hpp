@@ -21,8 +21,8 @@ namespace stac::can {
 struct GsUsbConfig {
   std::uint32_t bitrate_bps = 500'000;
   std::uint8_t channel = 0;
-  bool listen_only = true;      // never acknowledge or send on the vehicle bus
-  bool hw_timestamp = true;     // 24-byte frames with the adapter's microsecond clock, if supported
+  bool listen_only = true;   // never acknowledge or send on the vehicle bus
+  bool hw_timestamp = true;  // 24-byte frames with the adapter's microsecond clock, if supported
   int transfer_timeout_ms = 100;  // bulk-read slice: how quickly stop() is noticed
 };
 

@@ -9,10 +9,12 @@ namespace {
 rt::Result<OdometryDecoder::Channel> channel(const Database& db, const std::string& message,
                                              const std::string& signal, const char* what) {
   const Message* m = db.find(message);
-  if (m == nullptr) return rt::make_error(std::string(what) + ": the DBC has no message '" + message + "'");
+  if (m == nullptr)
+    return rt::make_error(std::string(what) + ": the DBC has no message '" + message + "'");
   const Signal* s = m->find(signal);
   if (s == nullptr) {
-    return rt::make_error(std::string(what) + ": message '" + message + "' has no signal '" + signal + "'");
+    return rt::make_error(std::string(what) + ": message '" + message + "' has no signal '" +
+                          signal + "'");
   }
   if (s->multiplexer || s->multiplex_value >= 0) {
     return rt::make_error(std::string(what) + ": signal '" + message + "." + signal +
@@ -27,7 +29,8 @@ rt::Result<OdometryDecoder::Channel> channel(const Database& db, const std::stri
 
 }  // namespace
 
-rt::Result<OdometryDecoder> OdometryDecoder::create(const Database& db, const OdometrySignalMap& map) {
+rt::Result<OdometryDecoder> OdometryDecoder::create(const Database& db,
+                                                    const OdometrySignalMap& map) {
   auto speed = channel(db, map.speed_message, map.speed_signal, "speed");
   if (!speed) return rt::Unexpected<rt::Error>{speed.error()};
   auto yaw = channel(db, map.yaw_rate_message, map.yaw_rate_signal, "yaw rate");
@@ -38,8 +41,8 @@ rt::Result<OdometryDecoder> OdometryDecoder::create(const Database& db, const Od
   } else if (su == "km/h" || su == "kph") {
     speed->scale = 1.0 / 3.6;
   } else {
-    return rt::make_error("speed: signal '" + map.speed_message + "." + map.speed_signal + "' has unit '" +
-                          su + "'; expected km/h or m/s");
+    return rt::make_error("speed: signal '" + map.speed_message + "." + map.speed_signal +
+                          "' has unit '" + su + "'; expected km/h or m/s");
   }
   const std::string& yu = yaw->signal.unit;
   if (yu == "deg/s" || yu == "\xC2\xB0/s") {
@@ -64,7 +67,9 @@ OdometryUpdate OdometryDecoder::decode(const Frame& frame) noexcept {
   ++counters_.frames;
   OdometryUpdate u;
   u.stamp_ns = frame.stamp_ns;
-  const auto matches = [&frame](const Channel& c) { return c.id == frame.id && c.extended == frame.extended; };
+  const auto matches = [&frame](const Channel& c) {
+    return c.id == frame.id && c.extended == frame.extended;
+  };
   const bool is_speed = matches(speed_);
   const bool is_yaw = matches(yaw_rate_);
   if (!is_speed && !is_yaw) {
@@ -100,15 +105,19 @@ OdometryUpdate OdometryDecoder::decode(const Frame& frame) noexcept {
 
 std::vector<CanIdFilter> OdometryDecoder::filters() const {
   std::vector<CanIdFilter> f{{speed_.id, speed_.extended}};
-  if (yaw_rate_.id != speed_.id || yaw_rate_.extended != speed_.extended) f.push_back({yaw_rate_.id, yaw_rate_.extended});
+  if (yaw_rate_.id != speed_.id || yaw_rate_.extended != speed_.extended)
+    f.push_back({yaw_rate_.id, yaw_rate_.extended});
   return f;
 }
 
 const char* to_string(DeadReckoningStatus status) noexcept {
   switch (status) {
-    case DeadReckoningStatus::kNoInput: return "no_input";
-    case DeadReckoningStatus::kOk: return "ok";
-    case DeadReckoningStatus::kStale: return "stale";
+    case DeadReckoningStatus::kNoInput:
+      return "no_input";
+    case DeadReckoningStatus::kOk:
+      return "ok";
+    case DeadReckoningStatus::kStale:
+      return "stale";
   }
   return "?";
 }

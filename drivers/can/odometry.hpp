@@ -37,11 +37,11 @@ struct OdometryUpdate {
 };
 
 struct OdometryDecoderCounters {
-  std::uint64_t frames = 0;       // frames offered
-  std::uint64_t decoded = 0;      // frames that carried speed or yaw rate
-  std::uint64_t not_mapped = 0;   // ids outside the signal map: dropped here (SocketCAN's kernel
-                                  // filter drops them before; gs_usb delivers the whole bus)
-  std::uint64_t short_frames = 0; // the right id but fewer bytes than the signal needs: dropped
+  std::uint64_t frames = 0;        // frames offered
+  std::uint64_t decoded = 0;       // frames that carried speed or yaw rate
+  std::uint64_t not_mapped = 0;    // ids outside the signal map: dropped here (SocketCAN's kernel
+                                   // filter drops them before; gs_usb delivers the whole bus)
+  std::uint64_t short_frames = 0;  // the right id but fewer bytes than the signal needs: dropped
   std::uint64_t remote_or_error = 0;  // remote and error frames with a mapped id: ignored
 };
 

@@ -20,7 +20,9 @@ namespace {
 static_assert(sizeof(can_frame) == 16 && CAN_MTU == 16, "classic SocketCAN frame is 16 bytes");
 static_assert(CANFD_MTU == 72, "CAN FD SocketCAN frame is 72 bytes");
 
-std::string errno_text(int e) { return std::string(std::strerror(e)) + ", errno " + std::to_string(e); }
+std::string errno_text(int e) {
+  return std::string(std::strerror(e)) + ", errno " + std::to_string(e);
+}
 
 }  // namespace
 
@@ -71,8 +73,9 @@ rt::Result<SocketCanReader> SocketCanReader::open(const SocketCanConfig& config)
   addr.can_ifindex = static_cast<int>(index);
   if (::bind(fd.get(), reinterpret_cast<const sockaddr*>(&addr), sizeof(addr)) != 0) {
     const int e = errno;
-    return rt::make_error("SocketCAN: cannot bind to '" + name + "' (is it a CAN interface and up? " +
-                          "`ip link set " + name + " up`): " + errno_text(e));
+    return rt::make_error("SocketCAN: cannot bind to '" + name +
+                          "' (is it a CAN interface and up? " + "`ip link set " + name +
+                          " up`): " + errno_text(e));
   }
   return adopt(fd.release());
 }
@@ -107,7 +110,8 @@ int SocketCanReader::read(std::span<Frame> out, int timeout_ms) noexcept {
   int count = 0;
   while (static_cast<std::size_t>(count) < out.size()) {
     alignas(can_frame) std::uint8_t record[CANFD_MTU + 8];
-    alignas(cmsghdr) std::uint8_t control[CMSG_SPACE(sizeof(timespec)) + CMSG_SPACE(sizeof(std::uint32_t))];
+    alignas(cmsghdr)
+        std::uint8_t control[CMSG_SPACE(sizeof(timespec)) + CMSG_SPACE(sizeof(std::uint32_t))];
     iovec iov{record, sizeof(record)};
     msghdr msg{};
     msg.msg_iov = &iov;

@@ -9,10 +9,10 @@ namespace stac::io {
 namespace {
 
 constexpr int kLinkEthernet = DLT_EN10MB;
-constexpr int kLinkCooked = DLT_LINUX_SLL;    // 113
-constexpr int kLinkCooked2 = 276;             // DLT_LINUX_SLL2
+constexpr int kLinkCooked = DLT_LINUX_SLL;  // 113
+constexpr int kLinkCooked2 = 276;           // DLT_LINUX_SLL2
 constexpr int kLinkRaw = DLT_RAW;
-constexpr int kLinkIpv4 = 228;                // DLT_IPV4
+constexpr int kLinkIpv4 = 228;  // DLT_IPV4
 constexpr std::uint16_t kEtherIpv4 = 0x0800;
 constexpr std::uint16_t kEtherVlan = 0x8100;
 constexpr std::uint16_t kEtherQinQ = 0x88A8;
@@ -43,7 +43,8 @@ void PcapReader::Closer::operator()(pcap* p) const noexcept {
 rt::Result<PcapReader> PcapReader::open(const std::filesystem::path& path, const PcapFilter& filter,
                                         const TcpFilter& tcp_filter) {
   char errbuf[PCAP_ERRBUF_SIZE] = {};
-  pcap* p = pcap_open_offline_with_tstamp_precision(path.c_str(), PCAP_TSTAMP_PRECISION_NANO, errbuf);
+  pcap* p =
+      pcap_open_offline_with_tstamp_precision(path.c_str(), PCAP_TSTAMP_PRECISION_NANO, errbuf);
   if (p == nullptr) {
     return rt::make_error(path.string() + ": cannot read as a pcap capture: " + errbuf);
   }
@@ -54,10 +55,17 @@ rt::Result<PcapReader> PcapReader::open(const std::filesystem::path& path, const
   r.tcp_filter_ = tcp_filter;
   r.link_type_ = pcap_datalink(p);
   switch (r.link_type_) {
-    case kLinkEthernet: case kLinkCooked: case kLinkCooked2: case kLinkRaw: case kLinkIpv4: break;
+    case kLinkEthernet:
+    case kLinkCooked:
+    case kLinkCooked2:
+    case kLinkRaw:
+    case kLinkIpv4:
+      break;
     default:
       return rt::make_error(path.string() + ": link type " + std::to_string(r.link_type_) + " (" +
-                            (pcap_datalink_val_to_name(r.link_type_) ? pcap_datalink_val_to_name(r.link_type_) : "?") +
+                            (pcap_datalink_val_to_name(r.link_type_)
+                                 ? pcap_datalink_val_to_name(r.link_type_)
+                                 : "?") +
                             ") is not supported; use Ethernet, Linux cooked or raw IP captures");
   }
   return r;
@@ -69,22 +77,34 @@ const std::uint8_t* PcapReader::ipv4(const std::uint8_t* f, std::uint32_t caplen
   std::uint16_t proto = kEtherIpv4;
   switch (link_type_) {
     case kLinkEthernet:
-      if (caplen < 14) { ++counters_.truncated_frame; return nullptr; }
+      if (caplen < 14) {
+        ++counters_.truncated_frame;
+        return nullptr;
+      }
       proto = be16(f + 12);
       off = 14;
       while (proto == kEtherVlan || proto == kEtherQinQ) {
-        if (caplen < off + 4) { ++counters_.truncated_frame; return nullptr; }
+        if (caplen < off + 4) {
+          ++counters_.truncated_frame;
+          return nullptr;
+        }
         proto = be16(f + off + 2);
         off += 4;
       }
       break;
     case kLinkCooked:
-      if (caplen < 16) { ++counters_.truncated_frame; return nullptr; }
+      if (caplen < 16) {
+        ++counters_.truncated_frame;
+        return nullptr;
+      }
       proto = be16(f + 14);
       off = 16;
       break;
     case kLinkCooked2:
-      if (caplen < 20) { ++counters_.truncated_frame; return nullptr; }
+      if (caplen < 20) {
+        ++counters_.truncated_frame;
+        return nullptr;
+      }
       proto = be16(f);
       off = 20;
       break;
@@ -102,7 +122,10 @@ const std::uint8_t* PcapReader::ipv4(const std::uint8_t* f, std::uint32_t caplen
   const std::uint8_t* ip = f + off;
   const std::uint32_t ihl = (ip[0] & 0x0Fu) * 4u;
   const std::uint16_t total = be16(ip + 2);
-  if (ihl < 20 || total < ihl) { ++counters_.bad_header; return nullptr; }
+  if (ihl < 20 || total < ihl) {
+    ++counters_.bad_header;
+    return nullptr;
+  }
   ip_bytes = caplen - off;
   return ip;
 }
@@ -113,14 +136,29 @@ bool PcapReader::parse(const std::uint8_t* f, std::uint32_t caplen, Datagram& ou
   if (ip == nullptr) return false;
   const std::uint32_t ihl = (ip[0] & 0x0Fu) * 4u;
   const std::uint16_t total = be16(ip + 2);
-  if (ip[9] != kProtoUdp) { ++counters_.non_udp; return false; }
+  if (ip[9] != kProtoUdp) {
+    ++counters_.non_udp;
+    return false;
+  }
   const std::uint16_t frag = be16(ip + 6);
-  if ((frag & 0x2000u) != 0 || (frag & 0x1FFFu) != 0) { ++counters_.fragments; return false; }
-  if (ip_bytes < ihl + 8) { ++counters_.truncated_frame; return false; }
+  if ((frag & 0x2000u) != 0 || (frag & 0x1FFFu) != 0) {
+    ++counters_.fragments;
+    return false;
+  }
+  if (ip_bytes < ihl + 8) {
+    ++counters_.truncated_frame;
+    return false;
+  }
   const std::uint8_t* udp = ip + ihl;
   const std::uint16_t udp_len = be16(udp + 4);
-  if (udp_len < 8 || udp_len > total - ihl) { ++counters_.bad_header; return false; }
-  if (ip_bytes < ihl + udp_len) { ++counters_.truncated_frame; return false; }
+  if (udp_len < 8 || udp_len > total - ihl) {
+    ++counters_.bad_header;
+    return false;
+  }
+  if (ip_bytes < ihl + udp_len) {
+    ++counters_.truncated_frame;
+    return false;
+  }
   out.src_ip = be32(ip + 12);
   out.dst_ip = be32(ip + 16);
   out.src_port = be16(udp);
@@ -140,14 +178,29 @@ bool PcapReader::parse_tcp(const std::uint8_t* f, std::uint32_t caplen, TcpSegme
   if (ip == nullptr) return false;
   const std::uint32_t ihl = (ip[0] & 0x0Fu) * 4u;
   const std::uint16_t total = be16(ip + 2);
-  if (ip[9] != kProtoTcp) { ++counters_.non_tcp; return false; }
+  if (ip[9] != kProtoTcp) {
+    ++counters_.non_tcp;
+    return false;
+  }
   const std::uint16_t frag = be16(ip + 6);
-  if ((frag & 0x2000u) != 0 || (frag & 0x1FFFu) != 0) { ++counters_.fragments; return false; }
-  if (ip_bytes < ihl + 20) { ++counters_.truncated_frame; return false; }
+  if ((frag & 0x2000u) != 0 || (frag & 0x1FFFu) != 0) {
+    ++counters_.fragments;
+    return false;
+  }
+  if (ip_bytes < ihl + 20) {
+    ++counters_.truncated_frame;
+    return false;
+  }
   const std::uint8_t* tcp = ip + ihl;
   const std::uint32_t data_offset = (tcp[12] >> 4) * 4u;
-  if (data_offset < 20 || ihl + data_offset > total) { ++counters_.bad_header; return false; }
-  if (ip_bytes < total) { ++counters_.truncated_frame; return false; }
+  if (data_offset < 20 || ihl + data_offset > total) {
+    ++counters_.bad_header;
+    return false;
+  }
+  if (ip_bytes < total) {
+    ++counters_.truncated_frame;
+    return false;
+  }
   out.src_ip = be32(ip + 12);
   out.dst_ip = be32(ip + 16);
   out.src_port = be16(tcp);

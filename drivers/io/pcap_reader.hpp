@@ -23,9 +23,9 @@ struct PcapFilter {
   std::optional<std::uint16_t> udp_src_port;  // and/or from this port
 };
 
-struct TcpFilter {                            // for next_tcp()
-  std::optional<std::uint16_t> src_port;      // keep only segments from this port
-  std::optional<std::uint16_t> dst_port;      // and/or to this port
+struct TcpFilter {                        // for next_tcp()
+  std::optional<std::uint16_t> src_port;  // keep only segments from this port
+  std::optional<std::uint16_t> dst_port;  // and/or to this port
 };
 
 struct PcapCounters {
@@ -44,7 +44,8 @@ struct PcapCounters {
 class PcapReader {
  public:
   // Fails with the file name and libpcap's reason (missing file, not a capture, unknown link).
-  static rt::Result<PcapReader> open(const std::filesystem::path& path, const PcapFilter& filter = {},
+  static rt::Result<PcapReader> open(const std::filesystem::path& path,
+                                     const PcapFilter& filter = {},
                                      const TcpFilter& tcp_filter = {});
 
   // The next datagram that passes the filter; false at the end of the file or on a damaged
@@ -70,7 +71,8 @@ class PcapReader {
   bool parse_tcp(const std::uint8_t* frame, std::uint32_t caplen, TcpSegment& out) noexcept;
   // The IPv4 header of a frame (link layer, version, lengths checked) or nullptr (counted);
   // ip_bytes: captured bytes from the start of the IP header.
-  const std::uint8_t* ipv4(const std::uint8_t* frame, std::uint32_t caplen, std::uint32_t& ip_bytes) noexcept;
+  const std::uint8_t* ipv4(const std::uint8_t* frame, std::uint32_t caplen,
+                           std::uint32_t& ip_bytes) noexcept;
   const std::uint8_t* next_frame(std::int64_t& stamp_ns, std::uint32_t& caplen) noexcept;
 
   std::unique_ptr<pcap, Closer> handle_;

@@ -22,7 +22,8 @@ void put32(std::uint8_t* p, std::uint32_t v) noexcept {
 
 std::uint16_t ipv4_checksum(const std::uint8_t* h) noexcept {
   std::uint32_t sum = 0;
-  for (std::size_t i = 0; i < kIpv4; i += 2) sum += static_cast<std::uint32_t>((h[i] << 8) | h[i + 1]);
+  for (std::size_t i = 0; i < kIpv4; i += 2)
+    sum += static_cast<std::uint32_t>((h[i] << 8) | h[i + 1]);
   while (sum >> 16) sum = (sum & 0xFFFFu) + (sum >> 16);
   return static_cast<std::uint16_t>(~sum);
 }
@@ -39,7 +40,8 @@ void PcapWriter::DumpCloser::operator()(pcap_dumper* d) const noexcept {
 rt::Result<PcapWriter> PcapWriter::open(const std::filesystem::path& path) {
   PcapWriter w;
   w.path_ = path.string();
-  w.handle_.reset(pcap_open_dead_with_tstamp_precision(DLT_EN10MB, 65535, PCAP_TSTAMP_PRECISION_NANO));
+  w.handle_.reset(
+      pcap_open_dead_with_tstamp_precision(DLT_EN10MB, 65535, PCAP_TSTAMP_PRECISION_NANO));
   if (!w.handle_) return rt::make_error(w.path_ + ": libpcap could not start a capture file");
   w.dumper_.reset(pcap_dump_open(w.handle_.get(), path.c_str()));
   if (!w.dumper_) {
@@ -47,10 +49,10 @@ rt::Result<PcapWriter> PcapWriter::open(const std::filesystem::path& path) {
   }
   w.frame_ = std::make_unique<std::array<std::uint8_t, 65536>>();
   std::uint8_t* f = w.frame_->data();
-  std::memset(f, 0xFF, 6);                                  // destination: broadcast
+  std::memset(f, 0xFF, 6);  // destination: broadcast
   const std::uint8_t src_mac[6] = {0x60, 0x76, 0x88, 0x00, 0x00, 0x01};
   std::memcpy(f + 6, src_mac, 6);
-  put16(f + 12, 0x0800);                                    // IPv4
+  put16(f + 12, 0x0800);  // IPv4
   return w;
 }
 
@@ -103,12 +105,12 @@ rt::Result<bool> PcapWriter::write_tcp(const TcpSegment& s) noexcept {
   put16(tcp, s.src_port);
   put16(tcp + 2, s.dst_port);
   put32(tcp + 4, s.seq);
-  put32(tcp + 8, 0);              // acknowledgement number
-  tcp[12] = (kTcp / 4) << 4;      // data offset, no options
+  put32(tcp + 8, 0);          // acknowledgement number
+  tcp[12] = (kTcp / 4) << 4;  // data offset, no options
   tcp[13] = s.flags;
-  put16(tcp + 14, 65535);         // window
-  put16(tcp + 16, 0);             // checksum not computed
-  put16(tcp + 18, 0);             // urgent pointer
+  put16(tcp + 14, 65535);  // window
+  put16(tcp + 16, 0);      // checksum not computed
+  put16(tcp + 18, 0);      // urgent pointer
   if (!s.payload.empty()) std::memcpy(tcp + kTcp, s.payload.data(), s.payload.size());
   write_frame(6, s.src_ip, s.dst_ip, kTcp + s.payload.size(), s.stamp_ns);
   return true;

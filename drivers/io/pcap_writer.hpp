@@ -1,5 +1,6 @@
-// Writes UDP datagrams as Ethernet/IPv4/UDP frames (and TCP segments as Ethernet/IPv4/TCP) into a pcap file with nanosecond stamps
-// (libpcap), readable by Wireshark, VeloView and PcapReader. For `stac record` and simulators.
+// Writes UDP datagrams as Ethernet/IPv4/UDP frames (and TCP segments as Ethernet/IPv4/TCP) into a
+// pcap file with nanosecond stamps (libpcap), readable by Wireshark, VeloView and PcapReader. For
+// `stac record` and simulators.
 #pragma once
 
 #include <array>

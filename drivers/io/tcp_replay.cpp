@@ -226,10 +226,9 @@ rt::Result<TcpReplayReport> TcpReplay::run(const std::atomic<bool>& stop,
   PacingStats pacing;
   // A client accepted by wait_for_client() just before counts for this run.
   const std::uint64_t accepted_before = accepted_ - (client_fd_ ? 1 : 0);
-  const ReplayClock clock =
-      shared ? *shared
-             : ReplayClock{rt::monotonic_ns(), plan_.first_stamp_ns, plan_.pass_period_ns,
-                           config_.rate};
+  const ReplayClock clock = shared ? *shared
+                                   : ReplayClock{rt::monotonic_ns(), plan_.first_stamp_ns,
+                                                 plan_.pass_period_ns, config_.rate};
   std::int64_t last_write = clock.start_ns, last_scheduled = 0;
   for (std::uint64_t pass = 0; config_.loops == 0 || pass < config_.loops; ++pass) {
     bool interrupted = false;

@@ -36,13 +36,13 @@ struct TcpReplayConfig {
   int stall_timeout_ms = 2000;               // a client that takes no byte this long is dropped
 };
 
-struct TcpReplayPlan {        // one pass (found by open())
+struct TcpReplayPlan {         // one pass (found by open())
   std::uint64_t segments = 0;  // captured segments with payload from the server port
   std::uint64_t bytes = 0;     // stream bytes after reassembly
   std::int64_t first_stamp_ns = 0;
-  std::int64_t span_ns = 0;        // first to last segment with payload
-  std::int64_t pass_period_ns = 0; // span plus one mean gap between segments
-  std::uint64_t streams = 0;       // captured connections (concatenated into one stream)
+  std::int64_t span_ns = 0;         // first to last segment with payload
+  std::int64_t pass_period_ns = 0;  // span plus one mean gap between segments
+  std::uint64_t streams = 0;        // captured connections (concatenated into one stream)
   std::uint64_t retransmitted = 0, gaps = 0, gap_bytes = 0;
 };
 

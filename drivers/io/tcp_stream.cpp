@@ -58,7 +58,10 @@ bool TcpReassembler::add(const TcpSegment& s) noexcept {
   }
   Slot* free = nullptr;
   for (auto& slot : slots_) {
-    if (!slot.used) { free = &slot; break; }
+    if (!slot.used) {
+      free = &slot;
+      break;
+    }
   }
   if (start <= 0 || free == nullptr || s.payload.size() > slot_bytes_) {
     // In order, or no room to wait: next() delivers it (after skipping the hole if need be).
@@ -100,7 +103,8 @@ bool TcpReassembler::next(std::span<const std::uint8_t>& out) noexcept {
     if (!current_.empty()) {
       const std::int64_t start = seq_diff(current_seq_, expected_);
       if (start > 0) {  // the store was full: skip the hole before the earliest bytes we hold
-        skip_to(first != nullptr && seq_diff(first->seq, current_seq_) < 0 ? first->seq : current_seq_);
+        skip_to(first != nullptr && seq_diff(first->seq, current_seq_) < 0 ? first->seq
+                                                                           : current_seq_);
         continue;
       }
       const std::int64_t end = start + static_cast<std::int64_t>(current_.size());
@@ -124,6 +128,8 @@ bool TcpReassembler::next(std::span<const std::uint8_t>& out) noexcept {
   }
 }
 
-void TcpReassembler::finish() noexcept { finishing_ = true; }
+void TcpReassembler::finish() noexcept {
+  finishing_ = true;
+}
 
 }  // namespace stac::io

@@ -18,8 +18,8 @@ struct TcpSegment {
   std::uint32_t dst_ip = 0;
   std::uint16_t src_port = 0;
   std::uint16_t dst_port = 0;
-  std::uint32_t seq = 0;                  // sequence number of the first payload byte (or SYN)
-  std::uint8_t flags = 0;                 // TCP flags (kTcpSyn, kTcpFin, kTcpRst, ...)
+  std::uint32_t seq = 0;   // sequence number of the first payload byte (or SYN)
+  std::uint8_t flags = 0;  // TCP flags (kTcpSyn, kTcpFin, kTcpRst, ...)
 };
 
 inline constexpr std::uint8_t kTcpFin = 0x01;
@@ -28,14 +28,14 @@ inline constexpr std::uint8_t kTcpRst = 0x04;
 inline constexpr std::uint8_t kTcpAck = 0x10;
 
 struct TcpReassemblerCounters {
-  std::uint64_t segments = 0;           // added
-  std::uint64_t bytes = 0;              // delivered in order
-  std::uint64_t retransmitted = 0;      // segments whose bytes were all delivered already
-  std::uint64_t overlap_bytes = 0;      // repeated bytes cut from partly new segments
-  std::uint64_t out_of_order = 0;       // segments stored until the bytes before them came
-  std::uint64_t gaps = 0;               // holes skipped (bytes never seen)
+  std::uint64_t segments = 0;       // added
+  std::uint64_t bytes = 0;          // delivered in order
+  std::uint64_t retransmitted = 0;  // segments whose bytes were all delivered already
+  std::uint64_t overlap_bytes = 0;  // repeated bytes cut from partly new segments
+  std::uint64_t out_of_order = 0;   // segments stored until the bytes before them came
+  std::uint64_t gaps = 0;           // holes skipped (bytes never seen)
   std::uint64_t gap_bytes = 0;
-  std::uint64_t streams = 0;            // connections started (SYN, or the first segment seen)
+  std::uint64_t streams = 0;  // connections started (SYN, or the first segment seen)
 };
 
 class TcpReassembler {
@@ -68,10 +68,10 @@ class TcpReassembler {
   std::vector<Slot> slots_;
   std::vector<std::uint8_t> store_;  // slots x slot_bytes
   std::size_t slot_bytes_;
-  Slot* delivered_ = nullptr;        // slot handed out by the last next(), freed on the next call
+  Slot* delivered_ = nullptr;  // slot handed out by the last next(), freed on the next call
   std::span<const std::uint8_t> current_;  // the last added segment, not stored
   std::uint32_t current_seq_ = 0;
-  std::uint32_t expected_ = 0;       // next sequence number to deliver
+  std::uint32_t expected_ = 0;  // next sequence number to deliver
   bool started_ = false;
   bool finishing_ = false;
   TcpReassemblerCounters counters_;

@@ -15,7 +15,8 @@
 namespace stac::io {
 namespace {
 
-constexpr std::size_t kControlSpace = CMSG_SPACE(sizeof(timespec)) + CMSG_SPACE(sizeof(std::uint32_t));
+constexpr std::size_t kControlSpace =
+    CMSG_SPACE(sizeof(timespec)) + CMSG_SPACE(sizeof(std::uint32_t));
 
 std::string where(const UdpReceiverConfig& c) {
   return "UDP " + c.bind_address + ":" + std::to_string(c.port);
@@ -55,9 +56,10 @@ rt::Result<UdpReceiver> UdpReceiver::open(const UdpReceiverConfig& config) {
   if (::bind(r.fd_.get(), reinterpret_cast<const sockaddr*>(&addr), sizeof(addr)) != 0) {
     const int e = errno;
     return rt::make_error(where(config) + ": cannot bind: " + std::strerror(e) +
-                          (e == EADDRINUSE ? " (another program, e.g. a second stac or a ROS "
-                                             "driver, listens there; stop it or change the port)"
-                                           : e == EADDRNOTAVAIL ? " (no interface has that address)" : ""));
+                          (e == EADDRINUSE      ? " (another program, e.g. a second stac or a ROS "
+                                                  "driver, listens there; stop it or change the port)"
+                           : e == EADDRNOTAVAIL ? " (no interface has that address)"
+                                                : ""));
   }
   sockaddr_in bound{};
   len = sizeof(bound);
@@ -94,7 +96,8 @@ int UdpReceiver::receive(std::span<Datagram> out, int timeout_ms) noexcept {
   if ((fds[1].revents & POLLIN) != 0) return kStopped;  // the eventfd stays readable: sticky
   if (ready == 0 || (fds[0].revents & POLLIN) == 0) return 0;
 
-  const auto n = static_cast<unsigned>(std::min<std::size_t>(out.size(), static_cast<std::size_t>(batch_)));
+  const auto n =
+      static_cast<unsigned>(std::min<std::size_t>(out.size(), static_cast<std::size_t>(batch_)));
   auto* iov = reinterpret_cast<iovec*>(iovecs_.data());
   auto* addr = reinterpret_cast<sockaddr_in*>(addresses_.data());
   for (unsigned i = 0; i < n; ++i) {
@@ -116,7 +119,8 @@ int UdpReceiver::receive(std::span<Datagram> out, int timeout_ms) noexcept {
     const msghdr& h = messages_[static_cast<std::size_t>(i)].msg_hdr;
     const std::size_t size = messages_[static_cast<std::size_t>(i)].msg_len;
     std::int64_t stamp = 0;
-    for (cmsghdr* c = CMSG_FIRSTHDR(&h); c != nullptr; c = CMSG_NXTHDR(const_cast<msghdr*>(&h), c)) {
+    for (cmsghdr* c = CMSG_FIRSTHDR(&h); c != nullptr;
+         c = CMSG_NXTHDR(const_cast<msghdr*>(&h), c)) {
       if (c->cmsg_level != SOL_SOCKET) continue;
       if (c->cmsg_type == SCM_TIMESTAMPNS) {
         timespec ts{};
@@ -155,7 +159,8 @@ int UdpReceiver::receive(std::span<Datagram> out, int timeout_ms) noexcept {
 
 rt::Result<UdpSender> UdpSender::open(const std::string& address, std::uint16_t port) {
   std::uint32_t ip = 0;
-  if (!parse_ipv4(address.c_str(), ip)) return rt::make_error("'" + address + "' is not an IPv4 address");
+  if (!parse_ipv4(address.c_str(), ip))
+    return rt::make_error("'" + address + "' is not an IPv4 address");
   UdpSender s;
   s.fd_.reset(::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0));
   if (!s.fd_) return rt::make_error(std::string("socket: ") + std::strerror(errno));
@@ -166,7 +171,8 @@ rt::Result<UdpSender> UdpSender::open(const std::string& address, std::uint16_t 
   addr.sin_port = htons(port);
   addr.sin_addr.s_addr = htonl(ip);
   if (::connect(s.fd_.get(), reinterpret_cast<const sockaddr*>(&addr), sizeof(addr)) != 0) {
-    return rt::make_error("UDP " + address + ":" + std::to_string(port) + ": " + std::strerror(errno));
+    return rt::make_error("UDP " + address + ":" + std::to_string(port) + ": " +
+                          std::strerror(errno));
   }
   return s;
 }

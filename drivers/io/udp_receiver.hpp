@@ -19,11 +19,11 @@ namespace stac::io {
 
 struct UdpReceiverConfig {
   std::string bind_address = "0.0.0.0";
-  std::uint16_t port = 2368;         // 0: any free port (see port())
+  std::uint16_t port = 2368;            // 0: any free port (see port())
   int receive_buffer_bytes = 16 << 20;  // SO_RCVBUF asked for; capped by net.core.rmem_max
-  std::string sender_address;        // empty: any sender; else only this IPv4 address
-  int batch = 32;                    // datagrams per recvmmsg
-  int max_payload = 2048;            // larger datagrams are truncated and counted
+  std::string sender_address;           // empty: any sender; else only this IPv4 address
+  int batch = 32;                       // datagrams per recvmmsg
+  int max_payload = 2048;               // larger datagrams are truncated and counted
 };
 
 struct UdpReceiverCounters {
@@ -69,11 +69,11 @@ class UdpReceiver {
   bool filter_sender_ = false;
   int batch_ = 0;
   std::size_t max_payload_ = 0;
-  std::vector<std::uint8_t> buffers_;   // batch x (max_payload + 1)
-  std::vector<std::uint8_t> control_;   // batch x cmsg space
+  std::vector<std::uint8_t> buffers_;  // batch x (max_payload + 1)
+  std::vector<std::uint8_t> control_;  // batch x cmsg space
   std::vector<mmsghdr> messages_;
-  std::vector<std::byte> iovecs_;       // struct iovec[batch]
-  std::vector<std::byte> addresses_;    // struct sockaddr_in[batch]
+  std::vector<std::byte> iovecs_;     // struct iovec[batch]
+  std::vector<std::byte> addresses_;  // struct sockaddr_in[batch]
   UdpReceiverCounters counters_;
 };
 

@@ -94,14 +94,12 @@ UdpSender* UdpReplay::sender_for(std::uint16_t port) noexcept {
   return nullptr;
 }
 
-rt::Result<ReplayReport> UdpReplay::run(const std::atomic<bool>& stop,
-                                        const ReplayClock* shared) {
+rt::Result<ReplayReport> UdpReplay::run(const std::atomic<bool>& stop, const ReplayClock* shared) {
   ReplayReport report;
   if (plan_.packets == 0) return report;
   PacingStats pacing;
   ReplayClock clock =
-      shared ? *shared
-             : ReplayClock{0, plan_.first_stamp_ns, plan_.pass_period_ns, config_.rate};
+      shared ? *shared : ReplayClock{0, plan_.first_stamp_ns, plan_.pass_period_ns, config_.rate};
   std::int64_t last_send = clock.start_ns, last_scheduled = 0;
   for (std::uint64_t pass = 0; config_.loops == 0 || pass < config_.loops; ++pass) {
     auto reader = PcapReader::open(capture_, filter_of(config_));

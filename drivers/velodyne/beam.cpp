@@ -9,9 +9,16 @@ namespace {
 constexpr double kTwoPointXAt = 2.4, kTwoPointYAt = 1.93, kTwoPointFar = 25.04;
 
 BeamModel::Laser laser_terms(const LaserCalibration& l) {
-  return {std::cos(l.vert_correction_rad), std::sin(l.vert_correction_rad), std::cos(l.rot_correction_rad),
-          std::sin(l.rot_correction_rad), l.vert_offset_m, l.horiz_offset_m, l.dist_correction_m,
-          l.dist_correction_x_m, l.dist_correction_y_m, l.two_pt_correction_available};
+  return {std::cos(l.vert_correction_rad),
+          std::sin(l.vert_correction_rad),
+          std::cos(l.rot_correction_rad),
+          std::sin(l.rot_correction_rad),
+          l.vert_offset_m,
+          l.horiz_offset_m,
+          l.dist_correction_m,
+          l.dist_correction_x_m,
+          l.dist_correction_y_m,
+          l.two_pt_correction_available};
 }
 
 // The ROS formula (REFERENCE §1) and its derivative in d, for cos/sin of the block rotation.
@@ -70,7 +77,9 @@ BeamLine beam_line(const LaserCalibration& l, std::uint16_t rotation, double aro
 }
 
 BeamModel::BeamModel(const Calibration& calibration, bool gate_two_point) : gate_(gate_two_point) {
-  for (int i = 0; i < kMaxLasers; ++i) lasers_[static_cast<std::size_t>(i)] = laser_terms(calibration.lasers[static_cast<std::size_t>(i)]);
+  for (int i = 0; i < kMaxLasers; ++i)
+    lasers_[static_cast<std::size_t>(i)] =
+        laser_terms(calibration.lasers[static_cast<std::size_t>(i)]);
   for (int r = 0; r < 36000; ++r) {
     cos_[static_cast<std::size_t>(r)] = std::cos(r * (std::numbers::pi / 18000.0));
     sin_[static_cast<std::size_t>(r)] = std::sin(r * (std::numbers::pi / 18000.0));
@@ -79,13 +88,15 @@ BeamModel::BeamModel(const Calibration& calibration, bool gate_two_point) : gate
 
 Vec3 BeamModel::point(int laser, std::uint16_t rotation, double d) const noexcept {
   Vec3 p{};
-  evaluate(lasers_[static_cast<std::size_t>(laser)], cos_[rotation], sin_[rotation], d, gate_, p, nullptr);
+  evaluate(lasers_[static_cast<std::size_t>(laser)], cos_[rotation], sin_[rotation], d, gate_, p,
+           nullptr);
   return p;
 }
 
 BeamLine BeamModel::line(int laser, std::uint16_t rotation, double around_m) const noexcept {
   Vec3 p{}, dp{};
-  evaluate(lasers_[static_cast<std::size_t>(laser)], cos_[rotation], sin_[rotation], around_m, gate_, p, &dp);
+  evaluate(lasers_[static_cast<std::size_t>(laser)], cos_[rotation], sin_[rotation], around_m,
+           gate_, p, &dp);
   return line_from(p, dp, around_m);
 }
 

@@ -284,10 +284,12 @@ rt::Result<Calibration> load_calibration(const std::filesystem::path& path) {
   std::string head(512, '\0');
   in.read(head.data(), static_cast<std::streamsize>(head.size()));
   head.resize(static_cast<std::size_t>(in.gcount()));
-  if (head.find("<?xml") != std::string::npos || head.find("<boost_serialization") != std::string::npos) {
+  if (head.find("<?xml") != std::string::npos ||
+      head.find("<boost_serialization") != std::string::npos) {
     return load_db_xml(path);
   }
-  if (head.find("lasers") != std::string::npos || head.find("distance_resolution") != std::string::npos ||
+  if (head.find("lasers") != std::string::npos ||
+      head.find("distance_resolution") != std::string::npos ||
       head.find("num_lasers") != std::string::npos) {
     return load_ros_yaml(path);
   }

@@ -14,17 +14,17 @@ namespace stac::velodyne {
 inline constexpr int kMaxLasers = 64;
 
 struct LaserCalibration {
-  int laser_id = 0;                      // 0..63; 0-31 upper bank, 32-63 lower bank
-  double rot_correction_rad = 0.0;       // azimuth correction, subtracted from the rotation
-  double vert_correction_rad = 0.0;      // elevation of the beam, positive up
-  double dist_correction_m = 0.0;        // added to the raw distance
-  double dist_correction_x_m = 0.0;      // two-point correction at 2.4 m along x
-  double dist_correction_y_m = 0.0;      // two-point correction at 1.93 m along y
-  double vert_offset_m = 0.0;            // vertical offset of the beam origin
-  double horiz_offset_m = 0.0;           // horizontal offset of the beam origin
-  double focal_distance_m = 0.0;         // intensity focal distance (db.xml stores cm)
-  double focal_slope = 0.0;              // intensity focal slope (unitless)
-  int min_intensity = 0;                 // clamp range of corrected intensity
+  int laser_id = 0;                  // 0..63; 0-31 upper bank, 32-63 lower bank
+  double rot_correction_rad = 0.0;   // azimuth correction, subtracted from the rotation
+  double vert_correction_rad = 0.0;  // elevation of the beam, positive up
+  double dist_correction_m = 0.0;    // added to the raw distance
+  double dist_correction_x_m = 0.0;  // two-point correction at 2.4 m along x
+  double dist_correction_y_m = 0.0;  // two-point correction at 1.93 m along y
+  double vert_offset_m = 0.0;        // vertical offset of the beam origin
+  double horiz_offset_m = 0.0;       // horizontal offset of the beam origin
+  double focal_distance_m = 0.0;     // intensity focal distance (db.xml stores cm)
+  double focal_slope = 0.0;          // intensity focal slope (unitless)
+  int min_intensity = 0;             // clamp range of corrected intensity
   int max_intensity = 255;
   bool two_pt_correction_available = false;
   bool enabled = true;

@@ -1,8 +1,8 @@
 #include "drivers/velodyne/decoder.hpp"
 
 #include <algorithm>
-#include <cmath>
 #include <cctype>
+#include <cmath>
 #include <numbers>
 #include <numeric>
 #include <string>
@@ -64,7 +64,8 @@ PacketDecoder::PacketDecoder(const Calibration& calibration, const DecoderConfig
     t.dist_y[id] = static_cast<float>(c.dist_correction_y_m);
     t.vert_offset[id] = static_cast<float>(c.vert_offset_m);
     t.horiz_offset[id] = static_cast<float>(c.horiz_offset_m);
-    const float fd = static_cast<float>(c.focal_distance_m * (config.ros_intensity_units ? 1.0 : 100.0));
+    const float fd =
+        static_cast<float>(c.focal_distance_m * (config.ros_intensity_units ? 1.0 : 100.0));
     const float f = 1.0f - fd / kFocalScale;
     t.focal_offset[id] = 256.0f * f * f;
     t.focal_slope[id] = static_cast<float>(c.focal_slope);
@@ -82,7 +83,8 @@ PacketDecoder::PacketDecoder(const Calibration& calibration, const DecoderConfig
                           traits_->laser_group_us * (j / 4) +
                           traits_->laser_in_group_us[static_cast<std::size_t>(j % 4)];
         firing_ns_[static_cast<std::size_t>(dual)][static_cast<std::size_t>(b)]
-                  [static_cast<std::size_t>(j)] = static_cast<std::int32_t>(std::lround(us * 1000.0));
+                  [static_cast<std::size_t>(j)] =
+                      static_cast<std::int32_t>(std::lround(us * 1000.0));
       }
     }
   }
@@ -119,10 +121,12 @@ int PacketDecoder::decode_block(const RawBlock& block, int block_index, bool dua
     const float xy = distance[j] * t.cos_vert[l] - t.vert_offset[l] * t.sin_vert[l];
     xx[j] = std::fabs(xy * sin_a[j] - t.horiz_offset[l] * cos_a[j]);
     yy[j] = std::fabs(xy * cos_a[j] + t.horiz_offset[l] * sin_a[j]);
-    corr_x[j] = ((t.dist[l] - t.dist_x[l]) * (xx[j] - kTwoPointXAt) * kInvX + t.dist_x[l] - t.dist[l]) *
-                t.two_pt[l];
-    corr_y[j] = ((t.dist[l] - t.dist_y[l]) * (yy[j] - kTwoPointYAt) * kInvY + t.dist_y[l] - t.dist[l]) *
-                t.two_pt[l];
+    corr_x[j] =
+        ((t.dist[l] - t.dist_x[l]) * (xx[j] - kTwoPointXAt) * kInvX + t.dist_x[l] - t.dist[l]) *
+        t.two_pt[l];
+    corr_y[j] =
+        ((t.dist[l] - t.dist_y[l]) * (yy[j] - kTwoPointYAt) * kInvY + t.dist_y[l] - t.dist[l]) *
+        t.two_pt[l];
   }
   if (config_.gate_two_point_correction) {
     for (int j = 0; j < kLasersPerBlock; ++j) {
@@ -140,8 +144,8 @@ int PacketDecoder::decode_block(const RawBlock& block, int block_index, bool dua
     const float xy_y = (distance[j] + corr_y[j]) * cv - vo * sv;
     const float vx = xy_x * sin_a[j] - ho * cos_a[j];  // Velodyne frame: x right
     const float vy = xy_y * cos_a[j] + ho * sin_a[j];  // y forward
-    px[j] = vy;   // sensor frame: x forward
-    py[j] = -vx;  // y left
+    px[j] = vy;                                        // sensor frame: x forward
+    py[j] = -vx;                                       // y left
     pz[j] = (distance[j] + corr_y[j]) * sv + vo * cv;
     const float r = 1.0f - raw[j] * (1.0f / 65535.0f);
     const float intensity =
@@ -174,7 +178,8 @@ int PacketDecoder::decode_block(const RawBlock& block, int block_index, bool dua
     p.z = pz[j];
     p.intensity = pi[j];
     p.distance_m = distance[j];
-    p.time_offset_ns = static_cast<std::int32_t>(packet_offset_ns + firing[static_cast<std::size_t>(j)]);
+    p.time_offset_ns =
+        static_cast<std::int32_t>(packet_offset_ns + firing[static_cast<std::size_t>(j)]);
     p.azimuth = block.rotation;
     p.laser = static_cast<std::uint8_t>(l);
     p.ring = t.ring[l];

@@ -26,9 +26,9 @@ struct DecoderConfig {
 };
 
 struct DecodeCounters {
-  std::uint64_t no_return = 0;     // raw distance 0
-  std::uint64_t out_of_range = 0;  // outside [min_range_m, max_range_m]
-  std::uint64_t disabled = 0;      // laser disabled in the calibration
+  std::uint64_t no_return = 0;         // raw distance 0
+  std::uint64_t out_of_range = 0;      // outside [min_range_m, max_range_m]
+  std::uint64_t disabled = 0;          // laser disabled in the calibration
   std::uint64_t invalid_rotation = 0;  // block rotation >= 36000: block skipped
 };
 

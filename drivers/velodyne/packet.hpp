@@ -11,8 +11,8 @@ namespace stac::velodyne {
 inline constexpr std::size_t kPacketSize = 1206;
 inline constexpr int kBlocksPerPacket = 12;
 inline constexpr int kLasersPerBlock = 32;
-inline constexpr std::uint16_t kUpperBank = 0xEEFF;  // lasers 0-31 (bytes FF EE on the wire)
-inline constexpr std::uint16_t kLowerBank = 0xDDFF;  // lasers 32-63
+inline constexpr std::uint16_t kUpperBank = 0xEEFF;     // lasers 0-31 (bytes FF EE on the wire)
+inline constexpr std::uint16_t kLowerBank = 0xDDFF;     // lasers 32-63
 inline constexpr std::uint16_t kRotationUnits = 36000;  // rotation in 0.01 deg, 0..35999
 inline constexpr std::uint16_t kPortData = 2368;
 

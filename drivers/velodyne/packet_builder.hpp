@@ -25,7 +25,8 @@ class PacketBuilder {
     store_u16(r, distance);
     r[2] = intensity;
   }
-  void set_gps_trailer(std::uint32_t usec_past_hour, std::uint8_t type, std::uint8_t value) noexcept {
+  void set_gps_trailer(std::uint32_t usec_past_hour, std::uint8_t type,
+                       std::uint8_t value) noexcept {
     std::uint8_t* t = bytes_.data() + kPacketSize - 6;
     store_u32(t, usec_past_hour);
     t[4] = type;

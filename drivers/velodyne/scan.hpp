@@ -11,23 +11,23 @@
 namespace stac::velodyne {
 
 struct ScanHeader {
-  std::uint64_t sequence = 0;        // 0, 1, 2, ... in the order scans were closed
-  std::int64_t stamp_ns = 0;         // time of the scan's first firing (ns, source clock)
-  std::int64_t end_stamp_ns = 0;     // time of its last firing
-  std::uint16_t first_azimuth = 0;   // raw rotation of the first and last firing (0.01 deg)
+  std::uint64_t sequence = 0;       // 0, 1, 2, ... in the order scans were closed
+  std::int64_t stamp_ns = 0;        // time of the scan's first firing (ns, source clock)
+  std::int64_t end_stamp_ns = 0;    // time of its last firing
+  std::uint16_t first_azimuth = 0;  // raw rotation of the first and last firing (0.01 deg)
   std::uint16_t last_azimuth = 0;
-  std::uint32_t packets = 0;         // packets that contributed points
-  std::uint32_t packets_lost = 0;    // estimated from azimuth steps larger than usual
-  std::uint32_t late_firings = 0;    // reordered firings that arrived after their scan closed
-  std::uint32_t points_dropped = 0;  // returns that did not fit the scan's capacity
+  std::uint32_t packets = 0;            // packets that contributed points
+  std::uint32_t packets_lost = 0;       // estimated from azimuth steps larger than usual
+  std::uint32_t late_firings = 0;       // reordered firings that arrived after their scan closed
+  std::uint32_t points_dropped = 0;     // returns that did not fit the scan's capacity
   std::uint32_t device_usec_first = 0;  // trailer (microseconds past the hour) of the packet
                                         // holding the first firing
   std::int32_t first_firing_in_packet_ns = 0;  // the first firing's offset in that packet
-  std::int64_t device_utc_ns = 0;       // UTC of the first firing by the sensor's clock, from the
-                                        // trailer and the status cycle's date; 0 = unknown
-  GpsState gps = GpsState::kUnknown;    // the sensor's GPS input when the scan opened
-  bool starts_at_cut = false;        // opened by a cut-angle crossing (not by start-up or a gap)
-  bool ends_at_cut = false;          // closed by a cut-angle crossing (not by a gap or timeout)
+  std::int64_t device_utc_ns = 0;     // UTC of the first firing by the sensor's clock, from the
+                                      // trailer and the status cycle's date; 0 = unknown
+  GpsState gps = GpsState::kUnknown;  // the sensor's GPS input when the scan opened
+  bool starts_at_cut = false;         // opened by a cut-angle crossing (not by start-up or a gap)
+  bool ends_at_cut = false;           // closed by a cut-angle crossing (not by a gap or timeout)
   bool dual_return = false;
   [[nodiscard]] bool complete() const noexcept {
     return starts_at_cut && ends_at_cut && points_dropped == 0;

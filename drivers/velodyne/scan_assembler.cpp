@@ -14,7 +14,9 @@ constexpr double kGapFactor = 1.5;  // an azimuth step this many times the usual
 constexpr int kMaxBlockStep = 300, kMaxBlockBack = 5;
 constexpr std::size_t kPointsPerPacket = kBlocksPerPacket * kLasersPerBlock;
 
-int forward(int from, int to) noexcept { return (to - from + kRotationUnits) % kRotationUnits; }
+int forward(int from, int to) noexcept {
+  return (to - from + kRotationUnits) % kRotationUnits;
+}
 
 std::uint64_t payload_hash(std::span<const std::uint8_t> payload) noexcept {
   std::uint64_t h = 0xcbf29ce484222325ULL;
@@ -33,8 +35,8 @@ std::uint64_t payload_hash(std::span<const std::uint8_t> payload) noexcept {
 
 std::size_t scan_capacity(const ScanAssemblerConfig& config) noexcept {
   const ModelTraits& t = traits(config.decoder.model);
-  const double packets_per_s = t.supports_dual_return ? t.packets_per_second_dual
-                                                      : t.packets_per_second_single;
+  const double packets_per_s =
+      t.supports_dual_return ? t.packets_per_second_dual : t.packets_per_second_single;
   const double packets_per_turn = packets_per_s * 60.0 / std::max(config.min_rpm, 1.0);
   return static_cast<std::size_t>(std::ceil(packets_per_turn * 1.1)) * kPointsPerPacket;
 }
@@ -132,7 +134,7 @@ bool ScanAssembler::add_packet(std::span<const std::uint8_t> payload,
     ++counters_.duplicates;
     return false;
   }
-  if (scan_ == nullptr) return false;  // begin() was never called: nothing to write into
+  if (scan_ == nullptr) return false;     // begin() was never called: nothing to write into
   if (target_ == &carry_) begin(*scan_);  // the caller did not take the closed scan: reuse it
   std::memcpy(last_trailer_.data(), packet->trailer, last_trailer_.size());
   const ModelTraits& model = decoder_.model();
@@ -144,7 +146,8 @@ bool ScanAssembler::add_packet(std::span<const std::uint8_t> payload,
   bool restarted = !have_prev_;
   // Silence, a clock jump or a scan that never ends closes the scan in progress.
   if (have_prev_ && current_.open) {
-    const bool gap = stamp_ns - prev_stamp_ns_ > max_gap_ns_ || prev_stamp_ns_ - stamp_ns > max_gap_ns_;
+    const bool gap =
+        stamp_ns - prev_stamp_ns_ > max_gap_ns_ || prev_stamp_ns_ - stamp_ns > max_gap_ns_;
     const bool timeout = stamp_ns - current_.header->stamp_ns > max_duration_ns_;
     if (gap || timeout) {
       ++(gap ? counters_.time_gaps : counters_.timeouts);
@@ -180,7 +183,8 @@ bool ScanAssembler::add_packet(std::span<const std::uint8_t> payload,
       // scan that counted the gap is corrected while it is still open.
       --gap_.open;
       --counters_.packets_lost;
-      if (gap_.target == target_ && gap_.epoch == target_->epoch && target_->header->packets_lost > 0) {
+      if (gap_.target == target_ && gap_.epoch == target_->epoch &&
+          target_->header->packets_lost > 0) {
         --target_->header->packets_lost;
       }
     }
@@ -237,8 +241,9 @@ bool ScanAssembler::add_packet(std::span<const std::uint8_t> payload,
       const int n = decoder_.decode_block(packet->blocks[b], b, dual, offset, pts.data() + size);
       (void)pts.resize(size + static_cast<std::size_t>(n));
     }
-    h.end_stamp_ns = std::max(h.end_stamp_ns, stamp_ns + decoder_.firing_offset_ns(
-                                                  first + group - 1, kLasersPerBlock - 1, dual));
+    h.end_stamp_ns = std::max(
+        h.end_stamp_ns,
+        stamp_ns + decoder_.firing_offset_ns(first + group - 1, kLasersPerBlock - 1, dual));
     if (forward(h.first_azimuth, r) >= forward(h.first_azimuth, h.last_azimuth)) h.last_azimuth = r;
     (target_ == &current_ ? wrote_current : wrote_carry) = true;
   }

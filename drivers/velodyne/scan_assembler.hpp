@@ -30,17 +30,17 @@ struct ScanAssemblerConfig {
 };
 
 struct AssemblerCounters {
-  std::uint64_t packets = 0;        // payloads offered
-  std::uint64_t wrong_size = 0;     // not 1206 bytes: dropped
-  std::uint64_t invalid_block = 0;  // bad bank id, rotation >= 36000, or rotations that jump
-                                    // between its blocks (over 3 deg): packet dropped
-  std::uint64_t duplicates = 0;     // identical to one of the last 16 packets: dropped
-  std::uint64_t late_firings = 0;   // reordered firings belonging to an already closed scan
-  std::uint64_t packets_lost = 0;   // estimated from azimuth steps
-  std::uint64_t time_gaps = 0;      // scans closed by silence or a clock jump
-  std::uint64_t timeouts = 0;       // scans closed by max_scan_duration_s
-  std::uint64_t points_dropped = 0; // returns beyond a scan's capacity
-  std::uint64_t scans = 0;          // scans closed
+  std::uint64_t packets = 0;         // payloads offered
+  std::uint64_t wrong_size = 0;      // not 1206 bytes: dropped
+  std::uint64_t invalid_block = 0;   // bad bank id, rotation >= 36000, or rotations that jump
+                                     // between its blocks (over 3 deg): packet dropped
+  std::uint64_t duplicates = 0;      // identical to one of the last 16 packets: dropped
+  std::uint64_t late_firings = 0;    // reordered firings belonging to an already closed scan
+  std::uint64_t packets_lost = 0;    // estimated from azimuth steps
+  std::uint64_t time_gaps = 0;       // scans closed by silence or a clock jump
+  std::uint64_t timeouts = 0;        // scans closed by max_scan_duration_s
+  std::uint64_t points_dropped = 0;  // returns beyond a scan's capacity
+  std::uint64_t scans = 0;           // scans closed
 };
 
 // Points a scan must hold at the slowest configured rotation, with 10% margin.
@@ -54,7 +54,8 @@ class ScanAssembler {
   void begin(Scan& scan) noexcept;
   // Decodes one UDP payload whose first firing happened at `stamp_ns`; true when it closed
   // the current scan (which is then complete and must be taken before the next call).
-  [[nodiscard]] bool add_packet(std::span<const std::uint8_t> payload, std::int64_t stamp_ns) noexcept;
+  [[nodiscard]] bool add_packet(std::span<const std::uint8_t> payload,
+                                std::int64_t stamp_ns) noexcept;
   // Closes the scan in progress at the end of input; true when it held any point.
   [[nodiscard]] bool flush() noexcept;
 
@@ -90,8 +91,8 @@ class ScanAssembler {
   std::int64_t max_gap_ns_;
   std::int64_t max_duration_ns_;
   Scan* scan_ = nullptr;
-  Target current_;   // the caller's scan
-  Target carry_;     // firings after a cut, waiting for the next begin()
+  Target current_;  // the caller's scan
+  Target carry_;    // firings after a cut, waiting for the next begin()
   Target* target_ = &current_;
   ScanHeader carry_header_;
   rt::FixedVector<Point> carry_points_;
@@ -99,7 +100,7 @@ class ScanAssembler {
   std::uint16_t prev_rotation_ = 0;         // last forward firing rotation
   std::uint16_t prev_packet_rotation_ = 0;  // first rotation of the last packet
   std::int64_t prev_stamp_ns_ = 0;
-  double step_ema_ = 0.0;                   // usual azimuth step between packets
+  double step_ema_ = 0.0;  // usual azimuth step between packets
   std::uint64_t next_sequence_ = 0;
   std::uint64_t epochs_ = 0;
   Gap gap_;

@@ -20,8 +20,7 @@ bool ScanStream::add_packet(std::span<const std::uint8_t> payload,
   const RawPacket* packet = as_packet(payload);
   const bool dual = packet != nullptr &&
                     is_dual_return(*packet, assembler_.decoder().model().supports_dual_return);
-  const std::int64_t first_firing_ns =
-      receive_stamp_ns - assembler_.decoder().packet_span_ns(dual);
+  const std::int64_t first_firing_ns = receive_stamp_ns - assembler_.decoder().packet_span_ns(dual);
   if (!assembler_.add_packet(payload, first_firing_ns)) return false;
   return publish();
 }

@@ -13,8 +13,8 @@ namespace {
 constexpr std::array<std::uint8_t, kStatusTypedBytes> kTypedOrder{'H', 'M', 'S', 'D', 'N',
                                                                   'Y', 'G', 'T', 'V'};
 constexpr char kUnit[] = "UNIT#";
-constexpr int kLaserRecords = 7;     // first laser record in the dump
-constexpr int kLaserRecordSize = 28; // 4 cycles per laser; 21 bytes used
+constexpr int kLaserRecords = 7;              // first laser record in the dump
+constexpr int kLaserRecordSize = 28;          // 4 cycles per laser; 21 bytes used
 constexpr int kTail = kStatusDumpBytes - 28;  // date, humidity, unit parameters, checksum
 constexpr double kDegToRad = std::numbers::pi / 180.0;
 // Scales of the laser record fields (REFERENCE §1): angles in 0.01 deg, lengths in 0.1 cm (mm),
@@ -36,17 +36,22 @@ std::int16_t load_i16(const std::uint8_t* p) noexcept {
 }
 
 bool valid_date_time(const DateTime& t) noexcept {
-  return t.month >= 1 && t.month <= 12 && t.day >= 1 && t.day <= 31 && t.hour >= 0 &&
-         t.hour < 24 && t.minute >= 0 && t.minute < 60 && t.second >= 0 && t.second < 60;
+  return t.month >= 1 && t.month <= 12 && t.day >= 1 && t.day <= 31 && t.hour >= 0 && t.hour < 24 &&
+         t.minute >= 0 && t.minute < 60 && t.second >= 0 && t.second < 60;
 }
 
 GpsState gps_state(std::uint8_t raw) noexcept {
   switch (raw) {
-    case 0: return GpsState::kNone;
-    case 'A': return GpsState::kPpsAndNmea;
-    case 'V': return GpsState::kNmeaOnly;
-    case 'P': return GpsState::kPpsOnly;
-    default: return GpsState::kUnknown;
+    case 0:
+      return GpsState::kNone;
+    case 'A':
+      return GpsState::kPpsAndNmea;
+    case 'V':
+      return GpsState::kNmeaOnly;
+    case 'P':
+      return GpsState::kPpsOnly;
+    default:
+      return GpsState::kUnknown;
   }
 }
 
@@ -54,7 +59,8 @@ std::uint16_t checksum_of(const std::array<std::uint8_t, kStatusDumpBytes>& dump
   // CRC over bytes 1..20 of every laser record (the id excluded), as the S3 computes it.
   std::array<std::uint8_t, kMaxLasers * 20> records{};
   for (int i = 0; i < kMaxLasers; ++i) {
-    std::memcpy(records.data() + i * 20, dump.data() + kLaserRecords + i * kLaserRecordSize + 1, 20);
+    std::memcpy(records.data() + i * 20, dump.data() + kLaserRecords + i * kLaserRecordSize + 1,
+                20);
   }
   return crc16_8005(records);
 }
@@ -89,21 +95,30 @@ std::uint8_t data_type(Model model, int cycle, int index) noexcept {
 
 const char* to_string(GpsState s) noexcept {
   switch (s) {
-    case GpsState::kNone: return "none";
-    case GpsState::kPpsAndNmea: return "PPS+NMEA";
-    case GpsState::kNmeaOnly: return "NMEA only";
-    case GpsState::kPpsOnly: return "PPS only";
-    case GpsState::kUnknown: break;
+    case GpsState::kNone:
+      return "none";
+    case GpsState::kPpsAndNmea:
+      return "PPS+NMEA";
+    case GpsState::kNmeaOnly:
+      return "NMEA only";
+    case GpsState::kPpsOnly:
+      return "PPS only";
+    case GpsState::kUnknown:
+      break;
   }
   return "unknown";
 }
 
 const char* to_string(ReturnMode m) noexcept {
   switch (m) {
-    case ReturnMode::kStrongest: return "strongest";
-    case ReturnMode::kLast: return "last";
-    case ReturnMode::kDual: return "dual";
-    case ReturnMode::kUnknown: break;
+    case ReturnMode::kStrongest:
+      return "strongest";
+    case ReturnMode::kLast:
+      return "last";
+    case ReturnMode::kDual:
+      return "dual";
+    case ReturnMode::kUnknown:
+      break;
   }
   return "unknown";
 }
@@ -134,8 +149,10 @@ void StatusDecoder::add(std::uint8_t type, std::uint8_t value) noexcept {
     if (dump_len_ > 0) ++counters_.dumps_broken;
     dump_len_ = 0;
     position_ = -1;
-    if (type == 'H') position_ = 0;  // a new cycle starts here
-    else return;
+    if (type == 'H')
+      position_ = 0;  // a new cycle starts here
+    else
+      return;
   }
   if (position_ < kStatusTypedBytes) {
     typed_[static_cast<std::size_t>(position_)] = value;
@@ -254,8 +271,8 @@ std::optional<std::int64_t> resolve_past_hour_ns(std::uint32_t usec_past_hour,
                                                  std::int64_t reference_ns) noexcept {
   constexpr std::int64_t kHourNs = 3'600'000'000'000;
   if (usec_past_hour >= 3'600'000'000U) return std::nullopt;
-  const std::int64_t hour = reference_ns >= 0 ? reference_ns / kHourNs
-                                              : (reference_ns + 1) / kHourNs - 1;
+  const std::int64_t hour =
+      reference_ns >= 0 ? reference_ns / kHourNs : (reference_ns + 1) / kHourNs - 1;
   const std::int64_t t = hour * kHourNs + static_cast<std::int64_t>(usec_past_hour) * 1000;
   if (t - reference_ns > kHourNs / 2) return t - kHourNs;  // still the previous hour
   if (reference_ns - t > kHourNs / 2) return t + kHourNs;  // already the next hour
@@ -275,15 +292,33 @@ StatusByte typed_status_byte(int position, const SensorStatus& s) noexcept {
   const auto u8 = [](int v) { return static_cast<std::uint8_t>(v & 0xFF); };
   std::uint8_t value = 0;
   switch (position) {
-    case 0: value = u8(s.time.hour); break;
-    case 1: value = u8(s.time.minute); break;
-    case 2: value = u8(s.time.second); break;
-    case 3: value = u8(s.time.day); break;
-    case 4: value = u8(s.time.month); break;
-    case 5: value = u8(s.time.year - 2000); break;
-    case 6: value = s.gps_raw; break;
-    case 7: value = u8(s.temperature_c); break;
-    default: value = s.firmware; break;
+    case 0:
+      value = u8(s.time.hour);
+      break;
+    case 1:
+      value = u8(s.time.minute);
+      break;
+    case 2:
+      value = u8(s.time.second);
+      break;
+    case 3:
+      value = u8(s.time.day);
+      break;
+    case 4:
+      value = u8(s.time.month);
+      break;
+    case 5:
+      value = u8(s.time.year - 2000);
+      break;
+    case 6:
+      value = s.gps_raw;
+      break;
+    case 7:
+      value = u8(s.temperature_c);
+      break;
+    default:
+      value = s.firmware;
+      break;
   }
   return {kTypedOrder[static_cast<std::size_t>(position)], value};
 }
@@ -322,8 +357,8 @@ rt::Result<bool> encode_status_sequence(Model model, const SensorStatus& status,
     for (const Field& f : fields) {
       const double q = std::round(f.value / f.unit);
       if (!(q >= -32768 && q <= 32767)) {
-        return rt::make_error(calibration.source + ": laser " + std::to_string(i) + ": '" +
-                              f.name + "' = " + std::to_string(f.value) +
+        return rt::make_error(calibration.source + ": laser " + std::to_string(i) + ": '" + f.name +
+                              "' = " + std::to_string(f.value) +
                               " does not fit the status dump's 16-bit field");
       }
       store_u16(r + f.offset, static_cast<std::uint16_t>(static_cast<std::int16_t>(q)));

@@ -28,8 +28,8 @@
 namespace stac::velodyne {
 
 inline constexpr int kStatusCyclePackets = 16;
-inline constexpr int kStatusTypedBytes = 9;       // H M S D N Y G T V
-inline constexpr int kStatusDataBytes = 7;        // per cycle
+inline constexpr int kStatusTypedBytes = 9;  // H M S D N Y G T V
+inline constexpr int kStatusDataBytes = 7;   // per cycle
 inline constexpr int kStatusDumpCycles = 260;
 inline constexpr int kStatusDumpBytes = kStatusDumpCycles * kStatusDataBytes;       // 1820
 inline constexpr int kStatusDumpPackets = kStatusDumpCycles * kStatusCyclePackets;  // 4160
@@ -71,13 +71,13 @@ struct UnitParameters {
 };
 
 struct StatusCounters {
-  std::uint64_t packets = 0;           // status bytes offered
-  std::uint64_t cycles = 0;            // complete 16-packet cycles
-  std::uint64_t out_of_sequence = 0;   // type byte not where the cycle puts it: resynchronised
-  std::uint64_t dumps = 0;             // calibration dumps assembled and accepted
-  std::uint64_t dumps_broken = 0;      // dumps in progress dropped by a broken cycle
-  std::uint64_t bad_checksum = 0;      // complete dumps whose checksum did not match
-  std::uint64_t bad_layout = 0;        // complete dumps whose laser ids were not 0..63
+  std::uint64_t packets = 0;          // status bytes offered
+  std::uint64_t cycles = 0;           // complete 16-packet cycles
+  std::uint64_t out_of_sequence = 0;  // type byte not where the cycle puts it: resynchronised
+  std::uint64_t dumps = 0;            // calibration dumps assembled and accepted
+  std::uint64_t dumps_broken = 0;     // dumps in progress dropped by a broken cycle
+  std::uint64_t bad_checksum = 0;     // complete dumps whose checksum did not match
+  std::uint64_t bad_layout = 0;       // complete dumps whose laser ids were not 0..63
 };
 
 class StatusDecoder {

@@ -48,8 +48,8 @@ int main(int argc, char** argv) {
       printf("scan %llu: %u objects\n", (unsigned long long)s->scan_index, s->objects._length);
       for (uint32_t i = 0; i < s->objects._length; ++i) {
         const stac_msgs_msg_TrackedObject* o = &s->objects._buffer[i];
-        printf("  id %llu at x=%.2f y=%.2f\n", (unsigned long long)o->object_id, o->kinematics.position.x,
-               o->kinematics.position.y);
+        printf("  id %llu at x=%.2f y=%.2f\n", (unsigned long long)o->object_id,
+               o->kinematics.position.x, o->kinematics.position.y);
       }
       fflush(stdout);
       ++received;

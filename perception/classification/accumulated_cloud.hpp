@@ -20,7 +20,7 @@ class AccumulatedCloud {
 
   // Adds the segment's finite points (x, y, z, intensity). No allocation, exception or I/O.
   void add_segment(const descriptors::SegmentView& segment) noexcept;
-  void clear() noexcept;  // empty again, same seed sequence continues
+  void clear() noexcept;                    // empty again, same seed sequence continues
   void clear(std::uint64_t seed) noexcept;  // empty again, sampling restarted from `seed`
 
   // The kept points (x, y, z, intensity; stride 16), valid until the next add_segment/clear.

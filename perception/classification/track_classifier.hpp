@@ -67,7 +67,7 @@ struct TrackClassifierCounters {
   // A track whose slot is out of range, or that another track of the same scan holds (the
   // later one is classified): never expected.
   std::uint64_t slot_mismatch = 0;
-  std::uint64_t kept_overflow = 0;       // segments begin() could not keep (never expected)
+  std::uint64_t kept_overflow = 0;  // segments begin() could not keep (never expected)
 };
 
 // Which of the kept tracks update() classifies.
@@ -118,7 +118,8 @@ class TrackClassifier {
   // classes after finish() are classify()'s.
   void begin(const segmentation::Segments& segments,
              const tracking::TrackerOutput& tracked) noexcept;
-  UpdateCount update(const float* xyzi, std::size_t stride_bytes, const UpdateLimit& limit) noexcept;
+  UpdateCount update(const float* xyzi, std::size_t stride_bytes,
+                     const UpdateLimit& limit) noexcept;
   void finish(const float* xyzi, std::size_t stride_bytes) noexcept;
   void report(const tracking::TrackerOutput& tracked,
               rt::FixedVector<TrackClass>& out) const noexcept;
@@ -132,11 +133,11 @@ class TrackClassifier {
     AccumulatedCloud cloud;
     TrackEvidence evidence;
     TrackClass cls;  // cls.id: the track this slot holds; 0: none yet (track ids start at 1)
-    std::uint32_t described = 0;  // segments of this track described (with a finite point)
+    std::uint32_t described = 0;       // segments of this track described (with a finite point)
     std::uint32_t since_holistic = 0;  // segments added since the accumulated cloud was described
     // The holistic descriptor's 931 accumulated elements (valid once described > 0).
     descriptors::Descriptors accumulated;
-    LogOdds accumulated_sum{};  // their part of the holistic log odds (GridClassifier::partial)
+    LogOdds accumulated_sum{};     // their part of the holistic log odds (GridClassifier::partial)
     std::uint64_t class_scan = 0;  // scans_ when cls last took a segment
     explicit Slot(std::size_t points) : cloud(points) {}
   };
@@ -177,8 +178,8 @@ class TrackClassifier {
   std::vector<const float*> rows_;  // partial_batch's inputs and sums (max_tracks each)
   std::vector<LogOdds> sums_;
   std::vector<LogOdds> segment_log_odds_;
-  std::vector<Slot*> slots_to_sum_;  // sum_accumulated()'s slots (max_tracks)
-  rt::FixedVector<Kept> kept_tracks_;   // begin()'s tracks, in their order of classification
+  std::vector<Slot*> slots_to_sum_;       // sum_accumulated()'s slots (max_tracks)
+  rt::FixedVector<Kept> kept_tracks_;     // begin()'s tracks, in their order of classification
   std::vector<std::uint64_t> slot_scan_;  // per slot: begin()'s scan count when it kept it
   std::vector<std::uint32_t> slot_kept_;  // per slot: its entry in kept_tracks_ then
   std::uint64_t scans_ = 0;               // begin() calls

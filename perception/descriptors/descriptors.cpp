@@ -258,7 +258,8 @@ void canonicalize(const SegmentView& segment, const DescriptorConfig& config, st
   const std::size_t reads = std::min(total, x.size());
   out.points_over_capacity = static_cast<std::uint32_t>(total - reads);
   const auto position = [&](std::size_t j) {
-    return reads == total ? j : static_cast<std::size_t>(static_cast<std::uint64_t>(j) * total / reads);
+    return reads == total ? j
+                          : static_cast<std::size_t>(static_cast<std::uint64_t>(j) * total / reads);
   };
   double mx = 0, my = 0, mz = 0;
   for (std::size_t j = 0; j < reads; ++j) {

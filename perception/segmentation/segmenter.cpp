@@ -72,7 +72,8 @@ const char* validate(const SegmenterConfig& c) noexcept {
     return "overhang_m must be in [0, max_height_m] m";
   if (!(c.overhang_max_m >= c.overhang_m)) return "overhang_max_m must be >= overhang_m";
   if (!(c.overhang_height_m >= 0)) return "overhang_height_m must be >= 0 m";
-  if (!(c.overhead_m == 0 || (c.overhead_m > c.obstacle_height_m && c.overhead_m <= c.max_height_m)))
+  if (!(c.overhead_m == 0 ||
+        (c.overhead_m > c.obstacle_height_m && c.overhead_m <= c.max_height_m)))
     return "overhead_m must be 0 (off) or in (obstacle_height_m, max_height_m] m";
   if (!(c.split_height_m == 0 ||
         (c.split_height_m > c.obstacle_height_m && c.split_height_m <= c.max_height_m)))
@@ -183,7 +184,7 @@ struct Segmenter::State {
   // Per fine column ix: gx + pad of the coarse cell that holds its centre; per fine row iy:
   // (gy + pad) * mp. A fine cell's coarse cell is their sum.
   std::vector<std::uint32_t> coarse_column, coarse_row;
-  rt::FixedVector<std::uint32_t> point_slot;    // per point: its slot, or kNone
+  rt::FixedVector<std::uint32_t> point_slot;  // per point: its slot, or kNone
   rt::FixedVector<float> point_z;  // per binned point: its z, for the passes after the first
   // Per slot (occupied fine cell).
   rt::FixedVector<std::uint32_t> cell_id;  // iy << 16 | ix
@@ -486,8 +487,8 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
     s.offset[slot] = kNone;
     if (s.obstacle_count[slot] == 0) continue;
     const float top = s.band_max[slot];
-    const bool strong = top - s.ground_at[slot] > obstacle_height ||
-                        top - s.z_min[slot] > obstacle_spread;
+    const bool strong =
+        top - s.ground_at[slot] > obstacle_height || top - s.z_min[slot] > obstacle_spread;
     s.label[slot] = strong ? kUnvisited : kWeak;
     s.overhead[slot] = overhead_on && s.band_min[slot] - s.ground_at[slot] >= overhead_low;
     State::set(s.open, s.dense_of(static_cast<std::uint32_t>(slot)));

@@ -41,10 +41,10 @@ struct SegmentCounters {
   std::uint64_t obstacle_points = 0;  // above the clearance in obstacle cells (kept or dropped)
   std::uint64_t occupied_cells = 0;
   std::uint64_t obstacle_cells = 0;
-  std::uint64_t clusters = 0;                  // connected components of obstacle cells
-  std::uint64_t split_segments = 0;  // extra parts made by splitting clusters (kept or dropped)
-  std::uint64_t dropped_too_small = 0;         // clusters under min_segment_points
-  std::uint64_t dropped_too_large = 0;         // over max_segment_points or max_segment_extent_m
+  std::uint64_t clusters = 0;           // connected components of obstacle cells
+  std::uint64_t split_segments = 0;     // extra parts made by splitting clusters (kept or dropped)
+  std::uint64_t dropped_too_small = 0;  // clusters under min_segment_points
+  std::uint64_t dropped_too_large = 0;  // over max_segment_points or max_segment_extent_m
   std::uint64_t dropped_segment_overflow = 0;  // kept clusters beyond max_segments
 };
 

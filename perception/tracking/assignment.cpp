@@ -18,7 +18,8 @@ AssignmentSolver::AssignmentSolver(std::size_t max_rows, std::size_t max_cols)
 
 bool AssignmentSolver::solve(std::span<const double> cost, std::size_t rows, std::size_t cols,
                              std::span<int> row_to_col) noexcept {
-  const bool fits = (rows <= max_rows_ && cols <= max_cols_) || (rows <= max_cols_ && cols <= max_rows_);
+  const bool fits =
+      (rows <= max_rows_ && cols <= max_cols_) || (rows <= max_cols_ && cols <= max_rows_);
   if (!fits || row_to_col.size() < rows || cost.size() < rows * cols) return false;
   for (std::size_t i = 0; i < rows; ++i) row_to_col[i] = -1;
   if (rows == 0 || cols == 0) return true;

@@ -48,15 +48,15 @@ class HolisticFeatures {
 };
 
 struct Track {
-  std::uint64_t id = 0;  // stable for the track's life, never reused
+  std::uint64_t id = 0;    // stable for the track's life, never reused
   std::uint32_t slot = 0;  // the tracker's pool slot holding it (< max_tracks); reused by a
-                          // later track once this one ends (per-track state elsewhere keys on it)
+                           // later track once this one ends (per-track state elsewhere keys on it)
   TrackState state = TrackState::kTentative;
   Eigen::Vector3f position = Eigen::Vector3f::Zero();  // filtered centroid, world (m)
   Eigen::Vector2f velocity = Eigen::Vector2f::Zero();  // filtered x,y velocity (m/s)
   float position_std_m = 0;  // sqrt(max eigenvalue of the x,y position covariance)
   float length = 0, width = 0, height = 0, yaw = 0;  // smoothed box (m, rad)
-  std::uint32_t points = 0;   // points of the last associated detection
+  std::uint32_t points = 0;                          // points of the last associated detection
   std::int32_t segment = -1;  // Detection::segment matched in this scan, -1 when coasting
   std::uint32_t age = 0;      // scans since spawn (0 in the spawning scan)
   std::uint32_t hits = 0;     // associated detections so far

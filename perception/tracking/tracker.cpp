@@ -81,7 +81,8 @@ bool tall(const TrackerConfig& c, float height) {
 // The longest box one fragmented object may span: absorb_max_length_m, or absorb_tall_length_m
 // (if longer) for a tall one.
 double longest_object(const TrackerConfig& c, bool tall_object) {
-  return tall_object ? std::max(c.absorb_max_length_m, c.absorb_tall_length_m) : c.absorb_max_length_m;
+  return tall_object ? std::max(c.absorb_max_length_m, c.absorb_tall_length_m)
+                     : c.absorb_max_length_m;
 }
 
 // A box that fits what one fragmented object may span (longest_object x absorb_max_width_m).
@@ -571,7 +572,8 @@ void Tracker::absorb_fragments(std::span<const Detection> detections) noexcept {
   }
   std::fill_n(merged_track_.begin(), live_.size(), std::uint8_t{0});
   if (config_.absorb_gap_m <= 0) return;
-  const auto max_len = static_cast<float>(longest_object(config_, config_.absorb_tall_height_m > 0));
+  const auto max_len =
+      static_cast<float>(longest_object(config_, config_.absorb_tall_height_m > 0));
   const auto max_wid = static_cast<float>(config_.absorb_max_width_m);
   const auto max_gap = static_cast<float>(config_.absorb_gap_m);
   const float reach_sq = max_len * max_len + max_wid * max_wid;
@@ -637,7 +639,8 @@ void Tracker::absorb_fragments(std::span<const Detection> detections) noexcept {
         if (!(gap <= best_gap) || (narrow_host && gap > config_.absorb_narrow_gap_m)) continue;
         const Extent u = hull(a, b);
         const float lu = u.u1 - u.u0, lv = u.v1 - u.v0;
-        if (!fits_one_object(config_, lu, lv, tall(config_, h.height) && tall(config_, f.height))) continue;
+        if (!fits_one_object(config_, lu, lv, tall(config_, h.height) && tall(config_, f.height)))
+          continue;
         if (narrow_host && !narrow_and_tall(config_, lu, lv, merged_[hi].height)) continue;
         if (best == hi && lu * lv >= best_area) continue;
         best = hi, best_gap = gap, best_union = u, best_heading = heading, best_area = lu * lv;
@@ -818,7 +821,8 @@ void Tracker::assign(std::size_t nd, std::size_t nrows, std::size_t ncols) noexc
     component_[i] = root == i ? static_cast<std::uint32_t>(components++) : component_[root];
   }
   std::fill_n(component_start_.begin(), 2 * components + 1, 0u);
-  for (std::size_t i = 0; i < nodes; ++i) ++component_start_[2 * component_[i] + (i < nrows ? 1 : 2)];
+  for (std::size_t i = 0; i < nodes; ++i)
+    ++component_start_[2 * component_[i] + (i < nrows ? 1 : 2)];
   for (std::size_t k = 1; k <= 2 * components; ++k) component_start_[k] += component_start_[k - 1];
   for (std::size_t i = 0; i < nodes; ++i) {
     component_members_[component_start_[2 * component_[i] + (i < nrows ? 0 : 1)]++] =

@@ -48,12 +48,12 @@ struct TrackerConfig {
   double gate_mahalanobis_sq = 9.21;  // squared Mahalanobis distance in x,y (chi^2, 2 dof, 99%)
   double gate_distance_m = 3.0;       // Euclidean x,y distance to the prediction (m)
   // Life cycle.
-  std::uint32_t confirm_hits = 3;          // hits that make a tentative track confirmed
+  std::uint32_t confirm_hits = 3;           // hits that make a tentative track confirmed
   std::uint32_t confirm_large_points = 50;  // a hit with a segment this large (points; 0: off)...
-  std::uint32_t confirm_large_hits = 2;    // ...confirms after this many hits
-  std::uint32_t tentative_max_misses = 1;  // consecutive misses that delete a tentative track
-  std::uint32_t max_coast_scans = 20;      // consecutive misses that delete a coasting track
-  double max_position_std_m = 1.5;         // sqrt(max eigenvalue of the x,y covariance) (m)
+  std::uint32_t confirm_large_hits = 2;     // ...confirms after this many hits
+  std::uint32_t tentative_max_misses = 1;   // consecutive misses that delete a tentative track
+  std::uint32_t max_coast_scans = 20;       // consecutive misses that delete a coasting track
+  double max_position_std_m = 1.5;          // sqrt(max eigenvalue of the x,y covariance) (m)
   // Position measured: the oriented box's centre (true) or the points' centroid (false, the
   // thesis). The centroid of a car seen from behind sits on its rear, metres from its centre.
   bool position_from_box = true;
@@ -230,10 +230,10 @@ class Tracker {
   std::vector<std::int32_t> det_match_;     // per detection: slot or -1
   std::vector<std::uint32_t> rows_, cols_;  // compact index -> live index / detection index
   std::vector<std::int32_t> col_of_det_;
-  std::vector<Eigen::Vector2d> positions_;        // per detection: its measured x,y
-  std::vector<Eigen::Vector2d> track_xy_;         // per live index: its x,y (overlap merge)
-  std::vector<std::uint32_t> order_, rank_;       // live indices sorted by x; each one's rank
-  std::vector<std::uint32_t> candidate_;          // live indices within a track's reach
+  std::vector<Eigen::Vector2d> positions_;         // per detection: its measured x,y
+  std::vector<Eigen::Vector2d> track_xy_;          // per live index: its x,y (overlap merge)
+  std::vector<std::uint32_t> order_, rank_;        // live indices sorted by x; each one's rank
+  std::vector<std::uint32_t> candidate_;           // live indices within a track's reach
   std::vector<std::uint32_t> parent_, component_;  // per row, then column: union-find, component
   std::vector<std::uint32_t> component_start_;     // per component: its rows', columns' start
   std::vector<std::uint32_t> component_members_;   // rows, columns, grouped by component

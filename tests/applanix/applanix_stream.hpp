@@ -74,8 +74,12 @@ inline applanix::Group3 random_group3(std::mt19937& rng, std::size_t channels) {
   g.sv_count = static_cast<std::uint8_t>(channels);
   g.channel_count = channels;
   for (std::size_t i = 0; i < channels; ++i) {
-    g.channels[i] = {static_cast<std::uint16_t>(rng() % 200), static_cast<std::uint16_t>(rng() % 16),
-                     u(rng) * 4.0f, u(rng), u(rng) / 2.0f, u(rng) / 2.0f};
+    g.channels[i] = {static_cast<std::uint16_t>(rng() % 200),
+                     static_cast<std::uint16_t>(rng() % 16),
+                     u(rng) * 4.0f,
+                     u(rng),
+                     u(rng) / 2.0f,
+                     u(rng) / 2.0f};
   }
   g.hdop = u(rng) / 30.0f;
   g.vdop = u(rng) / 30.0f;
@@ -97,9 +101,18 @@ inline EncodedMessage random_message(std::mt19937& rng) {
   std::size_t n = 0;
   const applanix::TimeDistance t = random_time(rng);
   switch (rng() % 5) {
-    case 0: m.id = 1; n = applanix::encode_group1(random_group1(rng), t, m.bytes); break;
-    case 1: m.id = 2; n = applanix::encode_group2(random_group2(rng), t, m.bytes); break;
-    case 2: m.id = 3; n = applanix::encode_group3(random_group3(rng, rng() % 24), t, m.bytes); break;
+    case 0:
+      m.id = 1;
+      n = applanix::encode_group1(random_group1(rng), t, m.bytes);
+      break;
+    case 1:
+      m.id = 2;
+      n = applanix::encode_group2(random_group2(rng), t, m.bytes);
+      break;
+    case 2:
+      m.id = 3;
+      n = applanix::encode_group3(random_group3(rng, rng() % 24), t, m.bytes);
+      break;
     case 3: {
       std::vector<std::uint8_t> data(rng() % 300);
       for (auto& b : data) b = static_cast<std::uint8_t>(rng());

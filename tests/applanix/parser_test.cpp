@@ -190,10 +190,11 @@ TEST(ApplanixStreamParser, AnyChunkingGivesTheSameMessages) {
   const auto messages = random_messages(rng, 300);
   const auto stream = concat(messages);
   const auto expected = expected_of(messages);
-  for (const std::size_t max_chunk : {std::size_t{1}, std::size_t{2}, std::size_t{7}, std::size_t{64},
-                                      std::size_t{1500}, stream.size()}) {
+  for (const std::size_t max_chunk : {std::size_t{1}, std::size_t{2}, std::size_t{7},
+                                      std::size_t{64}, std::size_t{1500}, stream.size()}) {
     StreamParser parser;
-    EXPECT_EQ(parse_in_chunks(stream, rng, max_chunk, parser), expected) << "chunks up to " << max_chunk;
+    EXPECT_EQ(parse_in_chunks(stream, rng, max_chunk, parser), expected)
+        << "chunks up to " << max_chunk;
     EXPECT_EQ(parser.counters().garbage_bytes, 0u);
     EXPECT_EQ(parser.counters().groups + parser.counters().control_messages, messages.size());
   }
@@ -345,8 +346,9 @@ TEST(ApplanixStreamParser, SteadyStateAllocatesNothing) {
 // The real POS LV capture: every UDP payload is one or more whole messages.
 TEST(ApplanixRealCapture, LastGroup1AndGroupIdsMatchTheReadme) {
   STAC_REQUIRE_SHARED_DATA(kCapture);
-  auto reader = io::PcapReader::open(testing::shared_data(kCapture),
-                                     io::PcapFilter{.udp_dst_port = kPortDisplay, .udp_src_port = {}});
+  auto reader =
+      io::PcapReader::open(testing::shared_data(kCapture),
+                           io::PcapFilter{.udp_dst_port = kPortDisplay, .udp_src_port = {}});
   ASSERT_TRUE(reader) << reader.error().message;
   StreamParser parser;
   io::Datagram d;
@@ -391,7 +393,9 @@ TEST(ApplanixRealCapture, LastGroup1AndGroupIdsMatchTheReadme) {
   EXPECT_EQ(message_ids.size(), 25u);  // $MSG echoes of the control messages
   EXPECT_EQ(parser.counters().control_messages, 25u * 81u);
   const auto& c = parser.counters();
-  EXPECT_EQ(c.bad_checksum + c.bad_length + c.bad_terminator + c.oversize + c.malformed + c.truncated, 0u);
+  EXPECT_EQ(
+      c.bad_checksum + c.bad_length + c.bad_terminator + c.oversize + c.malformed + c.truncated,
+      0u);
   EXPECT_EQ(c.garbage_bytes, 0u);
 
   // Group 3: 19 channel records, GPS week 1694, GPS-UTC 15 s.

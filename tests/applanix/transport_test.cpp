@@ -299,8 +299,8 @@ TEST(ApplanixCaptureReader, FollowsATcpStreamWithRetransmissionAndReorderInAPcap
     segments.push_back(s);
     at += n;
   }
-  std::swap(segments[10], segments[11]);                  // out of order
-  segments.insert(segments.begin() + 20, segments[15]);   // retransmitted
+  std::swap(segments[10], segments[11]);                 // out of order
+  segments.insert(segments.begin() + 20, segments[15]);  // retransmitted
   Group1 g1;
   g1.latitude_deg = 44.0;
   Bytes display(kGroup1Bytes);

@@ -40,7 +40,8 @@ TEST(CandumpLine, StandardExtendedRemoteAndErrorFrames) {
   EXPECT_EQ(f.dlc, 4);
   ASSERT_EQ(parse_candump_line("(2.000000) can0 123# T", f).kind, CandumpLineKind::kFrame);
   EXPECT_EQ(f.dlc, 0);
-  ASSERT_EQ(parse_candump_line("(2.000000) can0 20000004#0004000000000000", f).kind, CandumpLineKind::kFrame);
+  ASSERT_EQ(parse_candump_line("(2.000000) can0 20000004#0004000000000000", f).kind,
+            CandumpLineKind::kFrame);
   EXPECT_TRUE(f.error);
   EXPECT_EQ(f.id, 4u);
 }
@@ -74,7 +75,8 @@ TEST(CandumpLine, MalformedLinesSayWhatIsWrong) {
 }
 
 TEST(CandumpReader, MalformedLineStopsWithFileAndLine) {
-  const auto p = temp_file("bad.log", "(1.000000) can0 123#11\n\n(1.000000) can0 123##0AA\n(1.1) can0 XYZ#11\n");
+  const auto p = temp_file(
+      "bad.log", "(1.000000) can0 123#11\n\n(1.000000) can0 123##0AA\n(1.1) can0 XYZ#11\n");
   auto r = CandumpReader::open(p);
   ASSERT_TRUE(r);
   Frame f;
@@ -83,7 +85,8 @@ TEST(CandumpReader, MalformedLineStopsWithFileAndLine) {
   EXPECT_TRUE(*first);
   const auto second = r->next(f);
   ASSERT_FALSE(second);
-  EXPECT_NE(second.error().message.find(p.string() + ":4: the id is not hexadecimal"), std::string::npos)
+  EXPECT_NE(second.error().message.find(p.string() + ":4: the id is not hexadecimal"),
+            std::string::npos)
       << second.error().message;
   EXPECT_EQ(r->counters().can_fd, 1u);
   EXPECT_EQ(r->counters().blank, 1u);

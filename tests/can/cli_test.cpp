@@ -70,11 +70,14 @@ TEST(CanCli, CandumpWritesSpeedYawRateAndTheDeadReckonedCircle) {
   ASSERT_EQ(r.code, 0) << r.output;
   EXPECT_NE(r.output.find("1 CAN FD skipped"), std::string::npos) << r.output;
   const auto lines = lines_of(csv);
-  ASSERT_EQ(lines.size(), 1u + 2000u);  // header + every speed and yaw frame after the first yaw frame
+  ASSERT_EQ(lines.size(),
+            1u + 2000u);  // header + every speed and yaw frame after the first yaw frame
   EXPECT_EQ(lines[0], "time,speed_mps,yaw_rate_dps,x_m,y_m,yaw_deg,status");
   double t = 0, v = 0, w = 0, x = 0, y = 0, yaw = 0;
   char status[16] = {};
-  ASSERT_EQ(std::sscanf(lines.back().c_str(), "%lf,%lf,%lf,%lf,%lf,%lf,%15s", &t, &v, &w, &x, &y, &yaw, status), 7)
+  ASSERT_EQ(std::sscanf(lines.back().c_str(), "%lf,%lf,%lf,%lf,%lf,%lf,%15s", &t, &v, &w, &x, &y,
+                        &yaw, status),
+            7)
       << lines.back();
   EXPECT_NEAR(t, 1'700'000'010.0, 1e-3);
   EXPECT_NEAR(v, 10.0, 1e-9);
@@ -94,7 +97,8 @@ TEST(CanCli, CandumpErrorsNameTheFileAndLineOrTheSignal) {
   std::ofstream(log) << "(1.000000) can0 1A0#0E10000000000000\n(1.000000) can0 1A0-0E10\n";
   const CliResult r = stac("candump --in " + log.string() + " --out " + (dir / "x.csv").string());
   EXPECT_NE(r.code, 0);
-  EXPECT_NE(r.output.find(log.string() + ":2: expected <id>#<data>"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(log.string() + ":2: expected <id>#<data>"), std::string::npos)
+      << r.output;
   const auto dbc = dir / "other.dbc";
   std::ofstream(dbc) << "BO_ 1 Other: 8 X\n SG_ S : 0|8@1+ (1,0) [0|1] \"km/h\" X\n";
   const CliResult m = stac("candump --in " + log.string() + " --dbc " + dbc.string() + " --out " +
@@ -108,7 +112,8 @@ TEST(CanCli, CandumpErrorsNameTheFileAndLineOrTheSignal) {
   EXPECT_NE(e.output.find("empty.log: no CAN frame in the log"), std::string::npos) << e.output;
   const CliResult h = stac("candump --help");
   EXPECT_EQ(h.code, 0);
-  EXPECT_NE(h.output.find("time (s, from the log),speed_mps,yaw_rate_dps"), std::string::npos) << h.output;
+  EXPECT_NE(h.output.find("time (s, from the log),speed_mps,yaw_rate_dps"), std::string::npos)
+      << h.output;
 }
 
 }  // namespace

@@ -1,10 +1,10 @@
-#include "tools/settings.hpp"
-
 #include <gtest/gtest.h>
 
 #include <fstream>
 #include <regex>
 #include <sstream>
+
+#include "tools/settings.hpp"
 
 namespace stac::can {
 namespace {
@@ -30,8 +30,8 @@ std::filesystem::path variant(const std::string& key, const std::string& replace
   std::ifstream in(kShipped);
   std::stringstream text;
   text << in.rdbuf();
-  const std::string edited =
-      std::regex_replace(text.str(), std::regex("\n  " + key + ":[^\n]*"), replacement.empty() ? "" : "\n  " + replacement);
+  const std::string edited = std::regex_replace(text.str(), std::regex("\n  " + key + ":[^\n]*"),
+                                                replacement.empty() ? "" : "\n  " + replacement);
   const auto out = std::filesystem::temp_directory_path() / ("stac_can_config_" + key) /
                    ("stac" + std::to_string(++serial) + ".yaml");
   std::filesystem::create_directories(out.parent_path());

@@ -68,8 +68,10 @@ TEST(DbcSignal, MotorolaCrossingBytesFromAMidByteStart) {
 
 TEST(DbcSignal, SixtyFourBitsAndOffsets) {
   const Payload p{0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x88};
-  EXPECT_EQ(static_cast<std::uint64_t>(make(0, 64, ByteOrder::kIntel, false).raw(p)), 0x8807060504030201ull);
-  EXPECT_EQ(static_cast<std::uint64_t>(make(7, 64, ByteOrder::kMotorola, false).raw(p)), 0x0102030405060788ull);
+  EXPECT_EQ(static_cast<std::uint64_t>(make(0, 64, ByteOrder::kIntel, false).raw(p)),
+            0x8807060504030201ull);
+  EXPECT_EQ(static_cast<std::uint64_t>(make(7, 64, ByteOrder::kMotorola, false).raw(p)),
+            0x0102030405060788ull);
   EXPECT_DOUBLE_EQ(make(0, 8, ByteOrder::kIntel, false, 0.5, -40).decode(p), 0.5 - 40);
 }
 
@@ -117,7 +119,8 @@ TEST(DbcSignal, RandomRoundTripsKeepEveryOtherBit) {
                                    : static_cast<std::int64_t>(bits);
     Payload p = before;
     ASSERT_TRUE(s.encode(static_cast<double>(value), p)) << start << "|" << length;
-    ASSERT_EQ(s.raw(p), value) << start << "|" << length << (order == ByteOrder::kIntel ? "@1" : "@0");
+    ASSERT_EQ(s.raw(p), value) << start << "|" << length
+                               << (order == ByteOrder::kIntel ? "@1" : "@0");
     // the other bits are untouched: re-encoding the old raw value restores the old payload
     // (when that value is exact as a double)
     if (length > 53) continue;
@@ -188,9 +191,12 @@ TEST(DbcParse, ErrorsNameTheFileTheLineAndTheProblem) {
     const char* expected;
   };
   const Case cases[] = {
-      {"BO_ 100 A: 8 X\n SG_ S : 0|8@2+ (1,0) [0|1] \"\" X\n", "bad.dbc:2: SG_ A.S: byte order must be @1"},
-      {"BO_ 100 A: 2 X\n SG_ S : 8|16@1+ (1,0) [0|1] \"\" X\n", "bad.dbc:2: SG_ A.S: bits 8|16@1 do not fit the message's 2 bytes"},
-      {"BO_ 100 A: 8 X\n SG_ S : 3|8@0+ (1,0) [0|1] \"\" X\n SG_ T : 59|8@0+ (1,0) [0|1] \"\" X\n", "bad.dbc:3: SG_ A.T: bits 59|8@0 do not fit"},
+      {"BO_ 100 A: 8 X\n SG_ S : 0|8@2+ (1,0) [0|1] \"\" X\n",
+       "bad.dbc:2: SG_ A.S: byte order must be @1"},
+      {"BO_ 100 A: 2 X\n SG_ S : 8|16@1+ (1,0) [0|1] \"\" X\n",
+       "bad.dbc:2: SG_ A.S: bits 8|16@1 do not fit the message's 2 bytes"},
+      {"BO_ 100 A: 8 X\n SG_ S : 3|8@0+ (1,0) [0|1] \"\" X\n SG_ T : 59|8@0+ (1,0) [0|1] \"\" X\n",
+       "bad.dbc:3: SG_ A.T: bits 59|8@0 do not fit"},
       {"\n SG_ S : 0|8@1+ (1,0) [0|1] \"\" X\n", "bad.dbc:2: SG_ outside a BO_ message"},
       {"BO_ 2048 A: 8 X\n", "bad.dbc:1: BO_ A: id 2048 does not fit 11 bits"},
       {"BO_ 1 A: 8 X\nBO_ 1 B: 8 X\n", "bad.dbc:2: BO_ B: id 1 is already used by A"},
@@ -198,7 +204,8 @@ TEST(DbcParse, ErrorsNameTheFileTheLineAndTheProblem) {
       {"BO_ 1 A: 8 X\n SG_ S : 0|8@1+ (0,0) [0|1] \"\" X\n", "factor must be finite and non-zero"},
       {"BO_ 1 A: 8 X\n SG_ S : 0|0@1+ (1,0) [0|1] \"\" X\n", "length 0 is not in 1..64"},
       {"BO_ 1 A: 8 X\n SG_ S : 0|8@1* (1,0) [0|1] \"\" X\n", "sign must be '+'"},
-      {"BO_ 1 A: 8 X\n SG_ S : 0|8@1+ (1;0) [0|1] \"\" X\n", "bad.dbc:2: SG_ A.S: expected (factor,offset)"},
+      {"BO_ 1 A: 8 X\n SG_ S : 0|8@1+ (1;0) [0|1] \"\" X\n",
+       "bad.dbc:2: SG_ A.S: expected (factor,offset)"},
       {"BO_ 1 A: 8 X\n SG_ S : 0|8@1+ (1,0) [0|1] km X\n", "expected the unit in double quotes"},
       {"BO_ x A: 8 X\n", "bad.dbc:1: BO_: expected a numeric message id"},
       {"CM_ \"never closed\n", "a quoted string is never closed"},

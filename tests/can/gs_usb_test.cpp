@@ -46,8 +46,11 @@ TEST(GsUsbCodec, EchoesExtendedIdsAndFlags) {
   EXPECT_EQ(echo.status, DecodeStatus::kEcho);
   EXPECT_EQ(echo.echo_id, 7u);
   auto ext = received_0x1a0(false);
-  ext[4] = 0xFE; ext[5] = 0xF1; ext[6] = 0xFE; ext[7] = 0x98;  // 0x18FEF1FE | CAN_EFF_FLAG
-  ext[9] = 1;                                                  // channel 1
+  ext[4] = 0xFE;
+  ext[5] = 0xF1;
+  ext[6] = 0xFE;
+  ext[7] = 0x98;  // 0x18FEF1FE | CAN_EFF_FLAG
+  ext[9] = 1;     // channel 1
   ext[10] = kFrameFlagOverflow;
   const auto e = decode_frame(ext, false);
   ASSERT_EQ(e.status, DecodeStatus::kReceived);
@@ -77,7 +80,8 @@ TEST(GsUsbCodec, EncodeWritesTheHostFrameLayout) {
   f.data = {1, 2, 3};
   std::uint8_t buf[24];
   ASSERT_EQ(encode_frame(f, 5, 0, false, buf), 20u);
-  const std::uint8_t want[20] = {5, 0, 0, 0, 0xFE, 0xF1, 0xFE, 0x98, 3, 0, 0, 0, 1, 2, 3, 0, 0, 0, 0, 0};
+  const std::uint8_t want[20] = {5, 0, 0, 0, 0xFE, 0xF1, 0xFE, 0x98, 3, 0,
+                                 0, 0, 1, 2, 3,    0,    0,    0,    0, 0};
   EXPECT_EQ(std::vector<std::uint8_t>(buf, buf + 20), std::vector<std::uint8_t>(want, want + 20));
   EXPECT_EQ(encode_frame(f, 5, 0, true, buf), 24u);
   EXPECT_EQ(encode_frame(f, 5, 0, true, std::span(buf).first(23)), 0u);
@@ -107,7 +111,9 @@ TEST(GsUsbBitTiming, CandleLightClockGivesAnEightySevenPointFivePercentSamplePoi
 
 TEST(GsUsbDevice, OpeningWithoutAnAdapterFailsWithAClearMessage) {
   const auto d = GsUsbDevice::open({});
-  if (d) GTEST_SKIP() << "SKIPPED: a gs_usb adapter is attached; this test checks the message without one";
+  if (d)
+    GTEST_SKIP()
+        << "SKIPPED: a gs_usb adapter is attached; this test checks the message without one";
   EXPECT_NE(d.error().message.find("gs_usb (1d50:606f)"), std::string::npos) << d.error().message;
 }
 

@@ -16,9 +16,12 @@ Database shipped_dbc() {
   return std::move(db).value();
 }
 
-OdometrySignalMap shipped_map() { return {"WheelSpeeds", "VehicleSpeed", "YawRate", "YawRate", 1.0}; }
+OdometrySignalMap shipped_map() {
+  return {"WheelSpeeds", "VehicleSpeed", "YawRate", "YawRate", 1.0};
+}
 
-Frame frame(std::uint32_t id, std::initializer_list<std::uint8_t> bytes, std::int64_t stamp_ns = 0) {
+Frame frame(std::uint32_t id, std::initializer_list<std::uint8_t> bytes,
+            std::int64_t stamp_ns = 0) {
   Frame f;
   f.id = id;
   f.stamp_ns = stamp_ns;
@@ -48,7 +51,7 @@ TEST(OdometryDecoder, DecodesHandMadeFramesOfTheShippedDbc) {
   EXPECT_EQ(d->counters().frames, 4u);
   EXPECT_EQ(d->counters().decoded, 2u);
   EXPECT_EQ(d->counters().not_mapped, 2u);  // 0x123 and the 29-bit 0x1A0: dropped, counted
-  const auto filters = d->filters();  // what a SocketCAN reader lets through
+  const auto filters = d->filters();        // what a SocketCAN reader lets through
   ASSERT_EQ(filters.size(), 2u);
   EXPECT_EQ(filters[0].id, 0x1A0u);
   EXPECT_EQ(filters[1].id, 0x1B0u);
@@ -109,8 +112,12 @@ TEST(OdometryDecoder, DecodingAllocatesNothing) {
   EXPECT_NEAR(sum, 10000.0, 1e-6);
 }
 
-OdometryUpdate speed(std::int64_t t, double v) { return {t, true, false, v, 0.0}; }
-OdometryUpdate yaw(std::int64_t t, double w) { return {t, false, true, 0.0, w}; }
+OdometryUpdate speed(std::int64_t t, double v) {
+  return {t, true, false, v, 0.0};
+}
+OdometryUpdate yaw(std::int64_t t, double w) {
+  return {t, false, true, 0.0, w};
+}
 
 constexpr std::int64_t kMs = 1'000'000;
 

@@ -53,7 +53,8 @@ TEST(SocketCanReader, ReadsHandMadeCanFrameRecordsWithStamps) {
   EXPECT_EQ(out[1].data[7], 0xA7);
   EXPECT_TRUE(out[2].remote);
   EXPECT_EQ(out[2].id, 0x7FFu);
-  for (int i = 0; i < 3; ++i) EXPECT_GT(out[static_cast<std::size_t>(i)].stamp_ns, 1'600'000'000'000'000'000);
+  for (int i = 0; i < 3; ++i)
+    EXPECT_GT(out[static_cast<std::size_t>(i)].stamp_ns, 1'600'000'000'000'000'000);
   // the kernel stamps AF_UNIX datagrams too when SO_TIMESTAMPNS is on
   EXPECT_EQ(p.reader.counters().no_kernel_stamp, 0u);
   EXPECT_LE(out[0].stamp_ns, out[2].stamp_ns);
@@ -132,7 +133,8 @@ TEST(SocketCanReader, WriteSendsOneRecordAndReadAllocatesNothing) {
 TEST(SocketCanReader, OpeningAMissingInterfaceNamesIt) {
   const auto r = SocketCanReader::open({"stacnocan0", {}});
   ASSERT_FALSE(r);
-  EXPECT_NE(r.error().message.find("no network interface 'stacnocan0'"), std::string::npos) << r.error().message;
+  EXPECT_NE(r.error().message.find("no network interface 'stacnocan0'"), std::string::npos)
+      << r.error().message;
   const auto long_name = SocketCanReader::open({"a_name_longer_than_ifnamsiz", {}});
   ASSERT_FALSE(long_name);
   EXPECT_NE(long_name.error().message.find("must have 1..15 characters"), std::string::npos);
@@ -142,8 +144,9 @@ TEST(SocketCanReader, OpeningAMissingInterfaceNamesIt) {
 TEST(SocketCanReader, RealVcanSocketFiltersAndStamps) {
   const int probe = ::socket(PF_CAN, SOCK_RAW, CAN_RAW);
   if (probe < 0 && errno == EAFNOSUPPORT) {
-    GTEST_SKIP() << "SKIPPED: AF_CAN is unavailable on this kernel (socket(AF_CAN) fails with errno 97, "
-                    "EAFNOSUPPORT); the read path is tested through a SOCK_SEQPACKET socketpair instead";
+    GTEST_SKIP()
+        << "SKIPPED: AF_CAN is unavailable on this kernel (socket(AF_CAN) fails with errno 97, "
+           "EAFNOSUPPORT); the read path is tested through a SOCK_SEQPACKET socketpair instead";
   }
   ASSERT_GE(probe, 0) << std::strerror(errno);
   ::close(probe);

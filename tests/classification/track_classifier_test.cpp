@@ -292,8 +292,8 @@ TEST(TrackClassifier, StepsGiveTheClassesOfOneCallAndLeaveWhatTheLimitExcludesFo
     ASSERT_EQ(out.size(), 2u);
     EXPECT_EQ(out[0].log_odds, immediate[0].log_odds) << frame;
     EXPECT_EQ(out[0].segments, static_cast<std::uint32_t>(frame + 1));
-    EXPECT_EQ(out[0].age, 0u);                 // this scan's segment is in it
-    EXPECT_EQ(out[1].age, frame > 0 ? 1u : 0u);  // the scan before's
+    EXPECT_EQ(out[0].age, 0u);                         // this scan's segment is in it
+    EXPECT_EQ(out[1].age, frame > 0 ? 1u : 0u);        // the scan before's
     EXPECT_EQ(out[1].classified, frame > 0) << frame;  // the tentative one: the scan before's
     if (frame > 0) {
       EXPECT_EQ(out[1].log_odds, previous[1].log_odds) << frame;
@@ -338,7 +338,7 @@ TEST(TrackClassifier, TracksWithFewerSegmentsAreClassifiedFirst) {
   for (int frame = 0; frame < 3; ++frame) {
     const Scene scene(frame);
     tracked.tracks.clear();
-    (void)tracked.tracks.push_back(track(1, 0, 0));                   // from frame 0
+    (void)tracked.tracks.push_back(track(1, 0, 0));                  // from frame 0
     if (frame >= 1) (void)tracked.tracks.push_back(track(2, 1, 1));  // from frame 1
     if (frame == 2) (void)tracked.tracks.push_back(track(4, 3, 1));  // new in frame 2
     seen.ids.clear();

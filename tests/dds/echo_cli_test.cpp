@@ -2,15 +2,14 @@
 // over loopback (config/dds/loopback.xml, a tag unique to this process), and with no publisher
 // it times out with a message saying so.
 #include <gtest/gtest.h>
-
 #include <pthread.h>
 #include <sched.h>
 
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <thread>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "dds/publisher.hpp"
@@ -30,7 +29,8 @@ std::string run_to_end(FILE* p, int* code) {
 
 TEST(StacEcho, ReceivesTrackedObjectsFromAnotherProcess) {
   const std::string uri = testing::loopback_uri();  // sets DDS_TEST_TAG, inherited by the child
-  const std::string cmd = std::string(STAC_CLI) + " echo tracked_objects --count 5 --timeout 20 --domain 121 2>&1";
+  const std::string cmd =
+      std::string(STAC_CLI) + " echo tracked_objects --count 5 --timeout 20 --domain 121 2>&1";
   FILE* child = popen(cmd.c_str(), "r");
   ASSERT_NE(child, nullptr);
 
@@ -47,7 +47,8 @@ TEST(StacEcho, ReceivesTrackedObjectsFromAnotherProcess) {
   o.class_log_odds = {3, -3, -3, -3};
   std::vector<TrackedObjectIn> objects{o};
   for (std::uint64_t scan = 0; scan < 5; ++scan) {
-    ASSERT_TRUE((*pub)->publish_tracked_objects({static_cast<std::int64_t>(scan) * 100'000'000, scan}, objects));
+    ASSERT_TRUE((*pub)->publish_tracked_objects(
+        {static_cast<std::int64_t>(scan) * 100'000'000, scan}, objects));
     // Keep-last 1 replaces an unacknowledged sample (latest wins, by design): wait for the ack so
     // a loaded machine cannot turn this into a lost-sample race.
     ASSERT_EQ(dds_wait_for_acks((*pub)->writer(Topic::kTrackedObjects), DDS_SECS(10)), 0);
@@ -76,7 +77,9 @@ TEST(StacEcho, RealTimeLoopbackConfigReceivesOnASchedFifoReceiveThread) {
   if (!may_run_fifo_50()) GTEST_SKIP() << "SCHED_FIFO not permitted here (Cyclone would abort)";
   (void)testing::loopback_uri();  // the tag
   const std::string xml = std::string(STAC_SOURCE_DIR) + "/config/dds/loopback-rt.xml";
-  const std::string cmd = std::string(STAC_CLI) + " echo tracked_objects --count 3 --timeout 20 --domain 124 --dds-config " + xml + " 2>&1";
+  const std::string cmd =
+      std::string(STAC_CLI) +
+      " echo tracked_objects --count 3 --timeout 20 --domain 124 --dds-config " + xml + " 2>&1";
   FILE* child = popen(cmd.c_str(), "r");
   ASSERT_NE(child, nullptr);
   PublisherConfig c;
@@ -91,7 +94,8 @@ TEST(StacEcho, RealTimeLoopbackConfigReceivesOnASchedFifoReceiveThread) {
     std::string name;
     std::getline(comm, name);
     if (name.rfind("recv", 0) != 0) continue;
-    (sched_getscheduler(std::stoi(task.path().filename().string())) == SCHED_FIFO ? fifo_recv : other_recv)++;
+    (sched_getscheduler(std::stoi(task.path().filename().string())) == SCHED_FIFO ? fifo_recv
+                                                                                  : other_recv)++;
   }
   EXPECT_EQ(fifo_recv, 1);
   EXPECT_EQ(other_recv, 0);
@@ -100,7 +104,8 @@ TEST(StacEcho, RealTimeLoopbackConfigReceivesOnASchedFifoReceiveThread) {
   o.object_id = 9;
   std::vector<TrackedObjectIn> objects{o};
   for (std::uint64_t scan = 0; scan < 3; ++scan) {
-    ASSERT_TRUE((*pub)->publish_tracked_objects({static_cast<std::int64_t>(scan) * 100'000'000, scan}, objects));
+    ASSERT_TRUE((*pub)->publish_tracked_objects(
+        {static_cast<std::int64_t>(scan) * 100'000'000, scan}, objects));
     ASSERT_EQ(dds_wait_for_acks((*pub)->writer(Topic::kTrackedObjects), DDS_SECS(10)), 0);
   }
   int code = -1;
@@ -135,17 +140,21 @@ TEST(CSubscriberExample, PrintsIdsAndPositionsFromAnotherProcess) {
   const std::string out = run_to_end(child, &code);
   EXPECT_EQ(code, 0) << out;
   EXPECT_NE(out.find("scan 2: 2 objects\n  id 5 at x=1.25 y=2.50\n  id 6 at x=-30.00 y=40.75"),
-            std::string::npos) << out;
+            std::string::npos)
+      << out;
 }
 
 TEST(StacEcho, TimesOutWithAClearMessageWithoutAPublisher) {
   testing::loopback_uri();
-  FILE* child = popen((std::string(STAC_CLI) + " echo health --count 3 --timeout 0.5 --domain 122 2>&1").c_str(), "r");
+  FILE* child = popen(
+      (std::string(STAC_CLI) + " echo health --count 3 --timeout 0.5 --domain 122 2>&1").c_str(),
+      "r");
   ASSERT_NE(child, nullptr);
   int code = -1;
   const std::string out = run_to_end(child, &code);
   EXPECT_EQ(code, 1) << out;
-  EXPECT_NE(out.find("timed out after 0.5 s with 0 of 3 samples on stac/health"), std::string::npos) << out;
+  EXPECT_NE(out.find("timed out after 0.5 s with 0 of 3 samples on stac/health"), std::string::npos)
+      << out;
 }
 
 TEST(StacEcho, UnknownTopicListsTheTopics) {
@@ -154,8 +163,10 @@ TEST(StacEcho, UnknownTopicListsTheTopics) {
   int code = -1;
   const std::string out = run_to_end(child, &code);
   EXPECT_EQ(code, 1);
-  EXPECT_NE(out.find("unknown topic 'tracks' (topics: tracked_objects, segments, ego_pose, health, point_cloud)"),
-            std::string::npos) << out;
+  EXPECT_NE(out.find("unknown topic 'tracks' (topics: tracked_objects, segments, ego_pose, health, "
+                     "point_cloud)"),
+            std::string::npos)
+      << out;
 }
 
 }  // namespace

@@ -97,7 +97,8 @@ TEST(Ros2MsgFiles, EveryIdlStructHasAMsgFileWithTheSameFieldsTypesAndBounds) {
     EXPECT_EQ(msg_fields(file), fields) << file;
   }
   for (const auto& entry : std::filesystem::directory_iterator(kPackage / "msg")) {
-    EXPECT_TRUE(structs.count(entry.path().stem().string())) << entry.path() << ": no such IDL struct";
+    EXPECT_TRUE(structs.count(entry.path().stem().string()))
+        << entry.path() << ": no such IDL struct";
   }
 }
 

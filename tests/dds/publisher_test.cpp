@@ -56,7 +56,8 @@ TEST(DdsPublisher, TrackedObjectsRoundTripEveryFieldWithSequencesAtTheirBounds) 
   ASSERT_TRUE(TestReader::wait_matched(pub->writer(Topic::kTrackedObjects)));
 
   std::vector<Point2> footprint(kMaxFootprint);
-  for (std::size_t k = 0; k < footprint.size(); ++k) footprint[k] = {static_cast<float>(k), -static_cast<float>(k)};
+  for (std::size_t k = 0; k < footprint.size(); ++k)
+    footprint[k] = {static_cast<float>(k), -static_cast<float>(k)};
   std::vector<TrackedObjectIn> objects;
   for (std::uint64_t id = 0; id < kMaxObjects; ++id) objects.push_back(object(1000 + id));
   objects[1].classified = false;
@@ -120,7 +121,8 @@ TEST(DdsPublisher, OverBoundInputIsRefusedWithAClearError) {
   std::vector<TrackedObjectIn> objects(kMaxObjects + 1);
   auto r = pub->publish_tracked_objects({0, 1}, objects);
   ASSERT_FALSE(r);
-  EXPECT_NE(r.error().message.find("tracked objects: 513 elements exceed the bound of 512"), std::string::npos)
+  EXPECT_NE(r.error().message.find("tracked objects: 513 elements exceed the bound of 512"),
+            std::string::npos)
       << r.error().message;
 
   std::vector<Point2> footprint(kMaxFootprint + 1);
@@ -128,7 +130,8 @@ TEST(DdsPublisher, OverBoundInputIsRefusedWithAClearError) {
   one[0].footprint = footprint;
   r = pub->publish_tracked_objects({0, 1}, one);
   ASSERT_FALSE(r);
-  EXPECT_NE(r.error().message.find("footprint: 9 elements exceed the bound of 8"), std::string::npos);
+  EXPECT_NE(r.error().message.find("footprint: 9 elements exceed the bound of 8"),
+            std::string::npos);
 
   std::vector<SegmentIn> segments(kMaxSegments + 1);
   r = pub->publish_segments({0, 1}, segments);
@@ -146,8 +149,9 @@ TEST(DdsPublisher, OverBoundInputIsRefusedWithAClearError) {
   std::vector<LabeledPointIn> points(kMaxCloudPoints + 1);
   r = pub->publish_point_cloud({{0, 1}, {}, 0.01f, points});
   ASSERT_FALSE(r);
-  EXPECT_NE(r.error().message.find("point cloud points: 131073 elements exceed the bound of 131072"),
-            std::string::npos)
+  EXPECT_NE(
+      r.error().message.find("point cloud points: 131073 elements exceed the bound of 131072"),
+      std::string::npos)
       << r.error().message;
 }
 
@@ -182,8 +186,8 @@ TEST(DdsPublisher, PointCloudRoundTripsEveryFieldAtItsBoundInBothNamingModes) {
       EXPECT_DOUBLE_EQ(s->origin.z, 1.75);
       EXPECT_FLOAT_EQ(s->resolution, 0.01f);
       ASSERT_EQ(s->points._length, kMaxCloudPoints);
-      for (const std::size_t i : {std::size_t{0}, std::size_t{1}, std::size_t{32768}, std::size_t{70001},
-                                  std::size_t{kMaxCloudPoints - 1}}) {
+      for (const std::size_t i : {std::size_t{0}, std::size_t{1}, std::size_t{32768},
+                                  std::size_t{70001}, std::size_t{kMaxCloudPoints - 1}}) {
         const auto& p = s->points._buffer[i];
         EXPECT_EQ(p.x, points[i].x) << i;
         EXPECT_EQ(p.y, points[i].y) << i;
@@ -223,7 +227,8 @@ TEST(DdsPublisher, SegmentsEgoPoseAndHealthRoundTripInRos2NamingMode) {
   ASSERT_TRUE(TestReader::wait_matched(pub->writer(Topic::kHealth)));
 
   std::vector<SegmentIn> in(kMaxSegments);
-  for (std::uint32_t i = 0; i < kMaxSegments; ++i) in[i] = {i, {1.0 * i, 2, 3}, {4, 5, 6}, 0.5f, 100 + i};
+  for (std::uint32_t i = 0; i < kMaxSegments; ++i)
+    in[i] = {i, {1.0 * i, 2, 3}, {4, 5, 6}, 0.5f, 100 + i};
   ASSERT_TRUE(pub->publish_segments({-1'500'000'000, 7}, in));  // before the epoch: sec -2, +0.5 s
   const auto* s = segs.take<T::ScanSegments>();
   ASSERT_NE(s, nullptr);
@@ -334,8 +339,10 @@ TEST(DdsPublisher, StartUpErrorsNameWhatToFix) {
   c.config_uri = "file:///nonexistent/stac/cyclone.xml";
   auto p = Publisher::create(c);
   ASSERT_FALSE(p);
-  EXPECT_NE(p.error().message.find("creating DDS domain 107 with configuration file:///nonexistent"),
-            std::string::npos) << p.error().message;
+  EXPECT_NE(
+      p.error().message.find("creating DDS domain 107 with configuration file:///nonexistent"),
+      std::string::npos)
+      << p.error().message;
   c.domain_id = 999;
   p = Publisher::create(c);
   ASSERT_FALSE(p);

@@ -1,10 +1,9 @@
 // The `dds:` section of config/stac.yaml: the shipped file loads, a missing or bad key names it.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
-
-#include <unistd.h>
 
 #include "tools/dds_settings.hpp"
 
@@ -14,7 +13,8 @@ namespace {
 const std::filesystem::path kConfig = std::filesystem::path(STAC_SOURCE_DIR) / "config/stac.yaml";
 
 std::filesystem::path write_yaml(const std::string& name, const std::string& text) {
-  const auto p = std::filesystem::temp_directory_path() / (name + std::to_string(getpid()) + ".yaml");
+  const auto p =
+      std::filesystem::temp_directory_path() / (name + std::to_string(getpid()) + ".yaml");
   std::ofstream(p) << text;
   return p;
 }
@@ -33,23 +33,27 @@ TEST(DdsSettings, ShippedConfigUsesTheLoopbackXml) {
 }
 
 // A whole dds: section with these three values: the error it is refused with ("" if loaded).
-std::string refusal(const std::string& name, const std::string& domain, const std::string& config_file,
-                    const std::string& stride) {
+std::string refusal(const std::string& name, const std::string& domain,
+                    const std::string& config_file, const std::string& stride) {
   auto s = load_dds_settings(write_yaml(name, "dds:\n  domain_id: " + domain +
                                                   "\n  topic_prefix: stac\n  ros2_names: true\n"
-                                                  "  config_file: " + config_file +
+                                                  "  config_file: " +
+                                                  config_file +
                                                   "\n  frame_id: map\n  tentative_tracks: false\n"
-                                                  "  point_cloud_stride: " + stride + "\n"));
+                                                  "  point_cloud_stride: " +
+                                                  stride + "\n"));
   EXPECT_FALSE(s) << name << " loaded";
   return s ? "" : s.error().message;
 }
 
 TEST(DdsSettings, MissingAndInvalidKeysAreNamed) {
-  auto p = write_yaml("dds_missing", "dds:\n  domain_id: 3\n  topic_prefix: stac\n  ros2_names: true\n"
-                                     "  config_file: \"\"\n");
+  auto p = write_yaml("dds_missing",
+                      "dds:\n  domain_id: 3\n  topic_prefix: stac\n  ros2_names: true\n"
+                      "  config_file: \"\"\n");
   auto s = load_dds_settings(p);
   ASSERT_FALSE(s);
-  EXPECT_NE(s.error().message.find("missing required key 'dds.frame_id'"), std::string::npos) << s.error().message;
+  EXPECT_NE(s.error().message.find("missing required key 'dds.frame_id'"), std::string::npos)
+      << s.error().message;
   const std::string domain = refusal("dds_domain", "300", "\"\"", "8");
   EXPECT_NE(domain.find("'dds.domain_id' must be 0..230"), std::string::npos) << domain;
   const std::string file = refusal("dds_file", "1", "nowhere.xml", "8");

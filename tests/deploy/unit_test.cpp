@@ -24,8 +24,7 @@ namespace {
 
 const std::string kUnit = std::string(STAC_SOURCE_DIR) + "/deploy/stac.service";
 const std::string kUdevRule = std::string(STAC_SOURCE_DIR) + "/deploy/60-stac-gs-usb.rules";
-const std::string kLatencyRule =
-    std::string(STAC_SOURCE_DIR) + "/deploy/60-stac-cpu-latency.rules";
+const std::string kLatencyRule = std::string(STAC_SOURCE_DIR) + "/deploy/60-stac-cpu-latency.rules";
 
 std::string read(const std::string& path) {
   std::ifstream f(path);

@@ -36,7 +36,7 @@ void check_scan(const std::string& relative) {
   view.xyzi = cloud.data();
   view.stride_bytes = 16;
   view.indices = segments.indices(segments.segments[0]);
-  pipeline.compute(view, d);  // warm-up
+  pipeline.compute(view, d);                               // warm-up
   std::vector<Descriptors> all(segments.segments.size());  // checked after counting
   rt::testing::AllocationCounter counter;
   for (std::size_t k = 0; k < all.size(); ++k) {

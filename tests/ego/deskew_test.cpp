@@ -3,7 +3,6 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
-
 #include <cmath>
 #include <numbers>
 #include <optional>
@@ -19,9 +18,9 @@ namespace {
 
 constexpr const char* kYaml = "velodyne/calib/rosdrivers_64e_s2.1-sztaki.yaml";
 constexpr double kYawRate = 30.0 * std::numbers::pi / 180.0;  // rad/s, turning left
-constexpr double kSpeed = 5.0;                                 // m/s
-constexpr double kMount = 1.73;                                // sensor above the ego origin
-constexpr std::int64_t kStart = 1'767'268'800'000'000'000;     // pose clock = scan clock here
+constexpr double kSpeed = 5.0;                                // m/s
+constexpr double kMount = 1.73;                               // sensor above the ego origin
+constexpr std::int64_t kStart = 1'767'268'800'000'000'000;    // pose clock = scan clock here
 
 // The ego drives an exact arc: every pose is known in closed form.
 sim::EgoState ego_at(double t) {
@@ -65,7 +64,8 @@ double wall_bend_m(const velodyne::Scan& scan) {
   const Eigen::Vector2d normal = eig.eigenvectors().col(0);  // smallest eigenvalue
   double worst = 0;
   for (const auto& p : scan.points) {
-    if (p.z > -1.3f) worst = std::max(worst, std::abs((Eigen::Vector2d(p.x, p.y) - mean).dot(normal)));
+    if (p.z > -1.3f)
+      worst = std::max(worst, std::abs((Eigen::Vector2d(p.x, p.y) - mean).dot(normal)));
   }
   return worst;
 }

@@ -65,10 +65,11 @@ TEST(EgoEstimator, InsFixesBecomeUtcPosesInTheLocalFrame) {
   push(s.group1(100.010, 0.10, 7));  // not aligned: skipped
   EXPECT_EQ(ego.counters().ins_fixes, 1u);
   EXPECT_EQ(ego.counters().not_aligned, 1u);
-  const std::int64_t utc = gps_to_utc_ns(static_cast<std::int64_t>(kWeek) * 604800 * 1'000'000'000 +
-                                             100'005'000'000, kOffset);
-  EXPECT_EQ(utc, 315'964'800'000'000'000 + static_cast<std::int64_t>(kWeek) * 604800 * 1'000'000'000 +
-                     100'005'000'000 - 18'000'000'000);
+  const std::int64_t utc = gps_to_utc_ns(
+      static_cast<std::int64_t>(kWeek) * 604800 * 1'000'000'000 + 100'005'000'000, kOffset);
+  EXPECT_EQ(utc, 315'964'800'000'000'000 +
+                     static_cast<std::int64_t>(kWeek) * 604800 * 1'000'000'000 + 100'005'000'000 -
+                     18'000'000'000);
   const PoseLookup l = history.at(utc);
   ASSERT_EQ(l.status, PoseStatus::kInterpolated);
   EXPECT_NEAR(l.pose.position_m.x(), 0.05, 0.01);
@@ -141,8 +142,8 @@ TEST(EgoEstimator, CanOdometryCarriesThePoseWhenTheInsGoesSilent) {
   InsStream s;
   auto push = [&](std::size_t n) { s.feed(n, ego); };
   push(s.group3());
-  const std::int64_t t0 = gps_to_utc_ns(static_cast<std::int64_t>(kWeek) * 604800 * 1'000'000'000 +
-                                            200'000'000'000, kOffset);
+  const std::int64_t t0 = gps_to_utc_ns(
+      static_cast<std::int64_t>(kWeek) * 604800 * 1'000'000'000 + 200'000'000'000, kOffset);
   for (int i = 0; i <= 20; ++i) push(s.group1(200.0 + 0.005 * i, 0.05 * i));  // 0.1 s of INS
   ASSERT_EQ(ego.counters().ins_fixes, 21u);
   const std::int64_t last_fix = t0 + 100'000'000;

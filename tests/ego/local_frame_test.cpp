@@ -11,16 +11,22 @@ namespace {
 // The origin of the real Applanix capture in ../shared/data/applanix (Kingston, Ontario).
 constexpr Geodetic kOrigin{44.2449408681, -76.5096210157, 80.0};
 
-Eigen::Vector3d forward(const Eigen::Quaterniond& q) { return q * Eigen::Vector3d::UnitX(); }
-Eigen::Vector3d left(const Eigen::Quaterniond& q) { return q * Eigen::Vector3d::UnitY(); }
+Eigen::Vector3d forward(const Eigen::Quaterniond& q) {
+  return q * Eigen::Vector3d::UnitX();
+}
+Eigen::Vector3d left(const Eigen::Quaterniond& q) {
+  return q * Eigen::Vector3d::UnitY();
+}
 
 TEST(LocalFrame, IsEastNorthUpAroundTheOrigin) {
   LocalFrame f(kOrigin);
   EXPECT_NEAR(f.to_local(kOrigin).norm(), 0.0, 1e-9);
-  const Eigen::Vector3d north = f.to_local({kOrigin.lat_deg + 0.001, kOrigin.lon_deg, kOrigin.alt_m});
+  const Eigen::Vector3d north =
+      f.to_local({kOrigin.lat_deg + 0.001, kOrigin.lon_deg, kOrigin.alt_m});
   EXPECT_NEAR(north.y(), 111.1, 0.2);  // 0.001 deg of latitude
   EXPECT_NEAR(north.x(), 0.0, 1e-3);
-  const Eigen::Vector3d east = f.to_local({kOrigin.lat_deg, kOrigin.lon_deg + 0.001, kOrigin.alt_m});
+  const Eigen::Vector3d east =
+      f.to_local({kOrigin.lat_deg, kOrigin.lon_deg + 0.001, kOrigin.alt_m});
   EXPECT_NEAR(east.x(), 111.3 * std::cos(kOrigin.lat_deg * std::numbers::pi / 180.0), 0.2);
   const Eigen::Vector3d up = f.to_local({kOrigin.lat_deg, kOrigin.lon_deg, kOrigin.alt_m + 5.0});
   EXPECT_NEAR(up.z(), 5.0, 1e-6);
@@ -39,12 +45,17 @@ TEST(LocalFrame, AnchorsAtTheFirstFixWithoutAConfiguredOrigin) {
 
 TEST(LocalFrame, HeadingPitchAndRollFollowTheApplanixConventions) {
   // Heading 0 = north, 90 = east (clockwise from north): ENU yaw = 90 deg - heading.
-  EXPECT_NEAR((forward(LocalFrame::attitude_enu(0, 0, 0)) - Eigen::Vector3d::UnitY()).norm(), 0, 1e-12);
-  EXPECT_NEAR((forward(LocalFrame::attitude_enu(0, 0, 90)) - Eigen::Vector3d::UnitX()).norm(), 0, 1e-12);
-  EXPECT_NEAR((left(LocalFrame::attitude_enu(0, 0, 90)) - Eigen::Vector3d::UnitY()).norm(), 0, 1e-12);
+  EXPECT_NEAR((forward(LocalFrame::attitude_enu(0, 0, 0)) - Eigen::Vector3d::UnitY()).norm(), 0,
+              1e-12);
+  EXPECT_NEAR((forward(LocalFrame::attitude_enu(0, 0, 90)) - Eigen::Vector3d::UnitX()).norm(), 0,
+              1e-12);
+  EXPECT_NEAR((left(LocalFrame::attitude_enu(0, 0, 90)) - Eigen::Vector3d::UnitY()).norm(), 0,
+              1e-12);
   // Positive pitch = nose up; positive roll = right side down, so the left side goes up.
-  EXPECT_NEAR(forward(LocalFrame::attitude_enu(0, 10, 0)).z(), std::sin(10 * std::numbers::pi / 180), 1e-12);
-  EXPECT_NEAR(left(LocalFrame::attitude_enu(10, 0, 0)).z(), std::sin(10 * std::numbers::pi / 180), 1e-12);
+  EXPECT_NEAR(forward(LocalFrame::attitude_enu(0, 10, 0)).z(),
+              std::sin(10 * std::numbers::pi / 180), 1e-12);
+  EXPECT_NEAR(left(LocalFrame::attitude_enu(10, 0, 0)).z(), std::sin(10 * std::numbers::pi / 180),
+              1e-12);
 }
 
 TEST(LocalFrame, VelocityAndRatesAreRotatedIntoTheVehicleAndWorldFrames) {
@@ -66,7 +77,8 @@ TEST(LocalFrame, NorthAtAFarFixIsTheLocalNorthSeenFromTheOrigin) {
   InsFix fix;
   fix.position = far;
   const PoseSample p = f.pose(fix);
-  const Eigen::Vector3d step = f.to_local({far.lat_deg + 1e-5, far.lon_deg, far.alt_m}) - p.position_m;
+  const Eigen::Vector3d step =
+      f.to_local({far.lat_deg + 1e-5, far.lon_deg, far.alt_m}) - p.position_m;
   const Eigen::Vector3d x = forward(p.attitude);
   EXPECT_NEAR(x.dot(step.normalized()), 1.0, 1e-9);
   EXPECT_GT(std::abs(x.x()), 1e-3);  // and the convergence is really there

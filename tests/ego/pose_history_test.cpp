@@ -72,7 +72,8 @@ TEST(PoseHistory, SaysWhenThereIsNoPoseAndExtrapolatesOnlyABoundedTime) {
 }
 
 TEST(PoseHistory, ReportsGapsBetweenSamples) {
-  PoseHistory h(PoseHistoryConfig{.capacity = 16, .max_extrapolation_ns = 0, .max_gap_ns = 100 * kMs});
+  PoseHistory h(
+      PoseHistoryConfig{.capacity = 16, .max_extrapolation_ns = 0, .max_gap_ns = 100 * kMs});
   ASSERT_TRUE(h.push(truth(0)));
   ASSERT_TRUE(h.push(truth(300 * kMs)));  // INS silent for 300 ms
   EXPECT_EQ(h.at(150 * kMs).status, PoseStatus::kGap);

@@ -20,7 +20,8 @@ velodyne::ScanHeader header() {
 
 TEST(ScanClock, PpsSensorTakesItsHourFromTheInsAcrossTheTopOfTheHour) {
   // The INS's newest pose is still 17:59:59.9 UTC.
-  const ScanClock c = scan_clock(header(), velodyne::TrailerKind::kGpsStatus, kHour18 - 100'000'000);
+  const ScanClock c =
+      scan_clock(header(), velodyne::TrailerKind::kGpsStatus, kHour18 - 100'000'000);
   EXPECT_EQ(c.source, ScanClockSource::kInsHour);
   EXPECT_EQ(header().stamp_ns + c.scan_to_pose_ns, kHour18 + 250'048'000);
 }
@@ -32,7 +33,8 @@ TEST(ScanClock, WithoutInsTheStatusCycleDateServes) {
   EXPECT_EQ(c.source, ScanClockSource::kSensorUtc);
   EXPECT_EQ(h.stamp_ns + c.scan_to_pose_ns, kHour18 + 250'048'000);
   h.device_utc_ns = 0;  // no valid cycle yet either
-  EXPECT_EQ(scan_clock(h, velodyne::TrailerKind::kGpsStatus, std::nullopt).source, ScanClockSource::kReceive);
+  EXPECT_EQ(scan_clock(h, velodyne::TrailerKind::kGpsStatus, std::nullopt).source,
+            ScanClockSource::kReceive);
 }
 
 TEST(ScanClock, AFreeRunningSensorClockIsNeverUsed) {

@@ -52,15 +52,34 @@ std::vector<std::uint8_t> ipv4_udp(std::uint16_t dst_port, const std::vector<std
                                    std::uint16_t flags_frag = 0x4000) {
   const auto udp_len = static_cast<std::uint16_t>(8 + payload.size());
   const auto total = static_cast<std::uint16_t>(20 + udp_len);
-  std::vector<std::uint8_t> p = {0x45, 0, static_cast<std::uint8_t>(total >> 8),
-                                 static_cast<std::uint8_t>(total), 0, 1,
+  std::vector<std::uint8_t> p = {0x45,
+                                 0,
+                                 static_cast<std::uint8_t>(total >> 8),
+                                 static_cast<std::uint8_t>(total),
+                                 0,
+                                 1,
                                  static_cast<std::uint8_t>(flags_frag >> 8),
-                                 static_cast<std::uint8_t>(flags_frag), 64, 17, 0, 0,
-                                 10, 0, 0, 1, 10, 0, 0, 2,
-                                 0x12, 0x34, static_cast<std::uint8_t>(dst_port >> 8),
+                                 static_cast<std::uint8_t>(flags_frag),
+                                 64,
+                                 17,
+                                 0,
+                                 0,
+                                 10,
+                                 0,
+                                 0,
+                                 1,
+                                 10,
+                                 0,
+                                 0,
+                                 2,
+                                 0x12,
+                                 0x34,
+                                 static_cast<std::uint8_t>(dst_port >> 8),
                                  static_cast<std::uint8_t>(dst_port),
                                  static_cast<std::uint8_t>(udp_len >> 8),
-                                 static_cast<std::uint8_t>(udp_len), 0, 0};
+                                 static_cast<std::uint8_t>(udp_len),
+                                 0,
+                                 0};
   append(p, payload);
   return p;
 }
@@ -90,7 +109,8 @@ TEST(PcapReader, ReadsTheRealApplanixCapture) {
 
 TEST(PcapReader, FiltersByPort) {
   STAC_REQUIRE_SHARED_DATA(kApplanix);
-  auto r = PcapReader::open(stac::testing::shared_data(kApplanix), PcapFilter{.udp_dst_port = 2368, .udp_src_port = {}});
+  auto r = PcapReader::open(stac::testing::shared_data(kApplanix),
+                            PcapFilter{.udp_dst_port = 2368, .udp_src_port = {}});
   ASSERT_TRUE(r);
   Datagram d;
   EXPECT_FALSE(r->next(d));
@@ -103,7 +123,8 @@ TEST(PcapWriter, RoundTripsPayloadsStampsAndAddresses) {
     auto w = PcapWriter::open(path);
     ASSERT_TRUE(w) << w.error().message;
     for (int i = 0; i < 100; ++i) {
-      std::vector<std::uint8_t> payload(static_cast<std::size_t>(1 + i * 13), static_cast<std::uint8_t>(i));
+      std::vector<std::uint8_t> payload(static_cast<std::size_t>(1 + i * 13),
+                                        static_cast<std::uint8_t>(i));
       Datagram d;
       d.payload = payload;
       d.stamp_ns = 1'700'000'000'123'456'789 + i * 1'000'001;

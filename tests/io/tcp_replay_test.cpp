@@ -1,9 +1,10 @@
+#include "drivers/io/tcp_replay.hpp"
+
 #include <arpa/inet.h>
+#include <gtest/gtest.h>
 #include <netinet/in.h>
 #include <sys/socket.h>
 #include <unistd.h>
-
-#include <gtest/gtest.h>
 
 #include <atomic>
 #include <chrono>
@@ -12,7 +13,6 @@
 #include <vector>
 
 #include "drivers/io/pcap_writer.hpp"
-#include "drivers/io/tcp_replay.hpp"
 #include "drivers/io/udp_receiver.hpp"
 #include "drivers/io/udp_replay.hpp"
 #include "rt/clock.hpp"

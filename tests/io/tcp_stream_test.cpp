@@ -1,3 +1,5 @@
+#include "drivers/io/tcp_stream.hpp"
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -7,7 +9,6 @@
 
 #include "drivers/io/pcap_reader.hpp"
 #include "drivers/io/pcap_writer.hpp"
-#include "drivers/io/tcp_stream.hpp"
 #include "rt/testing/alloc_counter.hpp"
 
 namespace stac::io {
@@ -29,7 +30,8 @@ TcpSegment segment(const std::vector<std::uint8_t>& stream, std::uint32_t isn, s
 }
 
 // Adds each segment and collects everything delivered.
-std::vector<std::uint8_t> run(TcpReassembler& r, const std::vector<TcpSegment>& segments, bool finish) {
+std::vector<std::uint8_t> run(TcpReassembler& r, const std::vector<TcpSegment>& segments,
+                              bool finish) {
   std::vector<std::uint8_t> out;
   std::span<const std::uint8_t> chunk;
   for (const auto& s : segments) {
@@ -50,12 +52,13 @@ TEST(TcpReassembler, DeliversInOrderAndDropsRetransmissions) {
   syn.seq = isn;
   syn.flags = kTcpSyn;
   TcpReassembler r;
-  const auto out = run(r, {syn, segment(stream, isn, 0, 100), segment(stream, isn, 0, 100),
-                           segment(stream, isn, 100, 100), segment(stream, isn, 50, 100),
-                           segment(stream, isn, 150, 100), segment(stream, isn, 200, 100)},
+  const auto out = run(r,
+                       {syn, segment(stream, isn, 0, 100), segment(stream, isn, 0, 100),
+                        segment(stream, isn, 100, 100), segment(stream, isn, 50, 100),
+                        segment(stream, isn, 150, 100), segment(stream, isn, 200, 100)},
                        false);
   EXPECT_EQ(out, stream);
-  EXPECT_EQ(r.counters().retransmitted, 2u);  // 0-100 again, 50-150 after 200
+  EXPECT_EQ(r.counters().retransmitted, 2u);    // 0-100 again, 50-150 after 200
   EXPECT_EQ(r.counters().overlap_bytes, 100u);  // 150-200 and 200-250 came twice
   EXPECT_EQ(r.counters().streams, 1u);
   EXPECT_EQ(r.counters().gaps, 0u);
@@ -64,8 +67,9 @@ TEST(TcpReassembler, DeliversInOrderAndDropsRetransmissions) {
 TEST(TcpReassembler, OutOfOrderSegmentsWaitForTheHole) {
   const auto stream = bytes(400);
   TcpReassembler r;
-  const auto out = run(r, {segment(stream, 0, 0, 100), segment(stream, 0, 200, 100),
-                           segment(stream, 0, 300, 100), segment(stream, 0, 50, 150)},
+  const auto out = run(r,
+                       {segment(stream, 0, 0, 100), segment(stream, 0, 200, 100),
+                        segment(stream, 0, 300, 100), segment(stream, 0, 50, 150)},
                        false);
   EXPECT_EQ(out, stream);
   EXPECT_EQ(r.counters().out_of_order, 2u);
@@ -75,9 +79,9 @@ TEST(TcpReassembler, OutOfOrderSegmentsWaitForTheHole) {
 TEST(TcpReassembler, HoleThatNeverFillsIsSkippedAtFinishAndCounted) {
   const auto stream = bytes(400);
   TcpReassembler r;
-  const auto out = run(r, {segment(stream, 0, 0, 100), segment(stream, 0, 300, 100),
-                           segment(stream, 0, 150, 50)},
-                       true);
+  const auto out = run(
+      r, {segment(stream, 0, 0, 100), segment(stream, 0, 300, 100), segment(stream, 0, 150, 50)},
+      true);
   std::vector<std::uint8_t> expected(stream.begin(), stream.begin() + 100);
   expected.insert(expected.end(), stream.begin() + 150, stream.begin() + 200);
   expected.insert(expected.end(), stream.begin() + 300, stream.end());

@@ -113,7 +113,7 @@ TEST(UdpReceiver, StopWakesABlockedReceive) {
   r->stop();
   t.join();
   EXPECT_EQ(result, UdpReceiver::kStopped);
-  EXPECT_LT(rt::monotonic_ns() - start, 10'000'000'000);  // long before the 30 s timeout
+  EXPECT_LT(rt::monotonic_ns() - start, 10'000'000'000);      // long before the 30 s timeout
   EXPECT_EQ(r->receive(batch, 1000), UdpReceiver::kStopped);  // and stays stopped
 }
 

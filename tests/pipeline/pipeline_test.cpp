@@ -3,8 +3,6 @@
 // drive, re-fed many times.
 #include <gtest/gtest.h>
 
-#include <map>
-
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -14,6 +12,7 @@
 #include <thread>
 #include <vector>
 
+#include "classification/made_up_model.hpp"
 #include "drivers/io/pcap_reader.hpp"
 #include "drivers/velodyne/calibration.hpp"
 #include "drivers/velodyne/scan_stream.hpp"
@@ -21,7 +20,6 @@
 #include "rt/clock.hpp"
 #include "rt/slot_exchange.hpp"
 #include "rt/testing/alloc_counter.hpp"
-#include "classification/made_up_model.hpp"
 #include "shared_data.hpp"
 #include "stac_cli.hpp"
 #include "tools/settings.hpp"
@@ -321,7 +319,8 @@ TEST(ScanPipeline, CloudHoldsEverySegmentReturnAndEveryNthOtherOneFromTheSensor)
   pipeline.process(scan, nullptr, r);
   std::vector<int> segment_of(scan.points.size(), -1);
   for (std::size_t s = 0; s < r.segments.segments.size(); ++s) {
-    for (const std::uint32_t i : r.segments.indices(r.segments.segments[s])) segment_of[i] = static_cast<int>(s);
+    for (const std::uint32_t i : r.segments.indices(r.segments.segments[s]))
+      segment_of[i] = static_cast<int>(s);
   }
   std::vector<std::size_t> expected;
   for (std::size_t i = 0; i < scan.points.size(); ++i) {

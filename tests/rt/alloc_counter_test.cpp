@@ -1,3 +1,5 @@
+#include "rt/testing/alloc_counter.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -8,13 +10,14 @@
 
 #include "rt/fixed_vector.hpp"
 #include "rt/spsc_ring.hpp"
-#include "rt/testing/alloc_counter.hpp"
 
 namespace stac::rt::testing {
 namespace {
 
 // Keeps the compiler from eliding an allocation whose result is unused.
-void escape(void* p) { asm volatile("" : : "g"(p) : "memory"); }
+void escape(void* p) {
+  asm volatile("" : : "g"(p) : "memory");
+}
 
 TEST(AllocationCounter, CountsOperatorNew) {
   AllocationCounter counter;

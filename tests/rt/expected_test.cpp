@@ -1,6 +1,6 @@
-#include <gtest/gtest.h>
-
 #include "rt/expected.hpp"
+
+#include <gtest/gtest.h>
 
 namespace stac::rt {
 namespace {

@@ -1,6 +1,6 @@
-#include <gtest/gtest.h>
-
 #include "rt/fixed_vector.hpp"
+
+#include <gtest/gtest.h>
 
 namespace stac::rt {
 namespace {

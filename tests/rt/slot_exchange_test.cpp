@@ -1,9 +1,9 @@
+#include "rt/slot_exchange.hpp"
+
 #include <gtest/gtest.h>
 
 #include <array>
 #include <thread>
-
-#include "rt/slot_exchange.hpp"
 
 namespace stac::rt {
 namespace {

@@ -1,9 +1,9 @@
+#include "rt/spsc_ring.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cstdint>
 #include <thread>
-
-#include "rt/spsc_ring.hpp"
 
 namespace stac::rt {
 namespace {

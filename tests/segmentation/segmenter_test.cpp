@@ -181,7 +181,7 @@ Scene far_car_with_road_under_its_body() {
     const float x = scene.xyzi[4 * i], y = scene.xyzi[4 * i + 1];
     const bool under_body = x > 30.1f && x < 31.2f;
     if (x > 30.0f && std::fabs(y) < 0.9f && !under_body) continue;  // hidden by the car
-    if (x < 24.0f || std::fabs(y) > 6.0f) continue;                     // keep the scene small
+    if (x < 24.0f || std::fabs(y) > 6.0f) continue;                 // keep the scene small
     kept.add(x, y, scene.xyzi[4 * i + 2]);
   }
   for (float y = -0.9f; y <= 0.9f; y += 0.05f) {
@@ -339,14 +339,14 @@ TEST(Segmenter, CarSideCutByABicyclistsShadowStaysWithTheCar) {
       for (float z = 0.3f; z <= 0.9f; z += 0.1f) scene.add(x, 9.05f, g + z);
     }
   };
-  side(-12.0f, -11.0f);                                  // left of the rider's shadow
-  side(-10.2f, -7.5f);                                   // right of it
+  side(-12.0f, -11.0f);                                    // left of the rider's shadow
+  side(-10.2f, -7.5f);                                     // right of it
   scene.box(-9.0f, 9.95f, 2.0f, 1.5f, 1.4f, 0.05f, 0.9f);  // the cabin
   scene.box(-9.5f, 8.3f, 1.6f, 0.1f, 0.7f);                // wheels and frame
   scene.box(-8.9f, 8.3f, 0.1f, 0.5f, 1.0f, 0.05f, 0.9f);   // handlebar
   scene.cylinder(-9.6f, 8.3f, 0.2f, 1.5f, 0.05f, 0.8f);    // rider's legs and torso
   scene.cylinder(-9.5f, 8.3f, 0.1f, 1.75f, 0.05f, 1.5f);   // head
-  ASSERT_EQ(run(scene, no_split()).segments.size(), 1u);  // the bridges join them
+  ASSERT_EQ(run(scene, no_split()).segments.size(), 1u);   // the bridges join them
   const Segments out = run(scene);
   ASSERT_EQ(out.segments.size(), 2u);
   EXPECT_EQ(out.counters.split_segments, 1u);

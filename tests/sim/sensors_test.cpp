@@ -48,7 +48,7 @@ struct Decoded {
   std::vector<DecodedGroup1> group1;
   std::vector<std::pair<std::int64_t, std::uint16_t>> others;  // GPS ns (of time1), group id
   std::vector<applanix::Group3> group3;
-  std::vector<std::int64_t> stamps;                             // InsMessage stamps, all
+  std::vector<std::int64_t> stamps;  // InsMessage stamps, all
 };
 
 Decoded run_ins(const InsConfig& config, InsSim::EgoFn ego, double seconds) {
@@ -117,10 +117,12 @@ TEST(SimIns, Group1ThroughLocalFrameGivesTheEgoBack) {
     fix.pitch_deg = r.g.pitch_deg;
     fix.heading_deg = r.g.heading_deg;
     fix.velocity_ned_mps = {r.g.north_velocity_mps, r.g.east_velocity_mps, r.g.down_velocity_mps};
-    fix.angular_rate_frd_dps = {r.g.rate_longitudinal_dps, r.g.rate_transverse_dps, r.g.rate_down_dps};
+    fix.angular_rate_frd_dps = {r.g.rate_longitudinal_dps, r.g.rate_transverse_dps,
+                                r.g.rate_down_dps};
     const ego::PoseSample p = frame.pose(fix);
     EXPECT_NEAR((p.position_m - Eigen::Vector3d(e.x, e.y, e.z)).norm(), 0.0, 0.01) << "t " << t;
-    EXPECT_LT(angle_between_deg(p.attitude, ego::from_roll_pitch_yaw(e.roll, e.pitch, e.yaw)), 0.01) << "t " << t;
+    EXPECT_LT(angle_between_deg(p.attitude, ego::from_roll_pitch_yaw(e.roll, e.pitch, e.yaw)), 0.01)
+        << "t " << t;
     // Velocity: the speed along the yaw (no side slip) plus the climb.
     const double climb = (circle(t + 0.005).z - circle(t - 0.005).z) / 0.01;
     const Eigen::Vector3d v(e.speed * std::cos(e.yaw), e.speed * std::sin(e.yaw), climb);
@@ -153,7 +155,7 @@ TEST(SimIns, AttitudeSignsFollowTheApplanixConvention) {
   EXPECT_NEAR(nose_up.pitch_deg, 5.0, 1e-9);
   EXPECT_NEAR(nose_up.heading_deg, 90.0, 1e-9);
   EXPECT_NEAR(at(3 * kDeg, 0, 0).roll_deg, 3.0, 1e-9);
-  EXPECT_NEAR(at(0, 0, kPi / 2).heading_deg, 0.0, 1e-9);    // north
+  EXPECT_NEAR(at(0, 0, kPi / 2).heading_deg, 0.0, 1e-9);     // north
   EXPECT_NEAR(at(0, 0, -kPi / 2).heading_deg, 180.0, 1e-9);  // south
   EXPECT_NEAR(at(0, 0, kPi).heading_deg, 270.0, 1e-9);       // west
   const applanix::Group1 origin = at(0, 0, 0);
@@ -203,7 +205,9 @@ can::Database vehicle_dbc() {
   return *db;
 }
 
-can::OdometrySignalMap vehicle_map() { return {"WheelSpeeds", "VehicleSpeed", "YawRate", "YawRate", 1.0}; }
+can::OdometrySignalMap vehicle_map() {
+  return {"WheelSpeeds", "VehicleSpeed", "YawRate", "YawRate", 1.0};
+}
 
 // The frames decode to the ego's speed and yaw rate within the DBC's quantisation (0.01 km/h,
 // 0.01 deg/s), at 50 and 100 Hz, and dead reckoning on them follows the circle.
@@ -277,7 +281,8 @@ TEST(SimCan, OutOfRangeValuesAreCountedAndBadMapsRefused) {
   bad.speed_message = "NoSuchMessage";
   auto refused = VehicleCanSim::create(db, bad, config, circle);
   ASSERT_FALSE(refused);
-  EXPECT_NE(refused.error().message.find("NoSuchMessage"), std::string::npos) << refused.error().message;
+  EXPECT_NE(refused.error().message.find("NoSuchMessage"), std::string::npos)
+      << refused.error().message;
 }
 
 }  // namespace

@@ -37,9 +37,12 @@ constexpr double kSeconds = 2.5;
 
 // One folder per test process: ctest runs each test in its own process, in parallel.
 std::filesystem::path dir() {
-  return std::filesystem::temp_directory_path() / ("stac_sim_sensors_" + std::to_string(::getpid()));
+  return std::filesystem::temp_directory_path() /
+         ("stac_sim_sensors_" + std::to_string(::getpid()));
 }
-std::string calib() { return stac::testing::shared_data(kCalib).string(); }
+std::string calib() {
+  return stac::testing::shared_data(kCalib).string();
+}
 
 std::string read_file(const std::filesystem::path& p) {
   std::ifstream in(p, std::ios::binary);
@@ -48,10 +51,10 @@ std::string read_file(const std::filesystem::path& p) {
 
 CliResult simulate(const std::string& name, const std::string& extra = "") {
   const auto d = dir();
-  return stac(std::string("sim --scenario ") + kScenario + " --seed " + std::to_string(kSeed) + " --duration " +
-              std::to_string(kSeconds) + " --calib " + calib() + " --out " + (d / (name + ".pcap")).string() +
-              " --truth " + (d / (name + ".jsonl")).string() + " --can " + (d / (name + ".candump")).string() +
-              " " + extra);
+  return stac(std::string("sim --scenario ") + kScenario + " --seed " + std::to_string(kSeed) +
+              " --duration " + std::to_string(kSeconds) + " --calib " + calib() + " --out " +
+              (d / (name + ".pcap")).string() + " --truth " + (d / (name + ".jsonl")).string() +
+              " --can " + (d / (name + ".candump")).string() + " " + extra);
 }
 
 // The ego truth the sim drove (the same scenario, seed and duration).
@@ -150,10 +153,12 @@ TEST_F(SimSensors, PcapCarriesTheInsStreamOfTheEgoTruth) {
     const ego::PoseSample pose = frame.pose(fix);
     EXPECT_LT((pose.position_m - Eigen::Vector3d(e.x, e.y, e.z)).norm(), 0.01) << "t " << t;
     const Eigen::Quaterniond truth = ego::from_roll_pitch_yaw(e.roll, e.pitch, e.yaw);
-    EXPECT_LT(Eigen::AngleAxisd(truth.inverse() * pose.attitude).angle() * 180.0 / std::numbers::pi, 0.01)
+    EXPECT_LT(Eigen::AngleAxisd(truth.inverse() * pose.attitude).angle() * 180.0 / std::numbers::pi,
+              0.01)
         << "t " << t;
     // Heading, roll and pitch one by one (the sim's pitch is nose-up negative).
-    const double heading = std::remainder(90.0 - e.yaw * 180.0 / std::numbers::pi - r.g.heading_deg, 360.0);
+    const double heading =
+        std::remainder(90.0 - e.yaw * 180.0 / std::numbers::pi - r.g.heading_deg, 360.0);
     EXPECT_LT(std::abs(heading), 0.01) << "t " << t;
     EXPECT_NEAR(r.g.pitch_deg, -e.pitch * 180.0 / std::numbers::pi, 0.01);
     EXPECT_NEAR(r.g.roll_deg, e.roll * 180.0 / std::numbers::pi, 0.01);
@@ -199,7 +204,8 @@ TEST_F(SimSensors, PcapIsTimeOrderedWithTheInsInterleaved) {
 // The Velodyne decoding of the same pcap is unchanged: the TCP frames are skipped.
 TEST_F(SimSensors, VelodyneDecodeIgnoresTheInsStream) {
   {
-    auto in = io::PcapReader::open(dir() / "a.pcap", io::PcapFilter{.udp_dst_port = 2368, .udp_src_port = {}});
+    auto in = io::PcapReader::open(dir() / "a.pcap",
+                                   io::PcapFilter{.udp_dst_port = 2368, .udp_src_port = {}});
     ASSERT_TRUE(in);
     auto out = io::PcapWriter::open(dir() / "velodyne_only.pcap");
     ASSERT_TRUE(out);
@@ -208,10 +214,10 @@ TEST_F(SimSensors, VelodyneDecodeIgnoresTheInsStream) {
     EXPECT_EQ(in->counters().non_udp, 3u + 501u + 6u);
     ASSERT_TRUE(out->close());
   }
-  const CliResult a = stac("decode --in " + (dir() / "a.pcap").string() + " --calib " + calib() + " --out " +
-                           (dir() / "a.csv").string());
-  const CliResult b = stac("decode --in " + (dir() / "velodyne_only.pcap").string() + " --calib " + calib() +
-                           " --out " + (dir() / "b.csv").string());
+  const CliResult a = stac("decode --in " + (dir() / "a.pcap").string() + " --calib " + calib() +
+                           " --out " + (dir() / "a.csv").string());
+  const CliResult b = stac("decode --in " + (dir() / "velodyne_only.pcap").string() + " --calib " +
+                           calib() + " --out " + (dir() / "b.csv").string());
   ASSERT_EQ(a.code, 0) << a.output;
   ASSERT_EQ(b.code, 0) << b.output;
   const std::string csv = read_file(dir() / "a.csv");
@@ -232,9 +238,11 @@ TEST_F(SimSensors, SameSeedGivesByteIdenticalPcapCandumpAndTruth) {
 // `stac candump` on the sim's log gives the ego speed and yaw rate within the DBC quantisation
 // (0.01 km/h, 0.01 deg/s), and its dead-reckoned path follows the ego's.
 TEST_F(SimSensors, CandumpGivesTheEgoSpeedYawRateAndPath) {
-  const CliResult r = stac("candump --in " + (dir() / "a.candump").string() + " --out " + (dir() / "can.csv").string());
+  const CliResult r = stac("candump --in " + (dir() / "a.candump").string() + " --out " +
+                           (dir() / "can.csv").string());
   ASSERT_EQ(r.code, 0) << r.output;
-  EXPECT_NE(r.output.find("375 frames"), std::string::npos) << r.output;  // 125 speed + 250 yaw rate
+  EXPECT_NE(r.output.find("375 frames"), std::string::npos)
+      << r.output;  // 125 speed + 250 yaw rate
   auto run = truth_run();
   const double start_s = static_cast<double>(RunConfig{}.start_ns / 1'000'000'000);
   std::ifstream csv(dir() / "can.csv");
@@ -249,8 +257,8 @@ TEST_F(SimSensors, CandumpGivesTheEgoSpeedYawRateAndPath) {
   while (std::getline(csv, line)) {
     Row row{};
     char status[16] = {};
-    ASSERT_EQ(std::sscanf(line.c_str(), "%lf,%lf,%lf,%lf,%lf,%lf,%15s", &row.t, &row.speed, &row.yaw_rate, &row.x,
-                          &row.y, &row.yaw_deg, status),
+    ASSERT_EQ(std::sscanf(line.c_str(), "%lf,%lf,%lf,%lf,%lf,%lf,%15s", &row.t, &row.speed,
+                          &row.yaw_rate, &row.x, &row.y, &row.yaw_deg, status),
               7)
         << line;
     row.t -= start_s;
@@ -267,10 +275,12 @@ TEST_F(SimSensors, CandumpGivesTheEgoSpeedYawRateAndPath) {
       }
       return false;
     };
-    EXPECT_TRUE(near(row.speed, 0.02, [](const EgoState& e) { return e.speed; }, 0.005 / 3.6 + 1e-4))
+    EXPECT_TRUE(near(
+        row.speed, 0.02, [](const EgoState& e) { return e.speed; }, 0.005 / 3.6 + 1e-4))
         << "t " << row.t << " speed " << row.speed;
-    EXPECT_TRUE(near(row.yaw_rate, 0.01, [](const EgoState& e) { return e.yaw_rate * 180 / std::numbers::pi; },
-                     0.005 + 1e-4))
+    EXPECT_TRUE(near(
+        row.yaw_rate, 0.01, [](const EgoState& e) { return e.yaw_rate * 180 / std::numbers::pi; },
+        0.005 + 1e-4))
         << "t " << row.t << " yaw rate " << row.yaw_rate;
   }
   // Displacement from the first to the last row, in the vehicle frame of the first.
@@ -292,9 +302,10 @@ TEST_F(SimSensors, CandumpGivesTheEgoSpeedYawRateAndPath) {
 // a bad --origin or --can path is refused with a message naming it.
 TEST_F(SimSensors, InsUdpOriginAndCanOptions) {
   const auto d = dir();
-  const CliResult r = stac(std::string("sim --scenario ") + kScenario + " --seed 7 --duration 1 --calib " +
-                           calib() + " --out " + (d / "udp.pcap").string() + " --truth " +
-                           (d / "udp.jsonl").string() + " --ins-udp --origin 48.1375,11.575,519.5");
+  const CliResult r =
+      stac(std::string("sim --scenario ") + kScenario + " --seed 7 --duration 1 --calib " +
+           calib() + " --out " + (d / "udp.pcap").string() + " --truth " +
+           (d / "udp.jsonl").string() + " --ins-udp --origin 48.1375,11.575,519.5");
   ASSERT_EQ(r.code, 0) << r.output;
   auto reader = applanix::CaptureReader::open(d / "udp.pcap");
   ASSERT_TRUE(reader) << reader.error().message;
@@ -321,15 +332,16 @@ TEST_F(SimSensors, InsUdpOriginAndCanOptions) {
   EXPECT_EQ(reader->counters().datagrams, 201u + 2u + 2u);
   EXPECT_EQ(reader->counters().segments, 0u);
 
-  const CliResult bad = stac(std::string("sim --scenario empty --duration 0.2 --calib ") + calib() + " --out " +
-                             (d / "bad.pcap").string() + " --truth " + (d / "bad.jsonl").string() +
-                             " --origin 95,11,500");
+  const CliResult bad = stac(std::string("sim --scenario empty --duration 0.2 --calib ") + calib() +
+                             " --out " + (d / "bad.pcap").string() + " --truth " +
+                             (d / "bad.jsonl").string() + " --origin 95,11,500");
   EXPECT_NE(bad.code, 0);
   EXPECT_NE(bad.output.find("--origin '95,11,500'"), std::string::npos) << bad.output;
   // An unwritable candump path stops the run before it simulates anything.
-  const CliResult no_log = stac(std::string("sim --scenario empty --duration 0.2 --calib ") + calib() + " --out " +
-                                (d / "nolog.pcap").string() + " --truth " + (d / "nolog.jsonl").string() +
-                                " --can " + (d / "missing" / "x.candump").string());
+  const CliResult no_log =
+      stac(std::string("sim --scenario empty --duration 0.2 --calib ") + calib() + " --out " +
+           (d / "nolog.pcap").string() + " --truth " + (d / "nolog.jsonl").string() + " --can " +
+           (d / "missing" / "x.candump").string());
   EXPECT_NE(no_log.code, 0);
   EXPECT_NE(no_log.output.find("x.candump"), std::string::npos) << no_log.output;
   EXPECT_FALSE(std::filesystem::exists(d / "nolog.pcap"));

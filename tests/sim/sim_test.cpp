@@ -218,8 +218,8 @@ TEST(SimRun, TruthBoxesHoldTheirObjectsPoints) {
     std::int64_t first = 0;
     (*run)->packet(k, bytes, first, check, [&](const BeamRecord& b) {
       if (b.returned && b.actor >= 0) {
-        points.push_back({static_cast<std::uint32_t>(b.actor), b.world_xyz[0], b.world_xyz[1], b.world_xyz[2],
-                          b.time_s});
+        points.push_back({static_cast<std::uint32_t>(b.actor), b.world_xyz[0], b.world_xyz[1],
+                          b.world_xyz[2], b.time_s});
       }
     });
   }
@@ -412,18 +412,20 @@ TEST(Scenarios, SpeedsChangeAtBoundedRates) {
   for (const Case& c : cases) {
     auto s = make_scenario(c.name, c.seed, 20.0);
     ASSERT_TRUE(s) << s.error().message;
-    std::vector<std::pair<const Trajectory*, double>> paths = {{&s->ego_path, limit(ObjectClass::kCar)}};
+    std::vector<std::pair<const Trajectory*, double>> paths = {
+        {&s->ego_path, limit(ObjectClass::kCar)}};
     for (const Actor& a : s->actors) {
-      if (is_foreground(a.cls) && a.path.points.size() > 1) paths.push_back({&a.path, limit(a.cls)});
+      if (is_foreground(a.cls) && a.path.points.size() > 1)
+        paths.push_back({&a.path, limit(a.cls)});
     }
     for (const auto& [path, max_accel] : paths) {
       bool stood = false;
       for (double t = 0.0; t + 0.5 <= 20.0; t += 0.05) {
         const V3 v0 = path->velocity_at(t), v1 = path->velocity_at(t + 0.5);
         const double accel = std::hypot(v1.x - v0.x, v1.y - v0.y) / 0.5;
-        ASSERT_LE(accel, max_accel) << c.name << " seed " << c.seed << " t=" << t << " s: from ("
-                                    << v0.x << ", " << v0.y << ") to (" << v1.x << ", " << v1.y
-                                    << ") m/s";
+        ASSERT_LE(accel, max_accel)
+            << c.name << " seed " << c.seed << " t=" << t << " s: from (" << v0.x << ", " << v0.y
+            << ") to (" << v1.x << ", " << v1.y << ") m/s";
         if (std::hypot(v0.x, v0.y) < 1e-6 && t > 0.5) stood = true;
       }
       pauses += stood ? 1 : 0;
@@ -463,7 +465,9 @@ TEST(Scenarios, EachBuildsItsWorld) {
     std::map<ObjectClass, int> count;
     for (const Actor& a : s->actors) ++count[a.cls];
     if (name == "empty") {
-      EXPECT_EQ(count[ObjectClass::kCar] + count[ObjectClass::kPedestrian] + count[ObjectClass::kBicyclist], 0);
+      EXPECT_EQ(count[ObjectClass::kCar] + count[ObjectClass::kPedestrian] +
+                    count[ObjectClass::kBicyclist],
+                0);
       EXPECT_GT(count[ObjectClass::kBuilding], 5);
     } else if (name == "highway") {
       EXPECT_GE(count[ObjectClass::kCar], 30);

@@ -57,9 +57,9 @@ TEST(CliApplanix, DecodesTheRealCaptureIntoTheDocumentedCsv) {
   EXPECT_NEAR(std::stod(v[10]), 20.812475085, 0.5e-9);
   EXPECT_EQ(v[20], "4");
   // The summary names every group id with its count, and no rejects.
-  for (const char* s : {"1:82", "2:80", "3:80", "4:80", "7:80", "8:80", "10:80", "12:73", "13:73",
-                        "21:80", "99:80", "20000:80", "2025 control messages", "GPS week 1694",
-                        "bad checksum 0"}) {
+  for (const char* s :
+       {"1:82", "2:80", "3:80", "4:80", "7:80", "8:80", "10:80", "12:73", "13:73", "21:80", "99:80",
+        "20000:80", "2025 control messages", "GPS week 1694", "bad checksum 0"}) {
     EXPECT_NE(r.output.find(s), std::string::npos) << s << " missing from:\n" << r.output;
   }
   std::filesystem::remove(csv);
@@ -68,8 +68,8 @@ TEST(CliApplanix, DecodesTheRealCaptureIntoTheDocumentedCsv) {
 TEST(CliApplanix, WrongPortSaysNoSolutionWasFound) {
   STAC_REQUIRE_SHARED_DATA(kCapture);
   const auto csv = std::filesystem::temp_directory_path() / "stac_cli_applanix_port.csv";
-  const CliResult r = stac("decode applanix --port 5602 --in " + testing::shared_data(kCapture).string() +
-                           " --out " + csv.string());
+  const CliResult r = stac("decode applanix --port 5602 --in " +
+                           testing::shared_data(kCapture).string() + " --out " + csv.string());
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.output.find("no Group 1"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("--port"), std::string::npos) << r.output;

@@ -65,8 +65,8 @@ TEST(Cli, DecodeWritesTheDocumentedCsv) {
   STAC_REQUIRE_SHARED_DATA(kYaml);
   const auto dir = fresh_dir("csv");
   const auto pcap = write_capture(dir);
-  const CliResult r = stac("decode --calib " + stac::testing::shared_data(kYaml).string() + " --in " +
-                     pcap.string() + " --out " + (dir / "points.csv").string());
+  const CliResult r = stac("decode --calib " + stac::testing::shared_data(kYaml).string() +
+                           " --in " + pcap.string() + " --out " + (dir / "points.csv").string());
   ASSERT_EQ(r.code, 0) << r.output;
   std::ifstream in(dir / "points.csv");
   std::string line;
@@ -101,8 +101,9 @@ TEST(Cli, DecodeKittiWritesOneFloatFilePerScan) {
   STAC_REQUIRE_SHARED_DATA(kYaml);
   const auto dir = fresh_dir("kitti");
   const auto pcap = write_capture(dir);
-  const CliResult r = stac("decode --format kitti --calib " + stac::testing::shared_data(kYaml).string() +
-                     " --in " + pcap.string() + " --out " + (dir / "scans").string());
+  const CliResult r =
+      stac("decode --format kitti --calib " + stac::testing::shared_data(kYaml).string() +
+           " --in " + pcap.string() + " --out " + (dir / "scans").string());
   ASSERT_EQ(r.code, 0) << r.output;
   int files = 0;
   for (const auto& e : std::filesystem::directory_iterator(dir / "scans")) {
@@ -125,8 +126,8 @@ TEST(Cli, DecodeNamesTheFileAndLaserOfABrokenCalibration) {
   const auto dir = fresh_dir("badcalib");
   const auto pcap = write_capture(dir);
   std::ofstream(dir / "broken.yaml") << "lasers:\n- laser_id: 0\n  rot_correction: 0.1\n";
-  const CliResult r = stac("decode --calib " + (dir / "broken.yaml").string() + " --in " + pcap.string() +
-                     " --out " + (dir / "x.csv").string());
+  const CliResult r = stac("decode --calib " + (dir / "broken.yaml").string() + " --in " +
+                           pcap.string() + " --out " + (dir / "x.csv").string());
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.output.find("broken.yaml: laser 0: missing 'vert_correction'"), std::string::npos)
       << r.output;
@@ -136,18 +137,21 @@ TEST(Cli, DecodeRejectsAFileThatIsNotACapture) {
   STAC_REQUIRE_SHARED_DATA(kYaml);
   const auto dir = fresh_dir("notpcap");
   std::ofstream(dir / "notes.pcap") << "hello, this is not a capture at all, really not";
-  const CliResult r = stac("decode --calib " + stac::testing::shared_data(kYaml).string() + " --in " +
-                     (dir / "notes.pcap").string() + " --out " + (dir / "x.csv").string());
+  const CliResult r =
+      stac("decode --calib " + stac::testing::shared_data(kYaml).string() + " --in " +
+           (dir / "notes.pcap").string() + " --out " + (dir / "x.csv").string());
   EXPECT_EQ(r.code, 1);
-  EXPECT_NE(r.output.find("notes.pcap: cannot read as a pcap capture"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("notes.pcap: cannot read as a pcap capture"), std::string::npos)
+      << r.output;
 }
 
 TEST(Cli, DecodeSaysWhenNoPacketIsOnThePort) {
   STAC_REQUIRE_SHARED_DATA(kYaml);
   const auto dir = fresh_dir("port");
   const auto pcap = write_capture(dir);
-  const CliResult r = stac("decode --port 2369 --calib " + stac::testing::shared_data(kYaml).string() +
-                     " --in " + pcap.string() + " --out " + (dir / "x.csv").string());
+  const CliResult r =
+      stac("decode --port 2369 --calib " + stac::testing::shared_data(kYaml).string() + " --in " +
+           pcap.string() + " --out " + (dir / "x.csv").string());
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.output.find("no UDP packet to port 2369"), std::string::npos) << r.output;
 }
@@ -304,8 +308,10 @@ TEST(Cli, StatusShowsTheSimulatedUnitAndStreamCalibrationDecodesLikeTheFile) {
     EXPECT_NEAR(sent->lasers[k].dist_correction_m, file->lasers[k].dist_correction_m, 5e-4 + 1e-9);
   }
 
-  CliResult by_file = stac("decode --in " + pcap + " --calib " + yaml + " --out " + (dir / "a.csv").string());
-  CliResult by_stream = stac("decode --in " + pcap + " --calib stream --out " + (dir / "b.csv").string());
+  CliResult by_file =
+      stac("decode --in " + pcap + " --calib " + yaml + " --out " + (dir / "a.csv").string());
+  CliResult by_stream =
+      stac("decode --in " + pcap + " --calib stream --out " + (dir / "b.csv").string());
   ASSERT_EQ(by_file.code, 0) << by_file.output;
   ASSERT_EQ(by_stream.code, 0) << by_stream.output;
   EXPECT_GT(decoded_points(by_file.output), 100'000);
@@ -315,7 +321,8 @@ TEST(Cli, StatusShowsTheSimulatedUnitAndStreamCalibrationDecodesLikeTheFile) {
 TEST(Cli, StreamCalibrationSaysWhatToDoWhenTheCaptureCarriesNone) {
   const auto dir = fresh_dir("no_stream");
   const auto pcap = write_capture(dir);  // trailers without a status cycle
-  CliResult r = stac("decode --in " + pcap.string() + " --calib stream --out " + (dir / "x.csv").string());
+  CliResult r =
+      stac("decode --in " + pcap.string() + " --calib stream --out " + (dir / "x.csv").string());
   EXPECT_NE(r.code, 0);
   EXPECT_NE(r.output.find("no complete calibration"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("pass --calib"), std::string::npos) << r.output;
@@ -327,14 +334,15 @@ TEST(Cli, StreamCalibrationSaysWhatToDoWhenTheCaptureCarriesNone) {
 // A short simulated urban drive, written by `stac sim`.
 std::filesystem::path simulate(const std::filesystem::path& dir, double seconds) {
   const auto pcap = dir / "sim.pcap";
-  const CliResult r = stac("sim --scenario urban --seed 1 --duration " + std::to_string(seconds) + " --calib " +
-                           stac::testing::shared_data(kYaml).string() + " --out " + pcap.string() +
-                           " --truth " + (dir / "sim.truth.jsonl").string());
+  const CliResult r = stac("sim --scenario urban --seed 1 --duration " + std::to_string(seconds) +
+                           " --calib " + stac::testing::shared_data(kYaml).string() + " --out " +
+                           pcap.string() + " --truth " + (dir / "sim.truth.jsonl").string());
   EXPECT_EQ(r.code, 0) << r.output;
   return pcap;
 }
 
-std::vector<std::vector<std::uint8_t>> payloads_of(const std::filesystem::path& pcap, std::int64_t& span_ns) {
+std::vector<std::vector<std::uint8_t>> payloads_of(const std::filesystem::path& pcap,
+                                                   std::int64_t& span_ns) {
   std::vector<std::vector<std::uint8_t>> out;
   auto r = io::PcapReader::open(pcap);
   EXPECT_TRUE(r);
@@ -349,8 +357,8 @@ std::vector<std::vector<std::uint8_t>> payloads_of(const std::filesystem::path& 
 }
 
 // Runs `stac replay <args> --port P` into a loopback socket and returns what arrived.
-std::vector<std::vector<std::uint8_t>> replay_into_socket(const std::string& args, std::size_t expected,
-                                                         CliResult& result) {
+std::vector<std::vector<std::uint8_t>> replay_into_socket(const std::string& args,
+                                                          std::size_t expected, CliResult& result) {
   io::UdpReceiverConfig c;
   c.bind_address = "127.0.0.1";
   c.port = 0;
@@ -393,7 +401,8 @@ TEST(ReplayCli, SimulatedDriveArrivesByteIdenticalAtTheScaledSchedule) {
   ASSERT_EQ(got.size(), sent.size()) << r.output;
   for (std::size_t i = 0; i < sent.size(); ++i) ASSERT_EQ(got[i], sent[i]) << "packet " << i;
   // The last packet is scheduled at half the recorded span (printed to 1 us).
-  EXPECT_NEAR(number_after(r.output, "schedule   "), 0.5e-9 * static_cast<double>(span_ns), 1.5e-6) << r.output;
+  EXPECT_NEAR(number_after(r.output, "schedule   "), 0.5e-9 * static_cast<double>(span_ns), 1.5e-6)
+      << r.output;
   EXPECT_NE(r.output.find("pacing error"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find(std::to_string(sent.size()) + " packets"), std::string::npos) << r.output;
 }
@@ -405,10 +414,12 @@ TEST(ReplayCli, LoopSendsTheCaptureAgain) {
   std::int64_t span_ns = 0;
   const auto sent = payloads_of(pcap, span_ns);
   CliResult r;
-  const auto got = replay_into_socket("--in " + pcap.string() + " --rate 4 --loop 2", 2 * sent.size(), r);
+  const auto got =
+      replay_into_socket("--in " + pcap.string() + " --rate 4 --loop 2", 2 * sent.size(), r);
   ASSERT_EQ(r.code, 0) << r.output;
   ASSERT_EQ(got.size(), 2 * sent.size()) << r.output;
-  for (std::size_t i = 0; i < got.size(); ++i) ASSERT_EQ(got[i], sent[i % sent.size()]) << "packet " << i;
+  for (std::size_t i = 0; i < got.size(); ++i)
+    ASSERT_EQ(got[i], sent[i % sent.size()]) << "packet " << i;
   EXPECT_NE(r.output.find("2 full passes"), std::string::npos) << r.output;
 }
 
@@ -420,7 +431,8 @@ TEST(ReplayCli, MissingFileAndNoMatchingPacketsAreClearErrors) {
   const auto pcap = write_capture(dir);
   const CliResult none = stac("replay --in " + pcap.string() + " --filter-port 9999");
   EXPECT_EQ(none.code, 1);
-  EXPECT_NE(none.output.find("no UDP datagram to replay to port 9999"), std::string::npos) << none.output;
+  EXPECT_NE(none.output.find("no UDP datagram to replay to port 9999"), std::string::npos)
+      << none.output;
   // Cut by a small snap length: every frame counted as truncated, none sent.
   const CliResult snapped =
       stac("replay --in " + snapped_copy(pcap, 600).string() + " --no-tcp --fast");
@@ -438,19 +450,22 @@ TEST(SimCompareCli, WritesTheReportWithPlausibleFigures) {
   const auto dir = fresh_dir("sim_compare");
   const auto pcap = simulate(dir, 0.35);
   const auto report = dir / "report";
-  const CliResult r = stac("sim-compare --sim " + pcap.string() + " --kitti " +
-                           stac::testing::shared_data("kitti/000000.bin").string() + " --calib " +
-                           stac::testing::shared_data(kYaml).string() + " --report " + report.string());
+  const CliResult r =
+      stac("sim-compare --sim " + pcap.string() + " --kitti " +
+           stac::testing::shared_data("kitti/000000.bin").string() + " --calib " +
+           stac::testing::shared_data(kYaml).string() + " --report " + report.string());
   ASSERT_EQ(r.code, 0) << r.output;
-  for (const char* f : {"realism.md", "realism.json", "points_per_ring.png", "ring_elevation.png",
-                        "range_histogram.png", "intensity_histogram.png", "birds_eye_side_by_side.png"}) {
+  for (const char* f :
+       {"realism.md", "realism.json", "points_per_ring.png", "ring_elevation.png",
+        "range_histogram.png", "intensity_histogram.png", "birds_eye_side_by_side.png"}) {
     EXPECT_TRUE(std::filesystem::exists(report / f)) << f;
   }
   std::ifstream in(report / "realism.json");
   const std::string json((std::istreambuf_iterator<char>(in)), {});
-  for (const char* key : {"\"sim\":", "\"kitti\":", "\"points_per_scan\":", "\"ring_count\":", "\"points_per_ring\":",
-                          "\"ring_elevation_deg\":", "\"range_m\":", "\"histogram\":", "\"ground_fraction\":",
-                          "\"intensity\":", "\"rules\":"}) {
+  for (const char* key :
+       {"\"sim\":", "\"kitti\":", "\"points_per_scan\":", "\"ring_count\":", "\"points_per_ring\":",
+        "\"ring_elevation_deg\":", "\"range_m\":", "\"histogram\":", "\"ground_fraction\":",
+        "\"intensity\":", "\"rules\":"}) {
     EXPECT_NE(json.find(key), std::string::npos) << key << " missing from " << json;
   }
   const std::size_t kitti = json.find("\"kitti\":");

@@ -8,12 +8,11 @@
 
 #include <filesystem>
 #include <fstream>
+#include <opencv2/imgcodecs.hpp>
 #include <regex>
 #include <sstream>
 #include <string>
 #include <vector>
-
-#include <opencv2/imgcodecs.hpp>
 
 #include "shared_data.hpp"
 #include "stac_cli.hpp"
@@ -55,7 +54,8 @@ std::vector<ScanLine> scan_lines(const std::string& out) {
 TEST(DemoCli, ShortDriveGivesALinePerPublishedScanWithTracksASummaryThatAgreesAndPictures) {
   STAC_REQUIRE_SHARED_DATA(kYaml);
   const auto dir = fresh_dir("drive");
-  const auto r = stac::testing::stac("demo --seconds 3 --seed 5 --domain 146 --out " + dir.string());
+  const auto r =
+      stac::testing::stac("demo --seconds 3 --seed 5 --domain 146 --out " + dir.string());
   ASSERT_EQ(r.code, 0) << r.output;
   const std::string& out = r.output;
 
@@ -66,7 +66,8 @@ TEST(DemoCli, ShortDriveGivesALinePerPublishedScanWithTracksASummaryThatAgreesAn
   ASSERT_EQ(lines.size(), published) << out;
   // 3 s at 10 Hz: ~28 complete scans, unless packets were lost, which must then be counted.
   EXPECT_TRUE(published >= 20u || number(out, R"((\d+) dropped by the kernel)") > 0) << out;
-  const std::regex shown(R"(\| #\d+ (unknown|car|pedestrian|bicyclist|background) \(-?[0-9.]+, -?[0-9.]+\) [0-9.]+ m/s)");
+  const std::regex shown(
+      R"(\| #\d+ (unknown|car|pedestrian|bicyclist|background) \(-?[0-9.]+, -?[0-9.]+\) [0-9.]+ m/s)");
   for (std::size_t i = 0; i < lines.size(); ++i) {
     EXPECT_EQ(lines[i].scan, i);
     EXPECT_LE(lines[i].confirmed, lines[i].tracks) << lines[i].text;
@@ -84,14 +85,20 @@ TEST(DemoCli, ShortDriveGivesALinePerPublishedScanWithTracksASummaryThatAgreesAn
   EXPECT_EQ(number(out, R"(deadline +(\d+) misses)"), number(out, R"((\d+) misses of)")) << out;
   EXPECT_EQ(number(out, R"(\((\d+) scans, health\))"), published) << out;
   EXPECT_GT(number(out, R"(tracks +(\d+) ids)"), 0u) << out;
-  EXPECT_TRUE(std::regex_search(out, std::regex(R"(end to end +last firing -> published: median [0-9.]+ ms, p99 [0-9.]+ ms)")))
+  EXPECT_TRUE(std::regex_search(
+      out,
+      std::regex(R"(end to end +last firing -> published: median [0-9.]+ ms, p99 [0-9.]+ ms)")))
       << out;
-  EXPECT_TRUE(std::regex_search(out, std::regex(R"(DDS +publish -> receive \(tracked_objects\): median [0-9.]+ ms, p99 [0-9.]+ ms)")))
+  EXPECT_TRUE(std::regex_search(
+      out,
+      std::regex(
+          R"(DDS +publish -> receive \(tracked_objects\): median [0-9.]+ ms, p99 [0-9.]+ ms)")))
       << out;
   EXPECT_NE(out.find("drops "), std::string::npos) << out;
   // Published tracks classified before publication and one scan late, as stac run counted them.
-  EXPECT_EQ(number(out, R"(classes +(\d+) published tracks classified before publication, \d+ one)"),
-            number(out, R"((\d+) published tracks classified before publication, \d+ after)"))
+  EXPECT_EQ(
+      number(out, R"(classes +(\d+) published tracks classified before publication, \d+ one)"),
+      number(out, R"((\d+) published tracks classified before publication, \d+ after)"))
       << out;
   EXPECT_EQ(number(out, R"((\d+) one scan late)"), number(out, R"((\d+) after it \(run)")) << out;
   EXPECT_GT(number(out, R"((\d+) published tracks classified before publication, \d+ one)"), 0u)
@@ -123,7 +130,8 @@ TEST(DemoCli, ABusyPortIsNamedBeforeAnythingRuns) {
   const auto r = stac::testing::stac("demo --seconds 1 --port " + port + " --out " + dir.string());
   close(fd);
   EXPECT_EQ(r.code, 1) << r.output;
-  EXPECT_NE(r.output.find("UDP port " + port + " on 127.0.0.1 is not free"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("UDP port " + port + " on 127.0.0.1 is not free"), std::string::npos)
+      << r.output;
   EXPECT_NE(r.output.find("pass --port with another port"), std::string::npos) << r.output;
   EXPECT_FALSE(std::filesystem::exists(dir / "drive.pcap"));
   std::filesystem::remove_all(dir);

@@ -1,10 +1,9 @@
 // Runs the real `stac eval` on files written the way `stac sim` and `stac process` write them.
 #include <gtest/gtest.h>
 
-#include <nlohmann/json.hpp>
-
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "sim/run.hpp"
@@ -35,7 +34,8 @@ void write_run(const std::filesystem::path& dir, bool id_switch) {
     t.end_ns = t.start_ns + 99'000'000;
     const double cx = 5.0 + 1.0 * k;
     t.objects.push_back({1, sim::ObjectClass::kCar, cx, 4, 0.8, 4.5, 1.8, 1.5, 0, 10, 0, 500, 0});
-    t.objects.push_back({2, sim::ObjectClass::kPedestrian, -6, -2, 0.9, 0.6, 0.6, 1.8, 0, 0, 0, 60, 0});
+    t.objects.push_back(
+        {2, sim::ObjectClass::kPedestrian, -6, -2, 0.9, 0.6, 0.6, 1.8, 0, 0, 0, 60, 0});
     truth << sim::to_json(t) << "\n";
 
     TracksScan o;
@@ -82,7 +82,8 @@ TEST(EvalCli, WritesMetricsReportAndPlots) {
   std::ifstream m(dir / "out" / "metrics.json");
   ASSERT_TRUE(m.good());
   const auto j = nlohmann::json::parse(m);
-  for (const char* key : {"mota", "motp", "id_switches", "hota", "under_segmentation", "over_segmentation"}) {
+  for (const char* key :
+       {"mota", "motp", "id_switches", "hota", "under_segmentation", "over_segmentation"}) {
     ASSERT_TRUE(j.contains(key)) << key;
   }
   EXPECT_DOUBLE_EQ(j["mota"].get<double>(), 1.0 - 1.0 / 40.0);
@@ -118,13 +119,17 @@ TEST(EvalCli, BadInputsGiveErrorsNamingTheFile) {
     std::ofstream f(dir / "broken.jsonl");
     f << "{\"scan\":0}\n";
   }
-  auto r = stac("eval --truth " + (dir / "run.truth.jsonl").string() + " --tracks " + (dir / "broken.jsonl").string());
+  auto r = stac("eval --truth " + (dir / "run.truth.jsonl").string() + " --tracks " +
+                (dir / "broken.jsonl").string());
   EXPECT_NE(r.code, 0);
   EXPECT_NE(r.output.find("broken.jsonl:1: missing key 'time'"), std::string::npos) << r.output;
-  r = stac("eval --truth " + (dir / "run.tracks.jsonl").string() + " --tracks " + (dir / "run.tracks.jsonl").string());
+  r = stac("eval --truth " + (dir / "run.tracks.jsonl").string() + " --tracks " +
+           (dir / "run.tracks.jsonl").string());
   EXPECT_NE(r.code, 0);
-  EXPECT_NE(r.output.find("run.tracks.jsonl:1: missing key 'objects'"), std::string::npos) << r.output;
-  r = stac("eval --truth " + (dir / "absent.jsonl").string() + " --tracks " + (dir / "run.tracks.jsonl").string());
+  EXPECT_NE(r.output.find("run.tracks.jsonl:1: missing key 'objects'"), std::string::npos)
+      << r.output;
+  r = stac("eval --truth " + (dir / "absent.jsonl").string() + " --tracks " +
+           (dir / "run.tracks.jsonl").string());
   EXPECT_NE(r.code, 0);
   EXPECT_NE(r.output.find("absent.jsonl"), std::string::npos) << r.output;
 }

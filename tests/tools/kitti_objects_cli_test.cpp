@@ -59,7 +59,8 @@ TEST(KittiObjectsCli, BrokenFoldersAndFilesAreNamed) {
 
   // A copy of frame 000000 with a broken label file, then with a broken calibration.
   const std::filesystem::path src = stac::testing::shared_data("kitti-object");
-  for (const char* sub : {"velodyne", "calib", "label_2"}) std::filesystem::create_directories(dir / sub);
+  for (const char* sub : {"velodyne", "calib", "label_2"})
+    std::filesystem::create_directories(dir / sub);
   std::filesystem::copy_file(src / "velodyne/000000.bin", dir / "velodyne/000000.bin");
   std::filesystem::copy_file(src / "calib/000000.txt", dir / "calib/000000.txt");
   std::ofstream(dir / "label_2/000000.txt") << "Car 0.00 0 1.5 10 20\n";

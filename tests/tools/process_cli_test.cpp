@@ -25,15 +25,15 @@ TEST(ProcessCli, SimulatedDriveGivesOneLinePerScanWithSegmentsTracksAndTruthThat
   STAC_REQUIRE_SHARED_DATA(kYaml);
   const auto dir = fresh_dir("drive");
   const std::string pcap = (dir / "run.pcap").string(), truth = (dir / "run.jsonl").string();
-  const CliResult sim = stac("sim --scenario parking-lot --seed 11 --duration 2 --calib " +
-                             stac::testing::shared_data(kYaml).string() + " --out " + pcap +
-                             " --truth " + truth);
+  const CliResult sim =
+      stac("sim --scenario parking-lot --seed 11 --duration 2 --calib " +
+           stac::testing::shared_data(kYaml).string() + " --out " + pcap + " --truth " + truth);
   ASSERT_EQ(sim.code, 0) << sim.output;
   const std::string tracks = (dir / "run.tracks.jsonl").string();
   const CliResult p = stac("process " + pcap + " --truth " + truth + " --tracks " + tracks);
   ASSERT_EQ(p.code, 0) << p.output;
-  for (const char* word : {"complete scans", "INS fixes", "hour from the INS", "0 scans without a pose",
-                           "segment", "track", "median", "p99"}) {
+  for (const char* word : {"complete scans", "INS fixes", "hour from the INS",
+                           "0 scans without a pose", "segment", "track", "median", "p99"}) {
     EXPECT_NE(p.output.find(word), std::string::npos) << word << " missing from:\n" << p.output;
   }
   auto out = read_tracks_file(tracks);
@@ -64,12 +64,14 @@ TEST(ProcessCli, SimulatedDriveGivesOneLinePerScanWithSegmentsTracksAndTruthThat
   EXPECT_NEAR(out->front().ego.x, t0->ego.x, 0.05);
   EXPECT_NEAR(out->front().ego.y, t0->ego.y, 0.05);
 
-  const CliResult e = stac("eval --truth " + truth + " --tracks " + tracks + " --report " + (dir / "eval").string());
+  const CliResult e = stac("eval --truth " + truth + " --tracks " + tracks + " --report " +
+                           (dir / "eval").string());
   ASSERT_EQ(e.code, 0) << e.output;
   EXPECT_TRUE(std::filesystem::exists(dir / "eval" / "metrics.json"));
 
   // Without the INS the sensor frame is the world: still one line per scan, and it says so.
-  const CliResult parked = stac("process " + pcap + " --no-deskew --tracks " + (dir / "parked.jsonl").string());
+  const CliResult parked =
+      stac("process " + pcap + " --no-deskew --tracks " + (dir / "parked.jsonl").string());
   ASSERT_EQ(parked.code, 0) << parked.output;
   EXPECT_NE(parked.output.find("parked sensor"), std::string::npos) << parked.output;
   auto parked_out = read_tracks_file(dir / "parked.jsonl");
@@ -79,11 +81,13 @@ TEST(ProcessCli, SimulatedDriveGivesOneLinePerScanWithSegmentsTracksAndTruthThat
 
 TEST(ProcessCli, BadInputsAreNamed) {
   const auto dir = fresh_dir("errors");
-  const CliResult missing = stac("process /nonexistent.pcap --tracks " + (dir / "x.jsonl").string());
+  const CliResult missing =
+      stac("process /nonexistent.pcap --tracks " + (dir / "x.jsonl").string());
   EXPECT_NE(missing.code, 0);
   EXPECT_NE(missing.output.find("nonexistent.pcap"), std::string::npos) << missing.output;
-  const CliResult origin = stac("process " + std::string(STAC_SOURCE_DIR) + "/README.md --origin 95,0,0 --tracks " +
-                                (dir / "x.jsonl").string());
+  const CliResult origin =
+      stac("process " + std::string(STAC_SOURCE_DIR) + "/README.md --origin 95,0,0 --tracks " +
+           (dir / "x.jsonl").string());
   EXPECT_NE(origin.code, 0);
 }
 

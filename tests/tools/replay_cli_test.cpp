@@ -77,7 +77,8 @@ TEST(ReplayCli, ServesTheInsStreamCompleteNextToTheVelodynePackets) {
   while (port < 0 && std::fgets(line, sizeof(line), out) != nullptr) {
     output += line;
     const std::string l = line;
-    if (const auto at = l.find(key); at != std::string::npos) port = std::stoi(l.substr(at + key.size()));
+    if (const auto at = l.find(key); at != std::string::npos)
+      port = std::stoi(l.substr(at + key.size()));
   }
   ASSERT_GT(port, 0) << output;
 
@@ -109,11 +110,13 @@ TEST(ReplayCli, ServesTheInsStreamCompleteNextToTheVelodynePackets) {
   EXPECT_EQ(parser.counters().garbage_bytes, 0u);
   EXPECT_EQ(parser.counters().bad_checksum, 0u);
   EXPECT_NE(output.find("TCP stream of port 5602 served on 127.0.0.1:" + std::to_string(port)),
-            std::string::npos) << output;
+            std::string::npos)
+      << output;
   EXPECT_NE(output.find(" 0 bytes unserved"), std::string::npos) << output;
   // The Velodyne packets went out on the same run, every one of them.
   EXPECT_NE(output.find(std::to_string(packets) + " packets,"), std::string::npos)
-      << packets << "\n" << output;
+      << packets << "\n"
+      << output;
   EXPECT_GT(packets, 1000u);
 }
 

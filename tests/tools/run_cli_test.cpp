@@ -145,9 +145,9 @@ TEST(RunCli, ReplayedDriveGivesOneTrackedObjectsSamplePerScanAndHealthThatAgrees
 
   const std::uint16_t udp = free_port(SOCK_DGRAM), tcp = free_port(SOCK_STREAM);
   ASSERT_TRUE(udp != 0 && tcp != 0);
-  Child run("run --point-cloud-stride 8 --domain " + std::to_string(kDomain) + " --bind 127.0.0.1 --port " +
-                std::to_string(udp) + " --ins tcp --ins-address 127.0.0.1 --ins-port " +
-                std::to_string(tcp),
+  Child run("run --point-cloud-stride 8 --domain " + std::to_string(kDomain) +
+                " --bind 127.0.0.1 --port " + std::to_string(udp) +
+                " --ins tcp --ins-address 127.0.0.1 --ins-port " + std::to_string(tcp),
             dir / "run.log");
   ASSERT_TRUE(run.started());
   for (int i = 0; i < 2000 && !(tracked.matched() && health.matched() && cloud.matched()); ++i)

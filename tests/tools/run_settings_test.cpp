@@ -74,9 +74,8 @@ TEST(RunSettings, EveryKeyIsReadIntoItsField) {
 }
 
 TEST(RunSettings, MissingOrInvalidKeysAreNamed) {
-  for (const std::string key :
-       {"deadline_ms", "result_slots", "cpu_wake_latency_us", "classify_budget_ms", "pose_cpu", "ins",
-        "velodyne_timeout_s"}) {
+  for (const std::string key : {"deadline_ms", "result_slots", "cpu_wake_latency_us",
+                                "classify_budget_ms", "pose_cpu", "ins", "velodyne_timeout_s"}) {
     auto missing = load_run_settings(run_section("missing_" + key, key, ""));
     ASSERT_FALSE(missing) << key;
     EXPECT_NE(missing.error().message.find("missing required key 'run." + key + "'"),

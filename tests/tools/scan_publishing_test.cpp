@@ -32,11 +32,11 @@ TEST(ScanPublishing, SegmentLabelsAreTheClassesOfTheTracksTheyUpdated) {
   std::array<std::uint8_t, 8> labels{};
   labels.fill(99);
   ScanPublishing::segment_labels(r, labels);
-  EXPECT_EQ(labels[0], 1);  // car
-  EXPECT_EQ(labels[1], 2);  // pedestrian
-  EXPECT_EQ(labels[2], 3);  // bicyclist
-  EXPECT_EQ(labels[3], 4);  // background
-  EXPECT_EQ(labels[4], 5);  // a track, not classified
+  EXPECT_EQ(labels[0], 1);   // car
+  EXPECT_EQ(labels[1], 2);   // pedestrian
+  EXPECT_EQ(labels[2], 3);   // bicyclist
+  EXPECT_EQ(labels[3], 4);   // background
+  EXPECT_EQ(labels[4], 5);   // a track, not classified
   EXPECT_EQ(labels[5], 99);  // beyond the scan's segments: untouched
 
   r.tracked.tracks.clear();  // no tracks at all: every segment an unclassified object
@@ -66,8 +66,8 @@ TEST(ScanPublishing, PointCloudIsWrittenForAReaderOnlyWithItsSegmentsLabels) {
   k->classified = true;
   k->label = classification::ObjectClass::kPedestrian;
   *r.cloud.append() = {100, -200, 150, 7, pipeline::kNoSegment};  // ground
-  *r.cloud.append() = {1, 2, 3, 40, 0};  // segment 0: no track
-  *r.cloud.append() = {-5, 6, -7, 255, 1};  // segment 1: a pedestrian
+  *r.cloud.append() = {1, 2, 3, 40, 0};                           // segment 0: no track
+  *r.cloud.append() = {-5, 6, -7, 255, 1};                        // segment 1: a pedestrian
   r.cloud_origin = {10, 20, 1.9};
   r.has_cloud = true;
   r.stamp_ns = 3'000'000'000;
@@ -78,9 +78,11 @@ TEST(ScanPublishing, PointCloudIsWrittenForAReaderOnlyWithItsSegmentsLabels) {
   EXPECT_FALSE(scans.cloud_reader());  // the pipeline stops building it
 
   using T = dds::IdlTypes<false>;
-  stac::testing::TestReader reader(112, T::point_cloud(), "stac_test/point_cloud", dds::Topic::kPointCloud);
+  stac::testing::TestReader reader(112, T::point_cloud(), "stac_test/point_cloud",
+                                   dds::Topic::kPointCloud);
   ASSERT_TRUE(reader.ok());
-  ASSERT_TRUE(stac::testing::TestReader::wait_matched((*publisher)->writer(dds::Topic::kPointCloud)));
+  ASSERT_TRUE(
+      stac::testing::TestReader::wait_matched((*publisher)->writer(dds::Topic::kPointCloud)));
   auto written = scans.publish_cloud(r, 5);
   ASSERT_TRUE(written) << written.error().message;
   EXPECT_TRUE(*written);

@@ -9,10 +9,12 @@
 namespace stac::tools {
 namespace {
 
-const std::filesystem::path kShipped = std::filesystem::path(STAC_SOURCE_DIR) / "config" / "stac.yaml";
+const std::filesystem::path kShipped =
+    std::filesystem::path(STAC_SOURCE_DIR) / "config" / "stac.yaml";
 
 // The shipped file with the line holding `key:` in the tracking section replaced.
-std::filesystem::path edited(const std::string& name, const std::string& key, const std::string& replacement) {
+std::filesystem::path edited(const std::string& name, const std::string& key,
+                             const std::string& replacement) {
   std::ifstream in(kShipped);
   const auto path = std::filesystem::temp_directory_path() / ("stac_tracking_" + name + ".yaml");
   std::ofstream out(path);
@@ -44,15 +46,18 @@ TEST(TrackingSettings, ShippedConfigMatchesTheDefaults) {
 TEST(TrackingSettings, MissingWrongOrInvalidKeysAreNamed) {
   auto missing = load_tracking_config(edited("missing", "gate_distance_m", ""));
   ASSERT_FALSE(missing);
-  EXPECT_NE(missing.error().message.find("missing required key 'tracking.gate_distance_m'"), std::string::npos)
+  EXPECT_NE(missing.error().message.find("missing required key 'tracking.gate_distance_m'"),
+            std::string::npos)
       << missing.error().message;
   auto wrong = load_tracking_config(edited("wrong", "confirm_hits", "  confirm_hits: three"));
   ASSERT_FALSE(wrong);
-  EXPECT_NE(wrong.error().message.find("'tracking.confirm_hits' has the wrong type"), std::string::npos)
+  EXPECT_NE(wrong.error().message.find("'tracking.confirm_hits' has the wrong type"),
+            std::string::npos)
       << wrong.error().message;
   auto invalid = load_tracking_config(edited("invalid", "box_smoothing", "  box_smoothing: 0"));
   ASSERT_FALSE(invalid);
-  EXPECT_NE(invalid.error().message.find("box_smoothing"), std::string::npos) << invalid.error().message;
+  EXPECT_NE(invalid.error().message.find("box_smoothing"), std::string::npos)
+      << invalid.error().message;
   auto absent = load_tracking_config("/nonexistent/stac.yaml");
   ASSERT_FALSE(absent);
   EXPECT_NE(absent.error().message.find("/nonexistent/stac.yaml"), std::string::npos);

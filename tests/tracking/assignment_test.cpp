@@ -1,3 +1,5 @@
+#include "perception/tracking/assignment.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -7,12 +9,11 @@
 #include <random>
 #include <vector>
 
-#include "perception/tracking/assignment.hpp"
-
 namespace stac::tracking {
 namespace {
 
-double total(const std::vector<double>& cost, std::size_t cols, const std::vector<int>& row_to_col) {
+double total(const std::vector<double>& cost, std::size_t cols,
+             const std::vector<int>& row_to_col) {
   double sum = 0;
   for (std::size_t i = 0; i < row_to_col.size(); ++i) {
     if (row_to_col[i] >= 0) sum += cost[i * cols + static_cast<std::size_t>(row_to_col[i])];
@@ -89,8 +90,7 @@ std::vector<int> greedy(const std::vector<double>& cost, std::size_t rows, std::
 
 TEST(AssignmentSolver, BeatsGreedyWhereTheCheapestPairIsWrong) {
   // Row 0 is closest to column 0, but taking that pair forces row 1 onto column 1 at a high cost.
-  const std::vector<double> cost = {1.0, 2.0,
-                                    2.0, 10.0};
+  const std::vector<double> cost = {1.0, 2.0, 2.0, 10.0};
   AssignmentSolver solver(2, 2);
   std::vector<int> global(2);
   ASSERT_TRUE(solver.solve(cost, 2, 2, global));

@@ -243,7 +243,8 @@ TEST(Tracker, LargeSegmentsConfirmAfterFewerHits) {
       d.points = k.points;
       tracker.update(s * kScanNs, std::vector<Detection>{d}, out);
       ASSERT_EQ(out.tracks.size(), 1u);
-      EXPECT_EQ(out.tracks[0].state, s >= k.confirmed_at ? TrackState::kConfirmed : TrackState::kTentative)
+      EXPECT_EQ(out.tracks[0].state,
+                s >= k.confirmed_at ? TrackState::kConfirmed : TrackState::kTentative)
           << k.points << " points, confirm_large_points " << k.large_points << ", scan " << s;
     }
   }
@@ -530,7 +531,8 @@ TEST(Tracker, TallPiecesOfATruckMakeOneTrackUpToTheTallLength) {
     Tracker tracker(c);
     TrackerOutput out(c.max_tracks);
     for (int s = 0; s < 5; ++s)
-      tracker.update(s * kScanNs, std::vector<Detection>{box(30, 0, 6.0, 2.4, k.height, 0, 0)}, out);
+      tracker.update(s * kScanNs, std::vector<Detection>{box(30, 0, 6.0, 2.4, k.height, 0, 0)},
+                     out);
     for (int s = 5; s < 10; ++s) {
       tracker.update(s * kScanNs,
                      std::vector<Detection>{box(30, 0, 6.0, 2.4, k.height, 0, 0),

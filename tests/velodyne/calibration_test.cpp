@@ -1,10 +1,11 @@
+#include "drivers/velodyne/calibration.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <fstream>
 #include <numbers>
 
-#include "drivers/velodyne/calibration.hpp"
 #include "shared_data.hpp"
 
 namespace stac::velodyne {
@@ -22,8 +23,8 @@ std::filesystem::path write_temp(const std::string& name, const std::string& tex
 }
 
 std::string ros_yaml_laser(int id, bool with_vert = true) {
-  std::string s = "- laser_id: " + std::to_string(id) +
-                  "\n  rot_correction: 0.01\n  dist_correction: 1.4\n";
+  std::string s =
+      "- laser_id: " + std::to_string(id) + "\n  rot_correction: 0.01\n  dist_correction: 1.4\n";
   if (with_vert) s += "  vert_correction: -0.1\n";
   return s;
 }

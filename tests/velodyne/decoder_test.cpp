@@ -1,3 +1,5 @@
+#include "drivers/velodyne/decoder.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -8,7 +10,6 @@
 
 #include "drivers/velodyne/beam.hpp"
 #include "drivers/velodyne/calibration.hpp"
-#include "drivers/velodyne/decoder.hpp"
 #include "drivers/velodyne/packet_builder.hpp"
 #include "shared_data.hpp"
 
@@ -31,8 +32,8 @@ Calibration sztaki() {
   return *c;
 }
 
-static_assert(noexcept(std::declval<PacketDecoder&>().decode_block(
-    std::declval<const RawBlock&>(), 0, false, 0, nullptr)));
+static_assert(noexcept(std::declval<PacketDecoder&>().decode_block(std::declval<const RawBlock&>(),
+                                                                   0, false, 0, nullptr)));
 
 TEST(PacketDecoder, RealS2SamplePacketGivesPlausiblePoints) {
   STAC_REQUIRE_SHARED_DATA(kSample);
@@ -120,7 +121,8 @@ TEST(PacketDecoder, TwoPointGateChangesOnlyFarPoints) {
   PacketDecoder gate(sztaki(), gated);
   PacketBuilder b;
   b.set_block(0, kUpperBank, 0);  // straight ahead: xx small, yy = range
-  for (int j = 0; j < kLasersPerBlock; ++j) b.set_return(0, j, j < 16 ? 5000 : 30000, 50);  // 10 m, 60 m
+  for (int j = 0; j < kLasersPerBlock; ++j)
+    b.set_return(0, j, j < 16 ? 5000 : 30000, 50);  // 10 m, 60 m
   const RawPacket* packet = as_packet(b.bytes());
   Point a[32], g[32];
   ASSERT_EQ(plain.decode_block(packet->blocks[0], 0, false, 0, a), 32);
@@ -136,9 +138,9 @@ TEST(PacketDecoder, DropsNoReturnAndOutOfRange) {
   PacketDecoder decoder(sztaki(), DecoderConfig{});
   PacketBuilder b;
   b.set_block(0, kLowerBank, 100);
-  b.set_return(0, 0, 0, 10);          // no return
-  b.set_return(0, 1, 1, 10);          // 2 mm + ~1.5 m correction: in range
-  b.set_return(0, 2, 65535, 10);      // 131 m + correction: beyond 130 m
+  b.set_return(0, 0, 0, 10);      // no return
+  b.set_return(0, 1, 1, 10);      // 2 mm + ~1.5 m correction: in range
+  b.set_return(0, 2, 65535, 10);  // 131 m + correction: beyond 130 m
   b.set_return(0, 3, 2000, 10);
   const RawPacket* packet = as_packet(b.bytes());
   Point out[32];
@@ -173,11 +175,13 @@ TEST(PacketDecoder, RingsSortLasersByElevation) {
   std::set<int> rings;
   for (int l = 0; l < 64; ++l) {
     rings.insert(decoder.ring_of(l));
-    by_ring.emplace_back(decoder.ring_of(l), c.lasers[static_cast<std::size_t>(l)].vert_correction_rad);
+    by_ring.emplace_back(decoder.ring_of(l),
+                         c.lasers[static_cast<std::size_t>(l)].vert_correction_rad);
   }
   EXPECT_EQ(rings.size(), 64u);
   std::sort(by_ring.begin(), by_ring.end());
-  for (std::size_t i = 1; i < by_ring.size(); ++i) EXPECT_LE(by_ring[i - 1].second, by_ring[i].second);
+  for (std::size_t i = 1; i < by_ring.size(); ++i)
+    EXPECT_LE(by_ring[i - 1].second, by_ring[i].second);
 }
 
 TEST(PacketDecoder, ParsesModelNames) {
@@ -196,9 +200,9 @@ namespace {
 // The vectorised decoder against the double-precision reference, over every laser of every
 // real calibration, all rotations in steps, and distances from 1 to 120 m.
 TEST(PacketDecoder, AgreesWithTheReferenceBeamMath) {
-  for (const char* file : {"velodyne/calib/rosdrivers_64e_s2.1-sztaki.yaml",
-                           "velodyne/calib/rosdrivers_64e_s3-xiesc.yaml",
-                           "velodyne/calib/veloview_HDL-64.xml"}) {
+  for (const char* file :
+       {"velodyne/calib/rosdrivers_64e_s2.1-sztaki.yaml",
+        "velodyne/calib/rosdrivers_64e_s3-xiesc.yaml", "velodyne/calib/veloview_HDL-64.xml"}) {
     STAC_REQUIRE_SHARED_DATA(file);
     auto c = load_calibration(stac::testing::shared_data(file));
     ASSERT_TRUE(c) << c.error().message;
@@ -213,7 +217,8 @@ TEST(PacketDecoder, AgreesWithTheReferenceBeamMath) {
         for (int bank = 0; bank < 2; ++bank) {
           PacketBuilder b;
           b.set_block(0, bank == 0 ? kUpperBank : kLowerBank, rotation);
-          for (int j = 0; j < 32; ++j) b.set_return(0, j, static_cast<std::uint16_t>(500 + 1850 * j), 100);
+          for (int j = 0; j < 32; ++j)
+            b.set_return(0, j, static_cast<std::uint16_t>(500 + 1850 * j), 100);
           Point out[32];
           ASSERT_EQ(decoder.decode_block(as_packet(b.bytes())->blocks[0], 0, false, 0, out), 32);
           for (int j = 0; j < 32; ++j) {
@@ -233,7 +238,8 @@ TEST(PacketDecoder, AgreesWithTheReferenceBeamMath) {
 
 TEST(BeamLine, IsTheDecodedPointAlongTheBeam) {
   STAC_REQUIRE_SHARED_DATA("velodyne/calib/rosdrivers_64e_s2.1-sztaki.yaml");
-  auto c = load_calibration(stac::testing::shared_data("velodyne/calib/rosdrivers_64e_s2.1-sztaki.yaml"));
+  auto c = load_calibration(
+      stac::testing::shared_data("velodyne/calib/rosdrivers_64e_s2.1-sztaki.yaml"));
   ASSERT_TRUE(c);
   for (int laser : {0, 17, 40, 63}) {
     const LaserCalibration& l = c->lasers[static_cast<std::size_t>(laser)];

@@ -1,9 +1,10 @@
+#include "drivers/velodyne/scan_assembler.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <random>
 
-#include "drivers/velodyne/scan_assembler.hpp"
 #include "rt/testing/alloc_counter.hpp"
 #include "shared_data.hpp"
 #include "synthetic_stream.hpp"
@@ -63,7 +64,7 @@ TEST(ScanAssembler, FramesOnCutAngle) {
     EXPECT_TRUE(h.complete());
     EXPECT_EQ(h.sequence, i);
     // Firings are 17.28 units (48 us) apart at 600 rpm, rounded to whole units.
-    EXPECT_LT(h.first_azimuth, 18);       // the first firing at or after 0 deg
+    EXPECT_LT(h.first_azimuth, 18);  // the first firing at or after 0 deg
     EXPECT_GE(h.last_azimuth, 36000 - 18);
     EXPECT_NEAR(static_cast<double>(run.sizes[i]), 2083.3 * 64, 64 * 1.5);
     EXPECT_LT(run.azimuth_span[i].second, 36000);

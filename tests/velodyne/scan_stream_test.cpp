@@ -1,8 +1,9 @@
+#include "drivers/velodyne/scan_stream.hpp"
+
 #include <gtest/gtest.h>
 
 #include <thread>
 
-#include "drivers/velodyne/scan_stream.hpp"
 #include "rt/testing/alloc_counter.hpp"
 #include "synthetic_stream.hpp"
 
@@ -30,7 +31,8 @@ TEST(ScanStream, DropsTheNewestScanWhenTheConsumerFallsBehind) {
   spec.seconds = 1.05;  // 11 cut crossings
   ScanStream stream(flat_calibration(), ScanAssemblerConfig{}, 3);
   int completed = 0;
-  for (const auto& p : testing::make_stream(spec)) completed += stream.add_packet(p.bytes, p.stamp_ns) ? 1 : 0;
+  for (const auto& p : testing::make_stream(spec))
+    completed += stream.add_packet(p.bytes, p.stamp_ns) ? 1 : 0;
   EXPECT_EQ(completed, 10);  // cut crossings at 0.066 s + k * 0.1 s
   EXPECT_EQ(stream.assembler().counters().scans, 10u);
   // Nobody consumed: two slots were published, the rest dropped.

@@ -244,7 +244,7 @@ TEST(StatusDecoder, EncodingRefusesValuesThatDoNotFitNamingLaserAndField) {
 }
 
 TEST(StatusTime, UtcFromMicrosecondsPastTheHour) {
-  SensorStatus s = example_status();  // 2026-11-23 17:42:09
+  SensorStatus s = example_status();           // 2026-11-23 17:42:09
   const std::int64_t hour_17 = 1'795'453'200;  // 2026-11-23T17:00:00Z (date -u -d ... +%s)
   auto t = utc_time_ns(s, 2'529'250'000U);     // 42 min 9.25 s
   ASSERT_TRUE(t);
@@ -263,7 +263,7 @@ TEST(StatusTime, TopOfHourRolloverBetweenCycleAndPacket) {
   const std::int64_t new_year_2027 = 1'798'761'600;  // 2027-01-01T00:00:00Z
   EXPECT_EQ(*t, new_year_2027 * 1'000'000'000 + 100'000'000);
 
-  s.time = {2027, 1, 1, 0, 0, 0};          // the cycle is already in the new hour,
+  s.time = {2027, 1, 1, 0, 0, 0};           // the cycle is already in the new hour,
   auto u = utc_time_ns(s, 3'599'990'000U);  // the packet 10 ms before it
   ASSERT_TRUE(u);
   EXPECT_EQ(*u, new_year_2027 * 1'000'000'000 - 10'000'000);
@@ -309,7 +309,7 @@ TEST(StatusTrailerWriter, ScanHeadersCarryUtcAndGpsStateAndTheCalibrationArrives
   auto writer = StatusTrailerWriter::create(Model::kS2_1, sensor, example_unit(), flat);
   ASSERT_TRUE(writer) << writer.error().message;
   stac::testing::StreamSpec spec;
-  spec.seconds = 1.5;  // more than one 4160-packet dump
+  spec.seconds = 1.5;                                             // more than one 4160-packet dump
   spec.start_ns = 1'795'453'200'000'000'000 + 3'599'500'000'000;  // 0.5 s before 18:00 UTC
   auto packets = stac::testing::make_stream(spec);
   ScanAssemblerConfig config;

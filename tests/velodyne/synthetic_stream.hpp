@@ -32,8 +32,8 @@ struct StreamPacket {
 struct StreamSpec {
   double seconds = 1.0;
   std::function<double(double)> rpm = [](double) { return 600.0; };  // rpm at time t (s)
-  double start_deg = 123.45;        // azimuth of the first firing
-  std::uint16_t raw_distance = 5000;  // 10 m
+  double start_deg = 123.45;                                         // azimuth of the first firing
+  std::uint16_t raw_distance = 5000;                                 // 10 m
   double packets_per_second = 3472.17;
   std::int64_t start_ns = 1'700'000'000'000'000'000;
 };
@@ -50,7 +50,8 @@ inline std::vector<StreamPacket> make_stream(const StreamSpec& spec) {
     PacketBuilder b;
     for (int f = 0; f < 6; ++f) {
       const double tf = t + f * 48e-6;
-      const auto rot = static_cast<std::uint16_t>(std::lround(std::fmod(deg, 360.0) * 100.0) % 36000);
+      const auto rot =
+          static_cast<std::uint16_t>(std::lround(std::fmod(deg, 360.0) * 100.0) % 36000);
       for (int half = 0; half < 2; ++half) {
         const int block = 2 * f + half;
         b.set_block(block, half == 0 ? kUpperBank : kLowerBank, rot);
