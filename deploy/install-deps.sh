@@ -12,6 +12,8 @@ packages=(
   libopencv-dev  # pictures (bird's-eye views, plots) in tools/, never in the per-scan loop
   libpcl-dev  # benchmarks only: PCL Euclidean clustering as the baseline of perception/segmentation
   cyclonedds-dev cyclonedds-tools  # DDS publishing edge (dds/, idl/): C API and idlc
+  openssl  # deploy/dds-security.sh: the DDS Security CAs, certificates and signed documents
+  clang-format clang-tidy  # .ci/check-style (STYLE.md rule 14)
 )
 
 missing=()
