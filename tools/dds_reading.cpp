@@ -28,17 +28,22 @@ const dds_topic_descriptor_t* descriptor(dds::Topic t) {
 rt::Result<std::unique_ptr<TopicReaders>> TopicReaders::create(const dds::PublisherConfig& c) {
   if (c.domain_id > 230)
     return rt::make_error("DDS domain " + std::to_string(c.domain_id) + ": must be 0..230");
+  dds_entity_t domain = 0;
   if (!c.config_uri.empty()) {
-    const dds_entity_t domain = dds_create_domain(c.domain_id, c.config_uri.c_str());
+    domain = dds_create_domain(c.domain_id, c.config_uri.c_str());
     if (domain < 0) return dds::dds_error("creating DDS domain with " + c.config_uri, domain);
   }
   const dds_entity_t participant = dds_create_participant(c.domain_id, nullptr, nullptr);
-  if (participant < 0) return dds::dds_error("creating a DDS participant", participant);
-  return std::unique_ptr<TopicReaders>(new TopicReaders(c, participant));
+  if (participant < 0) {
+    if (domain > 0) dds_delete(domain);
+    return dds::dds_error("creating a DDS participant", participant);
+  }
+  return std::unique_ptr<TopicReaders>(new TopicReaders(c, domain, participant));
 }
 
 TopicReaders::~TopicReaders() {
   dds_delete(participant_);
+  if (domain_ > 0) dds_delete(domain_);
 }
 
 rt::Result<dds_entity_t> TopicReaders::add(dds::Topic t, int depth,

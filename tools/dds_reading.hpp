@@ -22,7 +22,10 @@ class TopicReaders {
  public:
   // Creates the domain (with config.config_uri when given) and a participant on it.
   static rt::Result<std::unique_ptr<TopicReaders>> create(const dds::PublisherConfig& config);
-  ~TopicReaders();  // deletes the participant and its readers (waits for running callbacks)
+  // Deletes the participant and its readers (waits for running callbacks), and the domain when
+  // create() made it: its threads must be gone before the process's exit handlers run (with DDS
+  // Security, OpenSSL's exit-time cleanup would pull the ground from under them).
+  ~TopicReaders();
   TopicReaders(const TopicReaders&) = delete;
   TopicReaders& operator=(const TopicReaders&) = delete;
 
@@ -39,8 +42,8 @@ class TopicReaders {
   [[nodiscard]] const dds::PublisherConfig& config() const noexcept { return config_; }
 
  private:
-  TopicReaders(const dds::PublisherConfig& config, dds_entity_t participant)
-      : config_(config), participant_(participant) {}
+  TopicReaders(const dds::PublisherConfig& config, dds_entity_t domain, dds_entity_t participant)
+      : config_(config), domain_(domain), participant_(participant) {}
   // Creates the reader with a data-available listener calling take(reader).
   rt::Result<dds_entity_t> add(dds::Topic t, int depth, std::function<void(dds_entity_t)> take);
   // Takes what `reader` holds now, calling f(sample, receive_time, info) for each valid sample.
@@ -48,6 +51,7 @@ class TopicReaders {
   static void take(dds_entity_t reader, F& f);
 
   dds::PublisherConfig config_;
+  dds_entity_t domain_;  // 0: Cyclone's default domain (no config_uri)
   dds_entity_t participant_;
   std::list<std::function<void(dds_entity_t)>> takers_;  // the listeners' arguments (stable)
 };

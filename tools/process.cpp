@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <optional>
 #include <string>
@@ -31,7 +32,7 @@ namespace stac::tools {
 namespace {
 
 struct ProcessOptions {
-  std::string in, tracks, truth, config, calib, origin, model;
+  std::string in, tracks, truth, config, calib, origin, model, dds_config;
   bool no_deskew = false;
   bool dds = false;
   int domain = -1;
@@ -140,6 +141,8 @@ int run_process(const ProcessOptions& o) {
     auto ds = load_dds_settings(config);
     if (!ds) return fail(ds.error().message);
     if (o.domain >= 0) ds->domain_id = static_cast<std::uint32_t>(o.domain);
+    if (!o.dds_config.empty())
+      ds->config_uri = "file://" + std::filesystem::absolute(o.dds_config).string();
     if (o.point_cloud_stride >= 0)
       ds->point_cloud_stride = static_cast<std::uint32_t>(o.point_cloud_stride);
     dds_settings = std::move(*ds);
@@ -353,6 +356,10 @@ void add_process_command(CLI::App& app) {
                   "with --dds, publish point_cloud: every segment return and every Nth other one; "
                   "0: none (default: dds.point_cloud_stride)")
       ->check(CLI::Range(0, 1000));
+  cmd->add_option("--dds-config", o->dds_config,
+                  "with --dds: Cyclone DDS XML, e.g. a secure one of deploy/dds-security.sh "
+                  "(default: dds.config_file)")
+      ->check(CLI::ExistingFile);
   cmd->add_option(
          "--dds-wait", o->dds_wait_s,
          "with --dds: wait up to S seconds for a tracked_objects reader before the first scan")

@@ -3,14 +3,26 @@
 #pragma once
 
 #include <dds/dds.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
+#include <cstdio>
 #include <cstdlib>
 #include <string>
 
 #include "dds/topics.hpp"
 
 namespace stac::testing {
+
+// Reads a popen() child's output to its end and closes it; *code = its exit code (-1: killed).
+inline std::string run_to_end(FILE* p, int* code) {
+  std::string out;
+  char buf[4096];
+  while (std::size_t n = std::fread(buf, 1, sizeof(buf), p)) out.append(buf, n);
+  const int status = pclose(p);
+  *code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return out;
+}
 
 inline std::string loopback_uri() {
   static const bool tagged = [] {

@@ -18,14 +18,7 @@
 namespace stac::dds {
 namespace {
 
-std::string run_to_end(FILE* p, int* code) {
-  std::string out;
-  char buf[4096];
-  while (std::size_t n = std::fread(buf, 1, sizeof(buf), p)) out.append(buf, n);
-  const int status = pclose(p);
-  *code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return out;
-}
+using testing::run_to_end;
 
 TEST(StacEcho, ReceivesTrackedObjectsFromAnotherProcess) {
   const std::string uri = testing::loopback_uri();  // sets DDS_TEST_TAG, inherited by the child
