@@ -45,7 +45,7 @@ class Deskewer {
   struct Bucket {
     Eigen::Matrix3f rotation;
     Eigen::Vector3f translation;
-    std::uint8_t state;  // 0 not computed, 1 usable, 2 no pose
+    std::uint8_t state = 0;  // 0 not computed, 1 usable, 2 no pose
   };
   DeskewConfig config_;
   std::vector<Bucket> buckets_;

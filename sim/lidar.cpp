@@ -111,8 +111,9 @@ LidarSim::LidarSim(const velodyne::Calibration& calibration, const LidarConfig& 
   const int per_firing = config.dual_return ? 4 : 2;
   for (int b = 0; b < 12; ++b) {
     for (int j = 0; j < 32; ++j) {
+      const int firing = b / per_firing, group = j / 4;  // whole firings and laser groups
       firing_offset_s_[static_cast<std::size_t>(b)][static_cast<std::size_t>(j)] =
-          1e-6 * (m.firing_period_us * (b / per_firing) + m.laser_group_us * (j / 4) +
+          1e-6 * (m.firing_period_us * firing + m.laser_group_us * group +
                   m.laser_in_group_us[static_cast<std::size_t>(j % 4)]);
     }
   }

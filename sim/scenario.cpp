@@ -653,7 +653,8 @@ void traffic(Builder& b, double x0, double x1, double cross_x, double duration, 
     const int dir = r.chance(0.5) ? 1 : -1;
     Actor& p = b.pedestrian(0, 0);
     const int line = lines[static_cast<std::size_t>(i) % lines.size()];
-    const double x = cross_x + (line % 2 ? -1 : 1) * (g.cross_half_width + 0.5 + (line / 2));
+    const int pair = line / 2;  // lines 0 and 1 nearest the crossing, then 2 and 3, ...
+    const double x = cross_x + (line % 2 ? -1 : 1) * (g.cross_half_width + 0.5 + pair);
     b.drive(p, x, -dir * (g.road_half_width + 2), dir * std::numbers::pi / 2, r.uniform(1.0, 1.6),
             duration, r.uniform(0.5, 3), r.uniform(0, 8));
   }

@@ -224,24 +224,25 @@ Hit World::hit_ground(const Ray& r) const {
 }
 
 Hit World::hit_actor_local(const Actor& a, const Ray& r, double t, bool& translucent) const {
-  const double L = a.size.x, W = a.size.y, H = a.size.z;
+  const double len = a.size.x, wid = a.size.y, hgt = a.size.z;
   translucent = false;
   switch (a.shape) {
     case Shape::kBox:
-      return hit_box(r, {-L / 2, -W / 2, 0}, {L / 2, W / 2, H});
+      return hit_box(r, {-len / 2, -wid / 2, 0}, {len / 2, wid / 2, hgt});
     case Shape::kSedan: {
-      Hit h = hit_box(r, {-L / 2, -W / 2, 0.30}, {L / 2, W / 2, 0.62 * H});
-      h = nearer(h, hit_box(r, {-0.33 * L, -0.43 * W, 0.62 * H}, {0.17 * L, 0.43 * W, H}));
-      return nearer(h, hit_wheels(r, L, W, 0.32));
+      Hit h = hit_box(r, {-len / 2, -wid / 2, 0.30}, {len / 2, wid / 2, 0.62 * hgt});
+      h = nearer(h,
+                 hit_box(r, {-0.33 * len, -0.43 * wid, 0.62 * hgt}, {0.17 * len, 0.43 * wid, hgt}));
+      return nearer(h, hit_wheels(r, len, wid, 0.32));
     }
     case Shape::kVan: {
-      Hit h = hit_box(r, {-L / 2, -W / 2, 0.35}, {L / 2, W / 2, H});
-      return nearer(h, hit_wheels(r, L, W, 0.34));
+      Hit h = hit_box(r, {-len / 2, -wid / 2, 0.35}, {len / 2, wid / 2, hgt});
+      return nearer(h, hit_wheels(r, len, wid, 0.34));
     }
     case Shape::kTruck: {
-      Hit h = hit_box(r, {L / 2 - 2.3, -W / 2, 0.5}, {L / 2, W / 2, 3.0});        // cab
-      h = nearer(h, hit_box(r, {-L / 2, -W / 2, 1.0}, {L / 2 - 2.5, W / 2, H}));  // cargo
-      return nearer(h, hit_wheels(r, L, W, 0.5));
+      Hit h = hit_box(r, {len / 2 - 2.3, -wid / 2, 0.5}, {len / 2, wid / 2, 3.0});          // cab
+      h = nearer(h, hit_box(r, {-len / 2, -wid / 2, 1.0}, {len / 2 - 2.5, wid / 2, hgt}));  // cargo
+      return nearer(h, hit_wheels(r, len, wid, 0.5));
     }
     case Shape::kWalker:
     case Shape::kWalkerWithSuitcase:
@@ -252,9 +253,9 @@ Hit World::hit_actor_local(const Actor& a, const Ray& r, double t, bool& translu
       const double swing = std::min(speed / 1.4, 1.0);
       if (a.shape == Shape::kWalkerWithBike) {  // walker at y = -0.3, the bike at y = +0.35
         const Ray shifted{r.origin + V3{0, 0.3, 0}, r.direction};
-        return nearer(hit_walker(shifted, H, phase, swing), hit_bicycle(r, 0.35));
+        return nearer(hit_walker(shifted, hgt, phase, swing), hit_bicycle(r, 0.35));
       }
-      Hit h = hit_walker(r, H, phase, swing);
+      Hit h = hit_walker(r, hgt, phase, swing);
       if (a.shape == Shape::kWalkerWithSuitcase) {
         h = nearer(h, hit_box(r, {-0.45, -0.42, 0.02}, {-0.12, -0.22, 0.62}));
       }
@@ -276,27 +277,27 @@ Hit World::hit_actor_local(const Actor& a, const Ray& r, double t, bool& translu
       return h;
     }
     case Shape::kTree: {
-      Hit h = hit_cylinder(r, 0, 0, 0.18, 0, 0.45 * H);
+      Hit h = hit_cylinder(r, 0, 0, 0.18, 0, 0.45 * hgt);
       bool crown = false;
-      const Hit c = hit_ellipsoid(r, {0, 0, 0.68 * H}, {L / 2, W / 2, 0.32 * H});
+      const Hit c = hit_ellipsoid(r, {0, 0, 0.68 * hgt}, {len / 2, wid / 2, 0.32 * hgt});
       if (c.t < h.t) h = c, crown = true;
       translucent = crown;
       return h;
     }
     case Shape::kBush:
       translucent = true;
-      return hit_ellipsoid(r, {0, 0, H / 2}, {L / 2, W / 2, H / 2});
+      return hit_ellipsoid(r, {0, 0, hgt / 2}, {len / 2, wid / 2, hgt / 2});
     case Shape::kPole:
-      return hit_cylinder(r, 0, 0, std::max(0.05, L / 2), 0, H);
+      return hit_cylinder(r, 0, 0, std::max(0.05, len / 2), 0, hgt);
     case Shape::kSign: {
-      Hit h = hit_cylinder(r, 0, 0, 0.04, 0, H);
-      return nearer(h, hit_box(r, {-0.03, -W / 2, H - 0.75}, {0.03, W / 2, H}));
+      Hit h = hit_cylinder(r, 0, 0, 0.04, 0, hgt);
+      return nearer(h, hit_box(r, {-0.03, -wid / 2, hgt - 0.75}, {0.03, wid / 2, hgt}));
     }
     case Shape::kFence: {
-      Hit h = hit_box(r, {-L / 2, -0.03, H - 0.08}, {L / 2, 0.03, H});
-      h = nearer(h, hit_box(r, {-L / 2, -0.03, 0.25}, {L / 2, 0.03, 0.33}));
-      for (double x = -L / 2; x <= L / 2 + 1e-9; x += 2.5) {
-        h = nearer(h, hit_cylinder(r, x, 0, 0.05, 0, H));
+      Hit h = hit_box(r, {-len / 2, -0.03, hgt - 0.08}, {len / 2, 0.03, hgt});
+      h = nearer(h, hit_box(r, {-len / 2, -0.03, 0.25}, {len / 2, 0.03, 0.33}));
+      for (double x = -len / 2; x <= len / 2 + 1e-9; x += 2.5) {
+        h = nearer(h, hit_cylinder(r, x, 0, 0.05, 0, hgt));
       }
       return h;
     }

@@ -137,7 +137,7 @@ int SocketCanReader::read(std::span<Frame> out, int timeout_ms) noexcept {
       ++counters_.bad_size;
       continue;
     }
-    can_frame cf;
+    can_frame cf{};
     std::memcpy(&cf, record, sizeof(cf));
     Frame& f = out[static_cast<std::size_t>(count)];
     f = Frame{};
@@ -148,7 +148,7 @@ int SocketCanReader::read(std::span<Frame> out, int timeout_ms) noexcept {
     for (cmsghdr* c = CMSG_FIRSTHDR(&msg); c != nullptr; c = CMSG_NXTHDR(&msg, c)) {
       if (c->cmsg_level != SOL_SOCKET) continue;
       if (c->cmsg_type == SO_TIMESTAMPNS) {
-        timespec ts;
+        timespec ts{};
         std::memcpy(&ts, CMSG_DATA(c), sizeof(ts));
         f.stamp_ns = ts.tv_sec * 1'000'000'000LL + ts.tv_nsec;
         stamped = true;

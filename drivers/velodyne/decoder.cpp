@@ -79,8 +79,8 @@ PacketDecoder::PacketDecoder(const Calibration& calibration, const DecoderConfig
     const int blocks_per_firing = dual ? 4 : 2;
     for (int b = 0; b < kBlocksPerPacket; ++b) {
       for (int j = 0; j < kLasersPerBlock; ++j) {
-        const double us = traits_->firing_period_us * (b / blocks_per_firing) +
-                          traits_->laser_group_us * (j / 4) +
+        const int firing = b / blocks_per_firing, group = j / 4;  // whole firings and groups
+        const double us = traits_->firing_period_us * firing + traits_->laser_group_us * group +
                           traits_->laser_in_group_us[static_cast<std::size_t>(j % 4)];
         firing_ns_[static_cast<std::size_t>(dual)][static_cast<std::size_t>(b)]
                   [static_cast<std::size_t>(j)] =

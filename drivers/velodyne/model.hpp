@@ -30,7 +30,7 @@ struct ModelTraits {
 // the packet: time(point) = stamp + firing*firing_period + group*laser_group + in_group.
 inline constexpr ModelTraits kS2Traits{
     "S2", 48.0, 6.0, {0.0, 1.26, 2.46, 3.66}, TrailerKind::kSpinCount, false, 3472.17, 3472.17};
-inline constexpr ModelTraits kS2_1Traits{
+inline constexpr ModelTraits kS21Traits{
     "S2.1", 48.0, 6.0, {0.0, 1.26, 2.46, 3.66}, TrailerKind::kGpsStatus, false, 3472.17, 3472.17};
 inline constexpr ModelTraits kS3Traits{
     "S3", 57.6, 7.2, {0.0, 1.3, 2.5, 3.7}, TrailerKind::kGpsStatus, true, 3472.17, 5787.0};
@@ -40,7 +40,7 @@ constexpr const ModelTraits& traits(Model m) noexcept {
     case Model::kS2:
       return kS2Traits;
     case Model::kS2_1:
-      return kS2_1Traits;
+      return kS21Traits;
     case Model::kS3:
       break;
   }

@@ -21,7 +21,7 @@ class PacketBuilder {
   }
   // Raw distance in resolution units (2 mm), raw intensity.
   void set_return(int block, int j, std::uint16_t distance, std::uint8_t intensity) noexcept {
-    std::uint8_t* r = block_ptr(block) + 4 + 3 * j;
+    std::uint8_t* r = block_ptr(block) + 4 + 3 * static_cast<std::ptrdiff_t>(j);
     store_u16(r, distance);
     r[2] = intensity;
   }

@@ -12,7 +12,8 @@ constexpr double kGapFactor = 1.5;  // an azimuth step this many times the usual
 // Between two blocks of one packet the rotation advances by at most kMaxBlockStep (0.01 deg:
 // 3 deg, ten times a firing's step at 1200 rpm) and goes back by at most kMaxBlockBack (jitter).
 constexpr int kMaxBlockStep = 300, kMaxBlockBack = 5;
-constexpr std::size_t kPointsPerPacket = kBlocksPerPacket * kLasersPerBlock;
+constexpr std::size_t kPointsPerPacket =
+    static_cast<std::size_t>(kBlocksPerPacket) * static_cast<std::size_t>(kLasersPerBlock);
 
 int forward(int from, int to) noexcept {
   return (to - from + kRotationUnits) % kRotationUnits;

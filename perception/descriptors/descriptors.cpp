@@ -53,7 +53,7 @@ struct Layout {
     for (const SpinShape& s : kSpins) {
       add("spin_" + std::to_string(static_cast<int>(s.px_per_m)) + "ppm_" + std::to_string(s.rows) +
               "x" + std::to_string(s.cols),
-          static_cast<std::size_t>(s.rows * s.cols));
+          static_cast<std::size_t>(s.rows) * static_cast<std::size_t>(s.cols));
     }
     for (int v = 0; v < kViews; ++v) {
       for (const HogShape& h : kHogShapes[v]) {

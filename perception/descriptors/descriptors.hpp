@@ -59,8 +59,8 @@ const char* validate(const DescriptorConfig& config) noexcept;
 // One named descriptor space: values [offset, offset + size) of Descriptors::values.
 struct Space {
   std::string_view name;
-  std::size_t offset;
-  std::size_t size;
+  std::size_t offset = 0;
+  std::size_t size = 0;
 };
 
 inline constexpr std::size_t kSpaceCount = 29;

@@ -23,8 +23,8 @@ inline float floor_exact(float v) noexcept {
 // for NaN, INT_MIN; above, 2147483520 (so that a range check rejects them all as std::floor's
 // value would be rejected).
 inline int floor_index(float v) noexcept {
-  constexpr float lo = -2147483648.0f, hi = 2147483520.0f;  // representable ints
-  const float c = !(v >= lo) ? lo : (v > hi ? hi : v);
+  constexpr float kLo = -2147483648.0f, kHi = 2147483520.0f;  // representable ints
+  const float c = !(v >= kLo) ? kLo : (v > kHi ? kHi : v);
   const int t = static_cast<int>(c);  // toward zero
   return t - (static_cast<float>(t) > c ? 1 : 0);
 }

@@ -96,7 +96,7 @@ HogWindow::HogWindow(const HogShape& shape) : shape_(shape) {
   const int cells_x = shape.width / shape.cell, cells_y = shape.height / shape.cell;
   const float sigma = static_cast<float>(shape.width + shape.height) / 8.0f;
   const float scale = 1.0f / (2.0f * sigma * sigma);
-  shares_.resize(static_cast<std::size_t>(shape.width * shape.height));
+  shares_.resize(static_cast<std::size_t>(shape.width) * static_cast<std::size_t>(shape.height));
   for (int y = 0; y < shape.height; ++y) {
     for (int x = 0; x < shape.width; ++x) {
       const float dy = static_cast<float>(y) - static_cast<float>(shape.height) * 0.5f;
@@ -107,7 +107,8 @@ HogWindow::HogWindow(const HogShape& shape) : shape_(shape) {
       const float cy = (static_cast<float>(y) + 0.5f) / static_cast<float>(shape.cell) - 0.5f;
       const int x0 = static_cast<int>(floor_exact(cx)), y0 = static_cast<int>(floor_exact(cy));
       const float fx = cx - static_cast<float>(x0), fy = cy - static_cast<float>(y0);
-      Share& s = shares_[static_cast<std::size_t>(y * shape.width + x)];
+      Share& s = shares_[static_cast<std::size_t>(y) * static_cast<std::size_t>(shape.width) +
+                         static_cast<std::size_t>(x)];
       int n = 0;
       for (int k = 0; k < 4; ++k) {
         const int ix = x0 + (k & 1), iy = y0 + (k >> 1);

@@ -19,7 +19,8 @@ struct HogShape {
   int bins = 6;                 // unsigned orientation bins over [0, pi)
   float l2hys_clip = 0.2f;
   [[nodiscard]] std::size_t size() const noexcept {
-    return static_cast<std::size_t>((width / cell) * (height / cell) * bins);
+    return static_cast<std::size_t>(width / cell) * static_cast<std::size_t>(height / cell) *
+           static_cast<std::size_t>(bins);
   }
 };
 

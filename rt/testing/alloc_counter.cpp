@@ -28,7 +28,9 @@ inline void count(std::size_t n) noexcept {
 }  // namespace
 
 #ifndef STAC_ALLOC_COUNTER_NEW_ONLY
-// glibc's own entry points: the interposed functions forward to them.
+// glibc's own entry points: the interposed functions forward to them (their reserved names
+// are glibc's).
+// NOLINTBEGIN(bugprone-reserved-identifier,readability-identifier-naming)
 extern "C" {
 void* __libc_malloc(std::size_t);
 void* __libc_calloc(std::size_t, std::size_t);
@@ -67,6 +69,7 @@ int posix_memalign(void** out, std::size_t alignment, std::size_t n) {
   return 0;
 }
 }
+// NOLINTEND(bugprone-reserved-identifier,readability-identifier-naming)
 #else
 // Under a sanitizer: count operator new, allocate through malloc (which the sanitizer owns).
 void* operator new(std::size_t n) {
