@@ -63,8 +63,12 @@ rt::Result<bool> ScanPublishing::publish(const pipeline::ScanResult& r, std::uin
       // Background's log odds: minus the largest foreground one, so it is positive exactly
       // when every foreground class is negative (the thesis's prediction rule).
       const classification::LogOdds& l = r.classes[i].log_odds;
+      const std::size_t classes = classes_.size();
       o.classified = true;
-      o.class_log_odds = {l[0], l[1], l[2], -std::max({l[0], l[1], l[2]})};
+      o.class_names = classes_;
+      o.class_log_odds = {};
+      std::copy_n(l.begin(), classes, o.class_log_odds.begin());
+      o.class_log_odds[classes] = -*std::max_element(l.begin(), l.begin() + classes);
       o.class_age = r.classes[i].age;
     }
   }

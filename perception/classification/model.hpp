@@ -47,6 +47,7 @@ struct ExpectedLayouts {
 };
 ExpectedLayouts build_layouts();  // this build's segment_layout() and holistic_layout()
 
+// `model.classes.size()` must be both classifiers' classes() (else deserialize refuses the bytes).
 std::vector<std::uint8_t> serialize(const TrackClassifierModel& model);
 rt::Result<TrackClassifierModel> deserialize(std::span<const std::uint8_t> bytes,
                                              const ExpectedLayouts& expected);

@@ -44,7 +44,9 @@ TEST(StacEcho, ReceivesTrackedObjectsFromAnotherProcess) {
   o.object_id = 77;
   o.position = {12.5, -4.0, 0.5};
   o.classified = true;
-  o.class_log_odds = {3, -3, -3, -3};
+  const std::vector<std::string> names = {"car", "pedestrian", "bicyclist", "pole"};
+  o.class_names = names;  // a user-taught 4th class, most probable: shown by its name
+  o.class_log_odds = {-3, -3, -3, 3, -3};
   std::vector<TrackedObjectIn> objects{o};
   for (std::uint64_t scan = 0; scan < 5; ++scan) {
     ASSERT_TRUE((*pub)->publish_tracked_objects(
@@ -58,7 +60,7 @@ TEST(StacEcho, ReceivesTrackedObjectsFromAnotherProcess) {
   EXPECT_EQ(code, 0) << out;
   EXPECT_NE(out.find("tracked_objects scan 0 "), std::string::npos) << out;
   EXPECT_NE(out.find("tracked_objects scan 4 "), std::string::npos) << out;
-  EXPECT_NE(out.find("#77 car x=12.50 y=-4.00"), std::string::npos) << out;
+  EXPECT_NE(out.find("#77 pole x=12.50 y=-4.00"), std::string::npos) << out;
   EXPECT_NE(out.find("5 samples on stac/tracked_objects"), std::string::npos) << out;
 }
 
@@ -115,7 +117,7 @@ TEST(StacEcho, RealTimeLoopbackConfigReceivesOnASchedFifoReceiveThread) {
 }
 
 // examples/c_subscriber, built from idl/stac.idl alone, reads what the publisher writes.
-TEST(CSubscriberExample, PrintsIdsAndPositionsFromAnotherProcess) {
+TEST(CSubscriberExample, PrintsIdsPositionsAndClassNamesFromAnotherProcess) {
   const std::string uri = testing::loopback_uri();
   const std::string cmd = "CYCLONEDDS_URI=" + uri + " " + STAC_C_SUBSCRIBER + " 3 123 2>&1";
   FILE* child = popen(cmd.c_str(), "r");
@@ -129,6 +131,10 @@ TEST(CSubscriberExample, PrintsIdsAndPositionsFromAnotherProcess) {
   TrackedObjectIn a, b;
   a.object_id = 5;
   a.position = {1.25, 2.5, 0};
+  const std::vector<std::string> names = {"car", "pedestrian", "bicyclist"};
+  a.classified = true;
+  a.class_names = names;
+  a.class_log_odds = {-2, 1.5, -2, -1.5};
   b.object_id = 6;
   b.position = {-30, 40.75, 0};
   std::vector<TrackedObjectIn> objects{a, b};
@@ -139,7 +145,8 @@ TEST(CSubscriberExample, PrintsIdsAndPositionsFromAnotherProcess) {
   int code = -1;
   const std::string out = run_to_end(child, &code);
   EXPECT_EQ(code, 0) << out;
-  EXPECT_NE(out.find("scan 2: 2 objects\n  id 5 at x=1.25 y=2.50\n  id 6 at x=-30.00 y=40.75"),
+  EXPECT_NE(out.find("scan 2: 2 objects\n  id 5 at x=1.25 y=2.50 class pedestrian\n  id 6 at "
+                     "x=-30.00 y=40.75 class unknown"),
             std::string::npos)
       << out;
 }
