@@ -5,6 +5,8 @@
 #include <pthread.h>
 #include <sched.h>
 
+#include <atomic>
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -162,6 +164,40 @@ TEST(StacEcho, TimesOutWithAClearMessageWithoutAPublisher) {
   EXPECT_EQ(code, 1) << out;
   EXPECT_NE(out.find("timed out after 0.5 s with 0 of 3 samples on stac/health"), std::string::npos)
       << out;
+}
+
+// The cloud carries labels, not names: echo counts the points of every label up to the largest
+// (a 5-class model's background is 6, unclassified 7).
+TEST(StacEcho, PointCloudCountsThePointsOfEveryLabel) {
+  const std::string uri = testing::loopback_uri();
+  FILE* child =
+      popen((std::string(STAC_CLI) + " echo point_cloud --count 1 --timeout 20 --domain 124 2>&1")
+                .c_str(),
+            "r");
+  ASSERT_NE(child, nullptr);
+  PublisherConfig c;
+  c.domain_id = 124;
+  c.config_uri = uri;
+  auto pub = Publisher::create(c);
+  ASSERT_TRUE(pub) << pub.error().message;
+  ASSERT_TRUE(testing::TestReader::wait_matched((*pub)->writer(Topic::kPointCloud)));
+  const std::vector<LabeledPointIn> points = {
+      {0, 0, 0, 1, 0}, {1, 0, 0, 1, 5}, {2, 0, 0, 1, 5}, {3, 0, 0, 1, 7}, {4, 0, 0, 1, 1}};
+  // Best effort: published until the child has taken one.
+  std::atomic<bool> done{false};
+  std::thread publisher([&] {
+    for (int i = 0; i < 1000 && !done; ++i) {
+      (void)(*pub)->publish_point_cloud({{0, static_cast<std::uint64_t>(i)}, {}, 0.01f, points});
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+  });
+  int code = -1;
+  const std::string out = run_to_end(child, &code);
+  done = true;
+  publisher.join();
+  EXPECT_EQ(code, 0) << out;
+  EXPECT_NE(out.find("points=5 "), std::string::npos) << out;
+  EXPECT_NE(out.find(" none=1 labels=[1,0,0,0,2,0,1]"), std::string::npos) << out;
 }
 
 TEST(StacEcho, UnknownTopicListsTheTopics) {
