@@ -1,5 +1,6 @@
 // stac train: a track classifier (segment and holistic boosting, ADBF weights) from `stac dataset`
 // folders, written as a model file (docs/classification.md).
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <memory>

@@ -234,10 +234,8 @@ rt::Result<TrackClassifierModel> deserialize(std::span<const std::uint8_t> bytes
   if (!holistic) return rt::make_error(holistic.error().message);
   model.segment = std::move(segment).value();
   model.holistic = std::move(holistic).value();
-  for (LogOdds* v : {&model.adbf.alpha, &model.adbf.beta, &model.adbf.gamma}) {
-    v->fill(1.0f);
-    for (std::size_t k = 0; k < classes; ++k) (*v)[k] = r.f32();
-  }
+  for (LogOdds* v : {&model.adbf.alpha, &model.adbf.beta, &model.adbf.gamma})
+    for (std::size_t k = 0; k < classes; ++k) (*v)[k] = r.f32();  // past K: AdbfParams' 1
   if (!r.ok()) return rt::make_error("model ends early in its filter parameters (corrupt model)");
   if (r.left() != 0)
     return rt::make_error("model has " + std::to_string(r.left()) +
