@@ -177,6 +177,56 @@ TEST(DatasetFile, RoundTripsAppendsAndRefusesMissingTruncatedAndCorrupt) {
   }
 }
 
+// Version 3 stores the class names, so a dataset can hold a class beyond the default three;
+// a version 2 file (no class list: the default three, label 3 background) still reads.
+TEST(DatasetFile, ClassNamesRoundTripAndVersion2StillReads) {
+  const auto dir = fresh_dir("stac_dataset_classes");
+  Dataset d = synthetic_dataset(8);
+  d.classes = {"car", "pedestrian", "bicyclist", "pole"};
+  d.tracks[5].label = 3;  // a pole
+  ASSERT_TRUE(write_dataset(dir / "four", d));
+  auto four = read_dataset(dir / "four");
+  ASSERT_TRUE(four) << four.error().message;
+  EXPECT_EQ(four->classes, d.classes);
+  EXPECT_EQ(four->tracks[5].label, 3);
+  EXPECT_EQ(four->tracks[3].label, classification::kBackground);
+  Dataset three = synthetic_dataset(2);
+  auto mixed = append_dataset(three, std::move(*four), "four");
+  ASSERT_FALSE(mixed);
+  EXPECT_NE(mixed.error().message.find("four: its classes (car, pedestrian, bicyclist, pole)"),
+            std::string::npos)
+      << mixed.error().message;
+  EXPECT_EQ(three.tracks.size(), 2u);  // nothing appended
+
+  // Version 2 of the same tracks: no class list after the header, background labelled 3.
+  Dataset v3 = synthetic_dataset(8);
+  ASSERT_TRUE(write_dataset(dir / "v3", v3));
+  std::vector<std::uint8_t> b = read_bytes(dir / "v3" / "tracks.bin");
+  constexpr std::size_t kHeader = 8 + 4 * 4 + 8 * 3;
+  constexpr std::size_t kClassList =
+      4 + (4 + 3) + (4 + 10) + (4 + 9);  // car, pedestrian, bicyclist
+  b.erase(b.begin() + kHeader, b.begin() + kHeader + kClassList);
+  b[8] = 2;                                                        // version
+  std::size_t at = kHeader + 4 + std::string("synthetic").size();  // the source
+  for (const DatasetTrack& t : v3.tracks) {
+    if (t.label == classification::kBackground) b[at + 12] = 3;  // after u64 id, u32 source
+    at += 8 + 4 * 4 + 4 * (t.segment_rows.size() + t.holistic_rows.size());
+  }
+  b.resize(b.size() - 8);
+  const std::uint64_t h = classification::fnv1a64(b);
+  for (int i = 0; i < 8; ++i) b.push_back(static_cast<std::uint8_t>(h >> (8 * i)));
+  std::filesystem::create_directories(dir / "v2");
+  write_bytes(dir / "v2" / "tracks.bin", b);
+  auto v2 = read_dataset(dir / "v2");
+  ASSERT_TRUE(v2) << v2.error().message;
+  EXPECT_EQ(v2->classes, classification::default_class_names());
+  ASSERT_EQ(v2->tracks.size(), v3.tracks.size());
+  for (std::size_t i = 0; i < v3.tracks.size(); ++i) {
+    EXPECT_EQ(v2->tracks[i].label, v3.tracks[i].label) << i;
+    EXPECT_EQ(v2->tracks[i].holistic_rows, v3.tracks[i].holistic_rows) << i;
+  }
+}
+
 TEST(DatasetConsistency, OffLabelSegmentsFollowTheThesisRule) {
   using S = SegmentTruth;
   const S car5{5, classification::kCar}, car6{6, classification::kCar}, none{};
