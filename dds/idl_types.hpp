@@ -10,7 +10,8 @@ namespace stac::dds {
 
 // Bounds of idl/stac.idl (a static_assert in publisher.cpp checks them against the C types).
 inline constexpr unsigned kMaxObjects = 512;
-inline constexpr unsigned kMaxClassifications = 5;
+inline constexpr unsigned kMaxClassifications = 9;  // up to 8 model classes and background
+inline constexpr unsigned kMaxClassNameLength = 31;
 inline constexpr unsigned kMaxFootprint = 8;
 inline constexpr unsigned kMaxSegments = 2048;
 inline constexpr unsigned kMaxStages = 12;

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstring>
+#include <string_view>
 #include <vector>
 
 #include "dds/idl_types.hpp"
@@ -19,7 +20,9 @@ static_assert(sizeof(stac_msgs_msg_TrackedObjects::frame_id) == 32);
 static_assert(sizeof(stac_msgs_msg_StageLatency::stage) == 24);
 static_assert(sizeof(stac_msgs_msg_DropCount::cause) == 32);
 static_assert(sizeof(stac_msgs_msg_SensorStatus::name) == 16);
-static_assert(sizeof(stac_msgs_msg_TrackedObject::class_log_odds) == 4 * sizeof(float));
+static_assert(sizeof(stac_msgs_msg_TrackedObject::class_log_odds) ==
+              sizeof(TrackedObjectIn::class_log_odds));
+static_assert(sizeof(stac_msgs_msg_ObjectClassification::name) == kMaxClassNameLength + 1);
 static_assert(sizeof(stac_msgs_msg_TrackedObjects) == sizeof(stac_msgs_msg_dds__TrackedObjects_));
 static_assert(sizeof(stac_msgs_msg_Health) == sizeof(stac_msgs_msg_dds__Health_));
 // A point cloud is copied as it is: the input's layout is the IDL's.
@@ -72,6 +75,15 @@ Status to_time(std::int64_t stamp_ns, Time& t) {
   t.sec = static_cast<std::int32_t>(sec);
   t.nanosec = static_cast<std::uint32_t>(ns);
   return true;
+}
+
+// Copies a name into a bounded IDL string, cut at its bound (class names are checked to fit when
+// a model loads).
+template <std::size_t N>
+void copy_name(char (&dst)[N], std::string_view name) noexcept {
+  const std::size_t len = std::min(name.size(), N - 1);
+  std::memcpy(dst, name.data(), len);
+  dst[len] = '\0';
 }
 
 template <class V>
@@ -231,23 +243,28 @@ class TypedPublisher final : public Publisher {
     d.existence_probability = o.existence_probability;
     std::copy(o.class_log_odds.begin(), o.class_log_odds.end(), d.class_log_odds);
     d.class_age = o.class_age;
-    // classification[]: every class with its probability (logistic of its log odds), most probable
-    // first; labels 1 car, 2 pedestrian, 3 bicyclist, 4 background. Unclassified: one entry,
-    // label 0 (unknown), probability 1.
+    // classification[]: every class of the model and background with its probability (logistic
+    // of its log odds), most probable first; labels 1..K the model's classes, K + 1 background
+    // (default model: 1 car, 2 pedestrian, 3 bicyclist, 4 background), each with its name.
+    // Unclassified: one entry, label 0 (unknown), probability 1.
     auto* c = d.classification._buffer;
+    const std::size_t classes =
+        std::min<std::size_t>(o.class_names.size(), kMaxClassifications - 1);
     if (o.classified) {
-      for (std::uint32_t k = 0; k < 4; ++k) {
+      for (std::size_t k = 0; k <= classes; ++k) {
         c[k].label = static_cast<std::uint8_t>(k + 1);
         c[k].probability = 1.0f / (1.0f + std::exp(-o.class_log_odds[k]));
+        copy_name(c[k].name, k < classes ? std::string_view(o.class_names[k]) : "background");
       }
-      for (int k = 1; k < 4; ++k) {  // insertion sort: stable, and never allocates
-        for (int j = k; j > 0 && c[j].probability > c[j - 1].probability; --j)
+      for (std::size_t k = 1; k <= classes; ++k) {  // insertion sort: stable, never allocates
+        for (std::size_t j = k; j > 0 && c[j].probability > c[j - 1].probability; --j)
           std::swap(c[j], c[j - 1]);
       }
-      d.classification._length = 4;
+      d.classification._length = static_cast<std::uint32_t>(classes + 1);
     } else {
       c[0].label = 0;
       c[0].probability = 1.0f;
+      copy_name(c[0].name, "unknown");
       d.classification._length = 1;
     }
     set(d.kinematics.position, o.position);

@@ -36,9 +36,13 @@ struct ScanStamp {
 
 struct TrackedObjectIn {
   std::uint64_t object_id = 0;
-  float existence_probability = 0;             // 0..1
-  bool classified = false;                     // false: classification[] = {unknown, 1}
-  std::array<float, 4> class_log_odds{};       // car, pedestrian, bicyclist, background
+  float existence_probability = 0;  // 0..1
+  bool classified = false;          // false: classification[] = {unknown, 1}
+  // The model's K class names (K <= 8, each at most 31 characters; must outlive the publish
+  // call) and log odds: its K classes in its order, then background at [K] (default model: car,
+  // pedestrian, bicyclist, background).
+  std::span<const std::string> class_names;
+  std::array<float, 9> class_log_odds{};
   std::uint32_t class_age = 0;                 // scans since the class took a segment
   Vec3 position, velocity;                     // world (m, m/s)
   std::array<float, 9> position_covariance{};  // x,y,z row-major (m^2)

@@ -20,9 +20,10 @@
 namespace stac::tools {
 namespace {
 
+using classification::ClassIndex;
+using classification::ClassNames;
 using classification::LogOdds;
-using classification::ObjectClass;
-constexpr std::size_t kLabels = 4;  // car, pedestrian, bicyclist, background
+constexpr std::size_t kMaxLabels = classification::kMaxClasses + 1;  // the classes, background
 
 enum Filter : std::size_t {
   kAdbf,
@@ -36,11 +37,14 @@ enum Filter : std::size_t {
 constexpr std::array<const char*, kFilters> kFilterNames = {
     "adbf", "normalized_dbf", "naive_dbf", "segment_only", "holistic_only", "prior_only"};
 
+// Rows and columns 0..labels-1: the model's classes, then background (the last).
 struct Tally {
-  std::array<std::array<std::uint64_t, kLabels>, kLabels> confusion{};  // [truth][predicted]
-  void add(ObjectClass truth, ObjectClass predicted) {
-    ++confusion[static_cast<std::size_t>(truth)][static_cast<std::size_t>(predicted)];
+  std::size_t labels = 0;
+  std::array<std::array<std::uint64_t, kMaxLabels>, kMaxLabels> confusion{};  // [truth][predicted]
+  [[nodiscard]] std::size_t row(ClassIndex c) const {
+    return c == classification::kBackground ? labels - 1 : c;
   }
+  void add(ClassIndex truth, ClassIndex predicted) { ++confusion[row(truth)][row(predicted)]; }
   [[nodiscard]] std::uint64_t total() const {
     std::uint64_t n = 0;
     for (const auto& row : confusion)
@@ -49,14 +53,14 @@ struct Tally {
   }
   [[nodiscard]] double accuracy() const {
     std::uint64_t ok = 0;
-    for (std::size_t i = 0; i < kLabels; ++i) ok += confusion[i][i];
+    for (std::size_t i = 0; i < labels; ++i) ok += confusion[i][i];
     return total() == 0 ? 0.0 : static_cast<double>(ok) / static_cast<double>(total());
   }
   // 1-vs-all: the fraction where "is class c" is predicted right.
   [[nodiscard]] double one_vs_all(std::size_t c) const {
     std::uint64_t ok = 0;
-    for (std::size_t i = 0; i < kLabels; ++i)
-      for (std::size_t j = 0; j < kLabels; ++j)
+    for (std::size_t i = 0; i < labels; ++i)
+      for (std::size_t j = 0; j < labels; ++j)
         if ((i == c) == (j == c)) ok += confusion[i][j];
     return total() == 0 ? 0.0 : static_cast<double>(ok) / static_cast<double>(total());
   }
@@ -82,20 +86,25 @@ void pr_curve(std::vector<Scored> s, ChartSeries& out) {
   }
 }
 
-rt::Result<bool> save_confusion(const Tally& t, const std::string& title,
+rt::Result<bool> save_confusion(const Tally& t, const ClassNames& names, const std::string& title,
                                 const std::filesystem::path& png) {
   constexpr int kCell = 90, kLeft = 120, kTop = 70;
-  cv::Mat img(kTop + kCell * 4 + 40, kLeft + kCell * 4 + 20, CV_8UC3, cv::Scalar(255, 255, 255));
+  const int n = static_cast<int>(t.labels);
+  const auto name = [&](std::size_t i) {
+    return classification::class_name(
+        names, i + 1 == t.labels ? classification::kBackground : static_cast<ClassIndex>(i));
+  };
+  cv::Mat img(kTop + kCell * n + 40, kLeft + kCell * n + 20, CV_8UC3, cv::Scalar(255, 255, 255));
   cv::putText(img, title, {10, 25}, cv::FONT_HERSHEY_SIMPLEX, 0.6, {0, 0, 0}, 1, cv::LINE_AA);
   cv::putText(img, "rows: truth, columns: predicted", {10, 50}, cv::FONT_HERSHEY_SIMPLEX, 0.45,
               {80, 80, 80}, 1, cv::LINE_AA);
-  for (std::size_t i = 0; i < kLabels; ++i) {
+  for (std::size_t i = 0; i < t.labels; ++i) {
     std::uint64_t row = 0;
     for (std::uint64_t v : t.confusion[i]) row += v;
     const int y = kTop + static_cast<int>(i) * kCell;
-    cv::putText(img, classification::class_name(static_cast<ObjectClass>(i)), {5, y + kCell / 2},
-                cv::FONT_HERSHEY_SIMPLEX, 0.45, {0, 0, 0}, 1, cv::LINE_AA);
-    for (std::size_t j = 0; j < kLabels; ++j) {
+    cv::putText(img, name(i), {5, y + kCell / 2}, cv::FONT_HERSHEY_SIMPLEX, 0.45, {0, 0, 0}, 1,
+                cv::LINE_AA);
+    for (std::size_t j = 0; j < t.labels; ++j) {
       const int x = kLeft + static_cast<int>(j) * kCell;
       const double f =
           row == 0 ? 0.0 : static_cast<double>(t.confusion[i][j]) / static_cast<double>(row);
@@ -106,9 +115,8 @@ rt::Result<bool> save_confusion(const Tally& t, const std::string& title,
                   cv::FONT_HERSHEY_SIMPLEX, 0.6,
                   f > 0.5 ? cv::Scalar(255, 255, 255) : cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
       if (i == 0) {
-        cv::putText(img, classification::class_name(static_cast<ObjectClass>(j)),
-                    {x, kTop + kCell * 4 + 25}, cv::FONT_HERSHEY_SIMPLEX, 0.4, {0, 0, 0}, 1,
-                    cv::LINE_AA);
+        cv::putText(img, name(j), {x, kTop + kCell * n + 25}, cv::FONT_HERSHEY_SIMPLEX, 0.4,
+                    {0, 0, 0}, 1, cv::LINE_AA);
       }
     }
   }
@@ -130,22 +138,34 @@ int run_class_eval(const ClassEvalOptions& o) {
   for (const std::string& dir : o.data) {
     auto d = read_dataset(dir);
     if (!d) return fail(d.error().message);
-    append_dataset(data, std::move(*d));
+    if (auto a = append_dataset(data, std::move(*d), dir); !a) return fail(a.error().message);
   }
   if (data.tracks.empty()) return fail("the datasets hold no track: nothing to evaluate");
 
   const classification::TrackClassifierModel& m = *model;
+  const ClassNames& names = m.classes;
+  const std::size_t classes = names.size();
+  if (data.classes != names) {
+    std::string d, k;
+    for (const std::string& n : data.classes) d += (d.empty() ? "" : ", ") + n;
+    for (const std::string& n : names) k += (k.empty() ? "" : ", ") + n;
+    return fail("the datasets' classes (" + d + ") are not the model's (" + k + ", " + o.model +
+                "): evaluate on datasets made with the --class options the model was trained on");
+  }
   const LogOdds prior = m.holistic.model().prior;
+  const auto predict = [classes](const LogOdds& l) { return classification::predict(l, classes); };
   // The tables count consistent tracks (kMaxOffLabelFraction, the thesis's protocol); every
   // track, inconsistent ones too, is in all_tracks (ADBF) and in tracks.csv.
   std::array<Tally, kFilters> tracks{}, segments{};
   Tally all_tracks{};
-  std::array<std::vector<Scored>, classification::kClassCount> scores;
+  all_tracks.labels = classes + 1;
+  for (std::size_t f = 0; f < kFilters; ++f) tracks[f].labels = segments[f].labels = classes + 1;
+  std::array<std::vector<Scored>, classification::kMaxClasses> scores;
   const std::size_t sd = descriptors::kDimensions, hd = classification::kHolisticDimensions;
   // One line per track for the report (tracks.csv): where each wrong one came from.
-  std::string per_track =
-      "source,track_id,label,adbf_class,car_log_odds,pedestrian_log_odds,bicyclist_log_odds,"
-      "segments,max_speed_mps,box_length_m,box_width_m,box_height_m,consistent\n";
+  std::string per_track = "source,track_id,label,adbf_class,";
+  for (const std::string& n : names) per_track += n + "_log_odds,";
+  per_track += "segments,max_speed_mps,box_length_m,box_width_m,box_height_m,consistent\n";
   Progress progress("eval: classifying", static_cast<double>(data.tracks.size()));
   std::size_t done = 0;
   for (const DatasetTrack& t : data.tracks) {
@@ -167,28 +187,31 @@ int run_class_eval(const ClassEvalOptions& o) {
       out[kHolisticOnly] = hh;
       out[kPriorOnly] = prior;
       if (counted) {
-        for (std::size_t f = 0; f < kFilters; ++f)
-          segments[f].add(t.label, classification::predict(out[f]));
+        for (std::size_t f = 0; f < kFilters; ++f) segments[f].add(t.label, predict(out[f]));
       }
     }
-    all_tracks.add(t.label, classification::predict(out[kAdbf]));
+    all_tracks.add(t.label, predict(out[kAdbf]));
     if (counted) {
-      for (std::size_t f = 0; f < kFilters; ++f)
-        tracks[f].add(t.label, classification::predict(out[f]));
+      for (std::size_t f = 0; f < kFilters; ++f) tracks[f].add(t.label, predict(out[f]));
     }
     if (t.segments > 0) {
       const float* last = t.holistic_rows.data() + (t.segments - 1) * hd;
-      char line[512];
-      std::snprintf(line, sizeof(line), "%u,%llu,%s,%s,%.3f,%.3f,%.3f,%u,%.2f,%.2f,%.2f,%.2f,%d\n",
-                    t.source, static_cast<unsigned long long>(t.id),
-                    classification::class_name(t.label),
-                    classification::class_name(classification::predict(out[kAdbf])), out[kAdbf][0],
-                    out[kAdbf][1], out[kAdbf][2], t.segments, last[0], last[6], last[7], last[8],
-                    counted ? 1 : 0);
-      per_track += line;
+      char field[128];
+      std::snprintf(field, sizeof(field), "%u,%llu,", t.source,
+                    static_cast<unsigned long long>(t.id));
+      per_track += std::string(field) + classification::class_name(names, t.label) + "," +
+                   classification::class_name(names, predict(out[kAdbf])) + ",";
+      for (std::size_t c = 0; c < classes; ++c) {
+        std::snprintf(field, sizeof(field), "%.3f,", static_cast<double>(out[kAdbf][c]));
+        per_track += field;
+      }
+      std::snprintf(field, sizeof(field), "%u,%.2f,%.2f,%.2f,%.2f,%d\n", t.segments,
+                    static_cast<double>(last[0]), static_cast<double>(last[6]),
+                    static_cast<double>(last[7]), static_cast<double>(last[8]), counted ? 1 : 0);
+      per_track += field;
     }
-    for (std::size_t c = 0; c < classification::kClassCount && counted; ++c) {
-      scores[c].push_back({out[kAdbf][c], static_cast<std::size_t>(t.label) == c});
+    for (std::size_t c = 0; c < classes && counted; ++c) {
+      scores[c].push_back({out[kAdbf][c], t.label == c});
     }
     progress.update(static_cast<double>(++done));
   }
@@ -207,18 +230,19 @@ int run_class_eval(const ClassEvalOptions& o) {
       static_cast<unsigned long long>(tracks[kAdbf].total()),
       static_cast<unsigned long long>(segments[kAdbf].total()),
       static_cast<unsigned long long>(inconsistent), o.model.c_str());
-  std::printf("%-8s %-15s %9s %11s %10s %8s\n", "", "filter", "car", "pedestrian", "bicyclist",
-              "overall");
+  std::printf("%-8s %-15s", "", "filter");
+  for (const std::string& n : names)
+    std::printf(" %*s", std::max(9, static_cast<int>(n.size())), n.c_str());
+  std::printf(" %8s\n", "overall");
   for (int wise = 0; wise < 2; ++wise) {
     const auto& tallies = wise == 0 ? tracks : segments;
     const char* w = wise == 0 ? "track" : "segment";
     for (std::size_t f = 0; f < kFilters; ++f) {
       std::printf("%-8s %-15s", w, kFilterNames[f]);
-      for (std::size_t c = 0; c < classification::kClassCount; ++c) {
+      for (std::size_t c = 0; c < classes; ++c) {
         const double a = tallies[f].one_vs_all(c);
-        std::printf(" %9.3f", a);
-        metrics[std::string(w) + "." + kFilterNames[f] + "." +
-                classification::class_name(static_cast<ObjectClass>(c))] = a;
+        std::printf(" %*.3f", std::max(9, static_cast<int>(names[c].size())), a);
+        metrics[std::string(w) + "." + kFilterNames[f] + "." + names[c]] = a;
       }
       std::printf(" %8.3f\n", tallies[f].accuracy());
       metrics[std::string(w) + "." + kFilterNames[f] + ".overall"] = tallies[f].accuracy();
@@ -227,7 +251,11 @@ int run_class_eval(const ClassEvalOptions& o) {
   std::printf("every track, the inconsistent ones too: ADBF track-wise %.3f (%llu tracks)\n",
               all_tracks.accuracy(), static_cast<unsigned long long>(all_tracks.total()));
   nlohmann::json confusion = nlohmann::json::array();
-  for (const auto& row : tracks[kAdbf].confusion) confusion.push_back(row);
+  for (std::size_t i = 0; i < tracks[kAdbf].labels; ++i) {
+    const auto& row = tracks[kAdbf].confusion[i];
+    confusion.push_back(std::vector<std::uint64_t>(row.begin(), row.begin() + classes + 1));
+  }
+  metrics["classes"] = names;
   metrics["track_confusion_adbf"] = confusion;
 
   if (!o.report.empty()) {
@@ -243,14 +271,15 @@ int run_class_eval(const ClassEvalOptions& o) {
     csv << per_track;
     csv.close();
     if (!csv) return fail((dir / "tracks.csv").string() + ": cannot write");
-    if (auto r = save_confusion(tracks[kAdbf], "Track-wise confusion, ADBF", dir / "confusion.png");
+    if (auto r = save_confusion(tracks[kAdbf], names, "Track-wise confusion, ADBF",
+                                dir / "confusion.png");
         !r) {
       return fail(r.error().message);
     }
     Chart chart{
         "Precision-recall, ADBF track-wise (1-vs-all)", "recall", "precision", {}, 800, 420};
-    for (std::size_t c = 0; c < classification::kClassCount; ++c) {
-      ChartSeries s{classification::class_name(static_cast<ObjectClass>(c)), {}, {}};
+    for (std::size_t c = 0; c < classes; ++c) {
+      ChartSeries s{names[c], {}, {}};
       pr_curve(scores[c], s);
       if (!s.x.empty()) chart.series.push_back(std::move(s));
     }

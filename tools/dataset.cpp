@@ -15,6 +15,7 @@
 #include "drivers/io/pcap_reader.hpp"
 #include "drivers/velodyne/scan_stream.hpp"
 #include "pipeline/scan_pipeline.hpp"
+#include "sim/world.hpp"
 #include "tools/capture_poses.hpp"
 #include "tools/commands.hpp"
 #include "tools/dataset_file.hpp"
@@ -26,7 +27,8 @@
 namespace stac::tools {
 namespace {
 
-using classification::ObjectClass;
+using classification::ClassIndex;
+using classification::kBackground;
 
 // The thesis's dataset rule (REFERENCE.md §5).
 constexpr std::uint32_t kMinSegments = 10;
@@ -35,21 +37,45 @@ constexpr std::uint32_t kMinLargestSegment = 75;  // points; at least one segmen
 struct DatasetOptions {
   std::vector<std::string> in, truth;
   std::string out, config, calib;
+  std::vector<std::string> extra_classes;  // --class: simulator kinds labelled as their own class
   bool no_deskew = false;
 };
 
-ObjectClass class_of(const std::string& cls) {
-  if (cls == "car") return ObjectClass::kCar;
-  if (cls == "pedestrian") return ObjectClass::kPedestrian;
-  if (cls == "bicyclist") return ObjectClass::kBicyclist;
-  return ObjectClass::kBackground;
+// The dataset's classes: the default three, then each --class (a simulator background kind).
+rt::Result<classification::ClassNames> dataset_classes(const DatasetOptions& o) {
+  classification::ClassNames names = classification::default_class_names();
+  for (const std::string& extra : o.extra_classes) {
+    bool kind = false;
+    std::string kinds;
+    for (auto c = static_cast<int>(sim::ObjectClass::kBuilding);
+         c <= static_cast<int>(sim::ObjectClass::kClutter); ++c) {
+      const std::string_view n = sim::class_name(static_cast<sim::ObjectClass>(c));
+      kind = kind || n == extra;
+      kinds += std::string(kinds.empty() ? "" : ", ") + std::string(n);
+    }
+    if (!kind)
+      return rt::make_error("--class " + extra + ": not a simulator background kind (one of " +
+                            kinds + ")");
+    names.push_back(extra);
+  }
+  if (const std::string bad = classification::check_class_names(names); !bad.empty())
+    return rt::make_error("--class: the dataset would have " + bad);
+  return names;
+}
+
+// A truth class name's index in `names`, background when none.
+ClassIndex class_of(const classification::ClassNames& names, const std::string& cls) {
+  for (std::size_t k = 0; k < names.size(); ++k)
+    if (names[k] == cls) return static_cast<ClassIndex>(k);
+  return kBackground;
 }
 
 struct TrackBuild {
   DatasetTrack track;
   std::uint32_t largest = 0;
-  std::array<std::uint64_t, 4> class_points{};  // per ObjectClass, truth points
-  std::vector<SegmentTruth> segment_truth;      // per segment, in order (consistency rule)
+  // Truth points per class, the last entry background.
+  std::array<std::uint64_t, classification::kMaxClasses + 1> class_points{};
+  std::vector<SegmentTruth> segment_truth;  // per segment, in order (consistency rule)
 };
 
 struct RunCounts {
@@ -159,15 +185,15 @@ class Builder : public classification::TrackClassifier::Observer {
       b.largest = std::max(b.largest, result.segments.segments[si].count);
       std::uint64_t total = 0, most = 0;
       std::int64_t object = -1;
-      ObjectClass object_class = ObjectClass::kBackground;
+      ClassIndex object_class = kBackground;
       for (const auto& [truth_id, n] : records_[si].truth) {
-        ObjectClass c = ObjectClass::kBackground;
+        ClassIndex c = kBackground;
         for (const TruthObjectRecord& obj : ts->objects) {
-          if (static_cast<std::int64_t>(obj.id) == truth_id) c = class_of(obj.cls);
+          if (static_cast<std::int64_t>(obj.id) == truth_id) c = class_of(out_.classes, obj.cls);
         }
-        b.class_points[static_cast<std::size_t>(c)] += n;
+        b.class_points[c == kBackground ? out_.classes.size() : c] += n;
         total += n;
-        if (c != ObjectClass::kBackground && n > most) {
+        if (c != kBackground && n > most) {
           most = n;
           object = truth_id;
           object_class = c;
@@ -175,7 +201,7 @@ class Builder : public classification::TrackClassifier::Observer {
       }
       if (2 * most <= total) {
         object = -1;
-        object_class = ObjectClass::kBackground;
+        object_class = kBackground;
       }
       b.segment_truth.push_back({object, object_class});
     }
@@ -193,11 +219,12 @@ class Builder : public classification::TrackClassifier::Observer {
 
   void finish(TrackBuild& b) {
     if (b.track.segments < kMinSegments || b.largest <= kMinLargestSegment) return;
-    std::size_t best = static_cast<std::size_t>(ObjectClass::kBackground);
-    for (std::size_t c = 0; c < 4; ++c) {
+    const std::size_t background = out_.classes.size();
+    std::size_t best = background;
+    for (std::size_t c = 0; c <= background; ++c) {
       if (b.class_points[c] > b.class_points[best]) best = c;
     }
-    b.track.label = static_cast<ObjectClass>(best);
+    b.track.label = best == background ? kBackground : static_cast<ClassIndex>(best);
     b.track.off_label_segments = off_label_segments(b.track.label, b.segment_truth);
     b.track.source = source_;
     if (!consistent(b.track)) ++counts_.inconsistent;
@@ -221,6 +248,9 @@ int run_dataset(const DatasetOptions& o) {
                 std::to_string(o.truth.size()) + " --truth)");
   }
   Dataset data;
+  auto classes = dataset_classes(o);
+  if (!classes) return fail(classes.error().message);
+  data.classes = std::move(*classes);
   Builder builder(data);
   for (std::size_t k = 0; k < o.in.size(); ++k) {
     auto r = builder.run(o, k);
@@ -235,16 +265,18 @@ int run_dataset(const DatasetOptions& o) {
                  static_cast<unsigned long long>(r->inconsistent));
   }
   if (auto w = write_dataset(o.out, data); !w) return fail(w.error().message);
-  std::array<std::size_t, 4> per{};
+  const std::size_t classes_n = data.classes.size();
+  std::vector<std::size_t> per(classes_n + 1, 0);  // per class, then background
   std::size_t inconsistent = 0;
   for (const DatasetTrack& t : data.tracks) {
-    ++per[static_cast<std::size_t>(t.label)];
+    ++per[t.label == kBackground ? classes_n : t.label];
     inconsistent += consistent(t) ? 0 : 1;
   }
-  std::printf(
-      "%s: %zu tracks (car %zu, pedestrian %zu, bicyclist %zu, background %zu; %zu "
-      "inconsistent)\n",
-      o.out.c_str(), data.tracks.size(), per[0], per[1], per[2], per[3], inconsistent);
+  std::string listed;
+  for (std::size_t c = 0; c < classes_n; ++c)
+    listed += data.classes[c] + " " + std::to_string(per[c]) + ", ";
+  std::printf("%s: %zu tracks (%sbackground %zu; %zu inconsistent)\n", o.out.c_str(),
+              data.tracks.size(), listed.c_str(), per[classes_n], inconsistent);
   return 0;
 }
 
@@ -258,7 +290,8 @@ void add_dataset_command(CLI::App& app) {
       "Runs each capture through the per-scan pipeline (as `stac process`), describes every\n"
       "segment each track is updated with and the track's holistic descriptor after it, labels\n"
       "each track by the majority truth class of its segments' points (car, pedestrian,\n"
-      "bicyclist, else background), keeps tracks of at least 10 segments with one over 75\n"
+      "bicyclist, each --class kind, else background), keeps tracks of at least 10 segments with "
+      "one over 75\n"
       "points, counts per track the segments that are tracking or under-segmentation errors\n"
       "(over 10%: inconsistent, left out by `stac train` and `stac eval --classes`, as in the\n"
       "thesis), and writes DIR/tracks.bin and DIR/manifest.json (docs/classification.md).");
@@ -272,6 +305,9 @@ void add_dataset_command(CLI::App& app) {
   cmd->add_option("--config", o->config,
                   "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
   cmd->add_option("--calib", o->calib, "calibration file or 'stream' (default: the config's)");
+  cmd->add_option("--class", o->extra_classes,
+                  "a simulator background kind (pole, sign, bin, tree, ...) labelled as a class "
+                  "of its own after car, pedestrian, bicyclist (repeatable; up to 8 classes)");
   cmd->add_flag("--no-deskew", o->no_deskew,
                 "ignore the INS stream: no deskew, sensor frame = world");
   cmd->callback([o] {

@@ -18,7 +18,9 @@ static_assert(std::endian::native == std::endian::little, "the dataset format is
 constexpr char kMagic[8] = {'S', 'T', 'A', 'C', 'D', 'S', 'E', 'T'};
 constexpr std::size_t kHeaderBytes = 8 + 4 * 4 + 8 * 3;
 
-using classification::ObjectClass;
+using classification::ClassIndex;
+constexpr std::uint32_t kVersion2 = 2;  // the default classes, labels 0..3 (3: background)
+constexpr std::uint32_t kVersion2Background = 3;
 
 std::size_t segment_dims() {
   return descriptors::kDimensions;
@@ -76,16 +78,22 @@ rt::Result<bool> write_dataset(const std::filesystem::path& dir, const Dataset& 
   put(b, classification::layout_hash(classification::segment_layout()));
   put(b, classification::layout_hash(classification::holistic_layout()));
   put(b, static_cast<std::uint64_t>(data.tracks.size()));
-  for (const std::string& s : data.sources) {
+  const auto put_string = [&b](const std::string& s) {
     put(b, static_cast<std::uint32_t>(s.size()));
     put_bytes(b, s.data(), s.size());
-  }
+  };
+  put(b, static_cast<std::uint32_t>(data.classes.size()));
+  for (const std::string& c : data.classes) put_string(c);
+  for (const std::string& s : data.sources) put_string(s);
   nlohmann::json classes = nlohmann::json::object(), segments = nlohmann::json::object(),
                  inconsistent = nlohmann::json::object();
-  for (int c = 0; c <= 3; ++c) {
-    classes[classification::class_name(static_cast<ObjectClass>(c))] = 0;
-    segments[classification::class_name(static_cast<ObjectClass>(c))] = 0;
-    inconsistent[classification::class_name(static_cast<ObjectClass>(c))] = 0;
+  for (std::size_t c = 0; c <= data.classes.size(); ++c) {
+    const char* name = classification::class_name(data.classes, c < data.classes.size()
+                                                                    ? static_cast<ClassIndex>(c)
+                                                                    : classification::kBackground);
+    classes[name] = 0;
+    segments[name] = 0;
+    inconsistent[name] = 0;
   }
   std::uint64_t total_segments = 0;
   for (const DatasetTrack& t : data.tracks) {
@@ -96,7 +104,7 @@ rt::Result<bool> write_dataset(const std::filesystem::path& dir, const Dataset& 
     put(b, t.off_label_segments);
     put_floats(b, t.segment_rows);
     put_floats(b, t.holistic_rows);
-    const char* name = classification::class_name(t.label);
+    const char* name = classification::class_name(data.classes, t.label);
     classes[name] = classes[name].get<std::uint64_t>() + 1;
     if (!consistent(t)) inconsistent[name] = inconsistent[name].get<std::uint64_t>() + 1;
     segments[name] = segments[name].get<std::uint64_t>() + t.segments;
@@ -112,6 +120,7 @@ rt::Result<bool> write_dataset(const std::filesystem::path& dir, const Dataset& 
   }
   const nlohmann::json manifest = {{"format", "stac-dataset"},
                                    {"version", kDatasetFormatVersion},
+                                   {"classes", data.classes},
                                    {"sources", data.sources},
                                    {"tracks", data.tracks.size()},
                                    {"segments", total_segments},
@@ -152,9 +161,9 @@ rt::Result<Dataset> read_dataset(const std::filesystem::path& dir) {
   std::uint32_t version = 0, sd = 0, hd = 0, nsources = 0;
   std::uint64_t sh = 0, hh = 0, ntracks = 0;
   r.get(version);
-  if (version != kDatasetFormatVersion) {
+  if (version != kDatasetFormatVersion && version != kVersion2) {
     return bad("format version " + std::to_string(version) + ", this build reads " +
-               std::to_string(kDatasetFormatVersion));
+               std::to_string(kVersion2) + " and " + std::to_string(kDatasetFormatVersion));
   }
   if (classification::fnv1a64(r.bytes) != stored)
     return bad("checksum mismatch (truncated or corrupt)");
@@ -165,21 +174,38 @@ rt::Result<Dataset> read_dataset(const std::filesystem::path& dir) {
     return bad("descriptor layout differs from this build's");
   }
   Dataset d;
-  for (std::uint32_t i = 0; i < nsources; ++i) {
+  const auto get_string = [&r](std::string& s) {
     std::uint32_t n = 0;
-    if (!r.get(n) || r.bytes.size() - r.at < n) return bad("truncated source list");
-    d.sources.emplace_back(reinterpret_cast<const char*>(r.bytes.data() + r.at), n);
+    if (!r.get(n) || r.bytes.size() - r.at < n) return false;
+    s.assign(reinterpret_cast<const char*>(r.bytes.data() + r.at), n);
     r.at += n;
+    return true;
+  };
+  if (version != kVersion2) {
+    std::uint32_t nclasses = 0;
+    if (!r.get(nclasses) || nclasses > classification::kMaxClasses)
+      return bad("truncated class list or more than " +
+                 std::to_string(classification::kMaxClasses) + " classes");
+    d.classes.resize(nclasses);
+    for (std::string& c : d.classes)
+      if (!get_string(c)) return bad("truncated class list");
+    if (const std::string wrong = classification::check_class_names(d.classes); !wrong.empty())
+      return bad("bad classes: " + wrong);
   }
+  d.sources.resize(nsources);
+  for (std::string& s : d.sources)
+    if (!get_string(s)) return bad("truncated source list");
   for (std::uint64_t i = 0; i < ntracks; ++i) {
     DatasetTrack t;
     std::uint32_t label = 0;
     if (!r.get(t.id) || !r.get(t.source) || !r.get(label) || !r.get(t.segments) ||
         !r.get(t.off_label_segments))
       return bad("truncated track");
-    if (label > 3 || t.source >= nsources || t.segments == 0 || t.off_label_segments > t.segments)
+    if (version == kVersion2 && label == kVersion2Background) label = classification::kBackground;
+    if ((label >= d.classes.size() && label != classification::kBackground) ||
+        t.source >= nsources || t.segments == 0 || t.off_label_segments > t.segments)
       return bad("bad track record");
-    t.label = static_cast<ObjectClass>(label);
+    t.label = static_cast<ClassIndex>(label);
     if (!r.get_floats(t.segment_rows, std::size_t{t.segments} * sd) ||
         !r.get_floats(t.holistic_rows, std::size_t{t.segments} * hd)) {
       return bad("truncated track descriptors");
@@ -190,18 +216,29 @@ rt::Result<Dataset> read_dataset(const std::filesystem::path& dir) {
   return d;
 }
 
-void append_dataset(Dataset& into, Dataset&& more) {
+rt::Result<bool> append_dataset(Dataset& into, Dataset&& more, const std::string& more_name) {
+  const auto list = [](const classification::ClassNames& names) {
+    std::string s;
+    for (const std::string& n : names) s += (s.empty() ? "" : ", ") + n;
+    return s;
+  };
+  if (into.tracks.empty() && into.sources.empty()) into.classes = more.classes;
+  if (more.classes != into.classes)
+    return rt::make_error(more_name + ": its classes (" + list(more.classes) +
+                          ") differ from the other datasets' (" + list(into.classes) +
+                          "); make every dataset with the same --class options");
   const auto offset = static_cast<std::uint32_t>(into.sources.size());
   for (std::string& s : more.sources) into.sources.push_back(std::move(s));
   for (DatasetTrack& t : more.tracks) {
     t.source += offset;
     into.tracks.push_back(std::move(t));
   }
+  return true;
 }
 
-std::uint32_t off_label_segments(ObjectClass label, std::span<const SegmentTruth> segments) {
+std::uint32_t off_label_segments(ClassIndex label, std::span<const SegmentTruth> segments) {
   std::uint32_t off = 0;
-  if (label == ObjectClass::kBackground) {
+  if (label == classification::kBackground) {
     for (const SegmentTruth& s : segments) off += s.object >= 0 ? 1u : 0u;
     return off;
   }

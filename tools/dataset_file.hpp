@@ -19,7 +19,7 @@ namespace stac::tools {
 struct DatasetTrack {
   std::uint64_t id = 0;      // tracker id (unique within one source)
   std::uint32_t source = 0;  // index into Dataset::sources
-  classification::ObjectClass label = classification::ObjectClass::kBackground;
+  classification::ClassIndex label = classification::kBackground;  // into Dataset::classes
   std::uint32_t segments = 0;
   // Segments that are tracking or under-segmentation errors (off_label_segments() below: not
   // mostly the track's own object). Over-segmentation (a piece of a car) is not one.
@@ -29,11 +29,13 @@ struct DatasetTrack {
 };
 
 struct Dataset {
+  classification::ClassNames classes = classification::default_class_names();  // labels index it
   std::vector<std::string> sources;  // "capture truth" of each run
   std::vector<DatasetTrack> tracks;
 };
 
-inline constexpr std::uint32_t kDatasetFormatVersion = 2;
+// Version 3 stores the class names (version 2: the default three, background label 3; still read).
+inline constexpr std::uint32_t kDatasetFormatVersion = 3;
 
 // The thesis's rule (ch. 1, the Stanford Track Collection): a track in which more than 10% of
 // the segments are tracking or under-segmentation errors is inconsistent, and is left out of
@@ -45,12 +47,12 @@ inline constexpr double kMaxOffLabelFraction = 0.1;
 // segment's points (-1: none; background, or several objects under-segmented) and its class.
 struct SegmentTruth {
   std::int64_t object = -1;
-  classification::ObjectClass cls = classification::ObjectClass::kBackground;
+  classification::ClassIndex cls = classification::kBackground;
 };
 // DatasetTrack::off_label_segments of a track labelled `label`: for a foreground label, the
 // segments that are not mostly its own object (the one most of its segments of that class are
 // mostly of); for background, the segments that are mostly one foreground object.
-std::uint32_t off_label_segments(classification::ObjectClass label,
+std::uint32_t off_label_segments(classification::ClassIndex label,
                                  std::span<const SegmentTruth> segments);
 [[nodiscard]] inline bool consistent(const DatasetTrack& t) noexcept {
   return static_cast<double>(t.off_label_segments) <=
@@ -61,7 +63,8 @@ std::uint32_t off_label_segments(classification::ObjectClass label,
 rt::Result<bool> write_dataset(const std::filesystem::path& dir, const Dataset& data);
 // Errors name the file and what is wrong (missing, truncated, checksum, version, layout).
 rt::Result<Dataset> read_dataset(const std::filesystem::path& dir);
-// Appends `more` to `into` (sources renumbered).
-void append_dataset(Dataset& into, Dataset&& more);
+// Appends `more` to `into` (sources renumbered). Fails (nothing appended) when their classes
+// differ; `more_name` names `more` in the message.
+rt::Result<bool> append_dataset(Dataset& into, Dataset&& more, const std::string& more_name);
 
 }  // namespace stac::tools

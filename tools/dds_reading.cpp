@@ -75,9 +75,4 @@ std::string TopicReaders::topic_name(dds::Topic t) const {
   return dds::topic_name(t, config_.topic_prefix, config_.ros2_names);
 }
 
-const char* label_name(unsigned label) noexcept {
-  static const char* const names[] = {"unknown", "car", "pedestrian", "bicyclist", "background"};
-  return label < 5 ? names[label] : "?";
-}
-
 }  // namespace stac::tools

@@ -75,21 +75,19 @@ void TopicReaders::take(dds_entity_t reader, F& f) {
   }
 }
 
-// A class name: "unknown", "car", "pedestrian", "bicyclist", "background" (IDL labels 0..4).
-const char* label_name(unsigned label) noexcept;
-
-// How a tracked object's class is shown: the first (most probable) entry of its classification,
-// or "unknown" when no class is more likely than not (probability <= 0.5: log odds all <= 0, as
-// before a classifier has seen the track).
+// How a tracked object's class is shown: the name of the first (most probable) entry of its
+// classification (the publisher's model's class name, or "background"), or "unknown" when no
+// class is more likely than not (probability <= 0.5: log odds all <= 0, as before a classifier
+// has seen the track). `name` points into the sample: copy it to keep it.
 struct ShownClass {
   const char* name;
   float probability;
 };
 template <class Object>
 ShownClass shown_class(const Object& o) noexcept {
-  if (o.classification._length == 0) return {label_name(0), 0.0f};
+  if (o.classification._length == 0) return {"unknown", 0.0f};
   const auto& c = o.classification._buffer[0];
-  return {c.probability > 0.5f ? label_name(c.label) : label_name(0), c.probability};
+  return {c.probability > 0.5f ? c.name : "unknown", c.probability};
 }
 
 // A ROS time {sec, nanosec} in seconds.

@@ -96,10 +96,10 @@ rt::Result<bool> draw_drive(const DriveView& v, DrivePicture picture,
     const cv::Point2f c = shift(to(t.x, t.y));
     bev.add_box(c.x, c.y, t.length, t.width, t.yaw - to.yaw, track_colour(t.id));
     if (picture == DrivePicture::kWholeDrive && moved.count(t.id) == 0) continue;
-    const bool classified = std::string_view(t.class_name) != "unknown";
+    const bool classified = t.class_name != "unknown";
     char label[48];
     std::snprintf(label, sizeof(label), "#%llu%s%s", static_cast<unsigned long long>(t.id),
-                  classified ? " " : "", classified ? t.class_name : "");
+                  classified ? " " : "", classified ? t.class_name.c_str() : "");
     bev.add_label(c.x, c.y, label, track_colour(t.id));
   }
   const cv::Point2f ego = shift({0, 0});

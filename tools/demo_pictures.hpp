@@ -22,7 +22,7 @@ struct TrackView {
   float x = 0, y = 0, length = 0, width = 0, yaw = 0;  // world (m, rad)
   float speed_mps = 0;
   std::uint8_t state = 0;  // 0 tentative, 1 confirmed, 2 coasting
-  const char* class_name = "unknown";
+  std::string class_name = "unknown";
 };
 struct ScanView {
   std::uint64_t scan_index = 0;

@@ -67,19 +67,27 @@ void print_health(const S& s) {
   std::printf("\n");
 }
 
-// The cloud's size and its points per label (0 no object ... 5 unclassified).
+// The cloud's size and its points per label: none (0, no object), then labels 1..the largest
+// present (a model of K classes: 1..K its classes, K + 1 background, K + 2 unclassified; the
+// default model: car, pedestrian, bicyclist, background, unclassified). The cloud carries no
+// class names (tracked_objects does).
 template <class S>
 void print_cloud(const S& s) {
-  unsigned by_label[6] = {};
-  for (std::uint32_t i = 0; i < s.points._length; ++i)
-    ++by_label[std::min<unsigned>(s.points._buffer[i].label, 5)];
+  unsigned by_label[256] = {};
+  unsigned top = 0;
+  for (std::uint32_t i = 0; i < s.points._length; ++i) {
+    const unsigned label = s.points._buffer[i].label;
+    ++by_label[label];
+    top = std::max(top, label);
+  }
   std::printf(
       "point_cloud scan %llu t=%.6f points=%u origin=(%.2f,%.2f,%.2f) resolution=%.3f none=%u "
-      "car=%u "
-      "pedestrian=%u bicyclist=%u background=%u unclassified=%u\n",
+      "labels=[",
       static_cast<unsigned long long>(s.scan_index), seconds(s.stamp), s.points._length, s.origin.x,
-      s.origin.y, s.origin.z, static_cast<double>(s.resolution), by_label[0], by_label[1],
-      by_label[2], by_label[3], by_label[4], by_label[5]);
+      s.origin.y, s.origin.z, static_cast<double>(s.resolution), by_label[0]);
+  for (unsigned label = 1; label <= top; ++label)
+    std::printf("%s%u", label == 1 ? "" : ",", by_label[label]);
+  std::printf("]\n");
 }
 
 // One sample of any topic (native or ROS 2 names), told apart by its fields.

@@ -103,6 +103,7 @@ int run_kitti_objects(const KittiObjectsOptions& o) {
   cc.max_points = seg_config->max_points;
   classification::TrackClassifier stage(cc, *model);
   SegmentClass segment_class(**model);  // the segment classifier alone, on the stage's descriptors
+  const classification::ClassNames& names = (*model)->classes;
   stage.set_observer(&segment_class);
   tracking::TrackerOutput tracked(1);
   (void)tracked.tracks.resize(1);
@@ -180,9 +181,10 @@ int run_kitti_objects(const KittiObjectsOptions& o) {
         segment_class.valid = false;
         stage.classify(v.data(), 16, segments, tracked, classes);
         if (segment_class.valid && classes[0].classified) {
-          r.segment_class = classification::class_name(classification::predict(segment_class.hs));
+          r.segment_class = classification::class_name(
+              names, classification::predict(segment_class.hs, names.size()));
           r.track_log_odds = classes[0].log_odds;
-          r.track_class = classification::class_name(classes[0].label);
+          r.track_class = classification::class_name(names, classes[0].label);
         }
       }
       r.status = status_of(r);
@@ -255,16 +257,21 @@ int run_kitti_objects(const KittiObjectsOptions& o) {
   if (!o.report.empty()) {
     std::ofstream csv(report / "objects.csv");
     csv << "frame,type,expected_class,range_m,occluded,points,segment_points,best_segment_inside,"
-           "best_segment_points,status,segment_class,track_class,car_log_odds,"
-           "pedestrian_log_odds,bicyclist_log_odds\n";
+           "best_segment_points,status,segment_class,track_class";
+    for (const std::string& n : names) csv << ',' << n << "_log_odds";
+    csv << '\n';
     for (const ObjectResult& r : results) {
       char line[512];
-      std::snprintf(line, sizeof(line), "%s,%s,%s,%.2f,%d,%u,%u,%u,%u,%s,%s,%s,%.3f,%.3f,%.3f\n",
-                    r.frame.c_str(), r.type.c_str(), expected_class(r.type), r.range_m, r.occluded,
-                    r.points, r.segment_points, r.best_inside, r.best_size, r.status.c_str(),
-                    r.segment_class.c_str(), r.track_class.c_str(), r.track_log_odds[0],
-                    r.track_log_odds[1], r.track_log_odds[2]);
+      std::snprintf(line, sizeof(line), "%s,%s,%s,%.2f,%d,%u,%u,%u,%u,%s,%s,%s", r.frame.c_str(),
+                    r.type.c_str(), expected_class(r.type), r.range_m, r.occluded, r.points,
+                    r.segment_points, r.best_inside, r.best_size, r.status.c_str(),
+                    r.segment_class.c_str(), r.track_class.c_str());
       csv << line;
+      for (std::size_t k = 0; k < names.size(); ++k) {
+        std::snprintf(line, sizeof(line), ",%.3f", static_cast<double>(r.track_log_odds[k]));
+        csv << line;
+      }
+      csv << '\n';
     }
     std::ofstream js(report / "metrics.json");
     js << metrics.dump(2) << '\n';

@@ -52,7 +52,7 @@ rt::Result<ProcessDds> open_dds(const dds::PublisherConfig& settings, const Proc
   auto p = dds::Publisher::create(settings);
   if (!p) return rt::Unexpected<rt::Error>{p.error()};
   ProcessDds out{std::move(*p), std::nullopt};
-  out.scans.emplace(*out.publisher, settings.tentative_tracks);
+  out.scans.emplace(*out.publisher, settings.tentative_tracks, ScanPublishing::classes_of(pc));
   const dds_entity_t writer = out.publisher->writer(dds::Topic::kTrackedObjects);
   for (double waited = 0; waited < o.dds_wait_s; waited += 0.01) {
     dds_publication_matched_status_t m{};
@@ -127,6 +127,8 @@ int run_process(const ProcessOptions& o) {
   if (!reader) return fail(reader.error().message);
   auto model = job_model(o.model, settings->classification.model);
   if (!model) return fail(model.error().message);
+  const classification::ClassNames model_classes =
+      *model ? (*model)->classes : classification::ClassNames{};
   std::ofstream out(o.tracks);
   if (!out) return fail(o.tracks + ": cannot create the tracks file");
 
@@ -223,8 +225,9 @@ int run_process(const ProcessOptions& o) {
       if (i < result.classes.size() && result.classes[i].classified) {
         const classification::TrackClass& c = result.classes[i];
         r.classified = true;
-        r.cls = classification::class_name(c.label);
-        for (std::size_t k = 0; k < 3; ++k) r.log_odds[k] = static_cast<double>(c.log_odds[k]);
+        r.cls = classification::class_name(model_classes, c.label);
+        for (std::size_t k = 0; k < model_classes.size(); ++k)
+          r.log_odds.push_back(static_cast<double>(c.log_odds[k]));
       }
     }
     if (!truth.empty()) {

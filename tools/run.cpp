@@ -373,7 +373,8 @@ int run_live(const RunOptions& o) {
   velodyne::ScanStream stream(*calibration, vs.assembler, static_cast<std::size_t>(vs.scan_slots));
   pipeline::ScanPipeline pipeline(pc);
   rt::SlotExchange<Frame> results(rs->result_slots, [&] { return Frame{pipeline.make_result()}; });
-  ScanPublishing scan_publishing(**publisher, dds_config->tentative_tracks);
+  ScanPublishing scan_publishing(**publisher, dds_config->tentative_tracks,
+                                 ScanPublishing::classes_of(pc));
   rt::DeadlineMonitor monitor(rs->deadline, kHealthStages);
   rt::Watchdog watchdog;
   watchdog.start(

@@ -1,30 +1,38 @@
 #include "tools/scan_publishing.hpp"
 
 #include <algorithm>
+#include <utility>
 
 #include "dds/idl_types.hpp"
 
 namespace stac::tools {
 
-ScanPublishing::ScanPublishing(dds::Publisher& publisher, bool tentative_tracks)
+ScanPublishing::ScanPublishing(dds::Publisher& publisher, bool tentative_tracks,
+                               classification::ClassNames classes)
     : publisher_(publisher),
       tentative_tracks_(tentative_tracks),
+      classes_(std::move(classes)),
       objects_(dds::kMaxObjects),
       segments_(dds::kMaxSegments),
       segment_labels_(dds::kMaxSegments),
       cloud_(dds::kMaxCloudPoints) {}
 
-void ScanPublishing::segment_labels(const pipeline::ScanResult& r,
+classification::ClassNames ScanPublishing::classes_of(const pipeline::PipelineConfig& config) {
+  return config.model ? config.model->classes : classification::default_class_names();
+}
+
+void ScanPublishing::segment_labels(const pipeline::ScanResult& r, std::size_t classes,
                                     std::span<std::uint8_t> labels) noexcept {
   const std::size_t n = std::min(r.segments.segments.size(), labels.size());
-  std::fill_n(labels.begin(), n, std::uint8_t{5});
+  std::fill_n(labels.begin(), n, static_cast<std::uint8_t>(classes + 2));
   for (std::size_t i = 0; i < r.tracked.tracks.size() && i < r.classes.size(); ++i) {
     const tracking::Track& t = r.tracked.tracks[i];
     if (t.segment < 0 || static_cast<std::size_t>(t.segment) >= n || !r.classes[i].classified)
       continue;
-    // ObjectClass car 0 .. background 3 -> labels 1 .. 4 (the track's prediction).
+    // Class index k -> label k + 1, background -> K + 1 (the track's prediction).
+    const classification::ClassIndex c = r.classes[i].label;
     labels[static_cast<std::size_t>(t.segment)] =
-        static_cast<std::uint8_t>(static_cast<unsigned>(r.classes[i].label) + 1);
+        static_cast<std::uint8_t>((c == classification::kBackground ? classes : c) + 1);
   }
 }
 
@@ -55,8 +63,12 @@ rt::Result<bool> ScanPublishing::publish(const pipeline::ScanResult& r, std::uin
       // Background's log odds: minus the largest foreground one, so it is positive exactly
       // when every foreground class is negative (the thesis's prediction rule).
       const classification::LogOdds& l = r.classes[i].log_odds;
+      const std::size_t classes = classes_.size();
       o.classified = true;
-      o.class_log_odds = {l[0], l[1], l[2], -std::max({l[0], l[1], l[2]})};
+      o.class_names = classes_;
+      o.class_log_odds = {};
+      std::copy_n(l.begin(), classes, o.class_log_odds.begin());
+      o.class_log_odds[classes] = -*std::max_element(l.begin(), l.begin() + classes);
       o.class_age = r.classes[i].age;
     }
   }
@@ -113,7 +125,7 @@ rt::Result<bool> ScanPublishing::publish_cloud(const pipeline::ScanResult& r,
   const dds::ScanStamp stamp{r.stamp_ns, scan_index};
   const std::size_t n_segments =
       std::min<std::size_t>(r.segments.segments.size(), segment_labels_.size());
-  segment_labels(r, segment_labels_);
+  segment_labels(r, classes_.size(), segment_labels_);
   const std::size_t n = std::min(r.cloud.size(), cloud_.size());
   for (std::size_t i = 0; i < n; ++i) {
     const pipeline::CloudPoint& c = r.cloud[i];

@@ -16,12 +16,17 @@ namespace stac::tools {
 class ScanPublishing {
  public:
   // tentative_tracks false: tracked_objects carries confirmed and coasting tracks only.
-  ScanPublishing(dds::Publisher& publisher, bool tentative_tracks);
+  // `classes`: the model's class names (a pipeline without a model: the default ones).
+  ScanPublishing(dds::Publisher& publisher, bool tentative_tracks,
+                 classification::ClassNames classes);
+  // The class names of a pipeline's model, the default ones without a model.
+  static classification::ClassNames classes_of(const pipeline::PipelineConfig& config);
 
   // The point cloud's label of each segment of a result: the class of the track it updated
-  // (1 car .. 4 background, its TrackClass label), 5 when that track is not
-  // classified or no track took it. Fills labels[0, segments).
-  static void segment_labels(const pipeline::ScanResult& result,
+  // (1..K: the model's class index + 1, K + 1 background; with the default model 1 car ..
+  // 4 background), K + 2 when that track is not classified or no track took it. K = `classes`.
+  // Fills labels[0, segments).
+  static void segment_labels(const pipeline::ScanResult& result, std::size_t classes,
                              std::span<std::uint8_t> labels) noexcept;
 
   // Checks at start-up that the pipeline's capacities fit the IDL bounds (errors name the key).
@@ -44,6 +49,7 @@ class ScanPublishing {
  private:
   dds::Publisher& publisher_;
   bool tentative_tracks_ = false;
+  classification::ClassNames classes_;
   std::vector<dds::TrackedObjectIn> objects_;
   std::vector<dds::SegmentIn> segments_;
   std::vector<std::uint8_t> segment_labels_;

@@ -8,6 +8,8 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "perception/classification/grid_classifier.hpp"
+
 namespace stac::tools {
 namespace {
 
@@ -182,9 +184,12 @@ void append_json_line(const TracksScan& s, std::string& out) {
                   t.width, t.height, t.yaw, t.points, t.age, t.segment);
     out += buf;
     if (t.classified) {
-      std::snprintf(buf, sizeof(buf), ",\"class\":\"%s\",\"log_odds\":[%.4f,%.4f,%.4f]",
-                    t.cls.c_str(), t.log_odds[0], t.log_odds[1], t.log_odds[2]);
-      out += buf;
+      out += ",\"class\":\"" + t.cls + "\",\"log_odds\":[";
+      for (std::size_t k = 0; k < t.log_odds.size(); ++k) {
+        std::snprintf(buf, sizeof(buf), "%s%.4f", k == 0 ? "" : ",", t.log_odds[k]);
+        out += buf;
+      }
+      out += ']';
     }
     out += '}';
   }
@@ -270,18 +275,20 @@ rt::Result<TracksScan> parse_tracks_line(std::string_view line) {
       if (t.contains("class")) {
         r.classified = true;
         r.cls = text(t, "class", w);
-        if (r.cls != "car" && r.cls != "pedestrian" && r.cls != "bicyclist" &&
-            r.cls != "background") {
+        if (r.cls != "background" && !classification::check_class_names({r.cls}).empty()) {
           throw FieldError{"'tracks[].class' is '" + r.cls +
-                           "'; expected car, pedestrian, bicyclist or background"};
+                           "'; expected a model class name (e.g. car) or background"};
         }
         const auto lo = t.find("log_odds");
-        if (lo == t.end() || !lo->is_array() || lo->size() != 3) {
-          throw FieldError{"'tracks[].log_odds' must be 3 numbers when 'class' is given"};
+        if (lo == t.end() || !lo->is_array() || lo->empty() ||
+            lo->size() > classification::kMaxClasses) {
+          throw FieldError{"'tracks[].log_odds' must be 1.." +
+                           std::to_string(classification::kMaxClasses) +
+                           " numbers (one per model class) when 'class' is given"};
         }
-        for (std::size_t k = 0; k < 3; ++k) {
-          if (!(*lo)[k].is_number()) throw FieldError{"'tracks[].log_odds' must be 3 numbers"};
-          r.log_odds[k] = (*lo)[k].get<double>();
+        for (const auto& v : *lo) {
+          if (!v.is_number()) throw FieldError{"'tracks[].log_odds' must be numbers"};
+          r.log_odds.push_back(v.get<double>());
         }
       }
       s.tracks.push_back(std::move(r));

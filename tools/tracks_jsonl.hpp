@@ -42,7 +42,7 @@ struct TrackRecord {
   // `stac process --model`: the track's class (ADBF) and log odds (car, pedestrian, bicyclist).
   bool classified = false;
   std::string cls;
-  std::array<double, 3> log_odds{};
+  std::vector<double> log_odds;  // one per model class (docs/classification.md)
 };
 
 struct TracksScan {

@@ -1,5 +1,6 @@
 // stac train: a track classifier (segment and holistic boosting, ADBF weights) from `stac dataset`
 // folders, written as a model file (docs/classification.md).
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <memory>
@@ -33,14 +34,20 @@ int run_train(const TrainOptions& o) {
     for (std::size_t i = 0; i < o.data.size(); ++i) {
       auto d = read_dataset(o.data[i]);
       if (!d) return fail(d.error().message);
-      append_dataset(all, std::move(*d));
+      if (auto a = append_dataset(all, std::move(*d), o.data[i]); !a)
+        return fail(a.error().message);
       progress.update(static_cast<double>(i + 1));
     }
   }
   if (all.tracks.empty()) return fail("the datasets hold no track: nothing to train on");
   std::vector<learning::TrackExample> examples;
   examples.reserve(all.tracks.size());
-  std::array<std::size_t, 4> per{};
+  const classification::ClassNames& names = all.classes;
+  const std::size_t classes = names.size();
+  std::vector<std::size_t> per(classes + 1, 0);  // per class, then background
+  const auto name = [&names](std::size_t c) {
+    return classification::class_name(names, static_cast<classification::ClassIndex>(c));
+  };
   std::size_t inconsistent = 0;
   for (DatasetTrack& t : all.tracks) {
     if (!o.keep_inconsistent && !consistent(t)) {
@@ -54,23 +61,29 @@ int run_train(const TrainOptions& o) {
     e.holistic.assign(t.holistic_rows.end() - static_cast<std::ptrdiff_t>(hd),
                       t.holistic_rows.end());
     examples.push_back(std::move(e));
-    ++per[static_cast<std::size_t>(t.label)];
+    ++per[t.label == classification::kBackground ? classes : t.label];
   }
   if (examples.empty())
     return fail(
         "every track of the datasets is inconsistent: nothing to train on "
         "(--keep-inconsistent trains on them)");
-  // A class without tracks cannot be learned: none of the three is an error, one missing a warning.
-  if (per[0] + per[1] + per[2] == 0) {
-    return fail("the datasets hold " + std::to_string(per[3]) +
-                " background tracks and no car, pedestrian or bicyclist: nothing to tell apart "
+  // A class without tracks cannot be learned: none of them is an error, one missing a warning.
+  std::string listed, foreground;
+  for (std::size_t c = 0; c < classes; ++c) {
+    listed += std::string(name(c)) + " " + std::to_string(per[c]) + ", ";
+    foreground += std::string(c == 0 ? "" : c + 1 == classes ? " or " : ", ") + name(c);
+  }
+  if (std::count(per.begin(), per.end() - 1, std::size_t{0}) ==
+      static_cast<std::ptrdiff_t>(classes)) {
+    return fail("the datasets hold " + std::to_string(per[classes]) + " background tracks and no " +
+                foreground +
+                ": nothing to tell apart "
                 "(add drives with objects: stac sim --scenario urban, then stac dataset)");
   }
-  for (std::size_t k = 0; k < 3; ++k) {
+  for (std::size_t k = 0; k < classes; ++k) {
     if (per[k] == 0) {
       std::fprintf(stderr, "stac train: warning: no %s track: the model will never say %s\n",
-                   classification::class_name(static_cast<classification::ObjectClass>(k)),
-                   classification::class_name(static_cast<classification::ObjectClass>(k)));
+                   name(k), name(k));
     }
   }
   learning::TrackTrainingConfig config;
@@ -82,14 +95,15 @@ int run_train(const TrainOptions& o) {
   config.held_out_fraction = o.held_out;
   config.ensemble = o.ensemble;
   std::fprintf(stderr,
-               "stac train: %zu tracks (car %zu, pedestrian %zu, bicyclist %zu, background %zu; "
-               "%zu inconsistent left out), %zu rounds%s...\n",
-               examples.size(), per[0], per[1], per[2], per[3], inconsistent, o.rounds,
+               "stac train: %zu tracks (%sbackground %zu; %zu inconsistent left out), %zu "
+               "rounds%s...\n",
+               examples.size(), listed.c_str(), per[classes], inconsistent, o.rounds,
                o.ensemble > 1 ? (" x " + std::to_string(o.ensemble) + " seeds").c_str() : "");
   const auto t0 = std::chrono::steady_clock::now();
   Progress progress("train: boosting", 1.0);
   config.progress = [&progress](double f) { progress.update(f); };
-  auto model = learning::train_track_classifier(examples, classification::build_layouts(), config);
+  auto model =
+      learning::train_track_classifier(examples, names, classification::build_layouts(), config);
   progress.finish();
   if (!model) return fail("training failed: " + model.error().message);
   const double seconds =
@@ -98,11 +112,10 @@ int run_train(const TrainOptions& o) {
   std::printf("%s: trained on %zu tracks (held out %.0f%% for the ADBF weights) in %.1f s\n",
               o.out.c_str(), examples.size(), 100.0 * o.held_out, seconds);
   const classification::AdbfParams& p = model->adbf;
-  for (std::size_t c = 0; c < classification::kClassCount; ++c) {
+  for (std::size_t c = 0; c < classes; ++c) {
     std::printf(
         "  %-10s prior(seg) %+.2f  prior(hol) %+.2f  adbf alpha %+.3f beta %+.3f gamma %+.3f\n",
-        classification::class_name(static_cast<classification::ObjectClass>(c)),
-        static_cast<double>(model->segment.model().prior[c]),
+        name(c), static_cast<double>(model->segment.model().prior[c]),
         static_cast<double>(model->holistic.model().prior[c]), static_cast<double>(p.alpha[c]),
         static_cast<double>(p.beta[c]), static_cast<double>(p.gamma[c]));
   }

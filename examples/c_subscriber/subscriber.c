@@ -48,8 +48,11 @@ int main(int argc, char** argv) {
       printf("scan %llu: %u objects\n", (unsigned long long)s->scan_index, s->objects._length);
       for (uint32_t i = 0; i < s->objects._length; ++i) {
         const stac_msgs_msg_TrackedObject* o = &s->objects._buffer[i];
-        printf("  id %llu at x=%.2f y=%.2f\n", (unsigned long long)o->object_id,
-               o->kinematics.position.x, o->kinematics.position.y);
+        /* The most probable class first: its name is the publisher's model's (or "unknown"). */
+        const char* cls =
+            o->classification._length > 0 ? o->classification._buffer[0].name : "unknown";
+        printf("  id %llu at x=%.2f y=%.2f class %s\n", (unsigned long long)o->object_id,
+               o->kinematics.position.x, o->kinematics.position.y, cls);
       }
       fflush(stdout);
       ++received;

@@ -23,25 +23,40 @@ bool all_finite(std::span<const float> v) noexcept {
 
 }  // namespace
 
-const char* class_name(ObjectClass c) noexcept {
-  switch (c) {
-    case ObjectClass::kCar:
-      return "car";
-    case ObjectClass::kPedestrian:
-      return "pedestrian";
-    case ObjectClass::kBicyclist:
-      return "bicyclist";
-    case ObjectClass::kBackground:
-      return "background";
-  }
-  return "unknown";
+ClassNames default_class_names() {
+  return {"car", "pedestrian", "bicyclist"};
 }
 
-ObjectClass predict(const LogOdds& log_odds) noexcept {
+const char* class_name(const ClassNames& names, ClassIndex c) noexcept {
+  if (c == kBackground) return "background";
+  return c < names.size() ? names[c].c_str() : "unknown";
+}
+
+std::string check_class_names(const ClassNames& names) {
+  if (names.empty() || names.size() > kMaxClasses)
+    return std::to_string(names.size()) + " classes, not 1.." + std::to_string(kMaxClasses);
+  for (std::size_t k = 0; k < names.size(); ++k) {
+    const std::string& n = names[k];
+    const std::string which = "class " + std::to_string(k) + " ";
+    if (n.empty()) return which + "has an empty name";
+    if (n.size() > kMaxClassNameLength)
+      return which + "name is longer than " + std::to_string(kMaxClassNameLength) + " characters";
+    for (const char ch : n)
+      if (ch <= ' ' || ch > '~')
+        return which + "name has a character that is not printable ASCII (or is a space)";
+    if (n == "background" || n == "unknown")
+      return which + "is named '" + n + "', a name reserved for no class";
+    for (std::size_t j = 0; j < k; ++j)
+      if (names[j] == n) return which + "'" + n + "' repeats class " + std::to_string(j);
+  }
+  return {};
+}
+
+ClassIndex predict(const LogOdds& log_odds, std::size_t classes) noexcept {
   std::size_t best = 0;
-  for (std::size_t k = 1; k < kClassCount; ++k)
+  for (std::size_t k = 1; k < classes && k < kMaxClasses; ++k)
     if (log_odds[k] > log_odds[best]) best = k;
-  return log_odds[best] < 0.0f ? ObjectClass::kBackground : static_cast<ObjectClass>(best);
+  return log_odds[best] < 0.0f ? kBackground : static_cast<ClassIndex>(best);
 }
 
 std::size_t layout_dimensions(const Layout& layout) noexcept {
@@ -97,7 +112,13 @@ rt::Result<GridClassifier> GridClassifier::create(GridModel model) {
     return rt::make_error("classifier has " + std::to_string(model.lower.size()) + " lower and " +
                           std::to_string(model.scale.size()) + " scale values for " +
                           std::to_string(grids) + " grids");
-  const std::size_t table = c.dimensions_ * c.cells_per_element_ * kClassCount;
+  if (model.classes == 0 || model.classes > kMaxClasses)
+    return rt::make_error("classifier has " + std::to_string(model.classes) + " classes, not 1.." +
+                          std::to_string(kMaxClasses));
+  for (std::size_t k = model.classes; k < kMaxClasses; ++k)
+    if (model.prior[k] != 0.0f)
+      return rt::make_error("classifier prior of unused class " + std::to_string(k) + " is not 0");
+  const std::size_t table = c.dimensions_ * c.cells_per_element_ * model.classes;
   if (model.table.size() != table)
     return rt::make_error("classifier table has " + std::to_string(model.table.size()) +
                           " responses, its grids need " + std::to_string(table));
@@ -133,7 +154,7 @@ bool GridClassifier::classify(std::span<const float> x, LogOdds& out) const noex
   if (x.size() != dimensions_) return false;
   LogOdds sum{};
   (void)partial(x, 0, dimensions_, sum);
-  for (std::size_t k = 0; k < kClassCount; ++k) out[k] += sum[k];
+  for (std::size_t k = 0; k < model_.classes; ++k) out[k] += sum[k];
   return true;
 }
 
@@ -150,24 +171,23 @@ constexpr std::size_t kAhead = 8;  // partial_batch: elements prefetched ahead
 
 // Same bins as bin(), without its branches; two accumulators (even and odd elements) halve the
 // chain of dependent adds. NaN elements add nothing (then no t below is NaN: lower, scale are
-// finite, scale > 0).
-bool GridClassifier::partial_batch(std::span<const float* const> rows, std::size_t begin,
-                                   std::size_t end, std::span<LogOdds> sums) const noexcept {
-  if (begin > end || end > dimensions_ || rows.size() != sums.size()) return false;
+// finite, scale > 0). K is the model's class count, a constant here so the column add unrolls.
+template <std::size_t K>
+void GridClassifier::partial_batch_k(std::span<const float* const> rows, std::size_t begin,
+                                     std::size_t end, std::span<LogOdds> sums) const noexcept {
   const std::size_t resolutions = model_.resolutions.size();
   const float* table = model_.table.data();
   const float* lower = model_.lower.data();
   const float* scale = model_.scale.data();
   for (std::size_t first = 0; first < rows.size(); first += kBatch) {
     const std::size_t n = std::min(kBatch, rows.size() - first);
-    float acc[kBatch][2][kClassCount];
-    std::fill_n(&acc[0][0][0], n * 2 * kClassCount, 0.0f);
+    float acc[kBatch][2][K];
+    std::fill_n(&acc[0][0][0], n * 2 * K, 0.0f);
     // The responses of element e's grid r for a value v (not NaN).
     const auto cell_of = [&](std::size_t e, std::size_t r, float v) {
       const std::size_t g = e * resolutions + r;
       const float t = std::min(std::max((v - lower[g]) * scale[g], 0.0f), last_bin_[r]);
-      return table + (e * cells_per_element_ + bin_offset_[r] + static_cast<std::uint32_t>(t)) *
-                         kClassCount;
+      return table + (e * cells_per_element_ + bin_offset_[r] + static_cast<std::uint32_t>(t)) * K;
     };
     for (std::size_t e = begin; e < end; ++e) {
       // The cells kAhead elements on are fetched now: the table (MBs) is not in the nearer
@@ -185,13 +205,46 @@ bool GridClassifier::partial_batch(std::span<const float* const> rows, std::size
         float* a = acc[j][e & 1];
         for (std::size_t r = 0; r < resolutions; ++r) {
           const float* cell = cell_of(e, r, v);
-          for (std::size_t k = 0; k < kClassCount; ++k) a[k] += cell[k];
+          for (std::size_t k = 0; k < K; ++k) a[k] += cell[k];
         }
       }
     }
     for (std::size_t j = 0; j < n; ++j)
-      for (std::size_t k = 0; k < kClassCount; ++k)
-        sums[first + j][k] += acc[j][0][k] + acc[j][1][k];
+      for (std::size_t k = 0; k < K; ++k) sums[first + j][k] += acc[j][0][k] + acc[j][1][k];
+  }
+}
+
+bool GridClassifier::partial_batch(std::span<const float* const> rows, std::size_t begin,
+                                   std::size_t end, std::span<LogOdds> sums) const noexcept {
+  if (begin > end || end > dimensions_ || rows.size() != sums.size()) return false;
+  static_assert(kMaxClasses == 8, "one case per class count below");
+  switch (model_.classes) {
+    case 1:
+      partial_batch_k<1>(rows, begin, end, sums);
+      break;
+    case 2:
+      partial_batch_k<2>(rows, begin, end, sums);
+      break;
+    case 3:
+      partial_batch_k<3>(rows, begin, end, sums);
+      break;
+    case 4:
+      partial_batch_k<4>(rows, begin, end, sums);
+      break;
+    case 5:
+      partial_batch_k<5>(rows, begin, end, sums);
+      break;
+    case 6:
+      partial_batch_k<6>(rows, begin, end, sums);
+      break;
+    case 7:
+      partial_batch_k<7>(rows, begin, end, sums);
+      break;
+    case 8:
+      partial_batch_k<8>(rows, begin, end, sums);
+      break;
+    default:
+      return false;  // create() refuses other counts
   }
   return true;
 }

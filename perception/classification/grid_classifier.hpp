@@ -16,19 +16,30 @@
 
 namespace stac::classification {
 
-enum class ObjectClass : std::uint8_t {
-  kCar = 0,
-  kPedestrian = 1,
-  kBicyclist = 2,
-  kBackground = 3
-};
-inline constexpr std::size_t kClassCount = 3;    // foreground classes; background = all negative
-const char* class_name(ObjectClass c) noexcept;  // "car", "pedestrian", "bicyclist", "background"
+// A model's classes (docs/classification.md, "Classes"): up to kMaxClasses foreground classes,
+// each an index 0..K-1 into the model's class names; background is none of them (every log odds
+// negative). The default model's classes are "car", "pedestrian", "bicyclist".
+inline constexpr std::size_t kMaxClasses = 8;
+using ClassIndex = std::uint8_t;
+inline constexpr ClassIndex kBackground = 0xFF;
+inline constexpr ClassIndex kCar = 0, kPedestrian = 1, kBicyclist = 2;  // the default model's
+inline constexpr std::size_t kDefaultClassCount = 3;
+inline constexpr std::size_t kMaxClassNameLength = 31;  // the DDS class_name bound
+using ClassNames = std::vector<std::string>;            // index k: foreground class k's name
+ClassNames default_class_names();                       // {"car", "pedestrian", "bicyclist"}
+// names[c], "background" for kBackground, "unknown" for an index past the names.
+const char* class_name(const ClassNames& names, ClassIndex c) noexcept;
+// Empty when `names` can be a model's classes (1..kMaxClasses non-empty, unique names of
+// printable ASCII other than space, none "background" or "unknown"), else what is wrong.
+std::string check_class_names(const ClassNames& names);
 
-using LogOdds = std::array<float, kClassCount>;  // log P(class | x) / P(not class | x)
+// log P(class | x) / P(not class | x) per foreground class; entries from the model's class count
+// on are unused (0).
+using LogOdds = std::array<float, kMaxClasses>;
 
-// The class with the largest log odds, background when every log odds is negative (thesis ch. 1).
-ObjectClass predict(const LogOdds& log_odds) noexcept;
+// Of the first `classes` log odds, the index of the largest; kBackground when every one is
+// negative (thesis ch. 1).
+ClassIndex predict(const LogOdds& log_odds, std::size_t classes) noexcept;
 
 // A named run of descriptor elements; a model records the layout it was trained for.
 struct LayoutSpace {
@@ -51,17 +62,19 @@ inline constexpr std::array<std::uint32_t, 2> kDefaultResolutions = {10, 100};  
 // Everything a classifier is made of; create() checks it (start-up, model loading).
 struct GridModel {
   Layout layout;
-  std::vector<std::uint32_t> resolutions;  // bins of each grid of an element, e.g. {10, 100}
-  LogOdds prior{};                         // L0: log prior odds per class, the table's offset
-  std::vector<float> lower;                // per grid: value at the lower edge of bin 0
-  std::vector<float> scale;                // per grid: bins per unit of value (> 0)
-  std::vector<float> table;                // cell_count() * kClassCount responses
+  std::vector<std::uint32_t> resolutions;    // bins of each grid of an element, e.g. {10, 100}
+  std::size_t classes = kDefaultClassCount;  // K: foreground classes, 1..kMaxClasses
+  LogOdds prior{};                           // L0: log prior odds per class, the table's offset
+  std::vector<float> lower;                  // per grid: value at the lower edge of bin 0
+  std::vector<float> scale;                  // per grid: bins per unit of value (> 0)
+  std::vector<float> table;                  // cell_count() * classes responses
 };
 
 class GridClassifier {
  public:
   GridClassifier() = default;
-  // Fails (message says what) when sizes disagree, a scale is not finite and positive, a
+  // Fails (message says what) when the class count is not 1..kMaxClasses, prior entries past it
+  // are not 0, sizes disagree, a scale is not finite and positive, a
   // resolution is 0 or over 65535, there are more than 16 resolutions or 2^24 elements, or a
   // number is not finite.
   static rt::Result<GridClassifier> create(GridModel model);
@@ -85,8 +98,9 @@ class GridClassifier {
                                    std::size_t end, std::span<LogOdds> sums) const noexcept;
 
   // Grid g = element * resolutions.size() + r; its cells are [cell_offset(g), + resolutions[r]),
-  // cell c's responses are table[c * kClassCount + k].
+  // cell c's responses are table[c * classes() + k].
   [[nodiscard]] std::size_t dimensions() const noexcept { return dimensions_; }
+  [[nodiscard]] std::size_t classes() const noexcept { return model_.classes; }
   [[nodiscard]] std::size_t grid_count() const noexcept { return model_.lower.size(); }
   [[nodiscard]] std::size_t cell_count() const noexcept { return cells_per_element_ * dimensions_; }
   [[nodiscard]] std::size_t cell_offset(std::size_t grid) const noexcept;
@@ -98,6 +112,10 @@ class GridClassifier {
   void set_prior(const LogOdds& prior) noexcept { model_.prior = prior; }
 
  private:
+  template <std::size_t K>
+  void partial_batch_k(std::span<const float* const> rows, std::size_t begin, std::size_t end,
+                       std::span<LogOdds> sums) const noexcept;
+
   GridModel model_;
   std::size_t dimensions_ = 0;
   std::size_t cells_per_element_ = 0;

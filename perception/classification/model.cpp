@@ -15,6 +15,10 @@ namespace {
 constexpr std::size_t kHeaderBytes = 16;
 constexpr std::size_t kTrailerBytes = 8;
 constexpr const char* kRetrain = "; retrain the model for this build (stac train)";
+static_assert(kMaxClasses == 8, "kRemakeClasses names the maximum");
+constexpr const char* kRemakeClasses =
+    "; a model holds 1..8 classes with unique printable names: remake it with stac train from a "
+    "dataset whose classes are such (stac dataset --class NAME adds a class)";
 
 class Writer {
  public:
@@ -93,7 +97,7 @@ void write_grid(Writer& w, const GridClassifier& c) {
   w.u64(layout_hash(m.layout));
   w.u32(static_cast<std::uint32_t>(m.resolutions.size()));
   for (const auto r : m.resolutions) w.u32(r);
-  for (const float p : m.prior) w.f32(p);
+  for (std::size_t k = 0; k < m.classes; ++k) w.f32(m.prior[k]);
   w.floats(m.lower);
   w.floats(m.scale);
   w.floats(m.table);
@@ -104,9 +108,11 @@ std::string describe(const Layout& l) {
          " elements";
 }
 
-rt::Result<GridClassifier> read_grid(Reader& r, const Layout& expected, const char* which) {
+rt::Result<GridClassifier> read_grid(Reader& r, std::size_t classes, const Layout& expected,
+                                     const char* which) {
   const std::string what = std::string("model's ") + which + " classifier: ";
   GridModel m;
+  m.classes = classes;
   m.layout.resize(r.count(8));
   for (auto& s : m.layout) {
     s.name = r.str();
@@ -115,7 +121,7 @@ rt::Result<GridClassifier> read_grid(Reader& r, const Layout& expected, const ch
   const std::uint64_t hash = r.u64();
   m.resolutions.resize(r.count(4));
   for (auto& x : m.resolutions) x = r.u32();
-  for (auto& p : m.prior) p = r.f32();
+  for (std::size_t k = 0; k < classes; ++k) m.prior[k] = r.f32();
   m.lower = r.floats();
   m.scale = r.floats();
   m.table = r.floats();
@@ -165,13 +171,13 @@ ExpectedLayouts build_layouts() {
 
 std::vector<std::uint8_t> serialize(const TrackClassifierModel& model) {
   Writer payload;
-  payload.u32(kClassCount);
-  for (std::size_t k = 0; k < kClassCount; ++k)
-    payload.str(class_name(static_cast<ObjectClass>(k)));
+  const std::size_t classes = model.classes.size();
+  payload.u32(static_cast<std::uint32_t>(classes));
+  for (const std::string& name : model.classes) payload.str(name);
   write_grid(payload, model.segment);
   write_grid(payload, model.holistic);
   for (const LogOdds* v : {&model.adbf.alpha, &model.adbf.beta, &model.adbf.gamma})
-    for (const float x : *v) payload.f32(x);
+    for (std::size_t k = 0; k < classes; ++k) payload.f32((*v)[k]);
 
   Writer out;
   for (const char c : kModelMagic) out.u8(static_cast<std::uint8_t>(c));
@@ -210,26 +216,26 @@ rt::Result<TrackClassifierModel> deserialize(std::span<const std::uint8_t> bytes
     return rt::make_error("model checksum mismatch (corrupt file); copy the model again");
 
   Reader r(payload);
-  const std::uint32_t classes = r.count(4);
-  if (!r.ok() || classes != kClassCount)
-    return rt::make_error("model has " + std::to_string(classes) + " classes, this build has " +
-                          std::to_string(kClassCount) + kRetrain);
-  for (std::size_t k = 0; k < kClassCount; ++k) {
-    const std::string name = r.str();
-    const char* want = class_name(static_cast<ObjectClass>(k));
-    if (!r.ok() || name != want)
-      return rt::make_error("model class " + std::to_string(k) + " is '" + name +
-                            "', this build expects '" + want + "'" + kRetrain);
-  }
   TrackClassifierModel model;
-  auto segment = read_grid(r, expected.segment, "segment");
+  const std::uint32_t class_count = r.u32();
+  if (r.ok() && (class_count == 0 || class_count > kMaxClasses))
+    return rt::make_error("model has " + std::to_string(class_count) +
+                          " classes, this build reads 1.." + std::to_string(kMaxClasses) +
+                          kRemakeClasses);
+  model.classes.resize(class_count);
+  for (std::string& name : model.classes) name = r.str();
+  if (!r.ok()) return rt::make_error("model ends early in its class names (corrupt model)");
+  if (const std::string bad = check_class_names(model.classes); !bad.empty())
+    return rt::make_error("model has " + bad + kRemakeClasses);
+  const std::size_t classes = model.classes.size();
+  auto segment = read_grid(r, classes, expected.segment, "segment");
   if (!segment) return rt::make_error(segment.error().message);
-  auto holistic = read_grid(r, expected.holistic, "holistic");
+  auto holistic = read_grid(r, classes, expected.holistic, "holistic");
   if (!holistic) return rt::make_error(holistic.error().message);
   model.segment = std::move(segment).value();
   model.holistic = std::move(holistic).value();
   for (LogOdds* v : {&model.adbf.alpha, &model.adbf.beta, &model.adbf.gamma})
-    for (float& x : *v) x = r.f32();
+    for (std::size_t k = 0; k < classes; ++k) (*v)[k] = r.f32();  // past K: AdbfParams' 1
   if (!r.ok()) return rt::make_error("model ends early in its filter parameters (corrupt model)");
   if (r.left() != 0)
     return rt::make_error("model has " + std::to_string(r.left()) +

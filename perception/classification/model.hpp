@@ -1,8 +1,9 @@
 // A trained track classifier (segment and holistic grid classifiers, ADBF parameters) and its
 // byte format (docs/classification.md, "Model format"). Reading and writing files is the
 // caller's (tools/); this library only turns a model into bytes and back. Loading checks the
-// magic, version, size, checksum, class names and the descriptor layouts the model was trained
-// for, and fails with a message, never undefined behaviour, on any bad buffer.
+// magic, version, size, checksum, class count and names (check_class_names) and the descriptor
+// layouts the model was trained for, and fails with a message, never undefined behaviour, on
+// any bad buffer.
 #pragma once
 
 #include <cstdint>
@@ -19,6 +20,7 @@ struct TrackClassifierModel {
   GridClassifier segment;   // on descriptors::Descriptors::values (segment_layout())
   GridClassifier holistic;  // on HolisticDescriptor (holistic_layout())
   AdbfParams adbf;
+  ClassNames classes = default_class_names();  // K names; both classifiers have K classes
 };
 
 // The per-scan use of a model (noexcept, no allocation). One segment of a track: its log odds
@@ -45,6 +47,7 @@ struct ExpectedLayouts {
 };
 ExpectedLayouts build_layouts();  // this build's segment_layout() and holistic_layout()
 
+// `model.classes.size()` must be both classifiers' classes() (else deserialize refuses the bytes).
 std::vector<std::uint8_t> serialize(const TrackClassifierModel& model);
 rt::Result<TrackClassifierModel> deserialize(std::span<const std::uint8_t> bytes,
                                              const ExpectedLayouts& expected);

@@ -87,7 +87,7 @@ void TrackClassifier::classify_pending() noexcept {
   (void)segment.partial_batch({rows_.data(), n}, 0, segment.dimensions(), {sums_.data(), n});
   for (std::size_t j = 0; j < n; ++j) {
     segment_log_odds_[j] = segment.model().prior;
-    for (std::size_t k = 0; k < kClassCount; ++k) segment_log_odds_[j][k] += sums_[j][k];
+    for (std::size_t k = 0; k < segment.classes(); ++k) segment_log_odds_[j][k] += sums_[j][k];
   }
   // The tracks first seen in this scan: their segment is their accumulated description.
   for (std::size_t j = 0; j < n; ++j)
@@ -98,11 +98,11 @@ void TrackClassifier::classify_pending() noexcept {
     LogOdds hh = s.accumulated_sum;
     (void)holistic.partial(pending_[j].motion, 0, kHolisticMotionDimensions, hh);
     s.evidence.add_segment(segment_log_odds_[j], segment.model().prior);
-    for (std::size_t k = 0; k < kClassCount; ++k) hh[k] += holistic.model().prior[k];
+    for (std::size_t k = 0; k < holistic.classes(); ++k) hh[k] += holistic.model().prior[k];
     const LogOdds track = track_log_odds(*model_, s.evidence, hh);
     s.cls.classified = true;
     s.cls.log_odds = track;
-    s.cls.label = predict(track);
+    s.cls.label = predict(track, model_->classes.size());
     s.cls.segments = s.evidence.segments;
     s.class_scan = scans_;
   }

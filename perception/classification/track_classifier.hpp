@@ -50,10 +50,10 @@ const char* validate(const TrackClassifierConfig& config) noexcept;
 // A track's class after this scan (ScanResult::classes[i] is for tracked.tracks[i]).
 struct TrackClass {
   std::uint64_t id = 0;
-  bool classified = false;  // a model is loaded and the track has had a segment
-  ObjectClass label = ObjectClass::kBackground;
-  LogOdds log_odds{};          // augmented DBF, per foreground class (natural log odds)
-  std::uint32_t segments = 0;  // segments classified so far
+  bool classified = false;         // a model is loaded and the track has had a segment
+  ClassIndex label = kBackground;  // an index into the model's classes
+  LogOdds log_odds{};              // augmented DBF, per model class (natural log odds; 0 past them)
+  std::uint32_t segments = 0;      // segments classified so far
   // Scans since the class last took a segment of the track (report()): 0 when this scan's
   // segment is in it; 1 when it waits for finish() (stac run's budget, a tentative track) or the
   // track coasted one scan; n after n scans without a segment.

@@ -4,7 +4,7 @@ namespace stac::classification {
 
 void TrackEvidence::add_segment(const LogOdds& segment_log_odds,
                                 const LogOdds& segment_prior) noexcept {
-  for (std::size_t k = 0; k < kClassCount; ++k)
+  for (std::size_t k = 0; k < kMaxClasses; ++k)
     segment_sum[k] += static_cast<double>(segment_log_odds[k]) - segment_prior[k];
   ++segments;
 }
@@ -12,14 +12,14 @@ void TrackEvidence::add_segment(const LogOdds& segment_log_odds,
 LogOdds TrackEvidence::segment_mean() const noexcept {
   LogOdds mean{};
   if (segments == 0) return mean;
-  for (std::size_t k = 0; k < kClassCount; ++k)
+  for (std::size_t k = 0; k < kMaxClasses; ++k)
     mean[k] = static_cast<float>(segment_sum[k] / segments);
   return mean;
 }
 
 LogOdds naive_dbf(const TrackEvidence& evidence, const LogOdds& base) noexcept {
   LogOdds out{};
-  for (std::size_t k = 0; k < kClassCount; ++k)
+  for (std::size_t k = 0; k < kMaxClasses; ++k)
     out[k] = static_cast<float>(base[k] + evidence.segment_sum[k]);
   return out;
 }
@@ -27,7 +27,7 @@ LogOdds naive_dbf(const TrackEvidence& evidence, const LogOdds& base) noexcept {
 LogOdds normalized_dbf(const TrackEvidence& evidence, const LogOdds& base) noexcept {
   const LogOdds mean = evidence.segment_mean();
   LogOdds out{};
-  for (std::size_t k = 0; k < kClassCount; ++k) out[k] = base[k] + mean[k];
+  for (std::size_t k = 0; k < kMaxClasses; ++k) out[k] = base[k] + mean[k];
   return out;
 }
 
@@ -35,7 +35,7 @@ LogOdds augmented_dbf(const TrackEvidence& evidence, const LogOdds& holistic_pri
                       const LogOdds& holistic, const AdbfParams& params) noexcept {
   const LogOdds mean = evidence.segment_mean();
   LogOdds out{};
-  for (std::size_t k = 0; k < kClassCount; ++k)
+  for (std::size_t k = 0; k < kMaxClasses; ++k)
     out[k] = params.alpha[k] * holistic_prior[k] +
              params.beta[k] * (holistic[k] - holistic_prior[k]) + params.gamma[k] * mean[k];
   return out;

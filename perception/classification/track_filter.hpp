@@ -1,6 +1,7 @@
 // Discrete Bayes filters over a track (thesis ch. 1, eq. 1.3-1.4; docs/classification.md). A
 // track keeps a TrackEvidence: fixed memory (a running sum and a count), never a list of frames.
-// Every function is noexcept and allocation-free.
+// Every function is noexcept and allocation-free, and works on all kMaxClasses entries: the
+// entries past a model's class count stay 0 when the inputs' are 0.
 #pragma once
 
 #include <array>
@@ -12,7 +13,7 @@ namespace stac::classification {
 
 // Per-track running segment evidence: sum over segments t of (H_S(z_t) - L0_S) per class.
 struct TrackEvidence {
-  std::array<double, kClassCount> segment_sum{};  // double: no drift over long tracks
+  std::array<double, kMaxClasses> segment_sum{};  // double: no drift over long tracks
   std::uint32_t segments = 0;
 
   // One classified segment: its log odds H_S(z_t) and the segment classifier's prior L0_S.
@@ -23,11 +24,14 @@ struct TrackEvidence {
 };
 
 // Per class: H_A = alpha*L0_H + beta*(H_H(w) - L0_H) + gamma*(1/T) sum_t (H_S(z_t) - L0_S).
-// The defaults (1, 1, 1) make it the normalized filter; fit them with learning::fit_adbf.
+// The defaults (all 1) make it the normalized filter; fit them with learning::fit_adbf. Entries
+// past the model's class count are unused (a model file holds the first K).
 struct AdbfParams {
-  LogOdds alpha{1.0f, 1.0f, 1.0f};
-  LogOdds beta{1.0f, 1.0f, 1.0f};
-  LogOdds gamma{1.0f, 1.0f, 1.0f};
+  static constexpr LogOdds kOnes = {1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f};
+  static_assert(kMaxClasses == 8);
+  LogOdds alpha = kOnes;
+  LogOdds beta = kOnes;
+  LogOdds gamma = kOnes;
 };
 
 // Naive DBF: base + sum_t (H_S(z_t) - L0_S). `base` is the holistic log odds H_H(w) (eq. 1.3)

@@ -10,7 +10,7 @@ namespace {
 
 using classification::GridModel;
 
-double sign(ObjectClass label, std::size_t k) noexcept {
+double sign(ClassIndex label, std::size_t k) noexcept {
   return static_cast<std::size_t>(label) == k ? 1.0 : -1.0;
 }
 
@@ -23,7 +23,7 @@ struct Candidate {
 
 }  // namespace
 
-void TrainingSet::add(std::span<const float> x, ObjectClass label) {
+void TrainingSet::add(std::span<const float> x, ClassIndex label) {
   features.insert(features.end(), x.begin(), x.end());
   labels.push_back(label);
 }
@@ -63,7 +63,15 @@ rt::Result<GridClassifier> initial_classifier(const TrainingSet& data,
                           std::to_string(classification::layout_dimensions(layout)));
   if (const char* bad = validate(config); *bad != '\0')
     return rt::make_error(std::string("boosting configuration: ") + bad);
+  if (data.classes == 0 || data.classes > classification::kMaxClasses)
+    return rt::make_error("training set has " + std::to_string(data.classes) + " classes, not 1.." +
+                          std::to_string(classification::kMaxClasses));
+  for (const ClassIndex label : data.labels)
+    if (label != classification::kBackground && label >= data.classes)
+      return rt::make_error("training set has label " + std::to_string(label) + " of " +
+                            std::to_string(data.classes) + " classes");
   GridModel m;
+  m.classes = data.classes;
   m.layout = layout;
   m.resolutions = config.resolutions;
   std::vector<float> values;
@@ -88,14 +96,14 @@ rt::Result<GridClassifier> initial_classifier(const TrainingSet& data,
       m.scale.push_back(static_cast<float>(bins / (hi - lo)));
     }
   }
-  for (std::size_t k = 0; k < kClassCount; ++k) {
+  for (std::size_t k = 0; k < data.classes; ++k) {
     double positives = 0;
     for (const auto label : data.labels) positives += sign(label, k) > 0 ? 1 : 0;
     m.prior[k] = static_cast<float>(std::log((positives + 1.0) / (double(n) - positives + 1.0)));
   }
   std::size_t cells = 0;
   for (const auto bins : config.resolutions) cells += bins;
-  m.table.assign(cells * d * kClassCount, 0.0f);
+  m.table.assign(cells * d * data.classes, 0.0f);
   return GridClassifier::create(std::move(m));
 }
 
@@ -109,13 +117,14 @@ BoostingTrainer::BoostingTrainer(const TrainingSet& data, GridClassifier initial
     for (std::size_t i = 0; i < n; ++i)
       bins_[g * n + i] = static_cast<std::uint16_t>(
           classifier_.bin(g, data.features[i * data.dimensions + g / per_element]));
-  weights_.resize(n * kClassCount);
+  const std::size_t classes = classifier_.classes();
+  weights_.resize(n * classes);
   cumulative_.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
     LogOdds h{};
     (void)classifier_.classify(data.row(i), h);
-    for (std::size_t k = 0; k < kClassCount; ++k)
-      weights_[i * kClassCount + k] = std::exp(-0.5 * sign(data.labels[i], k) * h[k]);
+    for (std::size_t k = 0; k < classes; ++k)
+      weights_[i * classes + k] = std::exp(-0.5 * sign(data.labels[i], k) * h[k]);
   }
 }
 
@@ -131,9 +140,10 @@ void BoostingTrainer::run(std::size_t rounds) {
 
 void BoostingTrainer::round() {
   const std::size_t n = data_.size(), grids = classifier_.grid_count();
+  const std::size_t classes = classifier_.classes();
   double total = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    for (std::size_t k = 0; k < kClassCount; ++k) total += weights_[i * kClassCount + k];
+    for (std::size_t k = 0; k < classes; ++k) total += weights_[i * classes + k];
     cumulative_[i] = total;
   }
   Candidate best;
@@ -147,15 +157,15 @@ void BoostingTrainer::round() {
     c.grid = static_cast<std::size_t>(rng_.next() % grids);
     c.bin = bins_[c.grid * n + i];
     if (c.bin >= classifier_.bins(c.grid)) continue;  // NaN element: no cell
-    std::array<CellStats, kClassCount> stats{};
+    std::array<CellStats, classification::kMaxClasses> stats{};
     const std::uint16_t* column = bins_.data() + c.grid * n;
     for (std::size_t m = 0; m < n; ++m) {
       if (column[m] != c.bin) continue;
-      for (std::size_t k = 0; k < kClassCount; ++k)
+      for (std::size_t k = 0; k < classes; ++k)
         (sign(data_.labels[m], k) > 0 ? stats[k].positive : stats[k].negative) +=
-            weights_[m * kClassCount + k];
+            weights_[m * classes + k];
     }
-    for (std::size_t k = 0; k < kClassCount; ++k) {
+    for (std::size_t k = 0; k < classes; ++k) {
       c.response[k] = newton_response(stats[k], config_.max_response);
       c.gain += loss_after(stats[k], c.response[k]) - (stats[k].positive + stats[k].negative);
     }
@@ -165,12 +175,12 @@ void BoostingTrainer::round() {
   if (!have) return;
   const std::size_t cell = classifier_.cell_offset(best.grid) + best.bin;
   auto table = classifier_.table();
-  for (std::size_t k = 0; k < kClassCount; ++k) table[cell * kClassCount + k] += best.response[k];
+  for (std::size_t k = 0; k < classes; ++k) table[cell * classes + k] += best.response[k];
   const std::uint16_t* column = bins_.data() + best.grid * n;
   for (std::size_t m = 0; m < n; ++m) {
     if (column[m] != best.bin) continue;
-    for (std::size_t k = 0; k < kClassCount; ++k)
-      weights_[m * kClassCount + k] *= std::exp(-0.5 * sign(data_.labels[m], k) * best.response[k]);
+    for (std::size_t k = 0; k < classes; ++k)
+      weights_[m * classes + k] *= std::exp(-0.5 * sign(data_.labels[m], k) * best.response[k]);
   }
 }
 
@@ -196,7 +206,8 @@ rt::Result<GridClassifier> average_classifiers(std::span<const GridClassifier> m
   for (std::size_t k = 1; k < members.size(); ++k) {
     const classification::GridModel& m = members[k].model();
     if (m.layout != first.layout || m.resolutions != first.resolutions || m.lower != first.lower ||
-        m.scale != first.scale || m.prior != first.prior || m.table.size() != first.table.size())
+        m.scale != first.scale || m.classes != first.classes || m.prior != first.prior ||
+        m.table.size() != first.table.size())
       return rt::make_error("classifier " + std::to_string(k) +
                             " has other grids or priors than the first: not averageable");
   }

@@ -15,18 +15,19 @@
 
 namespace stac::learning {
 
+using classification::ClassIndex;
 using classification::GridClassifier;
-using classification::kClassCount;
 using classification::LogOdds;
-using classification::ObjectClass;
 
-// Examples as rows of `dimensions` floats; label kBackground is negative for every class.
+// Examples as rows of `dimensions` floats, each labelled with a class index 0..classes-1 or
+// classification::kBackground (negative for every class).
 struct TrainingSet {
   std::size_t dimensions = 0;
-  std::vector<float> features;  // size() * dimensions, row-major
-  std::vector<ObjectClass> labels;
+  std::size_t classes = classification::kDefaultClassCount;  // 1..kMaxClasses
+  std::vector<float> features;                               // size() * dimensions, row-major
+  std::vector<ClassIndex> labels;
 
-  void add(std::span<const float> x, ObjectClass label);  // x.size() must be dimensions
+  void add(std::span<const float> x, ClassIndex label);  // x.size() must be dimensions
   [[nodiscard]] std::size_t size() const noexcept { return labels.size(); }
   [[nodiscard]] std::span<const float> row(std::size_t i) const noexcept {
     return {features.data() + i * dimensions, dimensions};
@@ -57,8 +58,9 @@ float newton_response(const CellStats& s, float max_response) noexcept;
 double loss_after(const CellStats& s, float c) noexcept;
 
 // A classifier with data-derived grids, prior log odds L0 = log((n_pos+1)/(n_neg+1)) per class
-// and an all-zero table. Fails on an empty set, a layout whose size is not `dimensions` or a
-// configuration validate() refuses.
+// and an all-zero table, for data.classes classes. Fails on an empty set, a layout whose size is
+// not `dimensions`, a class count not 1..kMaxClasses, a label past it or a configuration
+// validate() refuses.
 rt::Result<GridClassifier> initial_classifier(const TrainingSet& data,
                                               const classification::Layout& layout,
                                               const BoostingConfig& config);

@@ -33,13 +33,15 @@ rt::Result<Eigen::VectorXd> fit_logistic(const Eigen::MatrixXd& x, std::span<con
 
 rt::Result<classification::AdbfParams> fit_adbf(std::span<const TrackSample> tracks,
                                                 const classification::LogOdds& holistic_prior,
-                                                const LogisticConfig& config) {
-  using classification::kClassCount;
+                                                std::size_t classes, const LogisticConfig& config) {
   classification::AdbfParams params;
+  if (classes == 0 || classes > classification::kMaxClasses)
+    return rt::make_error(std::to_string(classes) + " classes, not 1.." +
+                          std::to_string(classification::kMaxClasses));
   const auto n = static_cast<Eigen::Index>(tracks.size());
   Eigen::MatrixXd x(n, 3);
   std::vector<double> y(tracks.size());
-  for (std::size_t k = 0; k < kClassCount; ++k) {
+  for (std::size_t k = 0; k < classes; ++k) {
     for (Eigen::Index m = 0; m < n; ++m) {
       const TrackSample& t = tracks[static_cast<std::size_t>(m)];
       x(m, 0) = holistic_prior[k];

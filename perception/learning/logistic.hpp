@@ -27,12 +27,13 @@ rt::Result<Eigen::VectorXd> fit_logistic(const Eigen::MatrixXd& x, std::span<con
 struct TrackSample {
   classification::LogOdds holistic{};
   classification::LogOdds segment_mean{};
-  classification::ObjectClass label = classification::ObjectClass::kBackground;
+  classification::ClassIndex label = classification::kBackground;
 };
 
-// Per class, logistic regression on (L0_H, H_H - L0_H, mean) against y = +1 for that class.
+// Per class 0..classes-1, logistic regression on (L0_H, H_H - L0_H, mean) against y = +1 for
+// that class (entries past `classes` stay 1).
 rt::Result<classification::AdbfParams> fit_adbf(std::span<const TrackSample> tracks,
                                                 const classification::LogOdds& holistic_prior,
-                                                const LogisticConfig& config);
+                                                std::size_t classes, const LogisticConfig& config);
 
 }  // namespace stac::learning

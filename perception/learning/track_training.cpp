@@ -8,8 +8,10 @@
 namespace stac::learning {
 
 rt::Result<classification::TrackClassifierModel> train_track_classifier(
-    std::span<const TrackExample> tracks, const classification::ExpectedLayouts& layouts,
-    const TrackTrainingConfig& config) {
+    std::span<const TrackExample> tracks, const classification::ClassNames& classes,
+    const classification::ExpectedLayouts& layouts, const TrackTrainingConfig& config) {
+  if (const std::string bad = classification::check_class_names(classes); !bad.empty())
+    return rt::make_error("classes: " + bad);
   const std::size_t seg_dims = classification::layout_dimensions(layouts.segment);
   const std::size_t hol_dims = classification::layout_dimensions(layouts.holistic);
   if (!(config.held_out_fraction > 0.0 && config.held_out_fraction < 1.0))
@@ -18,7 +20,8 @@ rt::Result<classification::TrackClassifierModel> train_track_classifier(
   // Split by track (a track's segments are never on both sides).
   rt::SplitMix64 rng(config.split_seed);
   std::vector<const TrackExample*> held_out;
-  TrainingSet segments{seg_dims, {}, {}}, holistic{hol_dims, {}, {}};
+  TrainingSet segments{seg_dims, classes.size(), {}, {}};
+  TrainingSet holistic{hol_dims, classes.size(), {}, {}};
   for (std::size_t m = 0; m < tracks.size(); ++m) {
     const TrackExample& t = tracks[m];
     if (t.segments.empty() || t.segments.size() % seg_dims != 0 || t.holistic.size() != hol_dims)
@@ -42,6 +45,7 @@ rt::Result<classification::TrackClassifierModel> train_track_classifier(
   if (config.ensemble < 1 || config.ensemble > 64)
     return rt::make_error("ensemble must be in [1, 64]");
   classification::TrackClassifierModel model;
+  model.classes = classes;
   const std::size_t per_member = config.segment.rounds + config.holistic.rounds;
   const double total = static_cast<double>(per_member * config.ensemble);
   const auto report = [&](std::size_t before) {
@@ -81,7 +85,7 @@ rt::Result<classification::TrackClassifierModel> train_track_classifier(
     (void)model.holistic.classify(t->holistic, s.holistic);
     samples.push_back(s);
   }
-  auto adbf = fit_adbf(samples, model.holistic.model().prior, config.filter);
+  auto adbf = fit_adbf(samples, model.holistic.model().prior, classes.size(), config.filter);
   if (!adbf) return rt::make_error("filter: " + adbf.error().message);
   model.adbf = *adbf;
   return model;

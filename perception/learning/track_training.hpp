@@ -17,7 +17,7 @@ namespace stac::learning {
 // One labelled track: its segments' descriptors (row-major, segment layout) and its holistic
 // descriptor (holistic layout; NaN where absent).
 struct TrackExample {
-  ObjectClass label = ObjectClass::kBackground;
+  ClassIndex label = classification::kBackground;  // an index into the classes trained
   std::vector<float> segments;
   std::vector<float> holistic;
 };
@@ -35,9 +35,11 @@ struct TrackTrainingConfig {
   std::function<void(double)> progress;
 };
 
-// Fails with a message on an empty split, descriptors of the wrong size, or a failed fit.
+// A model of the classes `classes` (labels index them). Fails with a message on class names
+// check_class_names refuses, a label past them, an empty split, descriptors of the wrong size,
+// or a failed fit.
 rt::Result<classification::TrackClassifierModel> train_track_classifier(
-    std::span<const TrackExample> tracks, const classification::ExpectedLayouts& layouts,
-    const TrackTrainingConfig& config);
+    std::span<const TrackExample> tracks, const classification::ClassNames& classes,
+    const classification::ExpectedLayouts& layouts, const TrackTrainingConfig& config);
 
 }  // namespace stac::learning

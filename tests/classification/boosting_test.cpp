@@ -12,6 +12,10 @@
 namespace stac::learning {
 namespace {
 
+using classification::kBackground;
+using classification::kCar;
+using classification::kDefaultClassCount;
+using classification::kPedestrian;
 using classification::Layout;
 using classification::testing::accuracy;
 using classification::testing::flat_layout;
@@ -20,8 +24,8 @@ using classification::testing::trained;
 std::size_t nonzero_cells(const GridClassifier& c) {
   std::size_t n = 0;
   for (std::size_t cell = 0; cell < c.cell_count(); ++cell)
-    for (std::size_t k = 0; k < kClassCount; ++k)
-      if (c.model().table[cell * kClassCount + k] != 0.0f) {
+    for (std::size_t k = 0; k < kDefaultClassCount; ++k)
+      if (c.model().table[cell * kDefaultClassCount + k] != 0.0f) {
         ++n;
         break;
       }
@@ -38,9 +42,9 @@ TEST(NewtonResponse, IsTwiceWeightedMeanLabelGuardedAndCapped) {
 }
 
 TEST(GridRanges, FirstTo99thPercentileWidenedOnePercentOutliersInEdgeBins) {
-  TrainingSet set{1, {}, {}};
-  for (int v = 0; v < 100; ++v) set.add(std::vector<float>{float(v)}, ObjectClass::kCar);
-  set.add(std::vector<float>{1e6f}, ObjectClass::kBackground);  // 101 values, last index 100
+  TrainingSet set{1, kDefaultClassCount, {}, {}};
+  for (int v = 0; v < 100; ++v) set.add(std::vector<float>{float(v)}, kCar);
+  set.add(std::vector<float>{1e6f}, kBackground);  // 101 values, last index 100
   auto c = initial_classifier(set, flat_layout(1), BoostingConfig{});
   ASSERT_TRUE(c.has_value()) << c.error().message;
   // 1st percentile = value[1] = 1, 99th = value[99] = 99; widened by 0.98 each side.
@@ -56,8 +60,8 @@ TEST(GridRanges, FirstTo99thPercentileWidenedOnePercentOutliersInEdgeBins) {
 }
 
 TEST(GridRanges, ConstantElementGetsAUsableGrid) {
-  TrainingSet set{1, {}, {}};
-  for (int i = 0; i < 10; ++i) set.add(std::vector<float>{3.0f}, ObjectClass::kCar);
+  TrainingSet set{1, kDefaultClassCount, {}, {}};
+  for (int i = 0; i < 10; ++i) set.add(std::vector<float>{3.0f}, kCar);
   auto c = initial_classifier(set, flat_layout(1), BoostingConfig{});
   ASSERT_TRUE(c.has_value()) << c.error().message;
   EXPECT_GT(c->model().scale[0], 0.0f);
@@ -65,9 +69,8 @@ TEST(GridRanges, ConstantElementGetsAUsableGrid) {
 
 TEST(BoostingTrainer, FirstRoundMatchesHandComputedNewtonStep) {
   // x = 0, 0, 1, 1 labelled car, car, background, pedestrian; one grid of 2 bins.
-  TrainingSet set{1, {}, {}};
-  const ObjectClass labels[4] = {ObjectClass::kCar, ObjectClass::kCar, ObjectClass::kBackground,
-                                 ObjectClass::kPedestrian};
+  TrainingSet set{1, kDefaultClassCount, {}, {}};
+  const ClassIndex labels[4] = {kCar, kCar, kBackground, kPedestrian};
   for (int i = 0; i < 4; ++i) set.add(std::vector<float>{i < 2 ? 0.0f : 1.0f}, labels[i]);
   BoostingConfig config;
   config.resolutions = {2};
@@ -122,7 +125,7 @@ TEST(Boosting, LossDecreasesAndClassifierSizeIsIndependentOfRounds) {
   const std::size_t cells = trainer.classifier().cell_count();
   const std::size_t table = trainer.classifier().model().table.size();
   EXPECT_EQ(cells, 12u * (10 + 100));
-  EXPECT_EQ(table, cells * kClassCount);
+  EXPECT_EQ(table, cells * kDefaultClassCount);
   double loss = trainer.loss();
   std::size_t used = 0;
   for (int step = 0; step < 4; ++step) {
@@ -163,7 +166,7 @@ TEST(Boosting, OneWeakClassifierCarriesAResponseForEveryClass) {
   for (std::size_t cell = 0; cell < c->cell_count(); ++cell) {
     if (t[cell * 3] == 0.0f && t[cell * 3 + 1] == 0.0f && t[cell * 3 + 2] == 0.0f) continue;
     int positive = 0, negative = 0;
-    for (std::size_t k = 0; k < kClassCount; ++k) {
+    for (std::size_t k = 0; k < kDefaultClassCount; ++k) {
       EXPECT_NE(t[cell * 3 + k], 0.0f) << "class " << k;
       (t[cell * 3 + k] > 0 ? positive : negative)++;
     }
@@ -173,7 +176,7 @@ TEST(Boosting, OneWeakClassifierCarriesAResponseForEveryClass) {
 }
 
 TEST(Boosting, RefusesEmptyOrMismatchedTrainingSetsAndBadConfigurations) {
-  TrainingSet empty{3, {}, {}};
+  TrainingSet empty{3, kDefaultClassCount, {}, {}};
   EXPECT_FALSE(train_boosting(empty, flat_layout(3), {}).has_value());
   const auto set = classification::testing::separable(10, 3, 1);
   auto c = train_boosting(set, flat_layout(4), {});
@@ -209,9 +212,9 @@ TEST(AverageClassifiers, ClassifiesAsTheMeanOfItsMembersAtTheCostOfOne) {
     LogOdds want{};
     for (const GridClassifier& m : members) {
       ASSERT_TRUE(m.classify(test.row(i), each));
-      for (std::size_t k = 0; k < kClassCount; ++k) want[k] += each[k] - m.model().prior[k];
+      for (std::size_t k = 0; k < kDefaultClassCount; ++k) want[k] += each[k] - m.model().prior[k];
     }
-    for (std::size_t k = 0; k < kClassCount; ++k)
+    for (std::size_t k = 0; k < kDefaultClassCount; ++k)
       EXPECT_NEAR(got[k], mean->model().prior[k] + want[k] / 3.0f, 1e-4f) << "example " << i;
   }
   // The members differ (other seeds), so the mean is none of them.

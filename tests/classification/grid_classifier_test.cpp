@@ -20,7 +20,7 @@ namespace {
 
 static_assert(noexcept(std::declval<const GridClassifier&>().classify(
     std::declval<std::span<const float>>(), std::declval<LogOdds&>())));
-static_assert(noexcept(predict(std::declval<const LogOdds&>())));
+static_assert(noexcept(predict(std::declval<const LogOdds&>(), std::size_t{3})));
 
 // Two elements, grids of 10 and 4 bins over [0, 10) (element 0) and [-1, 1) (element 1); cell c
 // of the table holds responses (c, 10c, 100c).
@@ -101,11 +101,11 @@ TEST(GridClassifier, ClassifyEqualsTheSumOverBinOfEveryGrid) {
     for (std::size_t grid = 0; grid < c.grid_count(); ++grid) {
       const std::uint32_t b = c.bin(grid, x[grid / 2]);
       if (b == c.bins(grid)) continue;
-      for (std::size_t k = 0; k < kClassCount; ++k)
-        expected[k] += c.model().table[(c.cell_offset(grid) + b) * kClassCount + k];
+      for (std::size_t k = 0; k < kDefaultClassCount; ++k)
+        expected[k] += c.model().table[(c.cell_offset(grid) + b) * kDefaultClassCount + k];
     }
     ASSERT_TRUE(c.classify(x, out));
-    for (std::size_t k = 0; k < kClassCount; ++k) EXPECT_NEAR(out[k], expected[k], 1e-4f);
+    for (std::size_t k = 0; k < kDefaultClassCount; ++k) EXPECT_NEAR(out[k], expected[k], 1e-4f);
   }
 }
 
@@ -123,7 +123,8 @@ TEST(GridClassifier, PartialSumsOfTwoRangesAddUpToClassify) {
     const std::span<const float> all(x);
     ASSERT_TRUE(c.partial(all.subspan(3), 3, 8, tail));
     ASSERT_TRUE(c.partial(all.first(3), 0, 3, parts));
-    for (std::size_t k = 0; k < kClassCount; ++k) EXPECT_NEAR(parts[k] + tail[k], full[k], 1e-4f);
+    for (std::size_t k = 0; k < kDefaultClassCount; ++k)
+      EXPECT_NEAR(parts[k] + tail[k], full[k], 1e-4f);
   }
   LogOdds sum{};
   EXPECT_FALSE(c.partial(std::span<const float>(x).first(3), 6, 9, sum));  // past the layout
@@ -152,7 +153,7 @@ TEST(GridClassifier, PartialBatchGivesEveryInputPartialsSumsBitForBit) {
   ASSERT_TRUE(c.partial_batch(rows, 3, 8, batch));
   for (std::size_t j = 0; j < n; ++j) {
     ASSERT_TRUE(c.partial(x[j], 3, 8, one[j]));
-    for (std::size_t k = 0; k < kClassCount; ++k)
+    for (std::size_t k = 0; k < kDefaultClassCount; ++k)
       EXPECT_EQ(batch[j][k], one[j][k]) << j << " " << k;
   }
   EXPECT_NE(batch[1], (LogOdds{0.25f, -1.0f, 3.0f}));  // the sums did move
@@ -199,14 +200,71 @@ TEST(GridClassifier, CreateRefusesInconsistentModels) {
   m = good;
   m.resolutions.assign(17, 1);
   expect_refused(m, "too many resolutions");
+  for (const std::size_t classes : {std::size_t{0}, kMaxClasses + 1}) {
+    m = good;
+    m.classes = classes;
+    expect_refused(m, "class count not 1..kMaxClasses");
+  }
+  m = good;
+  m.prior[kDefaultClassCount] = 1.0f;
+  expect_refused(m, "prior of an unused class");
   EXPECT_TRUE(GridClassifier::create(good).has_value());
 }
 
+TEST(GridClassifier, EveryClassCountUpToTheMaximumClassifiesWithItsOwnStride) {
+  // The table's stride is the model's class count: each count's classify() is the sum of the
+  // bins' columns of that many responses, and the entries past the count stay 0.
+  for (std::size_t classes = 1; classes <= kMaxClasses; ++classes) {
+    const auto data = testing::separable(200, 4, static_cast<unsigned>(classes), classes);
+    const GridClassifier c =
+        testing::trained(data, testing::flat_layout(4), {.rounds = 60, .seed = 2});
+    ASSERT_EQ(c.classes(), classes);
+    ASSERT_EQ(c.model().table.size(), c.cell_count() * classes);
+    std::mt19937 rng(static_cast<unsigned>(classes));
+    std::uniform_real_distribution<float> u(-1.0f, 2.0f * static_cast<float>(classes) + 2.0f);
+    std::vector<float> x(4);
+    for (int t = 0; t < 50; ++t) {
+      for (auto& v : x) v = u(rng);
+      LogOdds expected = c.model().prior, out{};
+      for (std::size_t grid = 0; grid < c.grid_count(); ++grid) {
+        const std::uint32_t b = c.bin(grid, x[grid / 2]);
+        for (std::size_t k = 0; k < classes; ++k)
+          expected[k] += c.model().table[(c.cell_offset(grid) + b) * classes + k];
+      }
+      ASSERT_TRUE(c.classify(x, out));
+      for (std::size_t k = 0; k < kMaxClasses; ++k) EXPECT_NEAR(out[k], expected[k], 1e-4f);
+      for (std::size_t k = classes; k < kMaxClasses; ++k) EXPECT_EQ(out[k], 0.0f);
+    }
+    EXPECT_GT(testing::accuracy(c, data), 0.9) << classes << " classes";
+  }
+}
+
 TEST(Predict, LargestLogOddsOrBackgroundWhenAllNegative) {
-  EXPECT_EQ(predict({-0.1f, 2.0f, 1.0f}), ObjectClass::kPedestrian);
-  EXPECT_EQ(predict({3.0f, 2.0f, 1.0f}), ObjectClass::kCar);
-  EXPECT_EQ(predict({-3.0f, -0.5f, 0.25f}), ObjectClass::kBicyclist);
-  EXPECT_EQ(predict({-3.0f, -0.5f, -0.25f}), ObjectClass::kBackground);
+  EXPECT_EQ(predict({-0.1f, 2.0f, 1.0f}, 3), kPedestrian);
+  EXPECT_EQ(predict({3.0f, 2.0f, 1.0f}, 3), kCar);
+  EXPECT_EQ(predict({-3.0f, -0.5f, 0.25f}, 3), kBicyclist);
+  EXPECT_EQ(predict({-3.0f, -0.5f, -0.25f}, 3), kBackground);
+  // Only the model's classes count: entries past them are ignored.
+  EXPECT_EQ(predict({-3.0f, -0.5f, -0.25f, 5.0f}, 3), kBackground);
+  EXPECT_EQ(predict({-3.0f, -0.5f, -0.25f, 5.0f}, 4), 3);
+  EXPECT_EQ(predict({-1, -1, -1, -1, -1, -1, -1, 0.5f}, kMaxClasses), kMaxClasses - 1);
+  EXPECT_EQ(predict({0.5f, 2.0f}, 1), kCar);
+}
+
+TEST(ClassNames, DefaultNamesAndNamesOfTheModel) {
+  const ClassNames names = default_class_names();
+  EXPECT_EQ(names, (ClassNames{"car", "pedestrian", "bicyclist"}));
+  EXPECT_STREQ(class_name(names, kBicyclist), "bicyclist");
+  EXPECT_STREQ(class_name(names, kBackground), "background");
+  EXPECT_STREQ(class_name(names, 3), "unknown");
+  EXPECT_STREQ(class_name({"car", "pole"}, 1), "pole");
+  EXPECT_EQ(check_class_names(names), "");
+  EXPECT_EQ(check_class_names({"a", "b", "c", "d", "e", "f", "g", "h"}), "");
+  EXPECT_NE(check_class_names({}), "");
+  EXPECT_NE(check_class_names({"a", "b", "c", "d", "e", "f", "g", "h", "i"}).find("9 classes"),
+            std::string::npos);
+  EXPECT_NE(check_class_names({"pole", "pole"}).find("repeats"), std::string::npos);
+  EXPECT_NE(check_class_names({"unknown"}).find("reserved"), std::string::npos);
 }
 
 TEST(Layouts, SegmentLayoutIsThe29DescriptorSpacesAndHashesDiffer) {

@@ -20,7 +20,7 @@ inline rt::Result<GridClassifier> made_up_grid(Layout layout) {
   const std::size_t dims = layout_dimensions(m.layout);
   m.lower.assign(2 * dims, -1.0f);
   for (std::size_t g = 0; g < 2 * dims; ++g) m.scale.push_back(g % 2 == 0 ? 5.0f : 50.0f);
-  for (std::size_t c = 0; c < dims * 110 * kClassCount; ++c)
+  for (std::size_t c = 0; c < dims * 110 * m.classes; ++c)
     m.table.push_back(0.001f * static_cast<float>(static_cast<int>(c % 7) - 3));
   return GridClassifier::create(std::move(m));
 }

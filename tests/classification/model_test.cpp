@@ -51,7 +51,7 @@ void expect_same_outputs(const GridClassifier& a, const GridClassifier& b, unsig
     LogOdds ha{}, hb{};
     ASSERT_TRUE(a.classify(x, ha));
     ASSERT_TRUE(b.classify(x, hb));
-    for (std::size_t k = 0; k < kClassCount; ++k)
+    for (std::size_t k = 0; k < kMaxClasses; ++k)
       EXPECT_EQ(std::bit_cast<std::uint32_t>(ha[k]), std::bit_cast<std::uint32_t>(hb[k]));
   }
 }
@@ -63,7 +63,9 @@ TEST(ModelFormat, RoundTripIsBitExactAndClassifiesTheSame) {
   ASSERT_TRUE(loaded.has_value()) << loaded.error().message;
   EXPECT_EQ(serialize(*loaded), bytes);
   EXPECT_EQ(loaded->segment.model().table, model.segment.model().table);
-  EXPECT_EQ(loaded->adbf.gamma, model.adbf.gamma);
+  for (std::size_t k = 0; k < kDefaultClassCount; ++k)
+    EXPECT_EQ(loaded->adbf.gamma[k], model.adbf.gamma[k]);
+  EXPECT_EQ(loaded->classes, default_class_names());
   expect_same_outputs(model.segment, loaded->segment, 1);
   expect_same_outputs(model.holistic, loaded->holistic, 2);
 }
@@ -72,7 +74,7 @@ TEST(ModelFormat, FullSizeModelForThisBuildsLayoutsRoundTrips) {
   TrackClassifierModel model{
       trained(segment_layout(), 200, 30, 3), trained(holistic_layout(), 200, 30, 4), {}};
   const auto bytes = serialize(model);
-  EXPECT_GT(bytes.size(), descriptors::kDimensions * 110 * kClassCount * 4);
+  EXPECT_GT(bytes.size(), descriptors::kDimensions * 110 * kDefaultClassCount * 4);
   auto loaded = deserialize(bytes);  // this build's layouts
   ASSERT_TRUE(loaded.has_value()) << loaded.error().message;
   EXPECT_EQ(serialize(*loaded), bytes);
@@ -143,13 +145,82 @@ TEST(ModelFormat, WrongMagicOrVersionIsRefusedSayingWhat) {
   EXPECT_NE(r.error().message.find("retrain"), std::string::npos) << r.error().message;
 }
 
-TEST(ModelFormat, WrongClassNamesAreRefused) {
+// A model of `names` on the small layouts, trained on separable data of that many classes.
+TrackClassifierModel small_model_of(const ClassNames& names) {
+  const ExpectedLayouts l = small_layouts();
+  const auto seg = testing::separable(400, layout_dimensions(l.segment), 5, names.size());
+  const auto hol = testing::separable(400, layout_dimensions(l.holistic), 6, names.size());
+  TrackClassifierModel m{testing::trained(seg, l.segment, {.rounds = 40, .seed = 5}),
+                         testing::trained(hol, l.holistic, {.rounds = 40, .seed = 6}),
+                         {},
+                         names};
+  for (std::size_t k = 0; k < names.size(); ++k) m.adbf.gamma[k] = 0.5f + static_cast<float>(k);
+  return m;
+}
+
+TEST(ModelFormat, ModelWithUserClassesRoundTripsWithItsNamesAndCount) {
+  const ClassNames names = {"car", "pedestrian", "bicyclist", "pole", "traffic_sign"};
+  const TrackClassifierModel model = small_model_of(names);
+  ASSERT_EQ(model.segment.classes(), 5u);
+  const auto bytes = serialize(model);
+  auto loaded = deserialize(bytes, small_layouts());
+  ASSERT_TRUE(loaded.has_value()) << loaded.error().message;
+  EXPECT_EQ(loaded->classes, names);
+  EXPECT_EQ(loaded->segment.classes(), 5u);
+  EXPECT_EQ(loaded->holistic.classes(), 5u);
+  EXPECT_EQ(loaded->adbf.gamma[4], 4.5f);
+  EXPECT_EQ(serialize(*loaded), bytes);
+  expect_same_outputs(model.segment, loaded->segment, 7);
+  // Element 0 tells the class (synthetic.hpp): the 5th class is predicted as itself.
+  std::vector<float> x(loaded->segment.dimensions(), 5.0f);
+  x[0] = 2.0f * 4 + 0.5f;
+  LogOdds h{};
+  ASSERT_TRUE(loaded->segment.classify(x, h));
+  EXPECT_EQ(predict(h, 5), 4);
+  EXPECT_STREQ(class_name(loaded->classes, predict(h, 5)), "traffic_sign");
+}
+
+TEST(ModelFormat, ClassNamesComeFromTheModel) {
   auto b = serialize(small_model());
   b[kHeader + 8] = 'b';  // "car" -> "bar" (u32 count, u32 length, then the name)
   rechecksum(b);
   auto r = deserialize(b, small_layouts());
-  ASSERT_FALSE(r.has_value());
-  EXPECT_NE(r.error().message.find("'bar'"), std::string::npos) << r.error().message;
+  ASSERT_TRUE(r.has_value()) << r.error().message;
+  EXPECT_EQ(r->classes, (ClassNames{"bar", "pedestrian", "bicyclist"}));
+}
+
+TEST(ModelFormat, BadClassCountOrNamesAreRefusedSayingHowToRemakeTheModel) {
+  const auto refused = [](std::vector<std::uint8_t> b, const std::string& what) {
+    rechecksum(b);
+    auto r = deserialize(b, small_layouts());
+    ASSERT_FALSE(r.has_value()) << what;
+    EXPECT_NE(r.error().message.find(what), std::string::npos) << r.error().message;
+    EXPECT_NE(r.error().message.find("stac train"), std::string::npos) << r.error().message;
+  };
+  const auto bytes = serialize(small_model());
+  for (const int count : {0, 9, 200}) {
+    auto b = bytes;
+    b[kHeader] = static_cast<std::uint8_t>(count);
+    refused(b, std::to_string(count) + " classes");
+  }
+  auto b = bytes;
+  b[kHeader + 8] = '\t';  // "car" -> "\tar"
+  refused(b, "not printable");
+  b = bytes;
+  std::memcpy(&b[kHeader + 8], "bic", 3);  // "car" -> "bic", then "bicyclist": still unique
+  rechecksum(b);
+  EXPECT_TRUE(deserialize(b, small_layouts()).has_value());
+  // Names a model cannot have: built with them, refused on loading.
+  for (const auto& [names, what] : std::vector<std::pair<ClassNames, std::string>>{
+           {{"car", "car", "bicyclist"}, "repeats"},
+           {{"car", "", "bicyclist"}, "empty"},
+           {{"car", "background", "bicyclist"}, "reserved"},
+           {{"car", "a b", "bicyclist"}, "space"},
+           {{"car", std::string(40, 'x'), "bicyclist"}, "longer than"}}) {
+    TrackClassifierModel m = small_model();
+    m.classes = names;
+    refused(serialize(m), what);
+  }
 }
 
 TEST(ModelFormat, ModelForAnotherDescriptorLayoutIsRefused) {

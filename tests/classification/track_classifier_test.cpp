@@ -116,9 +116,9 @@ TEST(TrackClassifier, OneClassPerTrackAndTheModelsOwnLogOdds) {
     ASSERT_TRUE(add_segment(*model, seen.segments[mine], evidence, hs));
     ASSERT_TRUE(track_log_odds(*model, evidence, seen.holistics[mine], expected));
     // The holistic sum is kept in two parts (motion, accumulated cloud): float rounding only.
-    for (std::size_t k = 0; k < kClassCount; ++k)
+    for (std::size_t k = 0; k < kDefaultClassCount; ++k)
       EXPECT_NEAR(out[0].log_odds[k], expected[k], 1e-4f * (1.0f + std::fabs(expected[k])));
-    EXPECT_EQ(out[0].label, predict(expected));
+    EXPECT_EQ(out[0].label, predict(expected, kDefaultClassCount));
     if (frame == 3 || frame == 4) {  // coasting: no update, the class of frame 2 is kept
       EXPECT_EQ(seen.ids.size(), before + 1);
       EXPECT_EQ(out[1].segments, 3u);

@@ -10,6 +10,7 @@
 
 #include "perception/learning/logistic.hpp"
 #include "rt/testing/alloc_counter.hpp"
+#include "synthetic.hpp"
 
 namespace stac::classification {
 namespace {
@@ -19,7 +20,8 @@ static_assert(noexcept(std::declval<TrackEvidence&>().add_segment(std::declval<c
 static_assert(noexcept(augmented_dbf(std::declval<const TrackEvidence&>(),
                                      std::declval<const LogOdds&>(), std::declval<const LogOdds&>(),
                                      std::declval<const AdbfParams&>())));
-static_assert(sizeof(TrackEvidence) <= 32, "per-track filter state stays small and fixed");
+static_assert(sizeof(TrackEvidence) <= 8 * (kMaxClasses + 1),
+              "per-track filter state stays small and fixed");
 
 // L0_S = (-1, -2, -3); H_S - L0_S = (2, 0, -1), (1, 1, 0), (3, -1, 1): sum (6, 0, 0), mean (2, 0,
 // 0).
@@ -57,7 +59,7 @@ TEST(DiscreteBayesFilter, AugmentedWeighsPriorHolisticAndSegmentTerms) {
   EXPECT_FLOAT_EQ(out[0], 2.0f * -1.0f + 0.5f * 2.0f + 0.25f * 2.0f);  // -0.5
   EXPECT_FLOAT_EQ(out[1], 0.0f);                                       // -1 + 1 + 0
   EXPECT_FLOAT_EQ(out[2], -2.0f);                                      // 0 - 2 + 0
-  EXPECT_EQ(predict(out), ObjectClass::kPedestrian);
+  EXPECT_EQ(predict(out, kDefaultClassCount), kPedestrian);
   // Default parameters are the normalized filter with the holistic log odds as base.
   EXPECT_EQ(augmented_dbf(three_segments(), l0h, hh, AdbfParams{}),
             normalized_dbf(three_segments(), hh));
@@ -98,18 +100,18 @@ SyntheticTracks synthetic_tracks(int n, unsigned seed) {
   SyntheticTracks t;
   for (int m = 0; m < n; ++m) {
     learning::TrackSample s;
-    s.label = static_cast<ObjectClass>(label(rng));
+    s.label = testing::label_of(label(rng));
     LogOdds bias{};
-    for (std::size_t k = 0; k < kClassCount; ++k) {
-      const float y = static_cast<std::size_t>(s.label) == k ? 1.0f : -1.0f;
+    for (std::size_t k = 0; k < kDefaultClassCount; ++k) {
+      const float y = s.label == k ? 1.0f : -1.0f;
       s.holistic[k] = kHolisticPrior[k] + 1.5f * y + 1.5f * g(rng);
       bias[k] = 1.2f * g(rng);
     }
     TrackEvidence e;
     for (int f = length(rng); f > 0; --f) {
       LogOdds h{};
-      for (std::size_t k = 0; k < kClassCount; ++k) {
-        const float y = static_cast<std::size_t>(s.label) == k ? 1.0f : -1.0f;
+      for (std::size_t k = 0; k < kDefaultClassCount; ++k) {
+        const float y = s.label == k ? 1.0f : -1.0f;
         h[k] = segment_prior[k] + 0.6f * y + bias[k] + 2.0f * g(rng);
       }
       e.add_segment(h, segment_prior);
@@ -125,13 +127,13 @@ template <class F>
 double track_accuracy(const SyntheticTracks& t, F filter) {
   int right = 0;
   for (std::size_t m = 0; m < t.samples.size(); ++m)
-    right += predict(filter(t.samples[m], t.evidence[m])) == t.samples[m].label;
+    right += predict(filter(t.samples[m], t.evidence[m]), kDefaultClassCount) == t.samples[m].label;
   return right / static_cast<double>(t.samples.size());
 }
 
 TEST(AugmentedDiscreteBayesFilter, FittedOnHeldOutTracksBeatsNaiveAndNormalized) {
   const SyntheticTracks held_out = synthetic_tracks(3000, 21), test = synthetic_tracks(3000, 22);
-  auto params = learning::fit_adbf(held_out.samples, kHolisticPrior, {});
+  auto params = learning::fit_adbf(held_out.samples, kHolisticPrior, kDefaultClassCount, {});
   ASSERT_TRUE(params.has_value()) << params.error().message;
   const double naive =
       track_accuracy(test, [](auto& s, auto& e) { return naive_dbf(e, s.holistic); });

@@ -8,11 +8,13 @@
 #include <random>
 
 #include "rt/testing/alloc_counter.hpp"
+#include "synthetic.hpp"
 
 namespace stac::learning {
 namespace {
 
 using classification::ExpectedLayouts;
+using classification::kDefaultClassCount;
 using classification::LogOdds;
 using classification::naive_dbf;
 using classification::predict;
@@ -36,7 +38,7 @@ std::vector<TrackExample> synthetic_tracks(int n, unsigned seed) {
   for (int m = 0; m < n; ++m) {
     TrackExample t;
     const int c = label(rng);
-    t.label = static_cast<ObjectClass>(c);
+    t.label = classification::testing::label_of(c);
     float bias[6];
     for (float& b : bias) b = 0.8f * g(rng);
     for (int f = length(rng); f > 0; --f)
@@ -70,9 +72,10 @@ Accuracy evaluate(const TrackClassifierModel& model, const std::vector<TrackExam
       EXPECT_TRUE(add_segment(model, std::span(t.segments).subspan(i, 6), e, h));
     EXPECT_TRUE(track_log_odds(model, e, t.holistic, track));
     (void)model.holistic.classify(t.holistic, hh);
-    a.adbf += predict(track) == t.label;
-    a.segment_only += predict(naive_dbf(e, model.segment.model().prior)) == t.label;
-    a.holistic_only += predict(hh) == t.label;
+    a.adbf += predict(track, kDefaultClassCount) == t.label;
+    a.segment_only +=
+        predict(naive_dbf(e, model.segment.model().prior), kDefaultClassCount) == t.label;
+    a.holistic_only += predict(hh, kDefaultClassCount) == t.label;
   }
   const double n = static_cast<double>(tracks.size());
   return {a.adbf / n, a.segment_only / n, a.holistic_only / n};
@@ -80,7 +83,8 @@ Accuracy evaluate(const TrackClassifierModel& model, const std::vector<TrackExam
 
 TEST(TrackTraining, TrainedModelClassifiesUnseenTracksBetterThanEitherPartAlone) {
   const auto train = synthetic_tracks(1500, 1), test = synthetic_tracks(1500, 2);
-  auto model = train_track_classifier(train, layouts(), config());
+  auto model =
+      train_track_classifier(train, classification::default_class_names(), layouts(), config());
   ASSERT_TRUE(model.has_value()) << model.error().message;
   const Accuracy a = evaluate(*model, test);
   RecordProperty("adbf", std::to_string(a.adbf));
@@ -94,8 +98,10 @@ TEST(TrackTraining, TrainedModelClassifiesUnseenTracksBetterThanEitherPartAlone)
 
 TEST(TrackTraining, SameSeedsSameModelBytes) {
   const auto train = synthetic_tracks(300, 3);
-  auto a = train_track_classifier(train, layouts(), config());
-  auto b = train_track_classifier(train, layouts(), config());
+  auto a =
+      train_track_classifier(train, classification::default_class_names(), layouts(), config());
+  auto b =
+      train_track_classifier(train, classification::default_class_names(), layouts(), config());
   ASSERT_TRUE(a.has_value() && b.has_value());
   EXPECT_EQ(serialize(*a), serialize(*b));
 }
@@ -105,8 +111,9 @@ TEST(TrackTraining, ProgressRisesToOneAndDoesNotChangeTheModel) {
   TrackTrainingConfig c = config();
   std::vector<double> seen;
   c.progress = [&seen](double f) { seen.push_back(f); };
-  auto a = train_track_classifier(train, layouts(), c);
-  auto b = train_track_classifier(train, layouts(), config());
+  auto a = train_track_classifier(train, classification::default_class_names(), layouts(), c);
+  auto b =
+      train_track_classifier(train, classification::default_class_names(), layouts(), config());
   ASSERT_TRUE(a.has_value() && b.has_value());
   EXPECT_EQ(serialize(*a), serialize(*b));
   ASSERT_GE(seen.size(), 2u);
@@ -119,9 +126,11 @@ TEST(TrackTraining, AnEnsembleIsTheMeanOfItsMembersSeeds) {
   const auto train = synthetic_tracks(300, 3);
   TrackTrainingConfig c = config();
   c.ensemble = 3;
-  auto ensemble = train_track_classifier(train, layouts(), c);
+  auto ensemble =
+      train_track_classifier(train, classification::default_class_names(), layouts(), c);
   ASSERT_TRUE(ensemble.has_value()) << ensemble.error().message;
-  auto single = train_track_classifier(train, layouts(), config());
+  auto single =
+      train_track_classifier(train, classification::default_class_names(), layouts(), config());
   ASSERT_TRUE(single.has_value());
   // Same tables' size and layout (same classification cost), other responses.
   EXPECT_EQ(ensemble->segment.model().table.size(), single->segment.model().table.size());
@@ -132,7 +141,7 @@ TEST(TrackTraining, AnEnsembleIsTheMeanOfItsMembersSeeds) {
     TrackTrainingConfig m = config();
     m.segment.seed += 2 * k;
     m.holistic.seed += 2 * k;
-    auto one = train_track_classifier(train, layouts(), m);
+    auto one = train_track_classifier(train, classification::default_class_names(), layouts(), m);
     ASSERT_TRUE(one.has_value());
     members.push_back(one->segment);
   }
@@ -140,21 +149,26 @@ TEST(TrackTraining, AnEnsembleIsTheMeanOfItsMembersSeeds) {
   ASSERT_TRUE(mean.has_value());
   EXPECT_EQ(mean->model().table, ensemble->segment.model().table);
   c.ensemble = 0;
-  EXPECT_FALSE(train_track_classifier(train, layouts(), c).has_value());
+  EXPECT_FALSE(train_track_classifier(train, classification::default_class_names(), layouts(), c)
+                   .has_value());
 }
 
 TEST(TrackTraining, RefusesWrongSizesAndEmptySplits) {
   auto tracks = synthetic_tracks(50, 4);
   tracks[7].holistic.push_back(1.0f);
-  auto r = train_track_classifier(tracks, layouts(), config());
+  auto r =
+      train_track_classifier(tracks, classification::default_class_names(), layouts(), config());
   ASSERT_FALSE(r.has_value());
   EXPECT_NE(r.error().message.find("track 7"), std::string::npos) << r.error().message;
   tracks = synthetic_tracks(1, 5);
-  EXPECT_FALSE(train_track_classifier(tracks, layouts(), config()).has_value());
+  EXPECT_FALSE(
+      train_track_classifier(tracks, classification::default_class_names(), layouts(), config())
+          .has_value());
 }
 
 TEST(TrackTraining, PerScanCallsAllocateNothing) {
-  auto model = train_track_classifier(synthetic_tracks(300, 6), layouts(), config());
+  auto model = train_track_classifier(synthetic_tracks(300, 6),
+                                      classification::default_class_names(), layouts(), config());
   ASSERT_TRUE(model.has_value());
   const auto tracks = synthetic_tracks(20, 7);
   TrackEvidence e;

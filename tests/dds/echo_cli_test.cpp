@@ -5,6 +5,8 @@
 #include <pthread.h>
 #include <sched.h>
 
+#include <atomic>
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -37,7 +39,9 @@ TEST(StacEcho, ReceivesTrackedObjectsFromAnotherProcess) {
   o.object_id = 77;
   o.position = {12.5, -4.0, 0.5};
   o.classified = true;
-  o.class_log_odds = {3, -3, -3, -3};
+  const std::vector<std::string> names = {"car", "pedestrian", "bicyclist", "pole"};
+  o.class_names = names;  // a user-taught 4th class, most probable: shown by its name
+  o.class_log_odds = {-3, -3, -3, 3, -3};
   std::vector<TrackedObjectIn> objects{o};
   for (std::uint64_t scan = 0; scan < 5; ++scan) {
     ASSERT_TRUE((*pub)->publish_tracked_objects(
@@ -51,7 +55,7 @@ TEST(StacEcho, ReceivesTrackedObjectsFromAnotherProcess) {
   EXPECT_EQ(code, 0) << out;
   EXPECT_NE(out.find("tracked_objects scan 0 "), std::string::npos) << out;
   EXPECT_NE(out.find("tracked_objects scan 4 "), std::string::npos) << out;
-  EXPECT_NE(out.find("#77 car x=12.50 y=-4.00"), std::string::npos) << out;
+  EXPECT_NE(out.find("#77 pole x=12.50 y=-4.00"), std::string::npos) << out;
   EXPECT_NE(out.find("5 samples on stac/tracked_objects"), std::string::npos) << out;
 }
 
@@ -108,7 +112,7 @@ TEST(StacEcho, RealTimeLoopbackConfigReceivesOnASchedFifoReceiveThread) {
 }
 
 // examples/c_subscriber, built from idl/stac.idl alone, reads what the publisher writes.
-TEST(CSubscriberExample, PrintsIdsAndPositionsFromAnotherProcess) {
+TEST(CSubscriberExample, PrintsIdsPositionsAndClassNamesFromAnotherProcess) {
   const std::string uri = testing::loopback_uri();
   const std::string cmd = "CYCLONEDDS_URI=" + uri + " " + STAC_C_SUBSCRIBER + " 3 123 2>&1";
   FILE* child = popen(cmd.c_str(), "r");
@@ -122,6 +126,10 @@ TEST(CSubscriberExample, PrintsIdsAndPositionsFromAnotherProcess) {
   TrackedObjectIn a, b;
   a.object_id = 5;
   a.position = {1.25, 2.5, 0};
+  const std::vector<std::string> names = {"car", "pedestrian", "bicyclist"};
+  a.classified = true;
+  a.class_names = names;
+  a.class_log_odds = {-2, 1.5, -2, -1.5};
   b.object_id = 6;
   b.position = {-30, 40.75, 0};
   std::vector<TrackedObjectIn> objects{a, b};
@@ -132,7 +140,8 @@ TEST(CSubscriberExample, PrintsIdsAndPositionsFromAnotherProcess) {
   int code = -1;
   const std::string out = run_to_end(child, &code);
   EXPECT_EQ(code, 0) << out;
-  EXPECT_NE(out.find("scan 2: 2 objects\n  id 5 at x=1.25 y=2.50\n  id 6 at x=-30.00 y=40.75"),
+  EXPECT_NE(out.find("scan 2: 2 objects\n  id 5 at x=1.25 y=2.50 class pedestrian\n  id 6 at "
+                     "x=-30.00 y=40.75 class unknown"),
             std::string::npos)
       << out;
 }
@@ -148,6 +157,40 @@ TEST(StacEcho, TimesOutWithAClearMessageWithoutAPublisher) {
   EXPECT_EQ(code, 1) << out;
   EXPECT_NE(out.find("timed out after 0.5 s with 0 of 3 samples on stac/health"), std::string::npos)
       << out;
+}
+
+// The cloud carries labels, not names: echo counts the points of every label up to the largest
+// (a 5-class model's background is 6, unclassified 7).
+TEST(StacEcho, PointCloudCountsThePointsOfEveryLabel) {
+  const std::string uri = testing::loopback_uri();
+  FILE* child =
+      popen((std::string(STAC_CLI) + " echo point_cloud --count 1 --timeout 20 --domain 124 2>&1")
+                .c_str(),
+            "r");
+  ASSERT_NE(child, nullptr);
+  PublisherConfig c;
+  c.domain_id = 124;
+  c.config_uri = uri;
+  auto pub = Publisher::create(c);
+  ASSERT_TRUE(pub) << pub.error().message;
+  ASSERT_TRUE(testing::TestReader::wait_matched((*pub)->writer(Topic::kPointCloud)));
+  const std::vector<LabeledPointIn> points = {
+      {0, 0, 0, 1, 0}, {1, 0, 0, 1, 5}, {2, 0, 0, 1, 5}, {3, 0, 0, 1, 7}, {4, 0, 0, 1, 1}};
+  // Best effort: published until the child has taken one.
+  std::atomic<bool> done{false};
+  std::thread publisher([&] {
+    for (int i = 0; i < 1000 && !done; ++i) {
+      (void)(*pub)->publish_point_cloud({{0, static_cast<std::uint64_t>(i)}, {}, 0.01f, points});
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+  });
+  int code = -1;
+  const std::string out = run_to_end(child, &code);
+  done = true;
+  publisher.join();
+  EXPECT_EQ(code, 0) << out;
+  EXPECT_NE(out.find("points=5 "), std::string::npos) << out;
+  EXPECT_NE(out.find(" none=1 labels=[1,0,0,0,2,0,1]"), std::string::npos) << out;
 }
 
 TEST(StacEcho, UnknownTopicListsTheTopics) {

@@ -26,11 +26,14 @@ std::unique_ptr<Publisher> make_publisher(std::uint32_t domain, bool ros2 = fals
   return p ? std::move(*p) : nullptr;
 }
 
+const std::vector<std::string> kDefaultNames = {"car", "pedestrian", "bicyclist"};
+
 TrackedObjectIn object(std::uint64_t id) {
   TrackedObjectIn o;
   o.object_id = id;
   o.existence_probability = 0.75f;
   o.classified = true;
+  o.class_names = kDefaultNames;
   o.class_log_odds = {2.0f, -1.0f, -3.0f, 0.5f};
   o.class_age = 1;
   o.position = {10.5, -3.25, 0.75};
@@ -62,6 +65,11 @@ TEST(DdsPublisher, TrackedObjectsRoundTripEveryFieldWithSequencesAtTheirBounds) 
   for (std::uint64_t id = 0; id < kMaxObjects; ++id) objects.push_back(object(1000 + id));
   objects[1].classified = false;
   objects[0].footprint = footprint;
+  // A model of 8 user-named classes (the maximum): every class by name, background last.
+  const std::vector<std::string> eight = {"car",  "pedestrian", "bicyclist", "pole",
+                                          "sign", "tree",       "bin",       std::string(31, 'n')};
+  objects[2].class_names = eight;
+  objects[2].class_log_odds = {-5, -4, -3, -2, -1, 3, -6, -7, -3};
   const ScanStamp scan{1'700'000'000'123'456'789, 42};
   auto ok = pub->publish_tracked_objects(scan, objects);
   ASSERT_TRUE(ok) << ok.error().message;
@@ -79,11 +87,26 @@ TEST(DdsPublisher, TrackedObjectsRoundTripEveryFieldWithSequencesAtTheirBounds) 
   EXPECT_FLOAT_EQ(o.class_log_odds[0], 2.0f);
   EXPECT_FLOAT_EQ(o.class_log_odds[3], 0.5f);
   EXPECT_EQ(o.class_age, 1u);
+  EXPECT_FLOAT_EQ(o.class_log_odds[4], 0.0f);
   ASSERT_EQ(o.classification._length, 4u);
   EXPECT_EQ(o.classification._buffer[0].label, 1);  // car, log odds 2
+  EXPECT_STREQ(o.classification._buffer[0].name, "car");
   EXPECT_NEAR(o.classification._buffer[0].probability, 0.8808f, 1e-4);
   EXPECT_EQ(o.classification._buffer[1].label, 4);  // background, 0.5
+  EXPECT_STREQ(o.classification._buffer[1].name, "background");
   EXPECT_EQ(o.classification._buffer[3].label, 3);  // bicyclist, -3
+  EXPECT_STREQ(o.classification._buffer[3].name, "bicyclist");
+  const auto& taught = s->objects._buffer[2];
+  ASSERT_EQ(taught.classification._length, kMaxClassifications);
+  EXPECT_EQ(taught.classification._buffer[0].label, 6);  // "tree", log odds 3
+  EXPECT_STREQ(taught.classification._buffer[0].name, "tree");
+  EXPECT_EQ(taught.classification._buffer[1].label, 5);  // "sign", -1
+  EXPECT_EQ(taught.classification._buffer[2].label, 4);  // "pole", -2
+  EXPECT_EQ(taught.classification._buffer[3].label, 3);  // "bicyclist", -3
+  EXPECT_EQ(taught.classification._buffer[4].label, 9);  // background, -3: after it (stable)
+  EXPECT_STREQ(taught.classification._buffer[4].name, "background");
+  EXPECT_EQ(std::string(taught.classification._buffer[8].name), std::string(31, 'n'));
+  EXPECT_FLOAT_EQ(taught.class_log_odds[8], -3.0f);
   EXPECT_DOUBLE_EQ(o.kinematics.position.x, 10.5);
   EXPECT_DOUBLE_EQ(o.kinematics.position.y, -3.25);
   EXPECT_DOUBLE_EQ(o.kinematics.velocity.y, 1.5);
@@ -102,6 +125,7 @@ TEST(DdsPublisher, TrackedObjectsRoundTripEveryFieldWithSequencesAtTheirBounds) 
   ASSERT_EQ(unknown.classification._length, 1u);
   EXPECT_EQ(unknown.classification._buffer[0].label, 0);
   EXPECT_FLOAT_EQ(unknown.classification._buffer[0].probability, 1.0f);
+  EXPECT_STREQ(unknown.classification._buffer[0].name, "unknown");
   // Without a footprint the box's corners are published, centred on the position.
   const auto& last = s->objects._buffer[kMaxObjects - 1];
   EXPECT_EQ(last.object_id, 1000u + kMaxObjects - 1);

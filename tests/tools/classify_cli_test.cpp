@@ -150,6 +150,7 @@ TEST_F(ClassifyCli, DatasetTrainEvalBeatsThePriorOnAHeldOutDrive) {
       if (!t.classified) continue;
       ++classified;
       ++classes[t.cls];
+      ASSERT_EQ(t.log_odds.size(), 3u);
       const bool any_positive = t.log_odds[0] > 0 || t.log_odds[1] > 0 || t.log_odds[2] > 0;
       EXPECT_EQ(t.cls == "background", !any_positive) << t.cls;
     }
@@ -166,7 +167,7 @@ TEST_F(ClassifyCli, DatasetTrainEvalBeatsThePriorOnAHeldOutDrive) {
   ASSERT_TRUE(test_set) << test_set.error().message;
   std::size_t agree = 0, consistent = 0, agree_consistent = 0;
   for (const stac::tools::DatasetTrack& t : test_set->tracks) {
-    const bool right = last[t.id] == stac::classification::class_name(t.label);
+    const bool right = last[t.id] == stac::classification::class_name(test_set->classes, t.label);
     agree += right ? 1 : 0;
     if (stac::tools::consistent(t)) {
       ++consistent;
@@ -180,6 +181,88 @@ TEST_F(ClassifyCli, DatasetTrainEvalBeatsThePriorOnAHeldOutDrive) {
   EXPECT_GT(classes["pedestrian"], 0);
   EXPECT_GT(classes["background"], 0);
   EXPECT_EQ(classes.size(), 3u + (classes.count("bicyclist") != 0 ? 1u : 0u));
+}
+
+// A class taught by the user (issue 29): `stac dataset --class` makes the simulator's trees and
+// poles classes of their own; the model trained on it carries five named classes through
+// train, eval --classes (every report) and process.
+TEST_F(ClassifyCli, ExtraClassesFromTheDatasetGoThroughTrainEvalAndProcess) {
+  const std::string classes = " --class tree --class pole";
+  const CliResult train_data =
+      stac("dataset --in " + at("train.pcap") + " --truth " + at("train.jsonl") + " --in " +
+           at("empty.pcap") + " --truth " + at("empty.jsonl") + classes + " --out " + at("data5"));
+  ASSERT_EQ(train_data.code, 0) << train_data.output;
+  const nlohmann::json manifest = read_json(at("data5") + "/manifest.json");
+  EXPECT_EQ(manifest["classes"],
+            nlohmann::json({"car", "pedestrian", "bicyclist", "tree", "pole"}));
+  EXPECT_GT(manifest["tracks_per_class"]["tree"].get<int>(), 0) << manifest.dump(2);
+  const CliResult test_data = stac("dataset --in " + at("test.pcap") + " --truth " +
+                                   at("test.jsonl") + classes + " --out " + at("test5"));
+  ASSERT_EQ(test_data.code, 0) << test_data.output;
+  auto test_set = stac::tools::read_dataset(at("test5"));
+  ASSERT_TRUE(test_set) << test_set.error().message;
+  EXPECT_EQ(test_set->classes.size(), 5u);
+
+  const CliResult train =
+      stac("train --data " + at("data5") + " --out " + at("model5.stac") + " --rounds 200");
+  ASSERT_EQ(train.code, 0) << train.output;
+  EXPECT_NE(train.output.find("tree "), std::string::npos) << train.output;
+  EXPECT_NE(train.output.find("pole "), std::string::npos) << train.output;
+
+  const CliResult eval = stac("eval --classes --data " + at("test5") + " --model " +
+                              at("model5.stac") + " --report " + at("report5"));
+  ASSERT_EQ(eval.code, 0) << eval.output;
+  const nlohmann::json m = read_json(at("report5") + "/metrics.json");
+  EXPECT_EQ(m["classes"], manifest["classes"]);
+  for (const char* c : {"car", "tree", "pole", "overall"}) {
+    EXPECT_TRUE(m.contains(std::string("track.adbf.") + c)) << c << "\n" << m.dump(2);
+  }
+  ASSERT_EQ(m["track_confusion_adbf"].size(), 6u);  // five classes and background
+  EXPECT_EQ(m["track_confusion_adbf"][0].size(), 6u);
+  // The trees of the held-out drive are told apart from background better than by the prior.
+  EXPECT_GT(m["track.adbf.tree"].get<double>(), m["track.prior_only.tree"].get<double>())
+      << eval.output;
+  {
+    std::ifstream csv(at("report5") + "/tracks.csv");
+    std::string header;
+    ASSERT_TRUE(std::getline(csv, header));
+    EXPECT_NE(header.find(",tree_log_odds,pole_log_odds,segments,"), std::string::npos) << header;
+  }
+  for (const char* f : {"confusion.png", "pr.png"}) {
+    EXPECT_GT(std::filesystem::file_size(at("report5") + "/" + f), 100u) << f;
+  }
+
+  const CliResult process = stac("process " + at("test.pcap") + " --tracks " +
+                                 at("test5.tracks.jsonl") + " --model " + at("model5.stac"));
+  ASSERT_EQ(process.code, 0) << process.output;
+  auto scans = stac::tools::read_tracks_file(at("test5.tracks.jsonl"));
+  ASSERT_TRUE(scans) << scans.error().message;
+  std::map<std::string, int> seen;
+  for (const stac::tools::TracksScan& scan : *scans) {
+    for (const stac::tools::TrackRecord& t : scan.tracks) {
+      if (!t.classified) continue;
+      ASSERT_EQ(t.log_odds.size(), 5u);
+      ++seen[t.cls];
+    }
+  }
+  EXPECT_GT(seen["tree"], 0);
+
+  // A 5-class model on a 3-class dataset, and datasets of different classes together: refused.
+  const CliResult three = stac("dataset --in " + at("test.pcap") + " --truth " + at("test.jsonl") +
+                               " --out " + at("test3"));
+  ASSERT_EQ(three.code, 0) << three.output;
+  const CliResult other =
+      stac("eval --classes --data " + at("test3") + " --model " + at("model5.stac"));
+  EXPECT_NE(other.code, 0);
+  EXPECT_NE(other.output.find("--class"), std::string::npos) << other.output;
+  const CliResult mixed = stac("train --data " + at("test3") + " --data " + at("test5") +
+                               " --out " + at("mixed.stac") + " --rounds 5");
+  EXPECT_NE(mixed.code, 0);
+  EXPECT_NE(mixed.output.find("classes"), std::string::npos) << mixed.output;
+  const CliResult unknown = stac("dataset --in " + at("test.pcap") + " --truth " +
+                                 at("test.jsonl") + " --class dragon --out " + at("bad5"));
+  EXPECT_NE(unknown.code, 0);
+  EXPECT_NE(unknown.output.find("--class dragon"), std::string::npos) << unknown.output;
 }
 
 TEST_F(ClassifyCli, MalformedInputsAreRefusedWithMessages) {

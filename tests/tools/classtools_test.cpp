@@ -26,7 +26,7 @@ std::filesystem::path fresh_dir(const std::string& name) {
   return d;
 }
 
-using classification::ObjectClass;
+using classification::ClassIndex;
 
 std::vector<std::uint8_t> read_bytes(const std::filesystem::path& p) {
   std::ifstream in(p, std::ios::binary);
@@ -45,7 +45,7 @@ Dataset synthetic_dataset(std::size_t tracks) {
   for (std::size_t i = 0; i < tracks; ++i) {
     DatasetTrack t;
     t.id = i;
-    t.label = static_cast<ObjectClass>(i % 4);
+    t.label = i % 4 == 3 ? classification::kBackground : static_cast<ClassIndex>(i % 4);
     t.segments = 3;
     const float shift = static_cast<float>(i % 4);
     for (std::size_t k = 0; k < t.segments * descriptors::kDimensions; ++k) {
@@ -72,7 +72,8 @@ classification::TrackClassifierModel trained_model() {
   learning::TrackTrainingConfig c;
   c.segment.rounds = 20;
   c.holistic.rounds = 20;
-  auto m = learning::train_track_classifier(ex, classification::build_layouts(), c);
+  auto m = learning::train_track_classifier(ex, classification::default_class_names(),
+                                            classification::build_layouts(), c);
   EXPECT_TRUE(m) << m.error().message;
   return std::move(*m);
 }
@@ -135,7 +136,7 @@ TEST(DatasetFile, RoundTripsAppendsAndRefusesMissingTruncatedAndCorrupt) {
   Dataset both = std::move(*back);
   auto again = read_dataset(dir / "a");
   ASSERT_TRUE(again);
-  append_dataset(both, std::move(*again));
+  ASSERT_TRUE(append_dataset(both, std::move(*again), "again"));
   EXPECT_EQ(both.tracks.size(), 12u);
   EXPECT_EQ(both.sources.size(), 2u);
   EXPECT_EQ(both.tracks.back().source, 1u);
@@ -176,19 +177,69 @@ TEST(DatasetFile, RoundTripsAppendsAndRefusesMissingTruncatedAndCorrupt) {
   }
 }
 
+// Version 3 stores the class names, so a dataset can hold a class beyond the default three;
+// a version 2 file (no class list: the default three, label 3 background) still reads.
+TEST(DatasetFile, ClassNamesRoundTripAndVersion2StillReads) {
+  const auto dir = fresh_dir("stac_dataset_classes");
+  Dataset d = synthetic_dataset(8);
+  d.classes = {"car", "pedestrian", "bicyclist", "pole"};
+  d.tracks[5].label = 3;  // a pole
+  ASSERT_TRUE(write_dataset(dir / "four", d));
+  auto four = read_dataset(dir / "four");
+  ASSERT_TRUE(four) << four.error().message;
+  EXPECT_EQ(four->classes, d.classes);
+  EXPECT_EQ(four->tracks[5].label, 3);
+  EXPECT_EQ(four->tracks[3].label, classification::kBackground);
+  Dataset three = synthetic_dataset(2);
+  auto mixed = append_dataset(three, std::move(*four), "four");
+  ASSERT_FALSE(mixed);
+  EXPECT_NE(mixed.error().message.find("four: its classes (car, pedestrian, bicyclist, pole)"),
+            std::string::npos)
+      << mixed.error().message;
+  EXPECT_EQ(three.tracks.size(), 2u);  // nothing appended
+
+  // Version 2 of the same tracks: no class list after the header, background labelled 3.
+  Dataset v3 = synthetic_dataset(8);
+  ASSERT_TRUE(write_dataset(dir / "v3", v3));
+  std::vector<std::uint8_t> b = read_bytes(dir / "v3" / "tracks.bin");
+  constexpr std::size_t kHeader = 8 + 4 * 4 + 8 * 3;
+  constexpr std::size_t kClassList =
+      4 + (4 + 3) + (4 + 10) + (4 + 9);  // car, pedestrian, bicyclist
+  b.erase(b.begin() + kHeader, b.begin() + kHeader + kClassList);
+  b[8] = 2;                                                        // version
+  std::size_t at = kHeader + 4 + std::string("synthetic").size();  // the source
+  for (const DatasetTrack& t : v3.tracks) {
+    if (t.label == classification::kBackground) b[at + 12] = 3;  // after u64 id, u32 source
+    at += 8 + 4 * 4 + 4 * (t.segment_rows.size() + t.holistic_rows.size());
+  }
+  b.resize(b.size() - 8);
+  const std::uint64_t h = classification::fnv1a64(b);
+  for (int i = 0; i < 8; ++i) b.push_back(static_cast<std::uint8_t>(h >> (8 * i)));
+  std::filesystem::create_directories(dir / "v2");
+  write_bytes(dir / "v2" / "tracks.bin", b);
+  auto v2 = read_dataset(dir / "v2");
+  ASSERT_TRUE(v2) << v2.error().message;
+  EXPECT_EQ(v2->classes, classification::default_class_names());
+  ASSERT_EQ(v2->tracks.size(), v3.tracks.size());
+  for (std::size_t i = 0; i < v3.tracks.size(); ++i) {
+    EXPECT_EQ(v2->tracks[i].label, v3.tracks[i].label) << i;
+    EXPECT_EQ(v2->tracks[i].holistic_rows, v3.tracks[i].holistic_rows) << i;
+  }
+}
+
 TEST(DatasetConsistency, OffLabelSegmentsFollowTheThesisRule) {
   using S = SegmentTruth;
-  const S car5{5, ObjectClass::kCar}, car6{6, ObjectClass::kCar}, none{};
-  const S ped7{7, ObjectClass::kPedestrian};
+  const S car5{5, classification::kCar}, car6{6, classification::kCar}, none{};
+  const S ped7{7, classification::kPedestrian};
   // A car track on one car: nothing off; over-segmentation (pieces of car 5) is not an error.
   std::vector<S> seg(20, car5);
-  EXPECT_EQ(off_label_segments(ObjectClass::kCar, seg), 0u);
+  EXPECT_EQ(off_label_segments(classification::kCar, seg), 0u);
   // Two segments lost in the background (or under-segmented: no object over half the points)
   // and one on another car (an identity switch): 3 of 20, over 10%.
   seg[3] = none;
   seg[4] = none;
   seg[9] = car6;
-  EXPECT_EQ(off_label_segments(ObjectClass::kCar, seg), 3u);
+  EXPECT_EQ(off_label_segments(classification::kCar, seg), 3u);
   DatasetTrack t;
   t.segments = 20;
   t.off_label_segments = 3;
@@ -198,16 +249,16 @@ TEST(DatasetConsistency, OffLabelSegmentsFollowTheThesisRule) {
   // Its own object is the one most segments are on, whichever comes first.
   std::vector<S> switched(10, car6);
   for (int i = 0; i < 4; ++i) switched[static_cast<std::size_t>(i)] = car5;
-  EXPECT_EQ(off_label_segments(ObjectClass::kCar, switched), 4u);
+  EXPECT_EQ(off_label_segments(classification::kCar, switched), 4u);
   // A background track: only segments that are mostly one foreground object are off.
   std::vector<S> bg(10, none);
   bg[0] = ped7;
-  EXPECT_EQ(off_label_segments(ObjectClass::kBackground, bg), 1u);
+  EXPECT_EQ(off_label_segments(classification::kBackground, bg), 1u);
   bg[1] = car5;
-  EXPECT_EQ(off_label_segments(ObjectClass::kBackground, bg), 2u);
+  EXPECT_EQ(off_label_segments(classification::kBackground, bg), 2u);
   // A pedestrian track whose segments are all of a car has no own object: all off.
-  EXPECT_EQ(off_label_segments(ObjectClass::kPedestrian, std::vector<S>(5, car5)), 5u);
-  EXPECT_EQ(off_label_segments(ObjectClass::kCar, {}), 0u);
+  EXPECT_EQ(off_label_segments(classification::kPedestrian, std::vector<S>(5, car5)), 5u);
+  EXPECT_EQ(off_label_segments(classification::kCar, {}), 0u);
 }
 
 }  // namespace

@@ -301,7 +301,7 @@ TEST(TracksJsonl, ClassifiedTracksCarryTheirClassAndLogOdds) {
   EXPECT_FALSE(back->tracks[0].classified);
   ASSERT_TRUE(back->tracks[1].classified);
   EXPECT_EQ(back->tracks[1].cls, "pedestrian");
-  EXPECT_EQ(back->tracks[1].log_odds, (std::array<double, 3>{-2.5, 1.25, -0.5}));
+  EXPECT_EQ(back->tracks[1].log_odds, (std::vector<double>{-2.5, 1.25, -0.5}));
   const std::string no_odds = "\"class\":\"pedestrian\",\"log_odds\":[-2.5000,1.2500,-0.5000]";
   ASSERT_NE(line.find(no_odds), std::string::npos) << line;
   std::string broken = line;
@@ -309,6 +309,19 @@ TEST(TracksJsonl, ClassifiedTracksCarryTheirClassAndLogOdds) {
   auto bad = parse_tracks_line(broken);
   ASSERT_FALSE(bad);
   EXPECT_NE(bad.error().message.find("log_odds"), std::string::npos) << bad.error().message;
+
+  // A model's own classes: any class name, one log odds per class.
+  s.tracks[1].cls = "pole";
+  s.tracks[1].log_odds = {-2.5, 1.25, -0.5, 3.0};
+  line.clear();
+  append_json_line(s, line);
+  ASSERT_NE(line.find("\"class\":\"pole\",\"log_odds\":[-2.5000,1.2500,-0.5000,3.0000]"),
+            std::string::npos)
+      << line;
+  back = parse_tracks_line(line);
+  ASSERT_TRUE(back) << back.error().message;
+  EXPECT_EQ(back->tracks[1].cls, "pole");
+  EXPECT_EQ(back->tracks[1].log_odds, (std::vector<double>{-2.5, 1.25, -0.5, 3.0}));
 }
 
 TEST(TracksJsonl, ReadsTheSimulatorsTruthLines) {
@@ -397,8 +410,10 @@ TEST(TracksJsonl, InconsistentFilesAreRefusedNamingLineAndWhat) {
        ":1: 'tracks[].segment' is 7, the id of no segment of the scan (-1: none)"},
       {scan(0, track(1, -2)), ":1: 'tracks[].segment' is -2"},
       {scan(0, track(1, 4, "", -4)), ":1: 'tracks[]' has a negative length, width or height"},
-      {scan(0, track(1, 4, R"(,"class":"dragon","log_odds":[0,0,0])")),
-       ":1: 'tracks[].class' is 'dragon'"},
+      {scan(0, track(1, 4, R"(,"class":"two words","log_odds":[0,0,0])")),
+       ":1: 'tracks[].class' is 'two words'"},
+      {scan(0, track(1, 4, R"(,"class":"car","log_odds":[0,0,0,0,0,0,0,0,0])")),
+       ":1: 'tracks[].log_odds' must be 1..8 numbers"},
       {"[]\n", ":1: the line is not a JSON object (one scan per line)"},
   };
   for (const auto& [text, expected] : cases) {

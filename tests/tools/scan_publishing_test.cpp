@@ -14,7 +14,7 @@ namespace {
 TEST(ScanPublishing, SegmentLabelsAreTheClassesOfTheTracksTheyUpdated) {
   pipeline::ScanResult r(8, 100, 8);
   for (int i = 0; i < 5; ++i) *r.segments.segments.append() = segmentation::Segment{};
-  const auto track = [&](std::int32_t segment, bool classified, classification::ObjectClass c) {
+  const auto track = [&](std::int32_t segment, bool classified, classification::ClassIndex c) {
     tracking::Track* t = r.tracked.tracks.append();
     *t = tracking::Track{};
     t->segment = segment;
@@ -23,15 +23,15 @@ TEST(ScanPublishing, SegmentLabelsAreTheClassesOfTheTracksTheyUpdated) {
     k->classified = classified;
     k->label = c;
   };
-  track(0, true, classification::ObjectClass::kCar);
-  track(1, true, classification::ObjectClass::kPedestrian);
-  track(-1, true, classification::ObjectClass::kCar);  // coasting: no segment
-  track(3, true, classification::ObjectClass::kBackground);
-  track(4, false, classification::ObjectClass::kCar);  // not classified yet
-  track(2, true, classification::ObjectClass::kBicyclist);
+  track(0, true, classification::kCar);
+  track(1, true, classification::kPedestrian);
+  track(-1, true, classification::kCar);  // coasting: no segment
+  track(3, true, classification::kBackground);
+  track(4, false, classification::kCar);  // not classified yet
+  track(2, true, classification::kBicyclist);
   std::array<std::uint8_t, 8> labels{};
   labels.fill(99);
-  ScanPublishing::segment_labels(r, labels);
+  ScanPublishing::segment_labels(r, classification::kDefaultClassCount, labels);
   EXPECT_EQ(labels[0], 1);   // car
   EXPECT_EQ(labels[1], 2);   // pedestrian
   EXPECT_EQ(labels[2], 3);   // bicyclist
@@ -41,8 +41,18 @@ TEST(ScanPublishing, SegmentLabelsAreTheClassesOfTheTracksTheyUpdated) {
 
   r.tracked.tracks.clear();  // no tracks at all: every segment an unclassified object
   r.classes.clear();
-  ScanPublishing::segment_labels(r, labels);
+  ScanPublishing::segment_labels(r, classification::kDefaultClassCount, labels);
   for (std::size_t i = 0; i < 5; ++i) EXPECT_EQ(labels[i], 5) << i;
+
+  // A model of 5 classes: class k is k + 1, background 6, not classified 7.
+  track(0, true, 4);
+  track(1, true, classification::kBackground);
+  track(2, false, 0);
+  ScanPublishing::segment_labels(r, 5, labels);
+  EXPECT_EQ(labels[0], 5);
+  EXPECT_EQ(labels[1], 6);
+  EXPECT_EQ(labels[2], 7);
+  EXPECT_EQ(labels[3], 7);
 }
 
 // The cloud goes out only to a reader (nobody reading: not even serialized), labelled by
@@ -54,7 +64,7 @@ TEST(ScanPublishing, PointCloudIsWrittenForAReaderOnlyWithItsSegmentsLabels) {
   c.config_uri = stac::testing::loopback_uri();
   auto publisher = dds::Publisher::create(c);
   ASSERT_TRUE(publisher) << publisher.error().message;
-  ScanPublishing scans(**publisher, false);
+  ScanPublishing scans(**publisher, false, classification::default_class_names());
 
   pipeline::ScanResult r(8, 100, 8, 16);
   for (int i = 0; i < 2; ++i) *r.segments.segments.append() = segmentation::Segment{};
@@ -64,7 +74,7 @@ TEST(ScanPublishing, PointCloudIsWrittenForAReaderOnlyWithItsSegmentsLabels) {
   classification::TrackClass* k = r.classes.append();
   *k = classification::TrackClass{};
   k->classified = true;
-  k->label = classification::ObjectClass::kPedestrian;
+  k->label = classification::kPedestrian;
   *r.cloud.append() = {100, -200, 150, 7, pipeline::kNoSegment};  // ground
   *r.cloud.append() = {1, 2, 3, 40, 0};                           // segment 0: no track
   *r.cloud.append() = {-5, 6, -7, 255, 1};                        // segment 1: a pedestrian
