@@ -23,6 +23,7 @@ void add_echo_command(CLI::App& app);
 void add_run_command(CLI::App& app);
 void add_dataset_command(CLI::App& app);
 void add_train_command(CLI::App& app);
+void add_induct_command(CLI::App& app);
 void add_kitti_objects_command(CLI::App& app);
 
 // Prints "stac: <message>" on stderr and returns the exit code 1, for command callbacks.

@@ -58,6 +58,7 @@ int main(int argc, char** argv) {
   stac::tools::add_run_command(app);
   stac::tools::add_dataset_command(app);
   stac::tools::add_train_command(app);
+  stac::tools::add_induct_command(app);
   stac::tools::add_kitti_objects_command(app);
   // What escapes a subcommand is reported, never an abort: start-up allocates every capacity of
   // the configuration, and a machine without the memory for them gets told so.

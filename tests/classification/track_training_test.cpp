@@ -9,6 +9,7 @@
 
 #include "rt/testing/alloc_counter.hpp"
 #include "synthetic.hpp"
+#include "synthetic_tracks.hpp"
 
 namespace stac::learning {
 namespace {
@@ -20,37 +21,8 @@ using classification::naive_dbf;
 using classification::predict;
 using classification::TrackClassifierModel;
 using classification::TrackEvidence;
-
-ExpectedLayouts layouts() {
-  return {{{"shape", 4}, {"noise", 2}}, {{"speed", 1}, {"size", 1}}};
-}
-
-// Segments: element c of "shape" is near 0 for class c, +-2 otherwise, under heavy per-frame
-// noise and a per-track bias (segments of a track are not independent). Holistic: a speed and a
-// size per class, noisy enough that neither part alone is reliable.
-std::vector<TrackExample> synthetic_tracks(int n, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::normal_distribution<float> g(0.0f, 1.0f);
-  std::bernoulli_distribution side(0.5);
-  std::uniform_int_distribution<int> label(0, 3), length(10, 30);
-  const float speed[4] = {8.0f, 1.4f, 4.5f, 0.5f}, size[4] = {4.5f, 0.6f, 1.8f, 1.5f};
-  std::vector<TrackExample> tracks;
-  for (int m = 0; m < n; ++m) {
-    TrackExample t;
-    const int c = label(rng);
-    t.label = classification::testing::label_of(c);
-    float bias[6];
-    for (float& b : bias) b = 0.8f * g(rng);
-    for (int f = length(rng); f > 0; --f)
-      for (int e = 0; e < 6; ++e) {
-        const float base = e < 4 && e != c ? (side(rng) ? 2.0f : -2.0f) : 0.0f;
-        t.segments.push_back(base + bias[e] + 1.6f * g(rng));
-      }
-    t.holistic = {speed[c] + 2.0f * g(rng), size[c] + 1.0f * g(rng)};
-    tracks.push_back(std::move(t));
-  }
-  return tracks;
-}
+using classification::testing::layouts;
+using classification::testing::synthetic_tracks;
 
 TrackTrainingConfig config() {
   TrackTrainingConfig c;

@@ -1,0 +1,221 @@
+// stac induct (issue 29) on real short simulated drives: a few labels, an empty street as B0,
+// two unlabeled drives as chunks, the oracle answering from their truth; resumed after kills;
+// bad state folders, answer files and inputs refused with messages naming the file.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "stac_cli.hpp"
+#include "tools/induction_state.hpp"
+
+namespace {
+
+using stac::testing::CliResult;
+using stac::testing::stac;
+namespace fs = std::filesystem;
+
+std::vector<nlohmann::json> read_lines(const fs::path& p) {
+  std::vector<nlohmann::json> out;
+  std::ifstream in(p);
+  for (std::string line; std::getline(in, line);)
+    if (!line.empty()) out.push_back(nlohmann::json::parse(line));
+  return out;
+}
+
+std::string read_text(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+class InductCli : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new fs::path(stac::testing::fresh_dir("stac_induct_cli_" + std::to_string(::getpid())));
+    for (const auto& [name, args] :
+         {std::pair<std::string, std::string>{"labels", "--scenario urban --seed 1 --duration 8"},
+          {"chunk1", "--scenario urban --seed 4 --duration 6"},
+          {"chunk2", "--scenario urban --seed 5 --duration 6"},
+          {"test", "--scenario urban --seed 2 --duration 5"},
+          {"empty", "--scenario empty --seed 3 --duration 4"}}) {
+      const std::string base = (*dir_ / name).string();
+      const CliResult sim =
+          stac("sim " + args + " --out " + base + ".pcap --truth " + base + ".jsonl");
+      ASSERT_EQ(sim.code, 0) << sim.output;
+      const CliResult data =
+          stac("dataset --in " + base + ".pcap --truth " + base + ".jsonl --out " + base + "_data");
+      ASSERT_EQ(data.code, 0) << data.output;
+    }
+  }
+  static void TearDownTestSuite() {
+    fs::remove_all(*dir_);
+    delete dir_;
+  }
+  static std::string at(const std::string& name) { return (*dir_ / name).string(); }
+  // The whole first command of a state: classes, B0, 3 labels per class, two chunks, the oracle.
+  static std::string first_run(const std::string& state) {
+    return "induct --state " + at(state) + " --classes car,pedestrian,bicyclist --background " +
+           at("empty_data") + " --labels " + at("labels_data") +
+           " --labels-per-class 3 --unlabeled " + at("chunk1_data") + " --unlabeled " +
+           at("chunk2_data") + " --oracle --ask 2 --warm-rounds 40 --reset-rounds 120";
+  }
+  static fs::path* dir_;
+};
+fs::path* InductCli::dir_ = nullptr;
+
+TEST_F(InductCli, OracleRoundsTeachAModelThatEvalAndProcessTake) {
+  const CliResult r = stac(first_run("state") + " --eval " + at("test_data"));
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("round 2:"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("retrospection"), std::string::npos) << r.output;
+
+  std::vector<nlohmann::json> rounds, retrospections;
+  for (const auto& j : read_lines(at("state") + "/history.jsonl"))
+    (j["event"] == "round" ? rounds : retrospections).push_back(j);
+  ASSERT_EQ(rounds.size(), 2u);
+  EXPECT_FALSE(retrospections.empty());
+  EXPECT_TRUE(rounds[0]["reset"].get<bool>());  // the first round trains from zero
+  for (const auto& round : rounds) {
+    ASSERT_TRUE(round.contains("accuracy")) << round.dump();
+    EXPECT_GT(round["accuracy"].get<double>(), 0.5) << round.dump();
+    EXPECT_GT(round["groups_offered"].get<int>(), 0) << round.dump();
+  }
+  // Inducted groups are mostly right (the oracle's truth checks them).
+  const auto& last = rounds.back();
+  ASSERT_GT(last["inducted_checked"].get<int>(), 0) << last.dump();
+  EXPECT_GE(last["inducted_right"].get<double>(), 0.8 * last["inducted_checked"].get<double>())
+      << last.dump();
+  // 3 seed labels per class (as many as the drive holds) and of background, then the answers.
+  const auto answers = read_lines(at("state") + "/labels.jsonl");
+  std::map<std::string, int> per;
+  for (const auto& a : answers) ++per[a["label"].get<std::string>()];
+  EXPECT_GE(per["car"], 3);
+  EXPECT_GE(per["background"], 3);
+  EXPECT_GT(answers.size(), 12u);
+  EXPECT_FALSE(read_lines(at("state") + "/queries.jsonl").empty());
+  for (const char* f : {"/model.stacmodel", "/models/round-0001.stacmodel",
+                        "/models/round-0002.stacmodel", "/state.bin"})
+    EXPECT_TRUE(fs::is_regular_file(at("state") + f)) << f;
+
+  // The model is a normal model file.
+  const CliResult eval = stac("eval --classes --data " + at("test_data") + " --model " +
+                              at("state") + "/model.stacmodel");
+  EXPECT_EQ(eval.code, 0) << eval.output;
+  const CliResult process = stac("process " + at("test.pcap") + " --model " + at("state") +
+                                 "/model.stacmodel --tracks " + at("tracks.jsonl"));
+  EXPECT_EQ(process.code, 0) << process.output;
+
+  // A chunk already taken is not taken twice; a new round on the buffer is.
+  const CliResult again = stac("induct --state " + at("state") + " --unlabeled " +
+                               at("chunk1_data") + " --rounds 1 --warm-rounds 40");
+  ASSERT_EQ(again.code, 0) << again.output;
+  EXPECT_NE(again.output.find("taken in an earlier run, skipped"), std::string::npos)
+      << again.output;
+  EXPECT_NE(again.output.find("round 3:"), std::string::npos) << again.output;
+  auto state = stac::tools::read_induction_state(at("state"));
+  ASSERT_TRUE(state.has_value()) << state.error().message;
+  EXPECT_EQ(state->rounds, 3u);
+}
+
+TEST_F(InductCli, AKillAtAnyMomentLosesAtMostTheRoundInProgress) {
+  // Killed (SIGKILL) at growing moments, resumed each time with the same command.
+  const std::string command = first_run("killed");
+  int kills = 0;
+  for (const char* after : {"0.3", "0.7", "1.2", "1.8", "2.5", "3.5"}) {
+    const std::string cmd = std::string("timeout -s KILL ") + after + " " + STAC_CLI + " " +
+                            command + " >/dev/null 2>&1";
+    const int status = std::system(cmd.c_str());
+    if (WIFEXITED(status) && WEXITSTATUS(status) == 137) ++kills;
+    // Whatever the moment, what is on disk loads (or is not there yet).
+    if (fs::exists(at("killed") + "/state.bin")) {
+      auto s = stac::tools::read_induction_state(at("killed"));
+      ASSERT_TRUE(s.has_value()) << "after a kill at " << after << " s: " << s.error().message;
+    }
+  }
+  EXPECT_GT(kills, 0) << "no run was killed: the test proves nothing";
+  // The first command creates the state: resumed without --classes and the settings.
+  const CliResult r = stac("induct --state " + at("killed") + " --background " + at("empty_data") +
+                           " --labels " + at("labels_data") + " --labels-per-class 3 --unlabeled " +
+                           at("chunk1_data") + " --unlabeled " + at("chunk2_data") +
+                           " --oracle --ask 2 --warm-rounds 40 --reset-rounds 120");
+  ASSERT_EQ(r.code, 0) << r.output;
+  auto s = stac::tools::read_induction_state(at("killed"));
+  ASSERT_TRUE(s.has_value()) << s.error().message;
+  EXPECT_EQ(s->rounds, 2u);  // one round per chunk, none twice
+  std::set<std::pair<std::uint32_t, std::uint64_t>> labelled;
+  for (const auto& t : s->labels)
+    EXPECT_TRUE(labelled.insert({t.source, t.track}).second) << "a track labelled twice";
+  for (const auto& src : s->sources) {
+    if (src.role == stac::tools::SourceRole::kUnlabeled) {
+      EXPECT_EQ(src.stage, stac::tools::ChunkStage::kAsked) << src.path;
+    }
+  }
+  // Every answer written is a whole line, and every one is in the state.
+  const auto answers = read_lines(at("killed") + "/labels.jsonl");
+  EXPECT_EQ(s->answers_applied, answers.size());
+  std::set<std::pair<std::string, std::uint64_t>> answered;
+  for (const auto& a : answers)
+    answered.insert({a["source"].get<std::string>(), a["track"].get<std::uint64_t>()});
+  EXPECT_EQ(s->seen.size(), answered.size());  // a track answered twice counts once
+  EXPECT_LE(s->labels.size(), s->seen.size());
+}
+
+TEST_F(InductCli, BadInputsAreRefusedNamingTheFileAndNoAnswerIsLost) {
+  // No state yet and no classes; settings of an existing state; a bad number; a capture given
+  // as a dataset.
+  CliResult r = stac("induct --state " + at("bad") + " --unlabeled " + at("chunk1_data"));
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.output.find("--classes"), std::string::npos) << r.output;
+  r = stac("induct --state " + at("bad") + " --classes car,car");
+  EXPECT_NE(r.code, 0);
+  r = stac("induct --state " + at("bad") + " --classes car --eps nan");
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.output.find("--eps"), std::string::npos) << r.output;
+  r = stac("induct --state " + at("bad") + " --classes car,pedestrian,bicyclist --unlabeled " +
+           at("test.pcap"));
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.output.find("test.pcap"), std::string::npos) << r.output;
+  r = stac("induct --state " + at("bad") + " --classes car,pedestrian,bicyclist --background " +
+           at("empty_data") + " --labels " + at("labels_data") + " --labels-per-class 2");
+  ASSERT_EQ(r.code, 0) << r.output;
+  r = stac("induct --state " + at("bad") + " --classes car --dual");
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.output.find("set when it is created"), std::string::npos) << r.output;
+
+  // A garbage line among the answers: refused with its line number; the file is untouched.
+  const std::string labels = at("bad") + "/labels.jsonl";
+  {
+    std::ofstream out(labels, std::ios::app);
+    out << "this is not json\n{\"source\": \"x\", \"track\": 1, \"label\": \"car\"}\n";
+  }
+  const std::string before = read_text(labels);
+  r = stac("induct --state " + at("bad") + " --rounds 1");
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.output.find("labels.jsonl:"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("not an answer"), std::string::npos) << r.output;
+  EXPECT_EQ(read_text(labels), before);
+
+  // A damaged state file: refused naming it; the answers are still there.
+  {
+    std::fstream f(at("bad") + "/state.bin", std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(40);
+    f.put('\x5a');
+  }
+  r = stac("induct --state " + at("bad") + " --rounds 1");
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.output.find("state.bin"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("damaged"), std::string::npos) << r.output;
+  EXPECT_EQ(read_text(labels), before);
+}
+
+}  // namespace

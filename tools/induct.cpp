@@ -1,0 +1,674 @@
+// stac induct: group induction as a resumable workflow (thesis ch. 2; docs/learning.md). A state
+// folder keeps the user's labels, the background set B0, the buffer of unlabeled groups and the
+// model; each unlabeled dataset given is one chunk of the stream and one round (induction phase,
+// then warm-started training); after a round the tracks the model is least sure of (and its
+// confident positives the user has never seen) are written as questions, answered by the user
+// (`stac label`, or labels.jsonl by hand) or, with --oracle, from the datasets' truth.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <numeric>
+#include <random>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "perception/classification/holistic.hpp"
+#include "perception/descriptors/descriptors.hpp"
+#include "perception/learning/induction.hpp"
+#include "tools/commands.hpp"
+#include "tools/dataset_file.hpp"
+#include "tools/induction_state.hpp"
+#include "tools/model_file.hpp"
+#include "tools/progress.hpp"
+
+namespace stac::tools {
+namespace {
+
+using classification::ClassIndex;
+using classification::kBackground;
+using classification::LogOdds;
+namespace fs = std::filesystem;
+
+constexpr std::size_t kSegDims = descriptors::kDimensions;
+constexpr std::size_t kHolDims = classification::kHolisticDimensions;
+
+struct InductOptions {
+  std::string state;
+  std::string classes;  // comma-separated, for a new state
+  std::string model;    // a model to start a new state from
+  std::vector<std::string> background, labels, unlabeled, eval;
+  std::size_t labels_per_class = 0;  // 0: every track of the --labels datasets
+  std::size_t rounds = 0;            // extra rounds on the buffer after the chunks
+  std::size_t ask = 5;               // questions per class and kind after a round
+  bool oracle = false;
+  bool dual = false;
+  double eps = 0.0;
+  std::size_t group_size = 10, buffer = 20'000;
+  std::size_t warm_rounds = 200, reset_rounds = 1000;
+  std::uint64_t seed = 1;
+  std::string out;
+  bool settings_given = false;
+};
+
+std::string join(const std::vector<std::string>& v) {
+  std::string s;
+  for (const std::string& x : v) s += (s.empty() ? "" : ", ") + x;
+  return s;
+}
+
+learning::TrackExample example_of(const DatasetTrack& t, ClassIndex label) {
+  learning::TrackExample e;
+  e.label = label;
+  e.segments = t.segment_rows;
+  e.holistic.assign(t.holistic_rows.end() - static_cast<std::ptrdiff_t>(kHolDims),
+                    t.holistic_rows.end());
+  return e;
+}
+
+// The model's track log odds (ADBF) over a track's segments and its last holistic descriptor.
+LogOdds track_log_odds(const classification::TrackClassifierModel& model, const DatasetTrack& t) {
+  classification::TrackEvidence evidence;
+  LogOdds h{}, out{};
+  for (std::size_t i = 0; i + kSegDims <= t.segment_rows.size(); i += kSegDims)
+    (void)add_segment(model, std::span(t.segment_rows).subspan(i, kSegDims), evidence, h);
+  (void)classification::track_log_odds(model, evidence, std::span(t.holistic_rows).last(kHolDims),
+                                       out);
+  return out;
+}
+
+class Inductor {
+ public:
+  Inductor(const InductOptions& o) : o_(o), dir_(o.state) {}
+  int run();
+
+ private:
+  rt::Result<bool> open_state();
+  rt::Result<const Dataset*> dataset(const std::string& path);
+  rt::Result<std::uint32_t> source_index(const std::string& path, SourceRole role);
+  rt::Result<bool> read_background();
+  rt::Result<bool> seed_labels();
+  rt::Result<bool> apply_answers();
+  rt::Result<bool> round(std::uint32_t chunk, std::vector<learning::Group> groups);
+  rt::Result<bool> ask(std::uint32_t chunk);
+  rt::Result<bool> save(const std::string& what);
+  [[nodiscard]] std::vector<learning::TrackExample> label_examples() const;
+  [[nodiscard]] double accuracy(const classification::TrackClassifierModel& model);
+  [[nodiscard]] bool seen(std::uint32_t source, std::uint64_t track) const {
+    return seen_.count({source, track}) != 0;
+  }
+  [[nodiscard]] learning::TrainingPhaseConfig phase() const;
+
+  const InductOptions& o_;
+  fs::path dir_;
+  InductionState s_;
+  std::map<std::string, Dataset> datasets_;
+  std::vector<learning::TrackExample> b0_;
+  std::set<std::pair<std::uint32_t, std::uint64_t>> seen_;
+  std::vector<std::string> pending_history_;
+  bool creating_ = false;
+};
+
+learning::TrainingPhaseConfig Inductor::phase() const {
+  learning::TrainingPhaseConfig c;
+  c.warm_rounds = o_.warm_rounds;
+  c.reset_rounds = o_.reset_rounds;
+  c.segment.seed = o_.seed + 2ull * s_.rounds;
+  c.holistic.seed = o_.seed + 2ull * s_.rounds + 1;
+  return c;
+}
+
+rt::Result<const Dataset*> Inductor::dataset(const std::string& path) {
+  if (auto it = datasets_.find(path); it != datasets_.end()) return &it->second;
+  auto d = read_dataset(path);
+  if (!d) return rt::make_error(d.error().message);
+  if (d->classes != s_.classes)
+    return rt::make_error(path + ": its classes (" + join(d->classes) +
+                          ") differ from the state's (" + join(s_.classes) +
+                          "); make it with the same `stac dataset --class` options");
+  return &datasets_.emplace(path, std::move(d).value()).first->second;
+}
+
+rt::Result<std::uint32_t> Inductor::source_index(const std::string& path, SourceRole role) {
+  for (std::uint32_t i = 0; i < s_.sources.size(); ++i)
+    if (s_.sources[i].path == path) {
+      if (s_.sources[i].role != role && role == SourceRole::kBackground)
+        return rt::make_error(path +
+                              ": already read as labelled or unlabeled data; B0 must hold only "
+                              "drives without the taught classes");
+      return i;
+    }
+  s_.sources.push_back({path, role});
+  return static_cast<std::uint32_t>(s_.sources.size() - 1);
+}
+
+rt::Result<bool> Inductor::open_state() {
+  std::error_code ec;
+  const bool exists = fs::exists(dir_ / "state.bin", ec);
+  if (exists) {
+    if (!o_.classes.empty() || !o_.model.empty() || o_.settings_given)
+      return rt::make_error(dir_.string() +
+                            ": the state exists; --classes, --model, --dual, --eps, --group-size "
+                            "and --buffer are set when it is created (start a new folder to "
+                            "change them)");
+    auto s = read_induction_state(dir_);
+    if (!s) return rt::make_error(s.error().message);
+    s_ = std::move(s).value();
+  } else {
+    if (fs::exists(dir_, ec) && !fs::is_directory(dir_, ec))
+      return rt::make_error(dir_.string() + ": exists and is not a folder");
+    if (o_.classes.empty() == o_.model.empty())
+      return rt::make_error(dir_.string() +
+                            ": no state here yet; start one with --classes NAME,NAME,... or "
+                            "--model FILE (one of them)");
+    if (!o_.model.empty()) {
+      auto m = read_model_file(o_.model);
+      if (!m) return rt::make_error(m.error().message);
+      s_.model = std::move(m).value();
+      s_.has_model = true;
+      s_.classes = s_.model.classes;
+      s_.reset_pending = false;  // warm start from the given model
+    } else {
+      std::stringstream list(o_.classes);
+      for (std::string name; std::getline(list, name, ',');) s_.classes.push_back(name);
+      if (const std::string bad = classification::check_class_names(s_.classes); !bad.empty())
+        return rt::make_error("--classes " + o_.classes + ": " + bad);
+    }
+    if (!std::isfinite(o_.eps)) return rt::make_error("--eps must be a number in [0, 100]");
+    s_.induction.dual = o_.dual;
+    s_.induction.eps_max = o_.eps;
+    s_.induction.max_group_size = o_.group_size;
+    s_.induction.buffer_groups = o_.buffer;
+    if (const std::string bad = learning::validate(s_.induction); !bad.empty())
+      return rt::make_error(bad);
+    creating_ = true;  // on disk once every input has been read (run())
+  }
+  for (const auto& p : s_.seen) seen_.insert(p);
+  return true;
+}
+
+rt::Result<bool> Inductor::read_background() {
+  for (const std::string& path : o_.background)
+    if (auto i = source_index(path, SourceRole::kBackground); !i)
+      return rt::make_error(i.error().message);
+  for (const InductionSource& src : s_.sources) {
+    if (src.role != SourceRole::kBackground) continue;
+    auto d = dataset(src.path);
+    if (!d) return rt::make_error(d.error().message);
+    for (const DatasetTrack& t : (*d)->tracks) b0_.push_back(example_of(t, kBackground));
+  }
+  return true;
+}
+
+// --labels: up to --labels-per-class tracks of each class (and of background), drawn with
+// --seed, appended to labels.jsonl as answers.
+rt::Result<bool> Inductor::seed_labels() {
+  std::mt19937_64 rng(o_.seed);
+  for (const std::string& path : o_.labels) {
+    auto i = source_index(path, SourceRole::kLabels);
+    if (!i) return rt::make_error(i.error().message);
+    auto d = dataset(path);
+    if (!d) return rt::make_error(d.error().message);
+    std::vector<std::size_t> order((*d)->tracks.size());
+    std::iota(order.begin(), order.end(), std::size_t{0});
+    std::shuffle(order.begin(), order.end(), rng);
+    std::vector<std::size_t> taken(s_.classes.size() + 1, 0);  // with the earlier runs' labels
+    for (const LabelledTrack& t : s_.labels)
+      if (t.source == *i) ++taken[t.label == kBackground ? s_.classes.size() : t.label];
+    for (const std::size_t k : order) {
+      const DatasetTrack& t = (*d)->tracks[k];
+      if (!consistent(t) || seen(*i, k)) continue;
+      std::size_t& n = taken[t.label == kBackground ? s_.classes.size() : t.label];
+      if (o_.labels_per_class != 0 && n >= o_.labels_per_class) continue;
+      ++n;
+      const nlohmann::json answer = {{"source", path},
+                                     {"track", k},
+                                     {"label", classification::class_name(s_.classes, t.label)}};
+      if (auto a = append_line_durably(dir_ / "labels.jsonl", answer.dump()); !a) return a;
+    }
+  }
+  return true;
+}
+
+std::vector<learning::TrackExample> Inductor::label_examples() const {
+  std::vector<learning::TrackExample> out;
+  out.reserve(s_.labels.size());
+  for (const LabelledTrack& t : s_.labels) out.push_back({t.label, t.segments, t.holistic});
+  return out;
+}
+
+// The answers of labels.jsonl not taken yet; new labels trigger retrospection (thesis 2.3.2).
+rt::Result<bool> Inductor::apply_answers() {
+  const fs::path file = dir_ / "labels.jsonl";
+  std::ifstream in(file);
+  if (!in) return true;  // no answer yet
+  std::vector<learning::TrackExample> fresh;
+  std::uint64_t line_no = 0;
+  std::size_t skipped = 0;
+  for (std::string line; std::getline(in, line);) {
+    if (++line_no <= s_.answers_applied) continue;
+    const auto bad = [&](const std::string& what) {
+      return rt::make_error(file.string() + ":" + std::to_string(line_no) + ": " + what +
+                            "; fix or delete that line (each line: {\"source\": DATASET, "
+                            "\"track\": INDEX, \"label\": CLASS | \"background\" | \"skip\"})");
+    };
+    if (line.find_first_not_of(" \t\r") == std::string::npos) {
+      s_.answers_applied = line_no;
+      continue;
+    }
+    const nlohmann::json j = nlohmann::json::parse(line, nullptr, false);
+    if (j.is_discarded() || !j.is_object() || !j.contains("source") || !j["source"].is_string() ||
+        !j.contains("track") || !j["track"].is_number_unsigned() || !j.contains("label") ||
+        !j["label"].is_string()) {
+      if (in.peek() == std::char_traits<char>::eof() && line_no > s_.answers_applied) {
+        // A last line cut short by a kill while it was written: said, and left for the user.
+        std::fprintf(stderr, "stac: %s:%llu: an incomplete last line, ignored\n",
+                     file.string().c_str(), static_cast<unsigned long long>(line_no));
+        break;
+      }
+      return bad("not an answer");
+    }
+    const std::string path = j["source"].get<std::string>();
+    const auto track = j["track"].get<std::uint64_t>();
+    const std::string label = j["label"].get<std::string>();
+    std::uint32_t source = 0;
+    bool known = false;
+    for (std::uint32_t i = 0; i < s_.sources.size(); ++i)
+      if (s_.sources[i].path == path) source = i, known = true;
+    if (!known || s_.sources[source].role == SourceRole::kBackground)
+      return bad("source " + path + " is not a dataset this state read as labels or unlabeled");
+    auto d = dataset(path);
+    if (!d) return bad(d.error().message);
+    if (track >= (*d)->tracks.size())
+      return bad("track " + std::to_string(track) + " is past the " +
+                 std::to_string((*d)->tracks.size()) + " tracks of " + path);
+    ClassIndex cls = kBackground;
+    if (label != "skip" && label != "background") {
+      const auto it = std::find(s_.classes.begin(), s_.classes.end(), label);
+      if (it == s_.classes.end())
+        return bad("label " + label + " is none of " + join(s_.classes) + ", background, skip");
+      cls = static_cast<ClassIndex>(it - s_.classes.begin());
+    }
+    s_.answers_applied = line_no;
+    if (!seen_.insert({source, track}).second) continue;  // answered before: the first answer holds
+    s_.seen.emplace_back(source, track);
+    if (label == "skip") {
+      ++skipped;
+      continue;
+    }
+    const DatasetTrack& t = (*d)->tracks[track];
+    const learning::TrackExample e = example_of(t, cls);
+    s_.labels.push_back({source, track, cls, e.segments, e.holistic});
+    fresh.push_back(e);
+    // A labelled track's groups leave the buffer: it is supervised now.
+    std::erase_if(s_.buffer,
+                  [&](const learning::Group& g) { return g.source == source && g.track == track; });
+  }
+  if (!fresh.empty() && s_.has_model) {
+    const LogOdds eps =
+        learning::retrospection_noise(s_.model.segment, fresh, kSegDims, s_.induction.eps_max);
+    const auto summary = learning::induction_phase(s_.model.segment, s_.buffer, s_.induction, eps);
+    std::size_t de = 0;
+    for (const auto& c : summary.changes) de += c.to == learning::kUninducted ? 1 : 0;
+    nlohmann::json e = nlohmann::json::array();
+    for (std::size_t k = 0; k < s_.classes.size(); ++k) e.push_back(eps[k]);
+    pending_history_.push_back(nlohmann::json{
+        {"event", "retrospection"},
+        {"after_round", s_.rounds},
+        {"new_labels", fresh.size()},
+        {"skipped", skipped},
+        {"eps", e},
+        {"de_inducted", de}}.dump());
+    std::printf("retrospection: %zu new labels, %zu groups de-inducted, H reset\n", fresh.size(),
+                de);
+    s_.reset_pending = true;
+  }
+  return true;
+}
+
+double Inductor::accuracy(const classification::TrackClassifierModel& model) {
+  std::size_t right = 0, total = 0;
+  for (const std::string& path : o_.eval) {
+    auto d = dataset(path);
+    if (!d) continue;  // checked before the rounds
+    for (const DatasetTrack& t : (*d)->tracks) {
+      if (!consistent(t)) continue;
+      ++total;
+      right += classification::predict(track_log_odds(model, t), model.classes.size()) == t.label
+                   ? 1
+                   : 0;
+    }
+  }
+  return total == 0 ? 0.0 : static_cast<double>(right) / static_cast<double>(total);
+}
+
+rt::Result<bool> Inductor::save(const std::string& what) {
+  if (auto w = write_induction_state(dir_, s_); !w)
+    return rt::make_error(w.error().message + " (" + what + ")");
+  for (const std::string& line : pending_history_)
+    if (auto a = append_line_durably(dir_ / "history.jsonl", line); !a) return a;
+  pending_history_.clear();
+  if (s_.has_model) {
+    char name[32];
+    std::snprintf(name, sizeof name, "round-%04u.stacmodel", s_.rounds);
+    std::error_code ec;
+    fs::create_directories(dir_ / "models", ec);
+    if (auto m = write_model_file(dir_ / "models" / name, s_.model); !m) return m;
+    if (auto m = write_model_file(dir_ / "model.stacmodel", s_.model); !m) return m;
+  }
+  return true;
+}
+
+rt::Result<bool> Inductor::round(std::uint32_t chunk, std::vector<learning::Group> groups) {
+  const auto started = std::chrono::steady_clock::now();
+  const std::size_t classes = s_.classes.size();
+  // Every third user label and B0 track is kept out of boosting for the filter's fit, as
+  // `stac train` holds tracks out (fitted on tracks boosting has seen, the weights trust the
+  // overconfident holistic classifier: held-out accuracy fell from 0.93 to 0.79 in a round).
+  std::vector<learning::TrackExample> labels, filter_tracks, background;
+  {
+    std::vector<learning::TrackExample> all = label_examples();
+    for (std::size_t i = 0; i < all.size(); ++i)
+      (i % 3 == 2 ? filter_tracks : labels).push_back(std::move(all[i]));
+    for (std::size_t i = 0; i < b0_.size(); ++i)
+      (i % 3 == 2 ? filter_tracks : background).push_back(b0_[i]);
+  }
+  if (!s_.has_model) {
+    const auto range =
+        learning::round_data(labels, background, groups, classes, kSegDims, kHolDims);
+    const auto data = learning::round_data(labels, background, {}, classes, kSegDims, kHolDims);
+    if (data.segments.size() == 0)
+      return rt::make_error(
+          "no labelled track and no background yet: give --labels DATASET (a few tracks per "
+          "class) and --background DATASET (drives without the taught classes)");
+    auto m =
+        learning::initial_model(s_.classes, range, data, classification::build_layouts(), phase());
+    if (!m) return rt::make_error(m.error().message);
+    s_.model = std::move(m).value();
+    s_.has_model = true;
+    s_.reset_pending = true;
+  }
+  const bool reset = s_.reset_pending;
+  if (reset) {
+    auto m = learning::training_phase(
+        s_.model, learning::round_data(labels, background, s_.buffer, classes, kSegDims, kHolDims),
+        true, phase());
+    if (!m) return rt::make_error(m.error().message);
+    s_.model = std::move(m).value();
+    s_.reset_pending = false;
+  }
+  const std::size_t before = s_.buffer.size();
+  for (learning::Group& g : groups) s_.buffer.push_back(std::move(g));
+  const auto summary = learning::induction_phase(s_.model.segment, s_.buffer, s_.induction,
+                                                 learning::uniform_noise(s_.induction.eps_max));
+  std::size_t newly = 0, de = 0;
+  for (const auto& c : summary.changes) {
+    if (c.to == learning::kUninducted)
+      ++de;
+    else if (c.from == learning::kUninducted)
+      ++newly;
+  }
+  const std::size_t offered = s_.buffer.size();
+  learning::keep_most_useful(s_.buffer, s_.induction.buffer_groups);
+  auto next = learning::training_phase(
+      s_.model, learning::round_data(labels, background, s_.buffer, classes, kSegDims, kHolDims),
+      false, phase());
+  if (!next) return rt::make_error(next.error().message);
+  s_.model = std::move(next).value();
+  if (chunk < s_.sources.size()) s_.sources[chunk].stage = ChunkStage::kTrained;
+  if (!filter_tracks.empty()) {
+    auto adbf = learning::fit_filter(s_.model, filter_tracks, kSegDims, learning::LogisticConfig{});
+    if (!adbf) return rt::make_error("the filter's fit: " + adbf.error().message);
+    s_.model.adbf = *adbf;
+  }
+  ++s_.rounds;
+
+  nlohmann::json user = nlohmann::json::object(), inducted = nlohmann::json::object();
+  std::vector<std::size_t> per(classes + 1, 0), in_buffer(classes + 1, 0);
+  for (const LabelledTrack& t : s_.labels) ++per[t.label == kBackground ? classes : t.label];
+  for (const learning::Group& g : s_.buffer)
+    if (g.label != learning::kUninducted) ++in_buffer[g.label == kBackground ? classes : g.label];
+  for (std::size_t c = 0; c <= classes; ++c) {
+    const char* name = c < classes ? s_.classes[c].c_str() : "background";
+    user[name] = per[c];
+    inducted[name] = in_buffer[c];
+  }
+  nlohmann::json line = {
+      {"event", "round"},
+      {"round", s_.rounds},
+      {"chunk", chunk < s_.sources.size() ? s_.sources[chunk].path : ""},
+      {"user_labels", user},
+      {"background_tracks", b0_.size()},
+      {"groups_offered", offered - before},
+      {"buffer", s_.buffer.size()},
+      {"dropped_from_buffer", offered - s_.buffer.size()},
+      {"inducted", inducted},
+      {"newly_inducted", newly},
+      {"de_inducted", de},
+      {"reset", reset},
+      {"seconds",
+       std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count()}};
+  if (o_.oracle) {
+    // The truth the oracle answers from: how many inducted groups carry their track's class.
+    std::size_t right = 0, total = 0;
+    for (const learning::Group& g : s_.buffer) {
+      if (g.label == learning::kUninducted || s_.sources[g.source].role != SourceRole::kUnlabeled)
+        continue;
+      auto d = dataset(s_.sources[g.source].path);
+      if (!d || g.track >= (*d)->tracks.size()) continue;
+      ++total;
+      right += (*d)->tracks[g.track].label == g.label ? 1 : 0;
+    }
+    line["inducted_right"] = right;
+    line["inducted_checked"] = total;
+  }
+  std::string acc;
+  if (!o_.eval.empty()) {
+    const double a = accuracy(s_.model);
+    line["accuracy"] = a;
+    char text[48];
+    std::snprintf(text, sizeof text, ", held-out accuracy %.3f", a);
+    acc = text;
+  }
+  pending_history_.push_back(line.dump());
+  std::size_t user_total = 0, inducted_total = 0;
+  for (std::size_t c = 0; c <= classes; ++c) user_total += per[c], inducted_total += in_buffer[c];
+  std::printf("round %u: %zu user labels, %zu groups in the buffer (%zu inducted, +%zu -%zu)%s\n",
+              s_.rounds, user_total, s_.buffer.size(), inducted_total, newly, de, acc.c_str());
+  std::fflush(stdout);
+  return save("round " + std::to_string(s_.rounds));
+}
+
+// Questions about the chunk's tracks: written to queries.jsonl; with --oracle answered from the
+// dataset's truth labels (an inconsistent track is skipped, as a person would).
+rt::Result<bool> Inductor::ask(std::uint32_t chunk) {
+  auto d = dataset(s_.sources[chunk].path);
+  if (!d) return rt::make_error(d.error().message);
+  std::vector<learning::QueryCandidate> candidates((*d)->tracks.size());
+  for (std::size_t k = 0; k < candidates.size(); ++k) {
+    candidates[k].log_odds = track_log_odds(s_.model, (*d)->tracks[k]);
+    candidates[k].seen = seen(chunk, k);
+  }
+  const auto chosen = learning::choose_queries(candidates, s_.classes.size(), o_.ask);
+  std::string text;
+  for (const std::size_t k : chosen) {
+    nlohmann::json lo = nlohmann::json::object();
+    for (std::size_t c = 0; c < s_.classes.size(); ++c)
+      lo[s_.classes[c]] = candidates[k].log_odds[c];
+    text +=
+        nlohmann::json{{"source", s_.sources[chunk].path},
+                       {"track", k},
+                       {"predicted", classification::class_name(
+                                         s_.classes, classification::predict(candidates[k].log_odds,
+                                                                             s_.classes.size()))},
+                       {"log_odds", lo}}
+            .dump() +
+        "\n";
+  }
+  if (auto w = write_file_durably(
+          dir_ / "queries.jsonl",
+          std::span(reinterpret_cast<const std::uint8_t*>(text.data()), text.size()));
+      !w)
+    return w;
+  s_.sources[chunk].stage = ChunkStage::kAsked;
+  if (!o_.oracle) return save("questions");
+  for (const std::size_t k : chosen) {
+    const DatasetTrack& t = (*d)->tracks[k];
+    const char* label = consistent(t) ? classification::class_name(s_.classes, t.label) : "skip";
+    const nlohmann::json answer = {
+        {"source", s_.sources[chunk].path}, {"track", k}, {"label", label}};
+    if (auto a = append_line_durably(dir_ / "labels.jsonl", answer.dump()); !a) return a;
+  }
+  if (auto a = apply_answers(); !a) return a;
+  return save("answers");
+}
+
+int Inductor::run() {
+  if (auto r = open_state(); !r) return fail(r.error().message);
+  for (const std::string& path : o_.eval)
+    if (auto d = dataset(path); !d) return fail(d.error().message);
+  if (auto r = read_background(); !r) return fail(r.error().message);
+  for (const std::string& path : o_.labels)
+    if (auto d = dataset(path); !d) return fail(d.error().message);
+  std::vector<std::uint32_t> chunks;
+  for (const std::string& path : o_.unlabeled) {
+    auto i = source_index(path, SourceRole::kUnlabeled);
+    if (!i) return fail(i.error().message);
+    if (auto d = dataset(path); !d) return fail(d.error().message);
+    chunks.push_back(*i);
+  }
+  if (creating_) {  // every input read: the new state goes to disk
+    std::error_code ec;
+    fs::create_directories(dir_ / "models", ec);
+    if (ec) return fail(dir_.string() + ": cannot create the state folder (" + ec.message() + ")");
+  }
+  if (auto r = apply_answers(); !r) return fail(r.error().message);  // a killed run's answers
+  if (auto r = seed_labels(); !r) return fail(r.error().message);
+  if (auto r = apply_answers(); !r) return fail(r.error().message);
+  if (auto r = save("labels"); !r) return fail(r.error().message);
+  const std::size_t total = chunks.size() + o_.rounds;
+  Progress progress("induct: rounds", static_cast<double>(total));
+  std::size_t done = 0;
+  for (const std::uint32_t chunk : chunks) {
+    if (s_.sources[chunk].stage == ChunkStage::kAsked) {
+      std::printf("%s: taken in an earlier run, skipped\n", s_.sources[chunk].path.c_str());
+      progress.update(static_cast<double>(++done));
+      continue;
+    }
+    if (s_.sources[chunk].stage == ChunkStage::kTrained) {  // killed before its questions
+      if (auto r = ask(chunk); !r) return fail(r.error().message);
+      progress.update(static_cast<double>(++done));
+      continue;
+    }
+    const Dataset& d = *dataset(s_.sources[chunk].path).value();
+    std::vector<learning::Group> groups;
+    for (std::size_t k = 0; k < d.tracks.size(); ++k) {
+      if (seen(chunk, k)) continue;
+      const DatasetTrack& t = d.tracks[k];
+      for (learning::Group& g :
+           learning::cut_into_groups(chunk, k, t.segment_rows, t.holistic_rows, kSegDims, kHolDims,
+                                     s_.induction.max_group_size))
+        groups.push_back(std::move(g));
+    }
+    if (auto r = round(chunk, std::move(groups)); !r) return fail(r.error().message);
+    if (auto r = ask(chunk); !r) return fail(r.error().message);
+    progress.update(static_cast<double>(++done));
+  }
+  for (std::size_t r = 0; r < o_.rounds; ++r) {
+    if (auto x = round(static_cast<std::uint32_t>(s_.sources.size()), {}); !x)
+      return fail(x.error().message);
+    progress.update(static_cast<double>(++done));
+  }
+  progress.finish();
+  if (!o_.out.empty()) {
+    if (!s_.has_model) return fail("no round has run yet: there is no model to write to " + o_.out);
+    if (auto m = write_model_file(o_.out, s_.model); !m) return fail(m.error().message);
+  }
+  std::printf("state %s: %u rounds, %zu user labels, %zu groups in the buffer; model %s\n",
+              dir_.c_str(), s_.rounds, s_.labels.size(), s_.buffer.size(),
+              s_.has_model ? (dir_ / "model.stacmodel").c_str() : "(none yet)");
+  return 0;
+}
+
+}  // namespace
+
+void add_induct_command(CLI::App& app) {
+  auto o = std::make_shared<InductOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "induct", "Teach the classifier with a few labels and unlabeled drives (group induction)");
+  cmd->description(
+      "Group induction (thesis ch. 2, docs/learning.md). A state folder (--state) keeps the\n"
+      "user's labels, the background set B0, a bounded buffer of unlabeled groups and the model.\n"
+      "Each --unlabeled dataset is one chunk of the stream and one round: its tracks are cut into\n"
+      "groups of at most --group-size segments, every group in the buffer is inducted (labelled\n"
+      "with the class whose exponential loss beats 'no label', against worst-case noise --eps) or\n"
+      "not, the buffer keeps its most useful --buffer groups, and both boosting classifiers are\n"
+      "trained on the labels, B0 and the inducted groups, warm-started (the model stays a fixed\n"
+      "table: classifying never costs more). After a round the least confident tracks and the\n"
+      "confident positives never shown are written to DIR/queries.jsonl; answers appended to\n"
+      "DIR/labels.jsonl (`stac label`, or --oracle from the datasets' truth) trigger\n"
+      "retrospection: de-induction of groups less confident than the worst new mistake, and a\n"
+      "reset of the classifier. Every round writes DIR/model.stacmodel (usable by stac process,\n"
+      "eval --classes and run), DIR/models/round-N.stacmodel and a line of DIR/history.jsonl;\n"
+      "DIR/state.bin is replaced atomically, so a kill loses at most the round in progress.");
+  cmd->add_option("--state", o->state, "the state folder (created on first use)")->required();
+  cmd->add_option("--classes", o->classes,
+                  "a new state's classes, comma-separated (e.g. car,pedestrian,bicyclist)");
+  cmd->add_option("--model", o->model, "a new state starts from this model (warm start)")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--background", o->background,
+                  "dataset of drives without the taught classes: B0, labelled background "
+                  "automatically (repeatable)");
+  cmd->add_option("--labels", o->labels,
+                  "labelled dataset the user's first labels are taken from (repeatable)");
+  cmd->add_option("--labels-per-class", o->labels_per_class,
+                  "labels taken per class (and of background) from --labels; 0: all")
+      ->check(CLI::Range(std::size_t{0}, std::size_t{1'000'000}));
+  cmd->add_option("--unlabeled", o->unlabeled,
+                  "dataset whose tracks are unlabeled data: one chunk and one round each "
+                  "(repeatable; its labels are read only by --oracle)");
+  cmd->add_option("--rounds", o->rounds, "rounds on the buffer after the chunks")
+      ->check(CLI::Range(std::size_t{0}, std::size_t{100'000}));
+  cmd->add_option("--ask", o->ask, "questions per class and kind after each chunk")
+      ->capture_default_str()
+      ->check(CLI::Range(std::size_t{0}, std::size_t{10'000}));
+  cmd->add_flag("--oracle", o->oracle,
+                "a simulated user: answer the questions from the chunks' truth labels");
+  cmd->add_option("--eval", o->eval,
+                  "labelled held-out dataset: accuracy after each round, in history.jsonl "
+                  "(repeatable)");
+  auto* dual = cmd->add_flag("--dual", o->dual,
+                             "dual induction: groups may be inducted as negatives (background)");
+  auto* eps = cmd->add_option("--eps", o->eps, "worst-case classifier noise eps_max (log odds)")
+                  ->capture_default_str()
+                  ->check(CLI::Range(0.0, 100.0));
+  auto* group = cmd->add_option("--group-size", o->group_size, "segments per group")
+                    ->capture_default_str()
+                    ->check(CLI::Range(std::size_t{1}, std::size_t{1000}));
+  auto* buffer = cmd->add_option("--buffer", o->buffer, "unlabeled groups kept")
+                     ->capture_default_str()
+                     ->check(CLI::Range(std::size_t{1}, std::size_t{10'000'000}));
+  cmd->add_option("--warm-rounds", o->warm_rounds, "boosting rounds added per round")
+      ->capture_default_str()
+      ->check(CLI::Range(std::size_t{1}, std::size_t{1'000'000}));
+  cmd->add_option("--reset-rounds", o->reset_rounds,
+                  "boosting rounds after a reset (the first round, retrospection)")
+      ->capture_default_str()
+      ->check(CLI::Range(std::size_t{1}, std::size_t{1'000'000}));
+  cmd->add_option("--seed", o->seed, "seed of the first labels' draw and of boosting")
+      ->capture_default_str();
+  cmd->add_option("--out", o->out, "also write the final model to this file");
+
+  cmd->callback([o, dual, eps, group, buffer] {
+    o->settings_given = dual->count() + eps->count() + group->count() + buffer->count() > 0;
+    if (const int code = Inductor(*o).run(); code != 0) throw CLI::RuntimeError(code);
+  });
+}
+
+}  // namespace stac::tools
