@@ -136,7 +136,7 @@ int run_class_eval(const ClassEvalOptions& o) {
   if (!model) return fail(model.error().message);
   Dataset data;
   for (const std::string& dir : o.data) {
-    auto d = read_dataset(dir);
+    auto d = read_labelled_dataset(dir, "stac eval --classes");
     if (!d) return fail(d.error().message);
     if (auto a = append_dataset(data, std::move(*d), dir); !a) return fail(a.error().message);
   }

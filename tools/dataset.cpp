@@ -110,11 +110,14 @@ class Builder : public classification::TrackClassifier::Observer {
           o.calib == "stream" ? std::filesystem::path{} : std::filesystem::path(o.calib);
     auto calibration = capture_calibration(vs.calibration, in, vs.port, vs.assembler.decoder.model);
     if (!calibration) return rt::Unexpected<rt::Error>{calibration.error()};
-    auto t = read_truth_file(o.truth[k]);
-    if (!t) return rt::Unexpected<rt::Error>{t.error()};
-    truth_ = std::move(*t);
-    if (truth_.empty()) return rt::make_error(o.truth[k] + ": no truth scans");
-    if (truth_.front().origin && !ego_settings.origin) {
+    truth_.clear();
+    if (out_.labelled) {
+      auto t = read_truth_file(o.truth[k]);
+      if (!t) return rt::Unexpected<rt::Error>{t.error()};
+      truth_ = std::move(*t);
+      if (truth_.empty()) return rt::make_error(o.truth[k] + ": no truth scans");
+    }
+    if (!truth_.empty() && truth_.front().origin && !ego_settings.origin) {
       const auto& g = *truth_.front().origin;
       ego_settings.origin = ego::Geodetic{g[0], g[1], g[2]};
     }
@@ -129,7 +132,7 @@ class Builder : public classification::TrackClassifier::Observer {
     if (!reader) return rt::Unexpected<rt::Error>{reader.error()};
 
     source_ = static_cast<std::uint32_t>(out_.sources.size());
-    out_.sources.push_back(in + " " + o.truth[k]);
+    out_.sources.push_back(out_.labelled ? in + " " + o.truth[k] : in);
     velodyne::ScanStream stream(*calibration, vs.assembler, 2);
     const pipeline::PipelineConfig pc = offline_pipeline_config(*settings, nullptr, true);
     pipeline::ScanPipeline pipeline(pc);
@@ -158,7 +161,7 @@ class Builder : public classification::TrackClassifier::Observer {
     for (auto& [id, b] : live_) finish(b);
     live_.clear();
     if (counts_.scans == 0) return rt::make_error(in + ": no complete scan in the capture");
-    if (counts_.truth_matched == 0) {
+    if (out_.labelled && counts_.truth_matched == 0) {
       return rt::make_error("no scan of " + in + " matches a scan of " + o.truth[k] +
                             " by time: give each capture its own truth file");
     }
@@ -169,7 +172,8 @@ class Builder : public classification::TrackClassifier::Observer {
   void handle(const velodyne::Scan& scan, const pipeline::ScanResult& result) {
     ++counts_.scans;
     // The truth scan of this scan (as `stac process`), and its segments' composition.
-    const TruthScanRecord* ts = nearest_truth_scan(truth_, truth_next_, result.stamp_ns);
+    const TruthScanRecord* ts =
+        truth_.empty() ? nullptr : nearest_truth_scan(truth_, truth_next_, result.stamp_ns);
     records_.assign(result.segments.segments.size(), SegmentRecord{});
     if (ts != nullptr) {
       truth_composition(*ts, scan, result.segments, result.world_T_sensor, records_);
@@ -243,11 +247,12 @@ class Builder : public classification::TrackClassifier::Observer {
 };
 
 int run_dataset(const DatasetOptions& o) {
-  if (o.in.size() != o.truth.size()) {
+  if (!o.truth.empty() && o.in.size() != o.truth.size()) {
     return fail("give one --truth per --in (" + std::to_string(o.in.size()) + " --in, " +
-                std::to_string(o.truth.size()) + " --truth)");
+                std::to_string(o.truth.size()) + " --truth), or none for unlabeled tracks");
   }
   Dataset data;
+  data.labelled = !o.truth.empty();
   auto classes = dataset_classes(o);
   if (!classes) return fail(classes.error().message);
   data.classes = std::move(*classes);
@@ -275,6 +280,10 @@ int run_dataset(const DatasetOptions& o) {
   std::string listed;
   for (std::size_t c = 0; c < classes_n; ++c)
     listed += data.classes[c] + " " + std::to_string(per[c]) + ", ";
+  if (!data.labelled) {
+    std::printf("%s: %zu unlabeled tracks\n", o.out.c_str(), data.tracks.size());
+    return 0;
+  }
   std::printf("%s: %zu tracks (%sbackground %zu; %zu inconsistent)\n", o.out.c_str(),
               data.tracks.size(), listed.c_str(), per[classes_n], inconsistent);
   return 0;
@@ -285,7 +294,7 @@ int run_dataset(const DatasetOptions& o) {
 void add_dataset_command(CLI::App& app) {
   auto o = std::make_shared<DatasetOptions>();
   CLI::App* cmd = app.add_subcommand(
-      "dataset", "Labelled track descriptors from simulated drives, for stac train");
+      "dataset", "Track descriptors from drives: labelled (stac train) or not (stac induct)");
   cmd->description(
       "Runs each capture through the per-scan pipeline (as `stac process`), describes every\n"
       "segment each track is updated with and the track's holistic descriptor after it, labels\n"
@@ -294,12 +303,16 @@ void add_dataset_command(CLI::App& app) {
       "one over 75\n"
       "points, counts per track the segments that are tracking or under-segmentation errors\n"
       "(over 10%: inconsistent, left out by `stac train` and `stac eval --classes`, as in the\n"
-      "thesis), and writes DIR/tracks.bin and DIR/manifest.json (docs/classification.md).");
-  cmd->add_option("--in", o->in, "pcap capture of a `stac sim` drive (repeatable)")
+      "thesis), and writes DIR/tracks.bin and DIR/manifest.json (docs/classification.md).\n"
+      "Without --truth (any capture, a real drive too) the tracks are unlabeled: data for\n"
+      "`stac induct --unlabeled` (or --background for drives without the taught classes).");
+  cmd->add_option("--in", o->in,
+                  "pcap capture (repeatable): a `stac sim` drive, or any with no --truth")
       ->required()
       ->check(CLI::ExistingFile);
-  cmd->add_option("--truth", o->truth, "its truth file (one per --in, same order)")
-      ->required()
+  cmd->add_option("--truth", o->truth,
+                  "its truth file (one per --in, same order); without: unlabeled tracks, for "
+                  "`stac induct --unlabeled` or --background")
       ->check(CLI::ExistingFile);
   cmd->add_option("--out", o->out, "output folder")->required();
   cmd->add_option("--config", o->config,

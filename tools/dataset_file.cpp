@@ -21,6 +21,7 @@ constexpr std::size_t kHeaderBytes = 8 + 4 * 4 + 8 * 3;
 using classification::ClassIndex;
 constexpr std::uint32_t kVersion2 = 2;  // the default classes, labels 0..3 (3: background)
 constexpr std::uint32_t kVersion2Background = 3;
+constexpr std::uint32_t kVersion3 = 3;  // class names, always labelled
 
 std::size_t segment_dims() {
   return descriptors::kDimensions;
@@ -84,6 +85,7 @@ rt::Result<bool> write_dataset(const std::filesystem::path& dir, const Dataset& 
   };
   put(b, static_cast<std::uint32_t>(data.classes.size()));
   for (const std::string& c : data.classes) put_string(c);
+  put(b, static_cast<std::uint8_t>(data.labelled ? 1 : 0));
   for (const std::string& s : data.sources) put_string(s);
   nlohmann::json classes = nlohmann::json::object(), segments = nlohmann::json::object(),
                  inconsistent = nlohmann::json::object();
@@ -120,6 +122,7 @@ rt::Result<bool> write_dataset(const std::filesystem::path& dir, const Dataset& 
   }
   const nlohmann::json manifest = {{"format", "stac-dataset"},
                                    {"version", kDatasetFormatVersion},
+                                   {"labelled", data.labelled},
                                    {"classes", data.classes},
                                    {"sources", data.sources},
                                    {"tracks", data.tracks.size()},
@@ -161,9 +164,9 @@ rt::Result<Dataset> read_dataset(const std::filesystem::path& dir) {
   std::uint32_t version = 0, sd = 0, hd = 0, nsources = 0;
   std::uint64_t sh = 0, hh = 0, ntracks = 0;
   r.get(version);
-  if (version != kDatasetFormatVersion && version != kVersion2) {
+  if (version != kDatasetFormatVersion && version != kVersion2 && version != kVersion3) {
     return bad("format version " + std::to_string(version) + ", this build reads " +
-               std::to_string(kVersion2) + " and " + std::to_string(kDatasetFormatVersion));
+               std::to_string(kVersion2) + " to " + std::to_string(kDatasetFormatVersion));
   }
   if (classification::fnv1a64(r.bytes) != stored)
     return bad("checksum mismatch (truncated or corrupt)");
@@ -192,6 +195,11 @@ rt::Result<Dataset> read_dataset(const std::filesystem::path& dir) {
     if (const std::string wrong = classification::check_class_names(d.classes); !wrong.empty())
       return bad("bad classes: " + wrong);
   }
+  if (version == kDatasetFormatVersion) {
+    std::uint8_t labelled = 0;
+    if (!r.get(labelled) || labelled > 1) return bad("truncated or bad header");
+    d.labelled = labelled == 1;
+  }
   d.sources.resize(nsources);
   for (std::string& s : d.sources)
     if (!get_string(s)) return bad("truncated source list");
@@ -216,13 +224,30 @@ rt::Result<Dataset> read_dataset(const std::filesystem::path& dir) {
   return d;
 }
 
+rt::Result<Dataset> read_labelled_dataset(const std::filesystem::path& dir,
+                                          const std::string& job) {
+  auto d = read_dataset(dir);
+  if (d && !d->labelled)
+    return rt::make_error(dir.string() +
+                          ": has no labels (made by `stac dataset` without --truth); " + job +
+                          " needs labelled tracks (`stac dataset --truth`)");
+  return d;
+}
+
 rt::Result<bool> append_dataset(Dataset& into, Dataset&& more, const std::string& more_name) {
   const auto list = [](const classification::ClassNames& names) {
     std::string s;
     for (const std::string& n : names) s += (s.empty() ? "" : ", ") + n;
     return s;
   };
-  if (into.tracks.empty() && into.sources.empty()) into.classes = more.classes;
+  if (into.tracks.empty() && into.sources.empty()) {
+    into.classes = more.classes;
+    into.labelled = more.labelled;
+  }
+  if (more.labelled != into.labelled)
+    return rt::make_error(more_name + ": " + (more.labelled ? "labelled" : "without labels") +
+                          ", the other datasets " +
+                          (into.labelled ? "labelled" : "without labels") + "; do not mix them");
   if (more.classes != into.classes)
     return rt::make_error(more_name + ": its classes (" + list(more.classes) +
                           ") differ from the other datasets' (" + list(into.classes) +

@@ -30,12 +30,16 @@ struct DatasetTrack {
 
 struct Dataset {
   classification::ClassNames classes = classification::default_class_names();  // labels index it
+  // False: made without truth (`stac dataset` without --truth): every label is a placeholder
+  // (background); only `stac induct --unlabeled` takes it.
+  bool labelled = true;
   std::vector<std::string> sources;  // "capture truth" of each run
   std::vector<DatasetTrack> tracks;
 };
 
-// Version 3 stores the class names (version 2: the default three, background label 3; still read).
-inline constexpr std::uint32_t kDatasetFormatVersion = 3;
+// Version 4 says whether the tracks are labelled; version 3 stores the class names (version 2: the
+// default three, background label 3). Versions 2 and 3 still read (labelled).
+inline constexpr std::uint32_t kDatasetFormatVersion = 4;
 
 // The thesis's rule (ch. 1, the Stanford Track Collection): a track in which more than 10% of
 // the segments are tracking or under-segmentation errors is inconsistent, and is left out of
@@ -63,8 +67,10 @@ std::uint32_t off_label_segments(classification::ClassIndex label,
 rt::Result<bool> write_dataset(const std::filesystem::path& dir, const Dataset& data);
 // Errors name the file and what is wrong (missing, truncated, checksum, version, layout).
 rt::Result<Dataset> read_dataset(const std::filesystem::path& dir);
+// read_dataset, refusing a dataset without labels with a message saying what `job` needs.
+rt::Result<Dataset> read_labelled_dataset(const std::filesystem::path& dir, const std::string& job);
 // Appends `more` to `into` (sources renumbered). Fails (nothing appended) when their classes
-// differ; `more_name` names `more` in the message.
+// differ or one is labelled and the other not; `more_name` names `more` in the message.
 rt::Result<bool> append_dataset(Dataset& into, Dataset&& more, const std::string& more_name);
 
 }  // namespace stac::tools

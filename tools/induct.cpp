@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <map>
 #include <memory>
@@ -22,6 +23,7 @@
 #include "perception/classification/holistic.hpp"
 #include "perception/descriptors/descriptors.hpp"
 #include "perception/learning/induction.hpp"
+#include "tools/chart.hpp"
 #include "tools/commands.hpp"
 #include "tools/dataset_file.hpp"
 #include "tools/induction_state.hpp"
@@ -54,6 +56,8 @@ struct InductOptions {
   std::size_t warm_rounds = 200, reset_rounds = 1000;
   std::uint64_t seed = 1;
   std::string out;
+  std::string export_dir;
+  std::vector<std::string> references;  // NAME=ACCURACY lines on the chart
   bool settings_given = false;
 };
 
@@ -98,6 +102,8 @@ class Inductor {
   rt::Result<bool> round(std::uint32_t chunk, std::vector<learning::Group> groups);
   rt::Result<bool> ask(std::uint32_t chunk);
   rt::Result<bool> save(const std::string& what);
+  rt::Result<bool> chart();
+  rt::Result<bool> export_labels();
   [[nodiscard]] std::vector<learning::TrackExample> label_examples() const;
   [[nodiscard]] double accuracy(const classification::TrackClassifierModel& model);
   [[nodiscard]] bool seen(std::uint32_t source, std::uint64_t track) const {
@@ -128,10 +134,22 @@ rt::Result<const Dataset*> Inductor::dataset(const std::string& path) {
   if (auto it = datasets_.find(path); it != datasets_.end()) return &it->second;
   auto d = read_dataset(path);
   if (!d) return rt::make_error(d.error().message);
-  if (d->classes != s_.classes)
-    return rt::make_error(path + ": its classes (" + join(d->classes) +
-                          ") differ from the state's (" + join(s_.classes) +
-                          "); make it with the same `stac dataset --class` options");
+  // Labels map by name: every class of the state must be one of the dataset's; its other
+  // classes are background here (1-vs-all: not any taught class). Unlabeled data has no classes.
+  if (d->labelled && d->classes != s_.classes) {
+    std::vector<ClassIndex> to(d->classes.size(), kBackground);
+    for (std::size_t k = 0; k < s_.classes.size(); ++k) {
+      const auto it = std::find(d->classes.begin(), d->classes.end(), s_.classes[k]);
+      if (it == d->classes.end())
+        return rt::make_error(
+            path + ": its classes (" + join(d->classes) + ") lack " + s_.classes[k] +
+            ", a class of the state; make it with `stac dataset --class " + s_.classes[k] + "`");
+      to[static_cast<std::size_t>(it - d->classes.begin())] = static_cast<ClassIndex>(k);
+    }
+    for (DatasetTrack& t : d->tracks)
+      if (t.label != kBackground) t.label = to[t.label];
+  }
+  d->classes = s_.classes;
   return &datasets_.emplace(path, std::move(d).value()).first->second;
 }
 
@@ -529,18 +547,89 @@ rt::Result<bool> Inductor::ask(std::uint32_t chunk) {
   return save("answers");
 }
 
+// DIR/learning.png: held-out accuracy after each round against the user labels so far (the
+// thesis's Fig. 2.6), with --reference lines.
+rt::Result<bool> Inductor::chart() {
+  std::ifstream in(dir_ / "history.jsonl");
+  ChartSeries curve{"group induction", {}, {}};
+  for (std::string line; std::getline(in, line);) {
+    const nlohmann::json j = nlohmann::json::parse(line, nullptr, false);
+    if (j.is_discarded() || !j.is_object() || j.value("event", "") != "round" ||
+        !j.contains("accuracy") || !j.contains("user_labels"))
+      continue;
+    double labels = 0;
+    for (const auto& [name, n] : j["user_labels"].items()) labels += n.get<double>();
+    curve.x.push_back(labels);
+    curve.y.push_back(j["accuracy"].get<double>());
+  }
+  if (curve.x.empty()) return true;
+  Chart c;
+  c.title = "held-out track accuracy (" + join(s_.classes) + ", background)";
+  c.x_label = "user labels";
+  c.y_label = "accuracy";
+  c.series.push_back(curve);
+  for (const std::string& r : o_.references) {
+    const auto eq = r.rfind('=');
+    char* end = nullptr;
+    const double v = eq == std::string::npos ? NAN : std::strtod(r.c_str() + eq + 1, &end);
+    if (eq == 0 || !std::isfinite(v) || end == nullptr || *end != '\0')
+      return rt::make_error("--reference " + r + ": not NAME=ACCURACY");
+    c.series.push_back({r.substr(0, eq), {curve.x.front(), curve.x.back()}, {v, v}});
+  }
+  return save_chart(c, dir_ / "learning.png");
+}
+
+// --export: the user's labels (the tracks as their datasets hold them, with the user's label)
+// and B0 as one dataset, for `stac train` on the same labels without induction.
+rt::Result<bool> Inductor::export_labels() {
+  Dataset out;
+  out.classes = s_.classes;
+  for (const InductionSource& src : s_.sources) {
+    if (src.role != SourceRole::kBackground) continue;
+    auto d = dataset(src.path);
+    if (!d) return rt::make_error(d.error().message);
+    Dataset copy = **d;
+    for (DatasetTrack& t : copy.tracks) t.label = kBackground;
+    if (auto a = append_dataset(out, std::move(copy), src.path); !a) return a;
+  }
+  for (const LabelledTrack& t : s_.labels) {
+    auto d = dataset(s_.sources[t.source].path);
+    if (!d) return rt::make_error(d.error().message);
+    DatasetTrack copy = (*d)->tracks[t.track];
+    copy.label = t.label;
+    copy.off_label_segments = 0;  // the user's word
+    copy.source = static_cast<std::uint32_t>(out.sources.size());
+    out.sources.push_back((*d)->sources[(*d)->tracks[t.track].source]);
+    out.tracks.push_back(std::move(copy));
+  }
+  if (auto w = write_dataset(o_.export_dir, out); !w) return w;
+  std::printf("exported %zu user labels and %zu B0 tracks to %s\n", s_.labels.size(),
+              out.tracks.size() - s_.labels.size(), o_.export_dir.c_str());
+  return true;
+}
+
 int Inductor::run() {
   if (auto r = open_state(); !r) return fail(r.error().message);
+  const auto labelled = [this](const std::string& path, const char* what) -> rt::Result<bool> {
+    auto d = dataset(path);
+    if (!d) return rt::make_error(d.error().message);
+    if (!(*d)->labelled)
+      return rt::make_error(path + ": has no labels (made by `stac dataset` without --truth); " +
+                            what + " needs labelled tracks");
+    return true;
+  };
   for (const std::string& path : o_.eval)
-    if (auto d = dataset(path); !d) return fail(d.error().message);
+    if (auto r = labelled(path, "--eval"); !r) return fail(r.error().message);
   if (auto r = read_background(); !r) return fail(r.error().message);
   for (const std::string& path : o_.labels)
-    if (auto d = dataset(path); !d) return fail(d.error().message);
+    if (auto r = labelled(path, "--labels"); !r) return fail(r.error().message);
   std::vector<std::uint32_t> chunks;
   for (const std::string& path : o_.unlabeled) {
     auto i = source_index(path, SourceRole::kUnlabeled);
     if (!i) return fail(i.error().message);
     if (auto d = dataset(path); !d) return fail(d.error().message);
+    if (o_.oracle)
+      if (auto r = labelled(path, "--oracle"); !r) return fail(r.error().message);
     chunks.push_back(*i);
   }
   if (creating_) {  // every input read: the new state goes to disk
@@ -586,6 +675,10 @@ int Inductor::run() {
     progress.update(static_cast<double>(++done));
   }
   progress.finish();
+  if (auto r = chart(); !r) return fail(r.error().message);
+  if (!o_.export_dir.empty()) {
+    if (auto r = export_labels(); !r) return fail(r.error().message);
+  }
   if (!o_.out.empty()) {
     if (!s_.has_model) return fail("no round has run yet: there is no model to write to " + o_.out);
     if (auto m = write_model_file(o_.out, s_.model); !m) return fail(m.error().message);
@@ -664,6 +757,10 @@ void add_induct_command(CLI::App& app) {
   cmd->add_option("--seed", o->seed, "seed of the first labels' draw and of boosting")
       ->capture_default_str();
   cmd->add_option("--out", o->out, "also write the final model to this file");
+  cmd->add_option("--export", o->export_dir,
+                  "write the user's labels and B0 as a dataset folder (for `stac train`)");
+  cmd->add_option("--reference", o->references,
+                  "NAME=ACCURACY: a line on DIR/learning.png (repeatable)");
 
   cmd->callback([o, dual, eps, group, buffer] {
     o->settings_given = dual->count() + eps->count() + group->count() + buffer->count() > 0;

@@ -32,7 +32,7 @@ int run_train(const TrainOptions& o) {
   {
     Progress progress("train: reading", static_cast<double>(o.data.size()));
     for (std::size_t i = 0; i < o.data.size(); ++i) {
-      auto d = read_dataset(o.data[i]);
+      auto d = read_labelled_dataset(o.data[i], "stac train");
       if (!d) return fail(d.error().message);
       if (auto a = append_dataset(all, std::move(*d), o.data[i]); !a)
         return fail(a.error().message);

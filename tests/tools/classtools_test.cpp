@@ -205,7 +205,38 @@ TEST(DatasetFile, ClassNamesRoundTripAndVersion2StillReads) {
   constexpr std::size_t kHeader = 8 + 4 * 4 + 8 * 3;
   constexpr std::size_t kClassList =
       4 + (4 + 3) + (4 + 10) + (4 + 9);  // car, pedestrian, bicyclist
-  b.erase(b.begin() + kHeader, b.begin() + kHeader + kClassList);
+  const auto reseal = [](std::vector<std::uint8_t>& bytes) {
+    bytes.resize(bytes.size() - 8);
+    const std::uint64_t sum = classification::fnv1a64(bytes);
+    for (int i = 0; i < 8; ++i) bytes.push_back(static_cast<std::uint8_t>(sum >> (8 * i)));
+  };
+  // Version 3: the class list, no labelled flag (version 4's byte after it): labelled.
+  {
+    std::vector<std::uint8_t> b3 = b;
+    ASSERT_EQ(b3[kHeader + kClassList], 1);  // labelled
+    b3.erase(b3.begin() + static_cast<std::ptrdiff_t>(kHeader + kClassList));
+    b3[8] = 3;
+    reseal(b3);
+    std::filesystem::create_directories(dir / "v3bytes");
+    write_bytes(dir / "v3bytes" / "tracks.bin", b3);
+    auto r3 = read_dataset(dir / "v3bytes");
+    ASSERT_TRUE(r3) << r3.error().message;
+    EXPECT_TRUE(r3->labelled);
+    EXPECT_EQ(r3->tracks.size(), v3.tracks.size());
+  }
+  // Without labels: the flag round-trips, and labelled and unlabeled data do not mix.
+  {
+    Dataset unl = synthetic_dataset(3);
+    unl.labelled = false;
+    ASSERT_TRUE(write_dataset(dir / "unl", unl));
+    auto r = read_dataset(dir / "unl");
+    ASSERT_TRUE(r) << r.error().message;
+    EXPECT_FALSE(r->labelled);
+    EXPECT_FALSE(read_labelled_dataset(dir / "unl", "stac train"));
+    Dataset into = synthetic_dataset(2);
+    EXPECT_FALSE(append_dataset(into, std::move(*r), "unl"));
+  }
+  b.erase(b.begin() + kHeader, b.begin() + kHeader + kClassList + 1);
   b[8] = 2;                                                        // version
   std::size_t at = kHeader + 4 + std::string("synthetic").size();  // the source
   for (const DatasetTrack& t : v3.tracks) {

@@ -170,6 +170,58 @@ TEST_F(InductCli, AKillAtAnyMomentLosesAtMostTheRoundInProgress) {
   EXPECT_LE(s->labels.size(), s->seen.size());
 }
 
+TEST_F(InductCli, UnlabeledDrivesAreChunksAndBackgroundButNeverLabels) {
+  // `stac dataset` without --truth: tracks without labels.
+  for (const char* name : {"chunk1", "empty"}) {
+    const CliResult d = stac("dataset --in " + at(std::string(name) + ".pcap") + " --out " +
+                             at(std::string(name) + "_unl"));
+    ASSERT_EQ(d.code, 0) << d.output;
+    EXPECT_NE(d.output.find("unlabeled tracks"), std::string::npos) << d.output;
+  }
+  const CliResult train = stac("train --data " + at("chunk1_unl") + " --out " + at("x.model"));
+  EXPECT_NE(train.code, 0);
+  EXPECT_NE(train.output.find("has no labels"), std::string::npos) << train.output;
+  const CliResult eval =
+      stac("eval --classes --data " + at("chunk1_unl") + " --model " + at("x.model"));
+  EXPECT_NE(eval.code, 0);
+  const std::string start = "induct --state " + at("unl") +
+                            " --classes car,pedestrian,bicyclist --background " + at("empty_unl") +
+                            " --labels " + at("labels_data") +
+                            " --labels-per-class 3 --warm-rounds 40 --reset-rounds 120 ";
+  // Neither the oracle nor --labels can read labels that are not there.
+  CliResult r = stac(start + "--unlabeled " + at("chunk1_unl") + " --oracle");
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.output.find("--oracle"), std::string::npos) << r.output;
+  r = stac("induct --state " + at("unl2") + " --classes car --labels " + at("chunk1_unl"));
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.output.find("--labels"), std::string::npos) << r.output;
+  // As a chunk (a B0 without labels too): a round, and questions for the user.
+  r = stac(start + "--unlabeled " + at("chunk1_unl"));
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("round 1:"), std::string::npos) << r.output;
+  const auto questions = read_lines(at("unl") + "/queries.jsonl");
+  ASSERT_FALSE(questions.empty());
+  for (const auto& q : questions) {
+    EXPECT_EQ(q["source"], at("chunk1_unl"));
+    EXPECT_TRUE(q.contains("log_odds")) << q.dump();
+  }
+  // The user's answer to the first question, by hand: taken at the next run (retrospection).
+  {
+    std::ofstream out(at("unl") + "/labels.jsonl", std::ios::app);
+    out << nlohmann::json{{"source", questions[0]["source"]},
+                          {"track", questions[0]["track"]},
+                          {"label", "car"}}
+               .dump()
+        << "\n";
+  }
+  r = stac("induct --state " + at("unl") + " --rounds 1 --warm-rounds 40 --reset-rounds 120");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("retrospection: 1 new labels"), std::string::npos) << r.output;
+  auto state = stac::tools::read_induction_state(at("unl"));
+  ASSERT_TRUE(state.has_value()) << state.error().message;
+  EXPECT_EQ(state->rounds, 2u);
+}
+
 TEST_F(InductCli, BadInputsAreRefusedNamingTheFileAndNoAnswerIsLost) {
   // No state yet and no classes; settings of an existing state; a bad number; a capture given
   // as a dataset.
