@@ -216,6 +216,8 @@ class TypedPublisher final : public Publisher {
     health_.sensors._length = static_cast<std::uint32_t>(in.sensors.size());
     health_.end_to_end_latency_us = in.end_to_end_latency_us;
     health_.deadline_misses = in.deadline_misses;
+    health_.model_hash = in.model_hash;
+    health_.model_reloads = in.model_reloads;
     return write(Topic::kHealth, &health_);
   }
 

@@ -110,6 +110,8 @@ struct HealthIn {
   std::uint64_t deadline_misses = 0;
   std::span<const DropCountIn> drops;
   std::span<const SensorStatusIn> sensors;
+  std::uint64_t model_hash = 0;  // the classifier model in use (0: none)
+  std::uint32_t model_reloads = 0;
 };
 
 struct PublisherConfig {

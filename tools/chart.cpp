@@ -42,23 +42,24 @@ rt::Result<bool> save_chart(const Chart& chart, const std::filesystem::path& png
     }
   }
   if (!(x1 > x0)) x1 = x0 + 1.0;
-  if (!(y1 > 0.0)) y1 = 1.0;
-  const double ys = tick_step(y1 * 1.05, 5);
-  y1 = std::ceil(y1 * 1.05 / ys) * ys;
+  const double y0 = chart.y_min;
+  if (!(y1 > y0)) y1 = y0 + 1.0;
+  const double ys = tick_step((y1 - y0) * 1.05, 5);
+  y1 = y0 + std::ceil((y1 - y0) * 1.05 / ys) * ys;
   auto px = [&](double x, double y) {
     return cv::Point(left + static_cast<int>(std::lround((x - x0) / (x1 - x0) * w)),
-                     top + h - static_cast<int>(std::lround(y / y1 * h)));
+                     top + h - static_cast<int>(std::lround((y - y0) / (y1 - y0) * h)));
   };
   const cv::Scalar grey(200, 200, 200), dark(60, 60, 60);
-  for (double y = 0; y <= y1 + 1e-9; y += ys) {
+  for (double y = y0; y <= y1 + 1e-9; y += ys) {
     cv::line(img, px(x0, y), px(x1, y), grey, 1);
     cv::putText(img, label(y), px(x0, y) + cv::Point(-60, 4), cv::FONT_HERSHEY_SIMPLEX, 0.4, dark,
                 1, cv::LINE_AA);
   }
   const double xs = tick_step(x1 - x0, 8);
   for (double x = std::ceil(x0 / xs) * xs; x <= x1 + 1e-9; x += xs) {
-    cv::line(img, px(x, 0), px(x, 0) + cv::Point(0, 5), dark, 1);
-    cv::putText(img, label(x), px(x, 0) + cv::Point(-10, 20), cv::FONT_HERSHEY_SIMPLEX, 0.4, dark,
+    cv::line(img, px(x, y0), px(x, y0) + cv::Point(0, 5), dark, 1);
+    cv::putText(img, label(x), px(x, y0) + cv::Point(-10, 20), cv::FONT_HERSHEY_SIMPLEX, 0.4, dark,
                 1, cv::LINE_AA);
   }
   cv::rectangle(img, cv::Point(left, top), cv::Point(left + w, top + h), dark, 1);
@@ -74,7 +75,10 @@ rt::Result<bool> save_chart(const Chart& chart, const std::filesystem::path& png
     for (std::size_t i = 1; i < s.x.size() && i < s.y.size(); ++i) {
       cv::line(img, px(s.x[i - 1], s.y[i - 1]), px(s.x[i], s.y[i]), c, 2, cv::LINE_AA);
     }
-    const cv::Point at(left + w - 200, top + 18 + 18 * static_cast<int>(k));
+    std::size_t longest = 0;
+    for (const auto& other : chart.series) longest = std::max(longest, other.name.size());
+    const int legend = 40 + 9 * static_cast<int>(longest);
+    const cv::Point at(left + w - std::min(legend, w), top + 18 + 18 * static_cast<int>(k));
     cv::line(img, at, at + cv::Point(25, 0), c, 3);
     cv::putText(img, s.name, at + cv::Point(32, 5), cv::FONT_HERSHEY_SIMPLEX, 0.45,
                 cv::Scalar(0, 0, 0), 1, cv::LINE_AA);

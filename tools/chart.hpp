@@ -19,6 +19,7 @@ struct Chart {
   std::string title, x_label, y_label;
   std::vector<ChartSeries> series;
   int width_px = 800, height_px = 420;
+  double y_min = 0.0;  // the y axis' lower end (the upper one comes from the data)
 };
 
 // Writes the chart; fails naming the file when it cannot be written.

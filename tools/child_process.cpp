@@ -72,6 +72,11 @@ std::optional<int> ChildProcess::wait_for(double timeout_s) {
   return code_;
 }
 
+bool ChildProcess::signal(int sig) {
+  if (poll()) return false;
+  return ::kill(pid_, sig) == 0;
+}
+
 int ChildProcess::stop(int sig, double timeout_s) {
   if (poll()) return *code_;
   ::kill(pid_, sig);

@@ -36,6 +36,8 @@ class ChildProcess {
   std::optional<int> wait_for(double timeout_s);
   // Sends `sig`, then waits up to timeout_s; if it still runs, SIGKILL. The exit code (-1: killed).
   int stop(int sig, double timeout_s);
+  // Sends `sig` and returns at once; false when it has ended.
+  bool signal(int sig);
   // The log's last `lines` lines (what it printed), for error messages.
   [[nodiscard]] std::string log_tail(int lines) const;
   [[nodiscard]] std::string log() const;

@@ -53,9 +53,10 @@ void print_pose(const S& s) {
 
 template <class S>
 void print_health(const S& s) {
-  std::printf("health scan %llu t=%.6f e2e=%uus misses=%llu",
+  std::printf("health scan %llu t=%.6f e2e=%uus misses=%llu model=%016llx reloads=%u",
               static_cast<unsigned long long>(s.scan_index), seconds(s.stamp),
-              s.end_to_end_latency_us, static_cast<unsigned long long>(s.deadline_misses));
+              s.end_to_end_latency_us, static_cast<unsigned long long>(s.deadline_misses),
+              static_cast<unsigned long long>(s.model_hash), s.model_reloads);
   for (std::uint32_t i = 0; i < s.stages._length; ++i)
     std::printf(" %s=%uus", s.stages._buffer[i].stage, s.stages._buffer[i].latency_us);
   for (std::uint32_t i = 0; i < s.drops._length; ++i)

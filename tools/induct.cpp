@@ -59,6 +59,7 @@ struct InductOptions {
   std::string export_dir;
   std::vector<std::string> references;  // NAME=ACCURACY lines on the chart
   bool settings_given = false;
+  bool baseline = false;
 };
 
 std::string join(const std::vector<std::string>& v) {
@@ -490,9 +491,27 @@ rt::Result<bool> Inductor::round(std::uint32_t chunk, std::vector<learning::Grou
   if (!o_.eval.empty()) {
     const double a = accuracy(s_.model);
     line["accuracy"] = a;
-    char text[48];
+    char text[96];
     std::snprintf(text, sizeof text, ", held-out accuracy %.3f", a);
     acc = text;
+    if (o_.baseline) {
+      // The thesis's comparison: the same user labels and B0 without induction, trained from
+      // zero with the rounds a reset gets, its filter fitted the same way.
+      auto alone = learning::training_phase(
+          s_.model, learning::round_data(labels, background, {}, classes, kSegDims, kHolDims), true,
+          phase());
+      if (!alone) return rt::make_error("--baseline: " + alone.error().message);
+      if (!filter_tracks.empty()) {
+        auto adbf =
+            learning::fit_filter(*alone, filter_tracks, kSegDims, learning::LogisticConfig{});
+        if (!adbf) return rt::make_error("--baseline: the filter's fit: " + adbf.error().message);
+        alone->adbf = *adbf;
+      }
+      const double b = accuracy(*alone);
+      line["accuracy_labels_only"] = b;
+      std::snprintf(text, sizeof text, ", held-out accuracy %.3f (%.3f without induction)", a, b);
+      acc = text;
+    }
   }
   pending_history_.push_back(line.dump());
   std::size_t user_total = 0, inducted_total = 0;
@@ -551,7 +570,7 @@ rt::Result<bool> Inductor::ask(std::uint32_t chunk) {
 // thesis's Fig. 2.6), with --reference lines.
 rt::Result<bool> Inductor::chart() {
   std::ifstream in(dir_ / "history.jsonl");
-  ChartSeries curve{"group induction", {}, {}};
+  ChartSeries curve{"group induction", {}, {}}, alone{"same labels, no induction", {}, {}};
   for (std::string line; std::getline(in, line);) {
     const nlohmann::json j = nlohmann::json::parse(line, nullptr, false);
     if (j.is_discarded() || !j.is_object() || j.value("event", "") != "round" ||
@@ -561,6 +580,10 @@ rt::Result<bool> Inductor::chart() {
     for (const auto& [name, n] : j["user_labels"].items()) labels += n.get<double>();
     curve.x.push_back(labels);
     curve.y.push_back(j["accuracy"].get<double>());
+    if (j.contains("accuracy_labels_only")) {
+      alone.x.push_back(labels);
+      alone.y.push_back(j["accuracy_labels_only"].get<double>());
+    }
   }
   if (curve.x.empty()) return true;
   Chart c;
@@ -568,6 +591,7 @@ rt::Result<bool> Inductor::chart() {
   c.x_label = "user labels";
   c.y_label = "accuracy";
   c.series.push_back(curve);
+  if (!alone.x.empty()) c.series.push_back(alone);
   for (const std::string& r : o_.references) {
     const auto eq = r.rfind('=');
     char* end = nullptr;
@@ -576,6 +600,10 @@ rt::Result<bool> Inductor::chart() {
       return rt::make_error("--reference " + r + ": not NAME=ACCURACY");
     c.series.push_back({r.substr(0, eq), {curve.x.front(), curve.x.back()}, {v, v}});
   }
+  double lowest = 1.0;
+  for (const ChartSeries& s : c.series)
+    for (const double y : s.y) lowest = std::min(lowest, y);
+  c.y_min = std::max(0.0, std::floor((lowest - 0.02) * 10.0) / 10.0);
   return save_chart(c, dir_ / "learning.png");
 }
 
@@ -759,6 +787,9 @@ void add_induct_command(CLI::App& app) {
   cmd->add_option("--out", o->out, "also write the final model to this file");
   cmd->add_option("--export", o->export_dir,
                   "write the user's labels and B0 as a dataset folder (for `stac train`)");
+  cmd->add_flag("--baseline", o->baseline,
+                "with --eval: also train on the same user labels and B0 without induction after "
+                "each round, and report its accuracy beside");
   cmd->add_option("--reference", o->references,
                   "NAME=ACCURACY: a line on DIR/learning.png (repeatable)");
 

@@ -65,9 +65,10 @@ mapfile -t everything < <(args --data "${BACKGROUND[@]}" "${LABELS[@]}" "${STREA
   --report "$WORK/supervised_all"
 all_acc=$(sed -n 's/.*"track_accuracy": *\([0-9.]*\).*/\1/p' "$WORK/supervised_all/metrics.json" | head -n 1)
 
-# Group induction, the oracle answering.
+# Group induction, the oracle answering; after each round, the same labels without induction.
 rm -rf "$WORK/state"
 "$STAC" induct --state "$WORK/state" --classes car,pedestrian,bicyclist "${bg[@]}" "${labels[@]}" \
+  --baseline \
   --labels-per-class "$SEED_LABELS" "${stream[@]}" --rounds 2 --oracle --ask "$ASK" "${test[@]}" \
   --export "$WORK/user_labels"
 "$STAC" eval --classes "${test_data[@]}" --model "$WORK/state/model.stacmodel" \

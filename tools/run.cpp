@@ -55,6 +55,10 @@ volatile std::sig_atomic_t g_signal = 0;
 void on_signal(int) {
   g_signal = 1;
 }
+volatile std::sig_atomic_t g_reload = 0;  // SIGHUP: read the model file again
+void on_reload(int) {
+  g_reload = 1;
+}
 
 enum Input : std::size_t { kLidar, kIns, kCan };
 // While no scan is published, a health sample (without stages) every second.
@@ -108,6 +112,15 @@ struct Shared {
   std::atomic<std::uint64_t> classes_current{0}, classes_late{0};
   std::atomic<std::uint8_t> ego_source{0};  // 0 none, 1 INS, 2 CAN dead reckoning
   CanCounterCells can;                      // written by the thread that reads CAN
+  // A model handed to the perception thread (SIGHUP): main fills `incoming` and sets
+  // `model_ready`; perception swaps it in between scans and clears it. Main then drops the old
+  // model (never freed on the perception thread).
+  std::atomic<bool> model_ready{false};
+  std::shared_ptr<const classification::TrackClassifierModel> incoming;
+  std::atomic<std::uint64_t> model_hash{0};
+  std::atomic<std::uint32_t> model_reloads{0};
+  std::atomic<std::uint64_t> model_refused{0};  // reloads refused (bad file, other classes)
+  std::uint64_t incoming_hash = 0;              // main's, with `incoming`
 };
 
 void idle() {
@@ -323,6 +336,11 @@ int run_live(const RunOptions& o) {
   }
   auto model = job_model(o.model, settings->classification.model);
   if (!model) return fail(model.error().message);
+  // The file SIGHUP reads again: the one the model came from.
+  const std::filesystem::path model_path = !o.model.empty() && o.model != "none"
+                                               ? std::filesystem::path(o.model)
+                                               : settings->classification.model;
+  std::shared_ptr<const classification::TrackClassifierModel> current_model = *model;
   const pipeline::PipelineConfig pc{.deskew = es.deskew,
                                     .segmenter = settings->segmenter,
                                     .tracker = settings->tracker,
@@ -382,6 +400,7 @@ int run_live(const RunOptions& o) {
        can_config ? can_config->dead_reckoning.stale_timeout_ns : std::int64_t{0}, std::int64_t{0}},
       rt::monotonic_ns());
   Shared shared;
+  if (current_model != nullptr) shared.model_hash = classification::model_hash(*current_model);
   CanReport can_report{watchdog, kCan, shared.can};
   const ego::PoseHistory* poses = inputs.ins() ? &history : nullptr;
 
@@ -389,12 +408,16 @@ int run_live(const RunOptions& o) {
   sa.sa_handler = on_signal;
   sigaction(SIGINT, &sa, nullptr);
   sigaction(SIGTERM, &sa, nullptr);
+  struct sigaction reload {};
+  reload.sa_handler = on_reload;
+  sigaction(SIGHUP, &reload, nullptr);
   // The worker threads start with SIGINT and SIGTERM blocked, so only the main thread takes them
   // (no receive call is interrupted); it unblocks them once the threads run.
   sigset_t stop_signals;
   sigemptyset(&stop_signals);
   sigaddset(&stop_signals, SIGINT);
   sigaddset(&stop_signals, SIGTERM);
+  sigaddset(&stop_signals, SIGHUP);
   pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
   std::fprintf(stderr,
                "stac run: Velodyne UDP %s:%u, INS %s, CAN %s, DDS domain %u; Ctrl-C stops\n",
@@ -463,6 +486,12 @@ int run_live(const RunOptions& o) {
     std::uint64_t incomplete = 0, packets_lost = 0, overflow = 0, classes_late = 0,
                   classes_current = 0;
     for (;;) {
+      if (shared.model_ready.load(std::memory_order_acquire)) {  // between scans
+        pipeline.classifier()->set_model(shared.incoming);
+        shared.model_hash.store(shared.incoming_hash, std::memory_order_relaxed);
+        shared.model_reloads.fetch_add(1, std::memory_order_relaxed);
+        shared.model_ready.store(false, std::memory_order_release);
+      }
       velodyne::Scan* scan = stream.take();
       if (scan == nullptr) {
         if (!shared.receiver_done.load(std::memory_order_acquire)) {
@@ -505,7 +534,7 @@ int run_live(const RunOptions& o) {
     start_thread("publisher", rs->publisher);
     std::array<std::int64_t, kHealthStages> stage_ns{};
     std::array<dds::StageLatencyIn, kHealthStages> stages{};
-    std::array<dds::DropCountIn, 27> drops{};
+    std::array<dds::DropCountIn, 28> drops{};
     static_assert(std::tuple_size_v<decltype(drops)> <= dds::kMaxDrops, "idl/stac.idl's bound");
     std::array<dds::SensorStatusIn, 3> sensors{};
     bool reported = false;
@@ -552,7 +581,8 @@ int run_live(const RunOptions& o) {
                {"can.overflow", cc.kernel_drops + cc.overflows + get(shared.can.ring_full)},
                {"can.fd", cc.can_fd},
                {"can.malformed", cc.malformed},
-               {"can.other_channel", cc.other_channel}};
+               {"can.other_channel", cc.other_channel},
+               {"model.reload_refused", get(shared.model_refused)}};
       for (std::size_t i = 0; i < sensors.size(); ++i) {
         const rt::InputStatus st = watchdog.status(i, now);
         sensors[i] = {kInputNames[i], sensor_status(st),
@@ -563,7 +593,9 @@ int run_live(const RunOptions& o) {
                            .end_to_end_latency_us = to_us(end_to_end),
                            .deadline_misses = monitor.misses(),
                            .drops = drops,
-                           .sensors = sensors};
+                           .sensors = sensors,
+                           .model_hash = shared.model_hash.load(std::memory_order_relaxed),
+                           .model_reloads = shared.model_reloads.load(std::memory_order_relaxed)};
     };
     std::int64_t last_health_ns = rt::monotonic_ns();
     for (;;) {
@@ -623,9 +655,40 @@ int run_live(const RunOptions& o) {
   });
 
   pthread_sigmask(SIG_UNBLOCK, &stop_signals, nullptr);
-  // The main thread waits for a stop: a signal, --seconds, or --scans published.
+  // The main thread waits for a stop: a signal, --seconds, or --scans published; and swaps in
+  // the model file again on SIGHUP.
   const std::int64_t start = rt::monotonic_ns();
+  std::shared_ptr<const classification::TrackClassifierModel> next_model;
   while (g_signal == 0) {
+    if (next_model != nullptr && !shared.model_ready.load(std::memory_order_acquire)) {
+      current_model = std::move(next_model);  // swapped in: the old one is freed here
+      next_model = nullptr;
+      std::fprintf(stderr, "stac run: model %s (%016llx) in use\n", model_path.c_str(),
+                   static_cast<unsigned long long>(shared.incoming_hash));
+    }
+    if (g_reload != 0 && next_model == nullptr) {
+      g_reload = 0;
+      std::string refused;
+      auto m = model_path.empty() ? rt::Result<classification::TrackClassifierModel>(
+                                        rt::make_error("no model file is configured"))
+                                  : read_model_file(model_path);
+      if (!m) {
+        refused = m.error().message;
+      } else if (pipeline.classifier() == nullptr || current_model == nullptr) {
+        refused = "started without a model: restart with --model to classify";
+      } else if (const std::string bad = pipeline.classifier()->check_swap(*m); !bad.empty()) {
+        refused = model_path.string() + ": " + bad;
+      }
+      if (!refused.empty()) {
+        shared.model_refused.fetch_add(1, std::memory_order_relaxed);
+        std::fprintf(stderr, "stac run: SIGHUP: the model is kept: %s\n", refused.c_str());
+      } else {
+        next_model = std::make_shared<const classification::TrackClassifierModel>(std::move(*m));
+        shared.incoming_hash = classification::model_hash(*next_model);
+        shared.incoming = next_model;
+        shared.model_ready.store(true, std::memory_order_release);
+      }
+    }
     if (o.seconds > 0 && static_cast<double>(rt::monotonic_ns() - start) * 1e-9 >= o.seconds) break;
     if (o.scans > 0 && shared.published.load(std::memory_order_relaxed) >= o.scans) break;
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
@@ -668,6 +731,11 @@ int run_live(const RunOptions& o) {
       u(stream.scans_dropped()), u(results.dropped()), u(shared.publish_errors.load()),
       u(pipeline.tracker().counters().pool_overflow),
       u(pipeline.tracker().counters().dropped_detections));
+  if (current_model != nullptr) {
+    std::fprintf(stderr, "  model       %016llx, %u swapped in (SIGHUP), %llu refused\n",
+                 u(shared.model_hash.load()), shared.model_reloads.load(),
+                 u(shared.model_refused.load()));
+  }
   if (pipeline.classifier() != nullptr) {
     std::fprintf(stderr,
                  "  classes     %llu published tracks classified before publication, %llu after "
@@ -735,7 +803,9 @@ void add_run_command(CLI::App& app) {
       "(run.deadline_ms) and the inputs. The published tracks are classified before publication\n"
       "while the scan is younger than run.classify_budget_ms; the rest after it. Stops on\n"
       "Ctrl-C/SIGTERM, --seconds or --scans and prints a summary: scans, drops by cause, classes\n"
-      "classified before and after publication, deadline misses, latencies (docs/run.md).");
+      "classified before and after publication, deadline misses, latencies (docs/run.md).\n"
+      "SIGHUP reads the model file again and swaps it in between scans (same classes; health's\n"
+      "model_hash says which model is in use; a bad file is refused and the model kept).");
   cmd->add_option("--config", o->config,
                   "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
   cmd->add_option("--seconds", o->seconds, "stop after this many seconds")

@@ -169,6 +169,10 @@ ExpectedLayouts build_layouts() {
   return {segment_layout(), holistic_layout()};
 }
 
+std::uint64_t model_hash(const TrackClassifierModel& model) {
+  return fnv1a64(serialize(model));
+}
+
 std::vector<std::uint8_t> serialize(const TrackClassifierModel& model) {
   Writer payload;
   const std::size_t classes = model.classes.size();

@@ -37,6 +37,10 @@ struct TrackClassifierModel {
                                      const TrackEvidence& evidence,
                                      const LogOdds& holistic) noexcept;
 
+// FNV-1a 64 of serialize(model): what health reports as the model in use. Allocates (start-up
+// and model loading only).
+std::uint64_t model_hash(const TrackClassifierModel& model);
+
 inline constexpr std::uint32_t kModelFormatVersion = 1;
 inline constexpr char kModelMagic[8] = {'S', 'T', 'A', 'C', 'C', 'L', 'S', '\0'};
 

@@ -54,6 +54,31 @@ TrackClassifier::TrackClassifier(const TrackClassifierConfig& config,
     slots_.emplace_back(config.accumulated_points);
 }
 
+std::string TrackClassifier::check_swap(const TrackClassifierModel& model) const {
+  if (model_ == nullptr) return "no model is loaded: a model can only replace another";
+  if (model.segment.dimensions() != descriptors::kDimensions ||
+      model.holistic.dimensions() != kHolisticDimensions)
+    return "the model's descriptor sizes are not this build's (retrain it)";
+  if (model.classes != model_->classes) {
+    std::string now, next;
+    for (const std::string& c : model_->classes) now += (now.empty() ? "" : ", ") + c;
+    for (const std::string& c : model.classes) next += (next.empty() ? "" : ", ") + c;
+    return "its classes (" + next + ") are not the running model's (" + now +
+           "): restart with it instead";
+  }
+  return "";
+}
+
+void TrackClassifier::set_model(const std::shared_ptr<const TrackClassifierModel>& model) noexcept {
+  if (model == nullptr || model_ == nullptr) return;
+  model_ = model;
+  for (Slot& s : slots_) {
+    s.evidence.reset();
+    if (s.described > 0) slots_to_sum_.push_back(&s);  // room: max_tracks
+  }
+  sum_accumulated();
+}
+
 void TrackClassifier::sum_accumulated() noexcept {
   // A description with no point (kEmpty) would be NaN elements, which add nothing: its part
   // stays zero.

@@ -22,6 +22,7 @@
 #include <limits>
 #include <memory>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "perception/classification/accumulated_cloud.hpp"
@@ -98,6 +99,19 @@ class TrackClassifier {
                   std::shared_ptr<const TrackClassifierModel> model);
 
   void set_observer(Observer* observer) noexcept { observer_ = observer; }
+
+  // Whether `model` can replace the current one: a model is loaded (the classifier was built
+  // with one), and `model` has this build's descriptor sizes and the same class names (what the
+  // outputs were sized and named for). Empty when it can, else what is wrong. Allocates the
+  // message: call it where that is allowed (the loading thread).
+  [[nodiscard]] std::string check_swap(const TrackClassifierModel& model) const;
+  // Swaps in `model` (check_swap() accepted it) between scans (not between begin() and
+  // finish()): every track's evidence restarts (its segments are classified by the new model
+  // from the next scan on, its class stays until then) and its accumulated cloud's holistic
+  // part is summed again. No allocation (a shared_ptr copy); the old model is released here, so
+  // the caller keeps a reference to it and drops it off the real-time thread.
+  void set_model(const std::shared_ptr<const TrackClassifierModel>& model) noexcept;
+  [[nodiscard]] const TrackClassifierModel* model() const noexcept { return model_.get(); }
   [[nodiscard]] bool has_model() const noexcept { return model_ != nullptr; }
 
   // One scan. `xyzi` + `stride_bytes`: the scan's points (x, y, z, intensity first), which

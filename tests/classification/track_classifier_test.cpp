@@ -129,6 +129,52 @@ TEST(TrackClassifier, OneClassPerTrackAndTheModelsOwnLogOdds) {
   EXPECT_EQ(stage.counters().slot_mismatch, 0u);
 }
 
+TEST(TrackClassifier, ASwappedInModelClassifiesFromTheNextScanWithoutAllocating) {
+  auto a = std::make_shared<const TrackClassifierModel>(full_size_model());
+  TrackClassifierModel other = full_size_model();
+  other.adbf = {{2.0f, 0.5f, 1.0f}, {0.5f, 2.0f, 1.0f}, {1.0f, 1.0f, 3.0f}};  // other log odds
+  auto b = std::make_shared<const TrackClassifierModel>(other);
+  TrackClassifier stage(small_config(), a);
+  Recorder seen;
+  stage.set_observer(&seen);
+  tracking::TrackerOutput tracked(4);
+  rt::FixedVector<TrackClass> out(4);
+  for (int frame = 0; frame < 6; ++frame) {
+    if (frame == 3) {
+      EXPECT_EQ(stage.check_swap(*b), "");
+      rt::testing::AllocationCounter counter;
+      stage.set_model(b);
+      counter.stop();
+      EXPECT_EQ(counter.allocations(), 0u);
+      EXPECT_EQ(stage.model(), b.get());
+    }
+    const Scene scene(frame);
+    tracked.tracks.clear();
+    ASSERT_TRUE(tracked.tracks.push_back(track(1, 2, 0)));
+    const std::size_t before = seen.ids.size();
+    stage.classify(scene.xyzi.data(), 16, scene.segments, tracked, out);
+    ASSERT_EQ(seen.ids.size(), before + 1);
+    if (frame < 3) continue;
+    // From the swap on: the new model's log odds on the segments since the swap (the evidence
+    // restarted) and the holistic descriptor as it is.
+    TrackEvidence evidence;
+    LogOdds hs{}, expected{};
+    for (std::size_t i = seen.ids.size() - static_cast<std::size_t>(frame - 2); i < seen.ids.size();
+         ++i)
+      ASSERT_TRUE(add_segment(*b, seen.segments[i], evidence, hs));
+    ASSERT_TRUE(track_log_odds(*b, evidence, seen.holistics.back(), expected));
+    for (std::size_t k = 0; k < kDefaultClassCount; ++k)
+      EXPECT_NEAR(out[0].log_odds[k], expected[k], 1e-4f * (1.0f + std::fabs(expected[k])))
+          << "frame " << frame;
+  }
+  // Other classes, or no model to replace: refused with what is wrong.
+  TrackClassifierModel five = full_size_model();
+  five.classes = {"car", "pedestrian", "tree"};
+  EXPECT_NE(stage.check_swap(five).find("classes"), std::string::npos) << stage.check_swap(five);
+  const TrackClassifier without(small_config(), nullptr);
+  EXPECT_NE(without.check_swap(*b), "");
+}
+
 TEST(TrackClassifier, TracksClassifiedTogetherGetTheClassesOfEachAlone) {
   // classify() walks the tables once for all of a scan's tracks; every slot must come out
   // bit-identical to updating the tracks one call each, also when a slot shows up twice in a
