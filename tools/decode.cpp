@@ -10,6 +10,7 @@
 #include "drivers/velodyne/scan_stream.hpp"
 #include "tools/birds_eye.hpp"
 #include "tools/capture_input.hpp"
+#include "tools/cli_checks.hpp"
 #include "tools/commands.hpp"
 #include "tools/progress.hpp"
 #include "tools/scan_writers.hpp"
@@ -142,7 +143,8 @@ void add_decode_command(CLI::App& app) {
   cmd->add_option("--model", o->model, "S2, S2.1 or S3 (default: the config's)");
   cmd->add_option("--port", o->port, "UDP data port in the capture (default: the config's, 2368)");
   cmd->add_option("--cut-angle", o->cut_angle_deg,
-                  "scan cut angle in degrees (default: the config's)");
+                  "scan cut angle in degrees (default: the config's)")
+      ->check(finite_range(0.0, 359.99));
   cmd->add_option("--png", o->png, "also draw the first complete scan from above into this PNG");
   CLI::App* applanix = add_decode_applanix_command(*cmd);
   cmd->callback([o, applanix] {

@@ -8,6 +8,7 @@
 #include "dds/idl_types.hpp"
 #include "dds/topics.hpp"
 #include "rt/deadline_monitor.hpp"
+#include "tools/cli_checks.hpp"
 #include "tools/commands.hpp"
 #include "tools/dds_reading.hpp"
 #include "tools/dds_settings.hpp"
@@ -198,8 +199,9 @@ void add_echo_command(CLI::App& app) {
   cmd->add_option("--count", o->count, "exit after this many samples (0: run until the timeout)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--timeout", o->timeout_s, "give up after this many seconds")
-      ->check(CLI::PositiveNumber);
-  cmd->add_option("--domain", o->domain, "DDS domain id (default: dds.domain_id of the config)");
+      ->check(finite_range(0.001, 1e6));
+  cmd->add_option("--domain", o->domain, "DDS domain id (default: dds.domain_id of the config)")
+      ->check(CLI::Range(0, 230));
   cmd->add_option("--config", o->config,
                   "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
   cmd->add_option("--dds-config", o->dds_config, "Cyclone DDS XML (default: dds.config_file)")

@@ -16,6 +16,7 @@
 #include "perception/classification/track_classifier.hpp"
 #include "perception/segmentation/segmenter.hpp"
 #include "tools/birds_eye.hpp"
+#include "tools/cli_checks.hpp"
 #include "tools/commands.hpp"
 #include "tools/kitti_files.hpp"
 #include "tools/model_file.hpp"
@@ -303,9 +304,9 @@ void add_kitti_objects_command(CLI::App& app) {
                   "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
   cmd->add_option("--model", o->model, "track classifier model (default: classification.model)");
   cmd->add_option("--max-range", o->max_range_m, "objects within this range of the sensor (m)")
-      ->check(CLI::PositiveNumber);
+      ->check(finite_range(0.1, 1000.0));
   cmd->add_option("--margin", o->margin_m, "label boxes are grown by this for point membership (m)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(finite_range(0.0, 10.0));
   cmd->add_option("--report", o->report, "folder for objects.csv, metrics.json and the pictures");
   cmd->callback([o] {
     if (const int code = run_kitti_objects(*o); code != 0) throw CLI::RuntimeError(code);

@@ -5,6 +5,7 @@
 #include <exception>
 #include <new>
 
+#include "tools/cli_checks.hpp"
 #include "tools/commands.hpp"
 
 namespace stac::tools {
@@ -40,6 +41,8 @@ int main(int argc, char** argv) {
       "  stac echo tracked_objects --count 10        # print what arrives on a DDS topic\n"
       "  stac dataset --in run.pcap --truth run.truth.jsonl --out data/  # labelled tracks\n"
       "  stac train --data data/ --out model.stac  # track classifier\n"
+      "  stac induct --state teach/ --classes car,pedestrian,bicyclist --labels data/ \\\n"
+      "      --labels-per-class 5 --background empty/ --unlabeled drive1/  # group induction\n"
       "  stac eval --classes --data test/ --model model.stac --report cls/  # Table 1.2\n"
       "  stac run --seconds 60                       # live: sensor UDP -> perception -> DDS\n"
       "Run 'stac <command> --help' for the options of each command.");
@@ -60,6 +63,21 @@ int main(int argc, char** argv) {
   stac::tools::add_train_command(app);
   stac::tools::add_induct_command(app);
   stac::tools::add_kitti_objects_command(app);
+  stac::tools::refuse_bad_numbers(app);
+  // `stac nosuch --help` would print the main help and exit 0: an unknown command is named first.
+  if (argc > 1 && argv[1][0] != '-') {
+    bool known = false;
+    std::string names;
+    for (const CLI::App* sub : app.get_subcommands({})) {
+      known = known || sub->get_name() == argv[1];
+      names += (names.empty() ? "" : ", ") + sub->get_name();
+    }
+    if (!known) {
+      std::fprintf(stderr, "stac: unknown command '%s'; the commands are: %s (stac --help)\n",
+                   argv[1], names.c_str());
+      return 2;
+    }
+  }
   // What escapes a subcommand is reported, never an abort: start-up allocates every capacity of
   // the configuration, and a machine without the memory for them gets told so.
   try {

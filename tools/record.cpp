@@ -6,6 +6,7 @@
 #include "drivers/io/pcap_writer.hpp"
 #include "drivers/io/udp_receiver.hpp"
 #include "rt/clock.hpp"
+#include "tools/cli_checks.hpp"
 #include "tools/commands.hpp"
 #include "tools/settings.hpp"
 
@@ -95,8 +96,10 @@ void add_record_command(CLI::App& app) {
   cmd->add_option("--bind", o->bind, "address to listen on (default: the config's bind_address)");
   cmd->add_option("--port", o->port, "UDP port (default: the config's, 2368)")
       ->check(CLI::Range(0, 65535));
-  cmd->add_option("--duration", o->duration_s, "stop after this many seconds (default: Ctrl-C)");
-  cmd->add_option("--packets", o->max_packets, "stop after this many packets");
+  cmd->add_option("--duration", o->duration_s, "stop after this many seconds (default: Ctrl-C)")
+      ->check(finite_range(0.001, 1e7));
+  cmd->add_option("--packets", o->max_packets, "stop after this many packets")
+      ->check(CLI::Range(1LL, 1'000'000'000'000LL));
   cmd->callback([o] {
     if (const int code = run_record(*o); code != 0) throw CLI::RuntimeError(code);
   });

@@ -12,6 +12,7 @@
 #include "drivers/io/tcp_replay.hpp"
 #include "drivers/io/udp_replay.hpp"
 #include "rt/clock.hpp"
+#include "tools/cli_checks.hpp"
 #include "tools/commands.hpp"
 
 namespace stac::tools {
@@ -311,7 +312,7 @@ void add_replay_command(CLI::App& app) {
   cmd->add_option("--filter-port", o->filter_port, "replay only packets captured to this UDP port")
       ->check(CLI::Range(1, 65535));
   auto* rate = cmd->add_option("--rate", o->rate, "speed factor: 2 sends twice as fast as recorded")
-                   ->check(CLI::PositiveNumber)
+                   ->check(finite_range(0.001, 1000.0))
                    ->capture_default_str();
   cmd->add_flag("--fast", o->fast, "no pacing: as fast as the socket takes them")->excludes(rate);
   auto* loop = cmd->add_option("--loop", o->loops, "passes over the capture")

@@ -34,6 +34,7 @@
 #include "rt/spsc_ring.hpp"
 #include "rt/watchdog.hpp"
 #include "tools/can_input.hpp"
+#include "tools/cli_checks.hpp"
 #include "tools/commands.hpp"
 #include "tools/dds_settings.hpp"
 #include "tools/model_file.hpp"
@@ -809,7 +810,7 @@ void add_run_command(CLI::App& app) {
   cmd->add_option("--config", o->config,
                   "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
   cmd->add_option("--seconds", o->seconds, "stop after this many seconds")
-      ->check(CLI::PositiveNumber);
+      ->check(finite_range(0.001, 1e9));
   cmd->add_option("--scans", o->scans, "stop after this many scans are published")
       ->check(CLI::PositiveNumber);
   cmd->add_option("--domain", o->domain, "DDS domain (default: dds.domain_id)")

@@ -17,6 +17,7 @@
 #include "perception/segmentation/segmenter.hpp"
 #include "tools/birds_eye.hpp"
 #include "tools/capture_scans.hpp"
+#include "tools/cli_checks.hpp"
 #include "tools/commands.hpp"
 #include "tools/kitti_files.hpp"
 #include "tools/sensor_status.hpp"
@@ -218,7 +219,8 @@ void add_segment_command(CLI::App& app) {
   cmd->add_option("--scan", o->scan, "pcap: which complete scan to segment, from 0 (default 0)");
   cmd->add_option("--calib", o->calib,
                   "pcap: calibration file or 'stream' (default: the config's)");
-  cmd->add_option("--view-range", o->view_range_m, "picture: half width in metres (default 50)");
+  cmd->add_option("--view-range", o->view_range_m, "picture: half width in metres (default 50)")
+      ->check(finite_range(1.0, 1000.0));
   cmd->callback([o] {
     if (const int code = run_segment(*o); code != 0) throw CLI::RuntimeError(code);
   });

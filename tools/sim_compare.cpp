@@ -15,6 +15,7 @@
 #include "drivers/velodyne/scan_stream.hpp"
 #include "tools/birds_eye.hpp"
 #include "tools/chart.hpp"
+#include "tools/cli_checks.hpp"
 #include "tools/commands.hpp"
 #include "tools/settings.hpp"
 
@@ -481,9 +482,11 @@ void add_sim_compare_command(CLI::App& app) {
   cmd->add_option("--config", o->config,
                   "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
   cmd->add_option("--mount-height", o->mount_height_m, "sensor height above the ground, m (both)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(finite_range(0.0, 10.0));
   cmd->add_option("--ground-margin", o->ground_margin_m, "ground: z below -mount height + this, m")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(finite_range(-5.0, 5.0));
   cmd->add_option("--max-scans", o->max_scans, "simulated scans to use (0: all complete ones)")
       ->capture_default_str();
   cmd->callback([o] {

@@ -61,6 +61,66 @@ TEST(Cli, HelpExplainsEveryCommand) {
   EXPECT_NE(none.code, 0);  // a subcommand is required
 }
 
+// `stac ARGS`, killed after `seconds` (exit code 137) if it has not ended.
+CliResult stac_within(int seconds, const std::string& args) {
+  const std::string cmd = "timeout -s KILL " + std::to_string(seconds) + " " +
+                          std::string(STAC_CLI) + " " + args + " 2>&1";
+  FILE* p = popen(cmd.c_str(), "r");
+  if (p == nullptr) return {-1, "popen failed"};
+  std::string out;
+  char buf[4096];
+  while (std::size_t n = std::fread(buf, 1, sizeof(buf), p)) out.append(buf, n);
+  const int status = pclose(p);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+}
+
+// Issue 31: numbers a command cannot use are refused at once, naming the option; none hangs
+// (each run is cut at 20 s by `timeout`, which the checks make moot).
+TEST(Cli, NumbersOutOfRangeAreRefusedNamingTheOption) {
+  const auto dir = fresh_dir("numbers");
+  const std::string out = (dir / "x").string();
+  // Inputs that exist, so that only the number is wrong.
+  std::filesystem::copy_file(write_capture(dir), out + ".pcap");
+  std::filesystem::create_directories(out);
+  std::ofstream(out + ".bin") << "x";
+  std::ofstream(out + ".jsonl") << "{}\n";
+  const std::pair<std::string, std::string> cases[] = {
+      {"run --seconds nan", "--seconds"},
+      {"run --seconds inf", "--seconds"},
+      {"run --seconds -1", "--seconds"},
+      {"run --domain -1", "--domain"},
+      {"record --out " + out + ".pcap --duration nan", "--duration"},
+      {"record --out " + out + ".pcap --duration -1", "--duration"},
+      {"record --out " + out + ".pcap --packets -1", "--packets"},
+      {"decode --in " + out + ".pcap --out " + out + ".csv --cut-angle nan", "--cut-angle"},
+      {"decode --in " + out + ".pcap --out " + out + ".csv --cut-angle -1", "--cut-angle"},
+      {"replay --in " + out + ".pcap --rate 1e-300", "--rate"},
+      {"kitti-objects --dir " + out + " --max-range nan", "--max-range"},
+      {"echo health --timeout nan", "--timeout"},
+      {"echo health --domain -1", "--domain"},
+      {"segment --in " + out + ".bin --view-range nan", "--view-range"},
+      {"sim --duration nan --out " + out + ".pcap --truth " + out + ".jsonl", "--duration"},
+      {"induct --state " + out + " --classes car --eps nan", "--eps"},
+      {"induct --state " + out + " --classes car --rounds -1", "--rounds"},
+      {"eval --truth " + out + ".jsonl --tracks " + out + ".jsonl --max-range nan", "--max-range"},
+  };
+  for (const auto& [args, option] : cases) {
+    const CliResult r = stac_within(20, args);
+    EXPECT_NE(r.code, 0) << args << "\n" << r.output;
+    EXPECT_NE(r.code, 137) << args << ": hung\n" << r.output;
+    EXPECT_NE(r.output.find(option), std::string::npos) << args << "\n" << r.output;
+  }
+}
+
+TEST(Cli, AnUnknownCommandIsNamedEvenWithHelp) {
+  for (const char* args : {"nosuch --help", "nosuch"}) {
+    const CliResult r = stac(args);
+    EXPECT_NE(r.code, 0) << args;
+    EXPECT_NE(r.output.find("unknown command 'nosuch'"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("induct"), std::string::npos) << r.output;  // the list of commands
+  }
+}
+
 TEST(Cli, DecodeWritesTheDocumentedCsv) {
   STAC_REQUIRE_SHARED_DATA(kYaml);
   const auto dir = fresh_dir("csv");
