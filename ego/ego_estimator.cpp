@@ -85,10 +85,13 @@ void EgoEstimator::add_ins(const applanix::Parsed& message,
   fix.velocity_ned_mps = {g->north_velocity_mps, g->east_velocity_mps, g->down_velocity_mps};
   fix.angular_rate_frd_dps = {g->rate_longitudinal_dps, g->rate_transverse_dps, g->rate_down_dps};
   const PoseSample pose = frame_.pose(fix);
-  // A fix over kTimeJumpNs after the last one counts only when the next follows it within
-  // kConfirmNs (the INS back after an outage); alone, it was a corrupted time.
+  // A fix over kTimeJumpNs after the last one, or before it, counts only when the next follows
+  // it within kConfirmNs (the INS back after an outage, a replay looping, the clock corrected
+  // after bad fixes); alone, it was a corrupted time. A jump back starts a new timeline in the
+  // history (the poses before it are not this time's).
   constexpr std::int64_t kTimeJumpNs = 1'000'000'000, kConfirmNs = 100'000'000;
-  if (have_ins_ && pose.stamp_ns - last_ins_.stamp_ns > kTimeJumpNs) {
+  const std::int64_t step = have_ins_ ? pose.stamp_ns - last_ins_.stamp_ns : 0;
+  if (have_ins_ && (step > kTimeJumpNs || step < -kTimeJumpNs)) {
     const bool confirms = have_after_jump_ && pose.stamp_ns > after_jump_.stamp_ns &&
                           pose.stamp_ns - after_jump_.stamp_ns <= kConfirmNs;
     if (!confirms) {
@@ -98,7 +101,16 @@ void EgoEstimator::add_ins(const applanix::Parsed& message,
       return;
     }
     have_after_jump_ = false;
-    accept(after_jump_);
+    if (after_jump_.stamp_ns < last_ins_.stamp_ns) {
+      ++counters_.backward_jumps;
+      if (!history_.restart(after_jump_)) {
+        ++counters_.rejected;
+        return;
+      }
+      commit(after_jump_);
+    } else {
+      accept(after_jump_);
+    }
   } else if (have_after_jump_) {
     ++counters_.time_jumps;  // the fixes went on from before it
     have_after_jump_ = false;
@@ -111,6 +123,10 @@ void EgoEstimator::accept(const PoseSample& pose) noexcept {
     ++counters_.rejected;
     return;
   }
+  commit(pose);
+}
+
+void EgoEstimator::commit(const PoseSample& pose) noexcept {
   ++counters_.ins_fixes;
   last_ins_ = pose;
   have_ins_ = true;

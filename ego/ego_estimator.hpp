@@ -42,9 +42,11 @@ struct EgoCounters {
                                        // the origin
   std::uint64_t dead_reckoned = 0;     // poses pushed from odometry
   std::uint64_t rejected = 0;          // poses the history refused (out of order)
-  std::uint64_t time_jumps = 0;        // a fix over 1 s after the last that no fix within 0.1 s
-                                       // followed: a corrupted time, dropped (else every later
-                                       // fix would be "out of order")
+  // A fix over 1 s after or before the last that no fix within 0.1 s followed: a corrupted time,
+  // dropped. One the next fix confirms is taken: ahead, the INS back after an outage; back, a
+  // new timeline (a looping replay, the clock corrected after bad fixes), counted here.
+  std::uint64_t time_jumps = 0;
+  std::uint64_t backward_jumps = 0;
 };
 
 class EgoEstimator {
@@ -66,6 +68,7 @@ class EgoEstimator {
   PoseHistory& history_;
   can::DeadReckoning odometry_;
   void accept(const PoseSample& pose) noexcept;
+  void commit(const PoseSample& pose) noexcept;  // a fix the history took
 
   PoseSample last_ins_;
   bool have_ins_ = false;

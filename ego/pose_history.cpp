@@ -1,7 +1,9 @@
 #include "ego/pose_history.hpp"
 
+#include <algorithm>
 #include <climits>
 #include <cmath>
+#include <limits>
 
 namespace stac::ego {
 namespace {
@@ -40,7 +42,8 @@ PoseHistory::PoseHistory(const PoseHistoryConfig& config)
 
 bool PoseHistory::push(const PoseSample& sample) noexcept {
   const std::uint64_t i = head_.load(std::memory_order_relaxed);
-  if (!finite(sample) || (i > 0 && sample.stamp_ns <= last_stamp_ns_)) {
+  if (!finite(sample) ||
+      (i > first_.load(std::memory_order_relaxed) && sample.stamp_ns <= last_stamp_ns_)) {
     rejected_.fetch_add(1, std::memory_order_relaxed);
     return false;
   }
@@ -72,6 +75,18 @@ bool PoseHistory::push(const PoseSample& sample) noexcept {
   head_.store(i + 1, std::memory_order_release);
   last_stamp_ns_ = sample.stamp_ns;
   return true;
+}
+
+bool PoseHistory::restart(const PoseSample& sample) noexcept {
+  if (!finite(sample)) {
+    rejected_.fetch_add(1, std::memory_order_relaxed);
+    return false;
+  }
+  const std::uint64_t i = head_.load(std::memory_order_relaxed);
+  // Before the sample and head_: a reader that sees the new head sees the new timeline's start.
+  first_.store(i, std::memory_order_release);
+  last_stamp_ns_ = std::numeric_limits<std::int64_t>::min();
+  return push(sample);
 }
 
 bool PoseHistory::read_stamp(std::uint64_t index, std::int64_t& out) const noexcept {
@@ -113,6 +128,8 @@ PoseLookup PoseHistory::at(std::int64_t stamp_ns) const noexcept {
   for (int attempt = 0; attempt < kAttempts; ++attempt) {
     const std::uint64_t n = head_.load(std::memory_order_acquire);
     if (n == 0) return out;  // kEmpty
+    const std::uint64_t first = first_.load(std::memory_order_acquire);
+    if (first >= n) continue;  // a new timeline's first sample is being written
     PoseSample newest;
     if (!read(n - 1, newest)) continue;
     if (stamp_ns >= newest.stamp_ns) {
@@ -125,6 +142,7 @@ PoseLookup PoseHistory::at(std::int64_t stamp_ns) const noexcept {
     }
     // The oldest slot may be overwritten at any moment: keep one slot of margin.
     std::uint64_t lo = n > config_.capacity ? n - config_.capacity + 1 : 0;
+    lo = std::max(lo, first);  // the samples of an earlier timeline are not this one's
     std::uint64_t hi = n - 1;  // stamp(hi) > stamp_ns
     std::int64_t t_lo = 0;
     if (!read_stamp(lo, t_lo)) continue;

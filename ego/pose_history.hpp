@@ -49,6 +49,10 @@ class PoseHistory {
   // Writer thread only. False (and counted) when the stamp is not newer than the last one or
   // the sample is not finite.
   bool push(const PoseSample& sample) noexcept;
+  // Writer thread only: starts a new timeline with `sample` (the clock went back: a looping
+  // replay, a bad fix corrected). Lookups see only the samples from it on. False (and counted)
+  // when the sample is not finite.
+  bool restart(const PoseSample& sample) noexcept;
 
   // Any thread.
   [[nodiscard]] PoseLookup at(std::int64_t stamp_ns) const noexcept;
@@ -74,6 +78,7 @@ class PoseHistory {
   PoseHistoryConfig config_;
   std::unique_ptr<Slot[]> slots_;
   alignas(64) std::atomic<std::uint64_t> head_{0};  // samples pushed
+  std::atomic<std::uint64_t> first_{0};             // index of the current timeline's first sample
   std::atomic<std::uint64_t> rejected_{0};
   std::int64_t last_stamp_ns_ = 0;  // writer only
 };

@@ -16,6 +16,14 @@ rt::Result<std::optional<CapturePoses>> load_capture_poses(const std::filesystem
     applanix::Parsed m;
     while (reader->next(m)) group1 += std::holds_alternative<applanix::Group1>(m.content) ? 1 : 0;
     if (!reader->error().empty()) return rt::make_error(reader->error());
+    const applanix::ParserCounters& pc = reader->parser().counters();
+    const std::uint64_t bad = pc.bad_checksum + pc.bad_length + pc.bad_terminator + pc.malformed;
+    if (group1 == 0 && bad > 0)
+      return rt::make_error(capture.string() + ": the INS stream on port " +
+                            std::to_string(settings.ins_port) + " has " + std::to_string(bad) +
+                            " messages dropped (" + std::to_string(pc.bad_checksum) +
+                            " bad checksums) and no valid Group 1: it is corrupt; --no-deskew "
+                            "processes the scans without it");
   }
   if (group1 == 0) return std::optional<CapturePoses>{};
 
@@ -31,6 +39,7 @@ rt::Result<std::optional<CapturePoses>> load_capture_poses(const std::filesystem
   applanix::Parsed m;
   while (reader->next(m)) estimator.add_ins(m, reader->parser());
   out.counters = estimator.counters();
+  out.parser = reader->parser().counters();
   return std::optional<CapturePoses>{std::move(out)};
 }
 

@@ -18,10 +18,13 @@ struct CapturePoses {
   std::unique_ptr<ego::LocalFrame> frame;
   std::unique_ptr<ego::PoseHistory> history;
   ego::EgoCounters counters;
-  std::uint64_t group1 = 0;  // Group 1 messages in the capture
+  applanix::ParserCounters parser;  // the INS stream's messages dropped, by cause
+  std::uint64_t group1 = 0;         // Group 1 messages in the capture
 };
 
 // Empty (no error) when the capture holds no Group 1 on the port: a parked sensor, identity pose.
+// An error when it holds none but messages dropped for bad checksums or framing: the INS stream
+// is there but corrupt, which must not pass for a parked sensor.
 rt::Result<std::optional<CapturePoses>> load_capture_poses(const std::filesystem::path& capture,
                                                            const EgoSettings& settings);
 

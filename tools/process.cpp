@@ -276,17 +276,26 @@ int run_process(const ProcessOptions& o) {
                capture_frames_summary(reader->counters(), ac.packets, vs.port).c_str(),
                packet_drops_summary(ac).c_str());
   if (poses) {
-    std::fprintf(stderr,
-                 "  ego         %llu INS fixes (%llu skipped before a GPS week, %llu not aligned, "
-                 "%llu impossible, %llu time jumps); "
-                 "scan clock: %s; %llu scans without a pose (not deskewed)\n",
-                 static_cast<unsigned long long>(poses->counters.ins_fixes),
-                 static_cast<unsigned long long>(poses->counters.no_absolute_time),
-                 static_cast<unsigned long long>(poses->counters.not_aligned),
-                 static_cast<unsigned long long>(poses->counters.impossible),
-                 static_cast<unsigned long long>(poses->counters.time_jumps),
-                 ego::to_string(result.clock_source),
-                 static_cast<unsigned long long>(pipeline.scans_without_pose()));
+    std::fprintf(
+        stderr,
+        "  ego         %llu INS fixes (%llu skipped before a GPS week, %llu not aligned, "
+        "%llu impossible, %llu time jumps, %llu jumps back); "
+        "scan clock: %s; %llu scans without a pose (not deskewed)\n"
+        "  ins input   dropped: bad checksum %llu, bad framing %llu, malformed %llu; %llu "
+        "bytes skipped\n",
+        static_cast<unsigned long long>(poses->counters.ins_fixes),
+        static_cast<unsigned long long>(poses->counters.no_absolute_time),
+        static_cast<unsigned long long>(poses->counters.not_aligned),
+        static_cast<unsigned long long>(poses->counters.impossible),
+        static_cast<unsigned long long>(poses->counters.time_jumps),
+        static_cast<unsigned long long>(poses->counters.backward_jumps),
+        ego::to_string(result.clock_source),
+        static_cast<unsigned long long>(pipeline.scans_without_pose()),
+        static_cast<unsigned long long>(poses->parser.bad_checksum),
+        static_cast<unsigned long long>(poses->parser.bad_length + poses->parser.bad_terminator +
+                                        poses->parser.oversize),
+        static_cast<unsigned long long>(poses->parser.malformed),
+        static_cast<unsigned long long>(poses->parser.garbage_bytes));
   } else {
     std::fprintf(stderr, "  ego         %s: parked sensor, world = vehicle frame\n",
                  o.no_deskew

@@ -751,14 +751,14 @@ int run_live(const RunOptions& o) {
   if (have_pose_thread && rs->ins != InsTransport::kNone) {
     std::fprintf(stderr,
                  "  ins         %llu poses rejected, %llu fixes with impossible values, %llu time "
-                 "jumps; input: bad "
+                 "jumps, %llu jumps back (a new timeline); input: bad "
                  "checksum %llu, bad framing %llu, malformed %llu, %llu bytes skipped; connect "
                  "failures %llu, disconnects %llu\n",
                  u(history.rejected()), u(estimator.counters().impossible),
-                 u(estimator.counters().time_jumps), u(shared.ins_bad_checksum.load()),
-                 u(shared.ins_bad_framing.load()), u(shared.ins_malformed.load()),
-                 u(shared.ins_garbage_bytes.load()), u(shared.ins_connect_failures.load()),
-                 u(shared.ins_disconnects.load()));
+                 u(estimator.counters().time_jumps), u(estimator.counters().backward_jumps),
+                 u(shared.ins_bad_checksum.load()), u(shared.ins_bad_framing.load()),
+                 u(shared.ins_malformed.load()), u(shared.ins_garbage_bytes.load()),
+                 u(shared.ins_connect_failures.load()), u(shared.ins_disconnects.load()));
   }
   if (can_config) {
     const can::CanInputCounters cc = inputs.can_counters();

@@ -135,6 +135,38 @@ TEST(EgoEstimator, AFixThatJumpsAheadAloneIsDroppedAndTheInsBackAfterAnOutageIsT
   EXPECT_EQ(ego.counters().rejected, 0u);
 }
 
+// Issue 31: a looping replay (time back by the capture's length) and two fixes dated an hour
+// ahead both used to lose the pose for the rest of the run.
+TEST(EgoEstimator, TheTimeGoingBackStartsANewTimelineOnceTheNextFixConfirmsIt) {
+  LocalFrame frame(kOrigin);
+  PoseHistory history(PoseHistoryConfig{.capacity = 4096});
+  EgoEstimator ego(EgoEstimatorConfig{}, frame, history);
+  InsStream s;
+  s.feed(s.group3(), ego);
+  for (int pass = 0; pass < 3; ++pass)
+    for (int i = 0; i < 400; ++i) s.feed(s.group1(100.0 + 0.005 * i, 0.05 * i), ego);  // 2 s
+  // Each pass after the first: one fix held, then the new timeline.
+  EXPECT_EQ(ego.counters().backward_jumps, 2u);
+  EXPECT_EQ(ego.counters().ins_fixes, 1200u);
+  EXPECT_EQ(ego.counters().rejected, 0u);
+  // The history answers for the third pass's times (UTC = GPS week + sow - offset).
+  const std::int64_t utc = ego::gps_to_utc_ns(
+      static_cast<std::int64_t>(kWeek) * 604'800'000'000'000LL + 101'000'000'000LL, kOffset);
+  const PoseLookup at = history.at(utc);
+  ASSERT_TRUE(at.ok()) << to_string(at.status);
+  EXPECT_NEAR(at.pose.position_m.x(), 10.0, 0.1);  // 1 s in at 10 m/s east
+
+  // Two fixes an hour ahead (confirming each other), then the true time again.
+  for (int i = 0; i < 2; ++i) s.feed(s.group1(3700.0 + 0.005 * i, 20.0), ego);
+  const std::uint64_t before = ego.counters().ins_fixes;
+  for (int i = 400; i < 410; ++i) s.feed(s.group1(100.0 + 0.005 * i, 0.05 * i), ego);
+  EXPECT_EQ(ego.counters().backward_jumps, 3u);
+  EXPECT_EQ(ego.counters().ins_fixes, before + 10u);  // none lost but the one held, then taken
+  const PoseLookup later = history.at(ego::gps_to_utc_ns(
+      static_cast<std::int64_t>(kWeek) * 604'800'000'000'000LL + 102'020'000'000LL, kOffset));
+  EXPECT_TRUE(later.ok()) << to_string(later.status);
+}
+
 TEST(EgoEstimator, CanOdometryCarriesThePoseWhenTheInsGoesSilent) {
   LocalFrame frame(kOrigin);
   PoseHistory history(PoseHistoryConfig{.capacity = 1000});

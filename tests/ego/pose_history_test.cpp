@@ -92,6 +92,27 @@ TEST(PoseHistory, RejectsOutOfOrderAndNonFiniteSamplesAndCountsThem) {
   EXPECT_EQ(h.pushed(), 1u);
 }
 
+TEST(PoseHistory, ARestartBeginsANewTimelineThatLookupsKeepTo) {
+  PoseHistory h(config(64));
+  fill(h, 40);  // 0..195 ms
+  PoseSample moved = truth(50 * kMs);
+  moved.position_m.y() = 100.0;  // the new timeline's poses are elsewhere
+  EXPECT_FALSE(h.push(moved));   // older than the newest: refused by push
+  ASSERT_TRUE(h.restart(moved));
+  for (int i = 11; i < 20; ++i) {
+    PoseSample p = truth(i * 5 * kMs);
+    p.position_m.y() = 100.0;
+    ASSERT_TRUE(h.push(p));
+  }
+  const PoseLookup mid = h.at(70 * kMs);
+  ASSERT_TRUE(mid.ok()) << to_string(mid.status);
+  EXPECT_DOUBLE_EQ(mid.pose.position_m.y(), 100.0);       // never the old timeline's sample
+  EXPECT_EQ(h.at(20 * kMs).status, PoseStatus::kTooOld);  // before the new timeline
+  PoseSample bad = truth(0);
+  bad.position_m.x() = std::nan("");
+  EXPECT_FALSE(h.restart(bad));
+}
+
 TEST(PoseHistory, KeepsTheNewestCapacityAfterWrappingAround) {
   PoseHistory h(config(100));
   fill(h, 1000);  // 10 times around

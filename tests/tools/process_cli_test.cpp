@@ -79,6 +79,37 @@ TEST(ProcessCli, SimulatedDriveGivesOneLinePerScanWithSegmentsTracksAndTruthThat
   EXPECT_EQ(parked_out->size(), out->size());
 }
 
+// Issue 31: Applanix messages dropped for a bad checksum are reported, not silently lost.
+TEST(ProcessCli, InsMessagesWithBadChecksumsAreCountedInTheSummary) {
+  STAC_REQUIRE_SHARED_DATA(kYaml);
+  const auto dir = fresh_dir("checksums");
+  const std::string pcap = (dir / "run.pcap").string();
+  const CliResult sim = stac("sim --scenario urban --seed 12 --duration 1 --calib " +
+                             stac::testing::shared_data(kYaml).string() + " --out " + pcap +
+                             " --truth " + (dir / "run.jsonl").string());
+  ASSERT_EQ(sim.code, 0) << sim.output;
+  // One byte of the body of every 10th Group 1 flipped (the TCP payload carries it as it is).
+  std::string bytes;
+  {
+    std::ifstream in(pcap, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  int flipped = 0, seen = 0;
+  for (std::size_t at = bytes.find("$GRP\x01"); at != std::string::npos;
+       at = bytes.find("$GRP\x01", at + 1)) {
+    if (seen++ % 10 != 0 || at + 40 >= bytes.size()) continue;
+    bytes[at + 30] = static_cast<char>(bytes[at + 30] ^ 0x5a);
+    ++flipped;
+  }
+  ASSERT_GT(flipped, 5);
+  std::ofstream(pcap, std::ios::binary | std::ios::trunc) << bytes;
+  const CliResult p = stac("process " + pcap + " --tracks " + (dir / "t.jsonl").string());
+  ASSERT_EQ(p.code, 0) << p.output;
+  const auto at = p.output.find("bad checksum ");
+  ASSERT_NE(at, std::string::npos) << p.output;
+  EXPECT_EQ(std::stoi(p.output.substr(at + 13)), flipped) << p.output;
+}
+
 TEST(ProcessCli, BadInputsAreNamed) {
   const auto dir = fresh_dir("errors");
   const CliResult missing =
