@@ -332,7 +332,9 @@ rt::Result<std::unique_ptr<Publisher>> make(const PublisherConfig& config) {
     if (domain < 0) {
       return dds_error("creating DDS domain " + std::to_string(config.domain_id) +
                            " with configuration " + config.config_uri +
-                           " (is the file there, and is the domain not yet in use here?)",
+                           " (is it Cyclone XML, with elements Cyclone knows (its parser says "
+                           "where, above; config/dds/loopback.xml is a working example), and is "
+                           "the domain not yet in use here?)",
                        domain);
     }
   }

@@ -39,26 +39,7 @@ EgoEstimator::EgoEstimator(const EgoEstimatorConfig& config, LocalFrame& frame,
                            PoseHistory& history) noexcept
     : config_(config), frame_(frame), history_(history), odometry_(config.odometry) {}
 
-namespace {
-
-// A fix a vehicle can have: finite, on the Earth, below 20 km, under 200 m/s (a corrupted
-// message with a valid checksum, or a receiver's garbage, must not become the local origin).
-bool possible(const applanix::Group1& g) noexcept {
-  const double values[] = {
-      g.latitude_deg,      g.longitude_deg,         g.altitude_m,          g.roll_deg,
-      g.pitch_deg,         g.heading_deg,           g.north_velocity_mps,  g.east_velocity_mps,
-      g.down_velocity_mps, g.rate_longitudinal_dps, g.rate_transverse_dps, g.rate_down_dps};
-  for (const double v : values) {
-    if (!std::isfinite(v)) return false;
-  }
-  const double speed2 = g.north_velocity_mps * g.north_velocity_mps +
-                        g.east_velocity_mps * g.east_velocity_mps +
-                        g.down_velocity_mps * g.down_velocity_mps;
-  return std::fabs(g.latitude_deg) <= 90 && std::fabs(g.longitude_deg) <= 360 &&
-         g.altitude_m >= -1000 && g.altitude_m <= 20000 && speed2 <= 200.0 * 200.0;
-}
-
-}  // namespace
+namespace {}  // namespace
 
 void EgoEstimator::add_ins(const applanix::Parsed& message,
                            const applanix::StreamParser& parser) noexcept {
@@ -72,7 +53,7 @@ void EgoEstimator::add_ins(const applanix::Parsed& message,
     ++counters_.not_aligned;
     return;
   }
-  if (!possible(*g)) {
+  if (!applanix::plausible(*g)) {
     ++counters_.impossible;
     return;
   }

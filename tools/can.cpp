@@ -81,6 +81,11 @@ int run_candump(const CandumpOptions& o) {
   if (dc.short_frames > 0)
     std::printf("candump: %" PRIu64 " frames too short for their signal, dropped\n",
                 dc.short_frames);
+  if (dc.implausible > 0)
+    std::printf("candump: %" PRIu64
+                " frames with a speed or yaw rate no vehicle has (over 200 m/s, 720 deg/s, or "
+                "not a number), dropped\n",
+                dc.implausible);
   if (dr.gaps() > 0)
     std::printf("candump: %" PRIu64 " intervals not integrated (input stale)\n", dr.gaps());
   if (rc.frames == 0)

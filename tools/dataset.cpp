@@ -157,7 +157,8 @@ class Builder : public classification::TrackClassifier::Observer {
     }
     progress.finish();
     if (!reader->error().empty())
-      std::fprintf(stderr, "stac dataset: warning: %s\n", reader->error().c_str());
+      return rt::make_error(reader->error() +
+                            " (the capture breaks off there; what comes after it is lost)");
     for (auto& [id, b] : live_) finish(b);
     live_.clear();
     if (counts_.scans == 0) return rt::make_error(in + ": no complete scan in the capture");

@@ -31,7 +31,12 @@ rt::Result<std::unique_ptr<TopicReaders>> TopicReaders::create(const dds::Publis
   dds_entity_t domain = 0;
   if (!c.config_uri.empty()) {
     domain = dds_create_domain(c.domain_id, c.config_uri.c_str());
-    if (domain < 0) return dds::dds_error("creating DDS domain with " + c.config_uri, domain);
+    if (domain < 0)
+      return dds::dds_error("the Cyclone DDS configuration " + c.config_uri +
+                                " cannot be used (not Cyclone XML, or an element Cyclone does not "
+                                "know: its parser says where, above; config/dds/loopback.xml is "
+                                "a working example)",
+                            domain);
   }
   const dds_entity_t participant = dds_create_participant(c.domain_id, nullptr, nullptr);
   if (participant < 0) {

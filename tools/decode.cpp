@@ -87,8 +87,7 @@ int run_decode(const DecodeOptions& o) {
     progress.update(static_cast<double>(reader->bytes_read()));
   }
   progress.finish();
-  if (!reader->error().empty())
-    std::fprintf(stderr, "stac decode: warning: %s\n", reader->error().c_str());
+  const std::string capture_error = reader->error();
   (void)stream.finish();
   if (auto r = drain(); !r) return fail(r.error().message);
   if (auto r = (*writer)->close(); !r) return fail(r.error().message);
@@ -114,6 +113,8 @@ int run_decode(const DecodeOptions& o) {
                static_cast<unsigned long long>(dc.no_return),
                static_cast<unsigned long long>(dc.out_of_range),
                static_cast<unsigned long long>(dc.disabled), packet_drops_summary(a).c_str());
+  if (!capture_error.empty())
+    return fail(capture_error + " (the capture breaks off there; what comes after it is lost)");
   if (scans == 0) return fail(nothing_decoded_reason(o.in, pc, a, s.port));
   return 0;
 }

@@ -2,6 +2,7 @@
 // one csv row per Group 1 navigation solution, and a summary of what the stream held.
 #include <algorithm>
 #include <cinttypes>
+#include <cmath>
 #include <cstdio>
 #include <memory>
 #include <optional>
@@ -57,10 +58,14 @@ int run_decode_applanix(const ApplanixDecodeOptions& o) {
   std::fputs(kHeader, out.get());
 
   applanix::Parsed p;
-  std::uint64_t rows = 0;
+  std::uint64_t rows = 0, implausible = 0;
   std::optional<std::uint32_t> week;
   while (reader->next(p)) {
     if (const auto* g = std::get_if<applanix::Group1>(&p.content)) {
+      if (!applanix::plausible(*g) || !std::isfinite(p.time.time1_s)) {
+        ++implausible;  // NaN, infinite or impossible values: never a row
+        continue;
+      }
       write_row(out.get(), p.time, *g);
       ++rows;
     }
@@ -69,8 +74,7 @@ int run_decode_applanix(const ApplanixDecodeOptions& o) {
   const bool write_failed = std::ferror(out.get()) != 0;
   if (std::fclose(out.release()) != 0 || write_failed)
     return fail(o.out + ": write failed (disk full?)");
-  if (!reader->error().empty())
-    std::fprintf(stderr, "stac decode applanix: warning: %s\n", reader->error().c_str());
+  const std::string capture_error = reader->error();
 
   const auto& pc = reader->parser().counters();
   const auto& cc = reader->counters();
@@ -98,13 +102,16 @@ int run_decode_applanix(const ApplanixDecodeOptions& o) {
   std::fprintf(stderr,
                "  groups    %llu (id:count%s)\n"
                "  $MSG      %llu control messages\n"
-               "  rows      %llu Group 1 solutions; GPS week %s\n"
+               "  rows      %llu Group 1 solutions (%llu with impossible values left out); GPS "
+               "week %s\n"
                "  rejected  bad checksum %llu, bad length %llu, no terminator %llu, oversize %llu,"
                " malformed %llu, truncated %llu, garbage bytes %llu\n",
-               ull(pc.groups), ids.c_str(), ull(pc.control_messages), ull(rows),
+               ull(pc.groups), ids.c_str(), ull(pc.control_messages), ull(rows), ull(implausible),
                week ? std::to_string(*week).c_str() : "unknown (no Group 3)", ull(pc.bad_checksum),
                ull(pc.bad_length), ull(pc.bad_terminator), ull(pc.oversize), ull(pc.malformed),
                ull(pc.truncated), ull(pc.garbage_bytes));
+  if (!capture_error.empty())
+    return fail(capture_error + " (the capture breaks off there; what comes after it is lost)");
   if (rows == 0) {
     return fail(o.in + ": no Group 1 navigation solution found" +
                 (reader->is_pcap() ? " (wrong --port?)" : ""));

@@ -665,6 +665,8 @@ int Inductor::run() {
     fs::create_directories(dir_ / "models", ec);
     if (ec) return fail(dir_.string() + ": cannot create the state folder (" + ec.message() + ")");
   }
+  for (const char* file : {"labels.jsonl", "history.jsonl"})  // a kill during an append
+    if (auto r = cut_torn_tail(dir_ / file); !r) return fail(r.error().message);
   if (auto r = apply_answers(); !r) return fail(r.error().message);  // a killed run's answers
   if (auto r = seed_labels(); !r) return fail(r.error().message);
   if (auto r = apply_answers(); !r) return fail(r.error().message);

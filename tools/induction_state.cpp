@@ -93,6 +93,20 @@ rt::Result<bool> sync_folder(const std::filesystem::path& dir) {
   return true;
 }
 
+// A torn last line (no '\n' at the end): the file back to just after its last complete line.
+rt::Result<bool> cut_tail(int fd, const std::filesystem::path& path) {
+  off_t end = ::lseek(fd, 0, SEEK_END);
+  char last = '\n';
+  if (end > 0 && ::pread(fd, &last, 1, end - 1) == 1 && last != '\n') {
+    char c = 0;
+    while (end > 0 && ::pread(fd, &c, 1, end - 1) == 1 && c != '\n') --end;
+    if (::ftruncate(fd, end) != 0 || ::fsync(fd) != 0)
+      return rt::make_error(path.string() + ": cannot cut its torn last line (" +
+                            std::strerror(errno) + ")");
+  }
+  return true;
+}
+
 }  // namespace
 
 rt::Result<bool> write_file_durably(const std::filesystem::path& path,
@@ -127,11 +141,25 @@ rt::Result<bool> write_file_durably(const std::filesystem::path& path,
   return sync_folder(path.has_parent_path() ? path.parent_path() : std::filesystem::path("."));
 }
 
+rt::Result<bool> cut_torn_tail(const std::filesystem::path& path) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) return true;
+  const int fd = ::open(path.c_str(), O_RDWR | O_CLOEXEC);
+  if (fd < 0) return rt::make_error(path.string() + ": cannot open (" + std::strerror(errno) + ")");
+  auto r = cut_tail(fd, path);
+  ::close(fd);
+  return r;
+}
+
 rt::Result<bool> append_line_durably(const std::filesystem::path& path, const std::string& line) {
-  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
+  const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
   if (fd < 0)
     return rt::make_error(path.string() + ": cannot open for appending (" + std::strerror(errno) +
                           ")");
+  if (auto cut = cut_tail(fd, path); !cut) {
+    ::close(fd);
+    return cut;
+  }
   const std::string text = line + "\n";
   std::size_t done = 0;
   while (done < text.size()) {

@@ -66,5 +66,7 @@ rt::Result<bool> write_file_durably(const std::filesystem::path& path,
 // One line (a '\n' is added) appended to `path` and fsynced before returning. A torn last line
 // (a kill during an earlier append, never acknowledged) is cut off first.
 rt::Result<bool> append_line_durably(const std::filesystem::path& path, const std::string& line);
+// Cuts a torn last line (no '\n': a kill during an append) off `path`, if it exists.
+rt::Result<bool> cut_torn_tail(const std::filesystem::path& path);
 
 }  // namespace stac::tools

@@ -266,8 +266,7 @@ int run_process(const ProcessOptions& o) {
   progress.finish();
   out.close();
   if (!out) return fail(o.tracks + ": write failed");
-  if (!reader->error().empty())
-    std::fprintf(stderr, "stac process: warning: %s\n", reader->error().c_str());
+  const std::string capture_error = reader->error();
 
   std::fprintf(stderr, "stac process: %s -> %s: %llu complete scans\n", o.in.c_str(),
                o.tracks.c_str(), static_cast<unsigned long long>(scans));
@@ -324,6 +323,8 @@ int run_process(const ProcessOptions& o) {
         static_cast<unsigned long long>(dds_errors));
   }
   print_stats(stages);
+  if (!capture_error.empty())
+    return fail(capture_error + " (the capture breaks off there; what comes after it is lost)");
   if (scans == 0) return fail(nothing_decoded_reason(o.in, reader->counters(), ac, vs.port));
   return 0;
 }

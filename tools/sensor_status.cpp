@@ -31,7 +31,8 @@ rt::Result<CaptureStatus> read_capture_status(const std::filesystem::path& captu
     if (until_calibration && out.status.has_calibration()) break;
   }
   if (!reader->error().empty())
-    std::fprintf(stderr, "stac: warning: %s\n", reader->error().c_str());
+    return rt::make_error(reader->error() +
+                          " (the capture breaks off there; what comes after it is lost)");
   out.pcap = reader->counters();
   return out;
 }

@@ -24,7 +24,8 @@ namespace {
 
 constexpr int kRings = 64;
 constexpr double kRangeBinM = 2.0;
-constexpr int kRangeBins = 60;  // 0..120 m
+constexpr int kRangeBins = 60;         // 0..120 m
+constexpr double kMaxRangeM = 1000.0;  // farther: not a LIDAR return
 constexpr int kIntensityBins = 20;
 
 struct CompareOptions {
@@ -47,6 +48,7 @@ struct P {
 struct Stats {
   std::string name;
   std::size_t scans = 0;
+  std::uint64_t bad_points = 0;  // non-finite or beyond kMaxRangeM: left out
   double points_mean = 0, points_min = 1e300, points_max = 0;
   double rings_mean = 0;                        // rings with points per scan
   std::array<double, kRings> ring_points{};     // mean points per ring, 0 = lowest
@@ -73,6 +75,11 @@ struct Stats {
     for (const P& p : pts) {
       const double horiz = std::hypot(p.x, p.y);
       const double r = std::sqrt(horiz * horiz + static_cast<double>(p.z) * p.z);
+      // A NaN or absurd point (a damaged file) is counted, never binned.
+      if (!std::isfinite(r) || r > kMaxRangeM || !std::isfinite(p.intensity01)) {
+        ++bad_points;
+        continue;
+      }
       ranges.push_back(r);
       rh[static_cast<std::size_t>(std::min(kRangeBins - 1, static_cast<int>(r / kRangeBinM)))] += 1;
       beyond += r > 50.0 ? 1 : 0;
@@ -338,7 +345,7 @@ int run_compare(const CompareOptions& o) {
   (void)stream.finish();
   drain();
   if (!reader->error().empty())
-    std::fprintf(stderr, "stac sim-compare: warning: %s\n", reader->error().c_str());
+    return fail(reader->error() + " (the capture breaks off there; what comes after it is lost)");
   if (sim.scans == 0) {
     return fail(o.sim + ": no complete scan decoded (simulate at least 0.3 s, port " +
                 std::to_string(settings->port) + ")");
@@ -457,6 +464,12 @@ int run_compare(const CompareOptions& o) {
                sim.scans, real.scans, o.report.c_str(), sim.points_mean, real.points_mean,
                sim_rings, real_rings, sim.ground_fraction, real.ground_fraction, sim.range_median,
                real.range_median);
+  if (sim.bad_points + real.bad_points > 0)
+    std::fprintf(stderr,
+                 "  left out     %llu simulated and %llu KITTI points that are NaN, infinite or "
+                 "beyond %.0f m (a damaged file?)\n",
+                 static_cast<unsigned long long>(sim.bad_points),
+                 static_cast<unsigned long long>(real.bad_points), kMaxRangeM);
   return 0;
 }
 

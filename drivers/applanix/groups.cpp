@@ -243,4 +243,19 @@ std::optional<std::int64_t> gps_time_ns(TimeType type, double time_s, std::uint3
   return static_cast<std::int64_t>(week) * kSecondsPerWeek * 1'000'000'000 + ns_of_week;
 }
 
+bool plausible(const Group1& g) noexcept {
+  const double values[] = {
+      g.latitude_deg,      g.longitude_deg,         g.altitude_m,          g.roll_deg,
+      g.pitch_deg,         g.heading_deg,           g.north_velocity_mps,  g.east_velocity_mps,
+      g.down_velocity_mps, g.rate_longitudinal_dps, g.rate_transverse_dps, g.rate_down_dps};
+  for (const double v : values) {
+    if (!std::isfinite(v)) return false;
+  }
+  const double speed2 = g.north_velocity_mps * g.north_velocity_mps +
+                        g.east_velocity_mps * g.east_velocity_mps +
+                        g.down_velocity_mps * g.down_velocity_mps;
+  return std::fabs(g.latitude_deg) <= 90 && std::fabs(g.longitude_deg) <= 360 &&
+         g.altitude_m >= -1000 && g.altitude_m <= 20000 && speed2 <= 200.0 * 200.0;
+}
+
 }  // namespace stac::applanix

@@ -86,6 +86,9 @@ bool is_valid_message(std::span<const std::uint8_t> m) noexcept;
 // Decoders: `m` is a whole valid group (or message) of the right id.
 bool decode_time_distance(std::span<const std::uint8_t> m, TimeDistance& out) noexcept;
 bool decode_group1(std::span<const std::uint8_t> m, Group1& out) noexcept;
+// A solution a vehicle can have: finite, on the Earth (|lat| <= 90, |lon| <= 360), altitude
+// -1..20 km, under 200 m/s. A corrupted message with a valid checksum fails it.
+bool plausible(const Group1& g) noexcept;
 bool decode_group2(std::span<const std::uint8_t> m, Group2& out) noexcept;
 bool decode_group3(std::span<const std::uint8_t> m, Group3& out) noexcept;
 bool decode_message(std::span<const std::uint8_t> m, Message& out) noexcept;

@@ -34,6 +34,8 @@ std::string_view token(std::string_view& s) noexcept {
   return t;
 }
 
+constexpr std::int64_t kMaxStampSeconds = 9'223'372'035;
+
 bool parse_stamp(std::string_view t, std::int64_t& stamp_ns) noexcept {
   if (t.size() < 4 || t.front() != '(' || t.back() != ')') return false;
   t = t.substr(1, t.size() - 2);
@@ -53,6 +55,8 @@ bool parse_stamp(std::string_view t, std::int64_t& stamp_ns) noexcept {
     frac = frac * 10 + (t[i] - '0');
   }
   for (; digits < 9; ++digits) frac *= 10;
+  // Nanoseconds since 1970 must fit an int64 (up to the year 2262): a larger time would wrap.
+  if (sec > kMaxStampSeconds) return false;
   stamp_ns = sec * 1'000'000'000 + frac;
   return true;
 }
@@ -64,7 +68,8 @@ CandumpLine parse_candump_line(std::string_view line, Frame& frame) noexcept {
   if (rest.empty()) return {CandumpLineKind::kBlank, "", {}};
   Frame f;
   if (!parse_stamp(token(rest), f.stamp_ns))
-    return malformed("expected a timestamp like (1700000000.123456)");
+    return malformed(
+        "expected a timestamp like (1700000000.123456), in seconds below 9223372036 (2262)");
   const std::string_view interface = token(rest);
   if (interface.empty() || interface.find('#') != std::string_view::npos) {
     return malformed("expected an interface name after the timestamp");

@@ -251,8 +251,10 @@ class Parser {
     if (length < 1 || length > 64)
       return what + "length " + std::to_string(length) + " is not in 1..64";
     if (start > 63) return what + "start bit " + std::to_string(start) + " is not in 0..63";
-    if (s.factor == 0.0 || !std::isfinite(s.factor) || !std::isfinite(s.offset)) {
-      return what + "factor must be finite and non-zero, offset finite";
+    // No CAN signal needs more; beyond, a 64-bit raw value times the factor is no longer a
+    // number a vehicle reports (1e308 made the odometry infinite).
+    if (s.factor == 0.0 || !(std::fabs(s.factor) <= 1e9) || !(std::fabs(s.offset) <= 1e15)) {
+      return what + "factor must be non-zero and at most 1e9 in magnitude, offset at most 1e15";
     }
     s.start_bit = static_cast<std::uint16_t>(start);
     s.length = static_cast<std::uint16_t>(length);
@@ -344,6 +346,9 @@ rt::Result<Database> parse_dbc(std::string_view text, const std::string& source)
 }
 
 rt::Result<Database> load_dbc(const std::filesystem::path& file) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(file, ec))
+    return rt::make_error(file.string() + ": is a folder, not a DBC file");
   std::ifstream in(file, std::ios::binary);
   if (!in) return rt::make_error(file.string() + ": cannot open the DBC file");
   std::ostringstream text;

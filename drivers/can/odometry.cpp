@@ -99,6 +99,13 @@ OdometryUpdate OdometryDecoder::decode(const Frame& frame) noexcept {
     }
   }
   if (short_frame) ++counters_.short_frames;
+  const bool bad_speed = u.has_speed && !(std::fabs(u.speed_mps) <= 200.0);
+  const bool bad_yaw = u.has_yaw_rate && !(std::fabs(u.yaw_rate_dps) <= 720.0);
+  if (bad_speed || bad_yaw) {
+    ++counters_.implausible;
+    if (bad_speed) u.has_speed = false, u.speed_mps = 0;
+    if (bad_yaw) u.has_yaw_rate = false, u.yaw_rate_dps = 0;
+  }
   if (u.has_speed || u.has_yaw_rate) ++counters_.decoded;
   return u;
 }

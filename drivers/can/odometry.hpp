@@ -43,6 +43,8 @@ struct OdometryDecoderCounters {
                                    // filter drops them before; gs_usb delivers the whole bus)
   std::uint64_t short_frames = 0;  // the right id but fewer bytes than the signal needs: dropped
   std::uint64_t remote_or_error = 0;  // remote and error frames with a mapped id: ignored
+  // A speed over 200 m/s or a yaw rate over 720 deg/s in magnitude, or not a number: dropped.
+  std::uint64_t implausible = 0;
 };
 
 class OdometryDecoder {

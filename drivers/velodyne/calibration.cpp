@@ -166,6 +166,9 @@ rt::Result<Calibration> load_ros_yaml(const std::filesystem::path& path) {
   int index = 0;
   for (const YAML::Node& node : root["lasers"]) {
     std::string ctx = path.string() + ": laser entry " + std::to_string(index++) + ": ";
+    if (!node.IsMap())
+      return rt::make_error(ctx + "not a map of laser_id, rot_correction, ... (line " +
+                            std::to_string(node.Mark().line + 1) + ")");
     auto id = yaml_number(node, "laser_id", ctx, std::nullopt);
     if (!id) return rt::Unexpected<rt::Error>{id.error()};
     LaserCalibration l;

@@ -20,6 +20,14 @@ bool all_finite(std::span<const float> v) noexcept {
     if (!std::isfinite(x)) return false;
   return true;
 }
+// Responses and priors (log odds) beyond this are no trained model's (training caps a weak
+// classifier at a few units): with at most 2^24 grids, a sum of them stays a finite float.
+constexpr float kMaxLogOdds = 1e6f;
+bool all_bounded(std::span<const float> v) noexcept {
+  for (const float x : v)
+    if (!(std::fabs(x) <= kMaxLogOdds)) return false;
+  return true;
+}
 
 }  // namespace
 
@@ -124,6 +132,9 @@ rt::Result<GridClassifier> GridClassifier::create(GridModel model) {
                           " responses, its grids need " + std::to_string(table));
   if (!all_finite(model.prior) || !all_finite(model.lower) || !all_finite(model.table))
     return rt::make_error("classifier holds a value that is not finite");
+  if (!all_bounded(model.prior) || !all_bounded(model.table))
+    return rt::make_error(
+        "classifier holds a log odds over 1e6 in magnitude (no trained model has one; corrupt?)");
   for (const float s : model.scale)
     if (!(std::isfinite(s) && s > 0.0f))
       return rt::make_error("classifier grid scale " + std::to_string(s) + " is not positive");

@@ -246,7 +246,10 @@ rt::Result<TrackClassifierModel> deserialize(std::span<const std::uint8_t> bytes
                           " unexpected bytes after its filter parameters (corrupt model)");
   for (const LogOdds* v : {&model.adbf.alpha, &model.adbf.beta, &model.adbf.gamma})
     for (const float x : *v)
-      if (!std::isfinite(x)) return rt::make_error("model filter parameter is not finite");
+      if (!(std::fabs(x) <= 1e4f))
+        return rt::make_error(
+            "model filter parameter " + std::to_string(x) +
+            " is not finite or over 1e4 in magnitude (no fitted filter has one; corrupt?)");
   return model;
 }
 

@@ -56,6 +56,9 @@ TEST(CandumpLine, MalformedLinesSayWhatIsWrong) {
   const std::pair<const char*, const char*> cases[] = {
       {"1700000000.1 can0 123#11", "timestamp"},
       {"(17000x0000.1) can0 123#11", "timestamp"},
+      // Issue 31: these wrapped around (written back as "-9223372036.-854775" and 3875820019.68).
+      {"(9223372036.854775808) can0 123#11", "timestamp"},
+      {"(999999999999.999999) can0 123#11", "timestamp"},
       {"(1.1) can0 123", "expected <id>#<data>"},
       {"(1.1) can0 1234#11", "3 (standard) or 8 (extended)"},
       {"(1.1) can0 800#11", "at most 7FF"},
@@ -72,6 +75,13 @@ TEST(CandumpLine, MalformedLinesSayWhatIsWrong) {
     EXPECT_EQ(l.kind, CandumpLineKind::kMalformed) << line;
     EXPECT_NE(std::string(l.reason).find(reason), std::string::npos) << line << " -> " << l.reason;
   }
+}
+
+TEST(CandumpLine, TheLatestTimeThatFitsIsRead) {
+  Frame f;
+  const auto l = parse_candump_line("(9223372035.999999) can0 123#11", f);
+  ASSERT_EQ(l.kind, CandumpLineKind::kFrame) << l.reason;
+  EXPECT_EQ(f.stamp_ns, 9'223'372'035'999'999'000);
 }
 
 TEST(CandumpReader, MalformedLineStopsWithFileAndLine) {

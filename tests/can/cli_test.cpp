@@ -105,6 +105,11 @@ TEST(CanCli, CandumpErrorsNameTheFileAndLineOrTheSignal) {
                            (dir / "x.csv").string());
   EXPECT_NE(m.code, 0);
   EXPECT_NE(m.output.find("no message 'WheelSpeeds'"), std::string::npos) << m.output;
+  // A folder given as the DBC (issue 31: it said the DBC had no message).
+  const CliResult folder = stac("candump --in " + log.string() + " --dbc " + dir.string() +
+                                " --out " + (dir / "x.csv").string());
+  EXPECT_NE(folder.code, 0);
+  EXPECT_NE(folder.output.find("is a folder, not a DBC file"), std::string::npos) << folder.output;
   const auto empty = dir / "empty.log";
   std::ofstream(empty) << "";
   const CliResult e = stac("candump --in " + empty.string() + " --out " + (dir / "e.csv").string());

@@ -201,7 +201,10 @@ TEST(DbcParse, ErrorsNameTheFileTheLineAndTheProblem) {
       {"BO_ 2048 A: 8 X\n", "bad.dbc:1: BO_ A: id 2048 does not fit 11 bits"},
       {"BO_ 1 A: 8 X\nBO_ 1 B: 8 X\n", "bad.dbc:2: BO_ B: id 1 is already used by A"},
       {"BO_ 1 A: 9 X\n", "bad.dbc:1: BO_ A: dlc 9 > 8"},
-      {"BO_ 1 A: 8 X\n SG_ S : 0|8@1+ (0,0) [0|1] \"\" X\n", "factor must be finite and non-zero"},
+      {"BO_ 1 A: 8 X\n SG_ S : 0|8@1+ (0,0) [0|1] \"\" X\n", "factor must be non-zero"},
+      // Issue 31: a factor of 1e308 made infinite odometry marked "ok".
+      {"BO_ 1 A: 8 X\n SG_ S : 0|8@1+ (1e308,0) [0|1] \"\" X\n", "at most 1e9 in magnitude"},
+      {"BO_ 1 A: 8 X\n SG_ S : 0|8@1+ (1,1e300) [0|1] \"\" X\n", "offset at most 1e15"},
       {"BO_ 1 A: 8 X\n SG_ S : 0|0@1+ (1,0) [0|1] \"\" X\n", "length 0 is not in 1..64"},
       {"BO_ 1 A: 8 X\n SG_ S : 0|8@1* (1,0) [0|1] \"\" X\n", "sign must be '+'"},
       {"BO_ 1 A: 8 X\n SG_ S : 0|8@1+ (1;0) [0|1] \"\" X\n",

@@ -71,6 +71,23 @@ TEST(OdometryDecoder, ShortAndRemoteFramesAreCountedNotDecoded) {
   EXPECT_EQ(d->counters().not_mapped, 0u);  // mapped ids, however bad the frames
 }
 
+// Issue 31: a value no vehicle has (here a map scaling 10 m/s to 1000 m/s) is dropped and
+// counted, never integrated as "ok".
+TEST(OdometryDecoder, ImplausibleSpeedsAreDroppedAndCounted) {
+  // A speed in m/s with a factor of 1: raw 3600 is 3600 m/s.
+  auto db = parse_dbc(
+      "BO_ 416 WheelSpeeds: 8 X\n SG_ VehicleSpeed : 7|16@0+ (1,0) [0|65535] \"m/s\" X\n"
+      "BO_ 432 Yaw: 8 X\n SG_ YawRate : 0|16@1- (1,0) [-32768|32767] \"deg/s\" X\n",
+      "test.dbc");
+  ASSERT_TRUE(db) << db.error().message;
+  auto d = OdometryDecoder::create(*db, {"WheelSpeeds", "VehicleSpeed", "Yaw", "YawRate", 1.0});
+  ASSERT_TRUE(d) << d.error().message;
+  const auto s = d->decode(frame(0x1A0, {0x0E, 0x10, 0, 0, 0, 0, 0, 0}));
+  EXPECT_FALSE(s.has_speed);
+  EXPECT_EQ(d->counters().implausible, 1u);
+  EXPECT_EQ(d->counters().decoded, 0u);
+}
+
 TEST(OdometryDecoder, SignAndUnitConversionsFromTheMap) {
   const auto db = parse_dbc(R"(BO_ 1 M: 8 X
  SG_ V : 0|16@1+ (0.01,0) [0|0] "m/s" X

@@ -131,6 +131,21 @@ TEST(ModelFormat, CorruptPayloadWithAValidChecksumNeverCrashes) {
   EXPECT_FALSE(deserialize(huge_count, small_layouts()).has_value());
 }
 
+// Issue 31: a model with a valid checksum but huge values made `stac process` write inf and NaN
+// log odds (invalid JSON); such a model is refused when it is read.
+TEST(ModelFormat, HugeResponsesOrFilterWeightsAreRefused) {
+  TrackClassifierModel huge = small_model();
+  huge.segment.table()[0] = 1e30f;
+  auto r = deserialize(serialize(huge), small_layouts());
+  ASSERT_FALSE(r.has_value());
+  EXPECT_NE(r.error().message.find("1e6"), std::string::npos) << r.error().message;
+  TrackClassifierModel weights = small_model();
+  weights.adbf.gamma[0] = 1e20f;
+  r = deserialize(serialize(weights), small_layouts());
+  ASSERT_FALSE(r.has_value());
+  EXPECT_NE(r.error().message.find("filter parameter"), std::string::npos) << r.error().message;
+}
+
 TEST(ModelFormat, WrongMagicOrVersionIsRefusedSayingWhat) {
   auto b = serialize(small_model());
   b[0] = 'X';

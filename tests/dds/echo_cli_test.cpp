@@ -193,6 +193,21 @@ TEST(StacEcho, PointCloudCountsThePointsOfEveryLabel) {
   EXPECT_NE(out.find(" none=1 labels=[1,0,0,0,2,0,1]"), std::string::npos) << out;
 }
 
+// Issue 31: a file that is not Cyclone XML gave only "Error".
+TEST(StacEcho, ADdsConfigThatIsNotCycloneXmlIsNamed) {
+  const auto file = std::filesystem::temp_directory_path() / "stac_echo_not_xml.xml";
+  std::ofstream(file) << "this is not xml\n";
+  FILE* child = popen(
+      (std::string(STAC_CLI) + " echo health --timeout 0.5 --dds-config " + file.string() + " 2>&1")
+          .c_str(),
+      "r");
+  ASSERT_NE(child, nullptr);
+  int code = -1;
+  const std::string out = run_to_end(child, &code);
+  EXPECT_EQ(code, 1);
+  EXPECT_NE(out.find(file.string() + " cannot be used (not Cyclone XML"), std::string::npos) << out;
+}
+
 TEST(StacEcho, UnknownTopicListsTheTopics) {
   FILE* child = popen((std::string(STAC_CLI) + " echo tracks --timeout 0.1 2>&1").c_str(), "r");
   ASSERT_NE(child, nullptr);

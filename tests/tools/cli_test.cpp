@@ -1,11 +1,13 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <sstream>
 #include <thread>
 
@@ -546,6 +548,65 @@ TEST(SimCompareCli, WritesTheReportWithPlausibleFigures) {
   const double sim_ground = number_after(json, "\"ground_fraction\":", sim);
   EXPECT_GT(sim_ground, 0.3);
   EXPECT_LT(sim_ground, 0.85);
+}
+
+// Issue 31: a capture that breaks off (a bad record length 300 records in) lost most of its data
+// while decode, status and decode applanix exited 0 with a warning: every command must say it.
+TEST(Cli, ACaptureThatBreaksOffIsAnErrorInEveryCommand) {
+  STAC_REQUIRE_SHARED_DATA(kYaml);
+  const auto dir = fresh_dir("breaks_off");
+  const auto pcap = simulate(dir, 1.0);
+  std::string bytes;
+  {
+    std::ifstream in(pcap, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  std::size_t at = 24;  // after the file header; each record: 16 bytes of header, then the data
+  for (int i = 0; i < 300; ++i) {
+    std::uint32_t incl = 0;
+    std::memcpy(&incl, bytes.data() + at + 8, 4);
+    at += 16 + incl;
+  }
+  const std::uint32_t bad = 0x7fffffff;
+  std::memcpy(bytes.data() + at + 8, &bad, 4);
+  const auto broken = dir / "broken.pcap";
+  std::ofstream(broken, std::ios::binary) << bytes;
+  const std::string b = broken.string(), calib = stac::testing::shared_data(kYaml).string();
+  for (const std::string& args :
+       {"decode --calib " + calib + " --in " + b + " --out " + (dir / "d.csv").string(),
+        "status --in " + b, "decode applanix --in " + b + " --out " + (dir / "a.csv").string(),
+        "process " + b + " --calib " + calib + " --tracks " + (dir / "t.jsonl").string(),
+        "dataset --in " + b + " --calib " + calib + " --out " + (dir / "data").string()}) {
+    const CliResult r = stac(args);
+    EXPECT_EQ(r.code, 1) << args << "\n" << r.output;
+    EXPECT_NE(r.output.find("stopped after 300 records"), std::string::npos) << args << "\n"
+                                                                             << r.output;
+  }
+}
+
+// Issue 31: a NaN or 1e30 point in a KITTI scan crashed sim-compare (a float cast to a
+// histogram index); such points are left out and counted.
+TEST(SimCompareCli, NonFinitePointsInAKittiScanAreLeftOutAndCounted) {
+  STAC_REQUIRE_SHARED_DATA(kYaml);
+  STAC_REQUIRE_SHARED_DATA("kitti/000000.bin");
+  const auto dir = fresh_dir("sim_compare_nan");
+  const auto pcap = simulate(dir, 0.35);
+  std::string scan;
+  {
+    std::ifstream in(stac::testing::shared_data("kitti/000000.bin"), std::ios::binary);
+    scan.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  const float nan = std::nanf(""), huge = 1e30f, inf = std::numeric_limits<float>::infinity();
+  std::memcpy(scan.data() + 16 * 10, &nan, 4);       // x of point 10
+  std::memcpy(scan.data() + 16 * 20 + 8, &huge, 4);  // z of point 20
+  std::memcpy(scan.data() + 16 * 30 + 12, &inf, 4);  // reflectance of point 30
+  const auto bin = dir / "damaged.bin";
+  std::ofstream(bin, std::ios::binary) << scan;
+  const CliResult r =
+      stac("sim-compare --sim " + pcap.string() + " --kitti " + bin.string() + " --calib " +
+           stac::testing::shared_data(kYaml).string() + " --report " + (dir / "report").string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("and 3 KITTI points that are NaN"), std::string::npos) << r.output;
 }
 
 }  // namespace

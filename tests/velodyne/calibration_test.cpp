@@ -169,6 +169,9 @@ TEST(Calibration, RejectsBrokenFilesWithClearMessages) {
        "'num_lasers' is 32 but the 'lasers' list holds 64"},
       {"garbage.yaml", "\x01\x02 not a calibration {{{", "neither a Velodyne db.xml"},
       {"list.yaml", "lasers: 5\n", "missing the 'lasers' list"},
+      // Issue 31: yaml-cpp's own "operator[] call on a scalar", without the file, before.
+      {"scalars.yaml", "num_lasers: 2\nlasers:\n  - 5\n  - 6\n",
+       "laser entry 0: not a map of laser_id"},
       {"bad.xml",
        "<?xml version=\"1.0\"?><boost_serialization><DB><points_><item><px><id_>0</id_>"
        "<rotCorrection_>1</rotCorrection_></px></item></points_></DB></boost_serialization>",
