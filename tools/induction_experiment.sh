@@ -81,7 +81,7 @@ rm -rf "$WORK/state"
 labels_acc=$(sed -n 's/.*"track_accuracy": *\([0-9.]*\).*/\1/p' "$WORK/supervised_labels/metrics.json" | head -n 1)
 
 # The chart again, with the baselines as lines.
-"$STAC" induct --state "$WORK/state" --reference "fully supervised=$all_acc" \
-  --reference "same user labels, no induction=$labels_acc"
+"$STAC" induct --state "$WORK/state" --reference "stac train, every label (b)=$all_acc" \
+  --reference "stac train, final user labels (a)=$labels_acc"
 echo "$0: $WORK/state/learning.png; history $WORK/state/history.jsonl; reports in" \
   "$WORK/{group_induction,supervised_labels,supervised_all}/metrics.json"
