@@ -171,13 +171,23 @@ rt::Result<bool> Inductor::open_state() {
   std::error_code ec;
   const bool exists = fs::exists(dir_ / "state.bin", ec);
   if (exists) {
-    if (!o_.classes.empty() || !o_.model.empty() || o_.settings_given)
-      return rt::make_error(dir_.string() +
-                            ": the state exists; --classes, --model, --dual, --eps, --group-size "
-                            "and --buffer are set when it is created (start a new folder to "
-                            "change them)");
     auto s = read_induction_state(dir_);
     if (!s) return rt::make_error(s.error().message);
+    // The command that created the state may be given again (a rerun after a kill): its
+    // settings must be the state's; other ones are refused.
+    std::vector<std::string> asked;
+    std::stringstream list(o_.classes);
+    for (std::string name; std::getline(list, name, ',');) asked.push_back(name);
+    const bool same =
+        (o_.classes.empty() || asked == s->classes) && o_.model.empty() &&
+        (!o_.settings_given ||
+         (o_.dual == s->induction.dual && o_.eps == s->induction.eps_max &&
+          o_.group_size == s->induction.max_group_size && o_.buffer == s->induction.buffer_groups));
+    if (!same)
+      return rt::make_error(dir_.string() +
+                            ": the state exists with other settings; --classes, --model, --dual, "
+                            "--eps, --group-size and --buffer are set when it is created (start a "
+                            "new folder to change them)");
     s_ = std::move(s).value();
   } else {
     if (fs::exists(dir_, ec) && !fs::is_directory(dir_, ec))

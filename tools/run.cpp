@@ -209,7 +209,8 @@ void pose_loop(PoseInputs& in, ego::EgoEstimator& estimator, const ego::PoseHist
       set(shared.ins_garbage_bytes, pc.garbage_bytes);
       if (in.tcp) {
         set(shared.ins_connect_failures, in.tcp->counters().connect_failures);
-        set(shared.ins_disconnects, in.tcp->counters().disconnects + in.tcp->counters().stalls);
+        set(shared.ins_disconnects, in.tcp->counters().disconnects + in.tcp->counters().stalls +
+                                        in.tcp->counters().no_message);
       }
     };
     if (in.tcp) {
@@ -221,7 +222,10 @@ void pose_loop(PoseInputs& in, ego::EgoEstimator& estimator, const ego::PoseHist
       }
       if (n > 0) {
         parser.feed({bytes.data(), static_cast<std::size_t>(n)});
-        while (parser.next(m)) take(parser);
+        while (parser.next(m)) {
+          in.tcp->note_message();  // the stream holds the INS's messages
+          take(parser);
+        }
       }
       publish_counters(parser.counters());
     } else if (in.udp) {
@@ -712,9 +716,9 @@ int run_live(const RunOptions& o) {
                g_signal != 0 ? " (signal)" : "");
   std::fprintf(stderr,
                "  packets     %llu received, %llu dropped by the kernel, %llu truncated, %llu "
-               "receive errors\n",
-               u(rc.received), u(rc.kernel_drops), u(rc.truncated),
-               u(shared.receive_errors.load()));
+               "receive errors, %llu lost on the wire (estimated from azimuth steps)\n",
+               u(rc.received), u(rc.kernel_drops), u(rc.truncated), u(shared.receive_errors.load()),
+               u(stream.assembler().counters().packets_lost));
   std::fprintf(
       stderr,
       "  dropped     wrong size %llu, invalid block %llu, duplicate %llu, late firings %llu "
@@ -723,8 +727,10 @@ int run_live(const RunOptions& o) {
       u(shared.late_firings.load()));
   std::fprintf(
       stderr,
-      "  scans       %llu received (complete), %llu published, %llu incomplete (not processed)\n",
-      u(shared.scans.load()), u(shared.published.load()), u(shared.incomplete.load()));
+      "  scans       %llu received (complete), %llu published, %llu incomplete (not processed), "
+      "%llu of them with more packets lost than velodyne.min_scan_completeness %.2f allows\n",
+      u(shared.scans.load()), u(shared.published.load()), u(shared.incomplete.load()),
+      u(stream.assembler().counters().below_completeness), vs.assembler.min_completeness);
   std::fprintf(
       stderr,
       "  drops       scan slots full %llu, result slots full %llu, DDS errors %llu, tracking pool "

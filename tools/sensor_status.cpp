@@ -104,10 +104,12 @@ int run_status(const StatusOptions& o) {
   }
   std::printf(
       "calibration  %llu dumps accepted, %llu broken by lost/reordered packets, %llu bad "
-      "checksum, %llu bad layout\n",
+      "checksum, %llu bad layout, %llu not confirmed (an S2.1 dump, having no CRC, is used once "
+      "the next is the same)\n",
       static_cast<unsigned long long>(c.dumps), static_cast<unsigned long long>(c.dumps_broken),
       static_cast<unsigned long long>(c.bad_checksum),
-      static_cast<unsigned long long>(c.bad_layout));
+      static_cast<unsigned long long>(c.bad_layout),
+      static_cast<unsigned long long>(c.unconfirmed));
   if (st.has_calibration()) {
     const velodyne::UnitParameters& u = st.unit();
     std::string date = "not set";

@@ -44,6 +44,7 @@ rt::Result<VelodyneSettings> load_velodyne_settings(const std::filesystem::path&
   STAC_GET(bool, "ros_intensity_units", a.decoder.ros_intensity_units);
   STAC_GET(double, "max_gap_s", a.max_gap_s);
   STAC_GET(double, "max_scan_duration_s", a.max_scan_duration_s);
+  STAC_GET(double, "min_scan_completeness", a.min_completeness);
   STAC_GET(int, "scan_slots", s.scan_slots);
 #undef STAC_GET
 
@@ -73,6 +74,8 @@ rt::Result<VelodyneSettings> load_velodyne_settings(const std::filesystem::path&
     return rt::make_error(file +
                           ": 'velodyne.max_gap_s' and 'velodyne.max_scan_duration_s' must be > 0");
   }
+  if (!(a.min_completeness >= 0.0 && a.min_completeness <= 1.0))
+    return rt::make_error(file + ": 'velodyne.min_scan_completeness' must be in [0, 1]");
   if (s.scan_slots < 2 || s.scan_slots > 64)
     return rt::make_error(file + ": 'velodyne.scan_slots' must be in 2..64");
   if (s.receive_buffer_bytes < 65536) {

@@ -35,6 +35,8 @@ rt::Result<TcpClient> TcpClient::open(const TcpClientConfig& config) {
                           "' is not an IPv4 address; set the POS computer's address (a.b.c.d)");
   }
   if (config.port == 0) return rt::make_error(where + ": port must be 1..65535");
+  if (config.message_timeout_ms < 0)
+    return rt::make_error("applanix tcp: message_timeout_ms must be >= 0 (0: never)");
   if (config.connect_timeout_ms < 1 || config.stall_timeout_ms < 1 ||
       config.initial_backoff_ms < 1 || config.max_backoff_ms < config.initial_backoff_ms) {
     return rt::make_error(where +
@@ -89,6 +91,7 @@ bool TcpClient::try_connect(std::int64_t now_ns) noexcept {
     ++counters_.connects;
     backoff_ms_ = 0;
     last_data_ns_ = rt::monotonic_ns();
+    last_message_ns_ = last_data_ns_;
     return true;
   }
   ++counters_.connect_failures;
@@ -96,6 +99,10 @@ bool TcpClient::try_connect(std::int64_t now_ns) noexcept {
                                  : std::min(backoff_ms_ * 2, config_.max_backoff_ms);
   next_attempt_ns_ = now_ns + backoff_ms_ * kMs;
   return false;
+}
+
+void TcpClient::note_message() noexcept {
+  last_message_ns_ = rt::monotonic_ns();
 }
 
 int TcpClient::receive(std::span<std::uint8_t> out, int timeout_ms) noexcept {
@@ -116,6 +123,12 @@ int TcpClient::receive(std::span<std::uint8_t> out, int timeout_ms) noexcept {
         continue;
       }
       now = rt::monotonic_ns();
+    }
+    if (config_.message_timeout_ms > 0 &&
+        now - last_message_ns_ > std::int64_t{config_.message_timeout_ms} * kMs) {
+      ++counters_.no_message;
+      disconnect(now);
+      continue;
     }
     const std::int64_t stall_at = last_data_ns_ + config_.stall_timeout_ms * kMs;
     pollfd p[2] = {{fd_.get(), POLLIN, 0}, {wake_fd_.get(), POLLIN, 0}};

@@ -19,7 +19,10 @@ struct TcpClientConfig {
   std::uint16_t port = 5602;      // Real-Time Data
   int connect_timeout_ms = 2000;  // one connection attempt
   int stall_timeout_ms = 1000;    // connected but silent this long: reconnect
-  int initial_backoff_ms = 100;   // delay after the first failure, doubled per failure
+  // Connected, bytes arriving, but no valid message (note_message()) for this long: reconnect
+  // (a trickle or a flood of garbage keeps a connection from stalling). 0: never.
+  int message_timeout_ms = 2000;
+  int initial_backoff_ms = 100;  // delay after the first failure, doubled per failure
   int max_backoff_ms = 5000;
 };
 
@@ -28,6 +31,7 @@ struct TcpClientCounters {
   std::uint64_t connect_failures = 0;  // refused, unreachable or timed out
   std::uint64_t disconnects = 0;       // closed by the peer or a socket error
   std::uint64_t stalls = 0;            // closed by us after stall_timeout_ms of silence
+  std::uint64_t no_message = 0;        // closed by us: bytes, but no valid message for a while
   std::uint64_t bytes = 0;
 };
 
@@ -41,6 +45,8 @@ class TcpClient {
   // Waits up to timeout_ms for stream bytes, (re)connecting as needed. Returns the number of
   // bytes written to `out` (> 0), 0 when the time ran out, or kStopped after stop().
   int receive(std::span<std::uint8_t> out, int timeout_ms) noexcept;
+  // The reading thread: the bytes so far held a valid message (the stream is the INS's).
+  void note_message() noexcept;
   // Any thread: makes the current and every later receive() return kStopped.
   void stop() noexcept;
 
@@ -64,6 +70,7 @@ class TcpClient {
   int backoff_ms_ = 0;
   std::int64_t next_attempt_ns_ = 0;
   std::int64_t last_data_ns_ = 0;
+  std::int64_t last_message_ns_ = 0;
   TcpClientCounters counters_;
 };
 

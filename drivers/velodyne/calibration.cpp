@@ -112,6 +112,8 @@ rt::Result<double> xml_number(const tinyxml2::XMLElement* parent, const char* ta
                               const std::string& ctx) {
   const tinyxml2::XMLElement* e = parent->FirstChildElement(tag);
   if (e == nullptr) return rt::make_error(ctx + "missing <" + std::string(tag) + ">");
+  if (e->NextSiblingElement(tag) != nullptr)  // which of them would the unit's be?
+    return rt::make_error(ctx + "<" + std::string(tag) + "> appears twice");
   // The whole text must be the number ("-7.15abc" is a broken file, not -7.15).
   const char* text = e->GetText();
   char* end = nullptr;
@@ -124,13 +126,21 @@ rt::Result<double> xml_number(const tinyxml2::XMLElement* parent, const char* ta
   return v;
 }
 
-// Reads the <item> values of a top-level array such as <minIntensity_>; empty when absent.
-std::vector<int> xml_int_items(const tinyxml2::XMLElement* db, const char* tag) {
+// Reads the <item> values of a top-level array such as <minIntensity_>; empty when absent. An
+// array given twice or an item that is not an integer is refused.
+rt::Result<std::vector<int>> xml_int_items(const tinyxml2::XMLElement* db, const char* tag,
+                                           const std::string& ctx) {
   std::vector<int> out;
   const tinyxml2::XMLElement* arr = db->FirstChildElement(tag);
   if (arr == nullptr) return out;
+  if (arr->NextSiblingElement(tag) != nullptr)
+    return rt::make_error(ctx + "<" + std::string(tag) + "> appears twice");
   for (const auto* it = arr->FirstChildElement("item"); it; it = it->NextSiblingElement("item")) {
-    out.push_back(it->IntText(0));
+    int v = 0;
+    if (it->QueryIntText(&v) != tinyxml2::XML_SUCCESS)
+      return rt::make_error(ctx + "<" + std::string(tag) + "> item " + std::to_string(out.size()) +
+                            " is not an integer");
+    out.push_back(v);
   }
   return out;
 }
@@ -232,9 +242,18 @@ rt::Result<Calibration> load_db_xml(const std::filesystem::path& path) {
   }
   const tinyxml2::XMLElement* points = db->FirstChildElement("points_");
   if (points == nullptr) return rt::make_error(path.string() + ": missing <points_>");
-  const std::vector<int> enabled = xml_int_items(db, "enabled_");
-  const std::vector<int> min_i = xml_int_items(db, "minIntensity_");
-  const std::vector<int> max_i = xml_int_items(db, "maxIntensity_");
+  if (points->NextSiblingElement("points_") != nullptr)
+    return rt::make_error(path.string() + ": <points_> appears twice");
+  const std::string file_ctx = path.string() + ": ";
+  auto enabled_r = xml_int_items(db, "enabled_", file_ctx);
+  if (!enabled_r) return rt::Unexpected<rt::Error>{enabled_r.error()};
+  auto min_r = xml_int_items(db, "minIntensity_", file_ctx);
+  if (!min_r) return rt::Unexpected<rt::Error>{min_r.error()};
+  auto max_r = xml_int_items(db, "maxIntensity_", file_ctx);
+  if (!max_r) return rt::Unexpected<rt::Error>{max_r.error()};
+  const std::vector<int>& enabled = *enabled_r;
+  const std::vector<int>& min_i = *min_r;
+  const std::vector<int>& max_i = *max_r;
 
   std::vector<LaserCalibration> lasers;
   int index = 0;
@@ -277,6 +296,15 @@ rt::Result<Calibration> load_db_xml(const std::filesystem::path& path) {
     l.max_intensity = at(max_i, 255);
     l.two_pt_correction_available = l.dist_correction_x_m != 0.0 || l.dist_correction_y_m != 0.0;
     lasers.push_back(l);
+  }
+  // A per-laser list must cover every laser (10 of 64 entries is a cut file, not defaults).
+  for (const auto& [tag, list] :
+       {std::pair<const char*, const std::vector<int>*>{"enabled_", &enabled},
+        {"minIntensity_", &min_i},
+        {"maxIntensity_", &max_i}}) {
+    if (!list->empty() && list->size() != lasers.size())
+      return rt::make_error(file_ctx + "<" + tag + "> lists " + std::to_string(list->size()) +
+                            " entries for " + std::to_string(lasers.size()) + " lasers");
   }
   return finish(path, lasers, lsb_cm * kCmToM);
 }

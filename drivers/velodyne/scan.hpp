@@ -29,8 +29,15 @@ struct ScanHeader {
   bool starts_at_cut = false;         // opened by a cut-angle crossing (not by start-up or a gap)
   bool ends_at_cut = false;           // closed by a cut-angle crossing (not by a gap or timeout)
   bool dual_return = false;
+  // Closed with more packets lost than ScanAssemblerConfig::min_completeness allows.
+  bool below_completeness = false;
+  // The fraction of its packets that arrived (1 when none is known lost).
+  [[nodiscard]] double completeness() const noexcept {
+    const double all = static_cast<double>(packets) + static_cast<double>(packets_lost);
+    return all > 0 ? static_cast<double>(packets) / all : 1.0;
+  }
   [[nodiscard]] bool complete() const noexcept {
-    return starts_at_cut && ends_at_cut && points_dropped == 0;
+    return starts_at_cut && ends_at_cut && points_dropped == 0 && !below_completeness;
   }
 };
 

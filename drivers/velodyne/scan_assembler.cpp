@@ -92,6 +92,8 @@ void ScanAssembler::open(Target& t, std::int64_t stamp_ns, std::uint16_t rotatio
 void ScanAssembler::close(bool at_cut) noexcept {
   ScanHeader& h = *current_.header;
   h.ends_at_cut = at_cut;
+  h.below_completeness = h.completeness() < config_.min_completeness;
+  counters_.below_completeness += h.below_completeness ? 1 : 0;
   h.sequence = next_sequence_++;
   counters_.points_dropped += h.points_dropped;
   ++counters_.scans;

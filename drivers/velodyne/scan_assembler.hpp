@@ -27,20 +27,24 @@ struct ScanAssemblerConfig {
   double min_rpm = 300.0;            // sizes the scan capacity (slowest = most points)
   double max_gap_s = 0.05;           // silence longer than this closes the scan in progress
   double max_scan_duration_s = 0.3;  // a scan longer than this is closed (sensor not turning)
+  // A scan whose packets arrived for less than this fraction (the rest lost on the wire,
+  // estimated from azimuth steps) is not complete: not processed, counted.
+  double min_completeness = 0.9;
 };
 
 struct AssemblerCounters {
-  std::uint64_t packets = 0;         // payloads offered
-  std::uint64_t wrong_size = 0;      // not 1206 bytes: dropped
-  std::uint64_t invalid_block = 0;   // bad bank id, rotation >= 36000, or rotations that jump
-                                     // between its blocks (over 3 deg): packet dropped
-  std::uint64_t duplicates = 0;      // identical to one of the last 16 packets: dropped
-  std::uint64_t late_firings = 0;    // reordered firings belonging to an already closed scan
-  std::uint64_t packets_lost = 0;    // estimated from azimuth steps
-  std::uint64_t time_gaps = 0;       // scans closed by silence or a clock jump
-  std::uint64_t timeouts = 0;        // scans closed by max_scan_duration_s
-  std::uint64_t points_dropped = 0;  // returns beyond a scan's capacity
-  std::uint64_t scans = 0;           // scans closed
+  std::uint64_t packets = 0;             // payloads offered
+  std::uint64_t wrong_size = 0;          // not 1206 bytes: dropped
+  std::uint64_t invalid_block = 0;       // bad bank id, rotation >= 36000, or rotations that jump
+                                         // between its blocks (over 3 deg): packet dropped
+  std::uint64_t duplicates = 0;          // identical to one of the last 16 packets: dropped
+  std::uint64_t late_firings = 0;        // reordered firings belonging to an already closed scan
+  std::uint64_t packets_lost = 0;        // estimated from azimuth steps
+  std::uint64_t time_gaps = 0;           // scans closed by silence or a clock jump
+  std::uint64_t timeouts = 0;            // scans closed by max_scan_duration_s
+  std::uint64_t points_dropped = 0;      // returns beyond a scan's capacity
+  std::uint64_t scans = 0;               // scans closed
+  std::uint64_t below_completeness = 0;  // scans closed with too many packets lost
 };
 
 // Points a scan must hold at the slowest configured rotation, with 10% margin.

@@ -209,6 +209,14 @@ void StatusDecoder::finish_dump() noexcept {
     ++counters_.bad_checksum;
     return;
   }
+  if (!crc_ok) {  // S2.1: no CRC, so the same bytes twice in a row before they are used
+    if (!have_candidate_ || candidate_ != dump_) {
+      candidate_ = dump_;
+      have_candidate_ = true;
+      ++counters_.unconfirmed;
+      return;
+    }
+  }
   for (int i = 0; i < kMaxLasers; ++i) {
     const std::uint8_t* r = dump_.data() + kLaserRecords + i * kLaserRecordSize;
     LaserCalibration& l = lasers_[static_cast<std::size_t>(i)];
@@ -253,10 +261,11 @@ rt::Result<Calibration> StatusDecoder::calibration() const {
   if (!has_calibration()) {
     return rt::make_error(
         "no complete calibration in the status bytes yet: an S2.1/S3 sends one every 4160 "
-        "packets (1.2 s), and it needs an unbroken run of them (" +
+        "packets (1.2 s), and it needs an unbroken run of them, an S2.1's twice the same (" +
         std::to_string(counters_.packets) + " packets seen, " +
         std::to_string(counters_.dumps_broken) + " dumps broken by lost or reordered packets, " +
-        std::to_string(counters_.bad_checksum) + " with a bad checksum)");
+        std::to_string(counters_.bad_checksum) + " with a bad checksum, " +
+        std::to_string(counters_.unconfirmed) + " S2.1 dumps not yet confirmed by the next)");
   }
   Calibration c;
   c.lasers = lasers_;

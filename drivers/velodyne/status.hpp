@@ -78,6 +78,9 @@ struct StatusCounters {
   std::uint64_t dumps_broken = 0;     // dumps in progress dropped by a broken cycle
   std::uint64_t bad_checksum = 0;     // complete dumps whose checksum did not match
   std::uint64_t bad_layout = 0;       // complete dumps whose laser ids were not 0..63
+  // S2.1 dumps (no CRC: a flipped bit would pass) not yet seen twice in a row, byte for byte:
+  // a dump is used only when the next one confirms it.
+  std::uint64_t unconfirmed = 0;
 };
 
 class StatusDecoder {
@@ -106,6 +109,8 @@ class StatusDecoder {
   std::uint8_t w_byte_ = 0;
   bool have_w_ = false;
   std::array<std::uint8_t, kStatusDumpBytes> dump_{};
+  std::array<std::uint8_t, kStatusDumpBytes> candidate_{};  // the last unconfirmed S2.1 dump
+  bool have_candidate_ = false;
   int dump_len_ = 0;
   SensorStatus sensor_;
   UnitParameters unit_;

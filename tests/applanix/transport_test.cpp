@@ -117,7 +117,10 @@ std::vector<Bytes> read_messages(TcpClient& client, StreamParser& parser, std::s
     }
     parser.feed({buf.data(), static_cast<std::size_t>(n)});
     Parsed p;
-    while (parser.next(p)) got.emplace_back(p.bytes.begin(), p.bytes.end());
+    while (parser.next(p)) {
+      client.note_message();
+      got.emplace_back(p.bytes.begin(), p.bytes.end());
+    }
   }
   return got;
 }
@@ -179,6 +182,37 @@ TEST(ApplanixTcpClient, StalledStreamTimesOutAndReconnects) {
     EXPECT_EQ(client->counters().disconnects, 0u);
   }
   pos.join();
+}
+
+// Issue 31: a server that trickles a byte every 50 ms (never a stall) or floods garbage kept its
+// connection forever while the INS was reported stale.
+TEST(ApplanixTcpClient, BytesWithoutAValidMessageForAWhileReconnect) {
+  LocalServer server;
+  std::atomic<bool> done{false};
+  std::thread pos([&] {
+    const int c1 = server.accept();
+    while (!done.load()) {  // one garbage byte every 50 ms, until the client gives up on it
+      const std::uint8_t junk = 0x5a;
+      if (::send(c1, &junk, 1, MSG_NOSIGNAL) != 1) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    ::close(c1);
+  });
+  auto config = local_config(server.port());
+  config.stall_timeout_ms = 300;  // longer than the trickle's gaps: never a stall
+  config.message_timeout_ms = 400;
+  auto client = TcpClient::open(config);
+  ASSERT_TRUE(client);
+  std::vector<std::uint8_t> buf(64);
+  for (int i = 0; i < 300 && client->counters().no_message == 0; ++i)
+    (void)client->receive(buf, 10);
+  EXPECT_EQ(client->counters().no_message, 1u);
+  EXPECT_EQ(client->counters().stalls, 0u);
+  done.store(true);
+  pos.join();
+  TcpClientConfig bad = local_config(1);
+  bad.message_timeout_ms = -1;
+  EXPECT_FALSE(TcpClient::open(bad));
 }
 
 TEST(ApplanixTcpClient, StopReturnsPromptlyWhileConnectedOrBackingOff) {

@@ -349,7 +349,7 @@ TEST(Cli, StatusShowsTheSimulatedUnitAndStreamCalibrationDecodesLikeTheFile) {
   const auto dir = fresh_dir("status");
   const std::string yaml = stac::testing::shared_data(kYaml).string();
   const auto pcap = (dir / "run.pcap").string();
-  CliResult sim = stac("sim --scenario parking-lot --seed 5 --duration 1.5 --calib " + yaml +
+  CliResult sim = stac("sim --scenario parking-lot --seed 5 --duration 2.8 --calib " + yaml +
                        " --out " + pcap + " --truth " + (dir / "run.jsonl").string());
   ASSERT_EQ(sim.code, 0) << sim.output;
 
@@ -357,7 +357,7 @@ TEST(Cli, StatusShowsTheSimulatedUnitAndStreamCalibrationDecodesLikeTheFile) {
   CliResult st = stac("status --in " + pcap + " --calib-out " + unit_yaml);
   ASSERT_EQ(st.code, 0) << st.output;
   for (const char* word : {"1 dumps accepted", "0 out of sequence", "GPS PPS+NMEA", "600 rpm",
-                           "return mode strongest", "192.168.3.43", "2026-01-01 12:00:01 UTC"}) {
+                           "return mode strongest", "192.168.3.43", "2026-01-01 12:00:02 UTC"}) {
     EXPECT_NE(st.output.find(word), std::string::npos) << word << " missing from:\n" << st.output;
   }
   auto sent = velodyne::load_calibration(unit_yaml);

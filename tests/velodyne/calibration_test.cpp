@@ -138,6 +138,22 @@ TEST(Calibration, MissingFieldNamesFileLaserAndField) {
   EXPECT_NE(c.error().message.find("vert_correction"), std::string::npos) << c.error().message;
 }
 
+// A db.xml of 64 lasers whose <minIntensity_> list holds `items` entries.
+std::string xml_with_intensity_items(int items) {
+  std::string s = "<?xml version=\"1.0\"?><boost_serialization><DB><points_>";
+  for (int i = 0; i < 64; ++i) {
+    s += "<item><px><id_>" + std::to_string(i) +
+         "</id_><rotCorrection_>0</rotCorrection_><vertCorrection_>0</vertCorrection_>"
+         "<distCorrection_>100</distCorrection_><distCorrectionX_>0</distCorrectionX_>"
+         "<distCorrectionY_>0</distCorrectionY_><vertOffsetCorrection_>20</vertOffsetCorrection_>"
+         "<horizOffsetCorrection_>0</horizOffsetCorrection_><focalDistance_>0</focalDistance_>"
+         "<focalSlope_>0</focalSlope_></px></item>";
+  }
+  s += "</points_><minIntensity_>";
+  for (int i = 0; i < items; ++i) s += "<item>0</item>";
+  return s + "</minIntensity_></DB></boost_serialization>";
+}
+
 TEST(Calibration, RejectsBrokenFilesWithClearMessages) {
   struct Case {
     const char* name;
@@ -178,6 +194,14 @@ TEST(Calibration, RejectsBrokenFilesWithClearMessages) {
        "laser 0: missing <vertCorrection_>"},
       {"trunc.xml", "<?xml version=\"1.0\"?><boost_serialization><DB><points_>",
        "not readable as XML"},
+      // Issue 31: conflicting duplicates, and a per-laser list cut short.
+      {"dup.xml",
+       "<?xml version=\"1.0\"?><boost_serialization><DB><points_><item><px><id_>0</id_>"
+       "<rotCorrection_>1</rotCorrection_><rotCorrection_>2</rotCorrection_></px></item>"
+       "</points_></DB></boost_serialization>",
+       "<rotCorrection_> appears twice"},
+      {"partial.xml", xml_with_intensity_items(10),
+       "<minIntensity_> lists 10 entries for 64 lasers"},
       {"trailing.xml",
        "<?xml version=\"1.0\"?><boost_serialization><DB><points_><item><px><id_>0</id_>"
        "<rotCorrection_>-7.15abc</rotCorrection_></px></item></points_></DB></boost_serialization>",

@@ -122,6 +122,30 @@ TEST(ScanAssembler, CountsLostPacketsAsGaps) {
   }
 }
 
+// Issue 31: a scan missing 20% of its packets was called complete and published as if whole.
+TEST(ScanAssembler, AScanMissingMoreThanTheFloorAllowsIsNotComplete) {
+  StreamSpec spec;
+  spec.seconds = 1.0;
+  auto packets = make_stream(spec);
+  std::vector<StreamPacket> lossy;
+  for (std::size_t i = 0; i < packets.size(); ++i)
+    if (i < 10 || i % 5 != 0) lossy.push_back(packets[i]);  // every 5th packet lost: 20%
+  const Assembled run = assemble(lossy);
+  ASSERT_GE(run.headers.size(), 5u);
+  for (std::size_t i = 1; i + 1 < run.headers.size(); ++i) {
+    EXPECT_NEAR(run.headers[i].completeness(), 0.8, 0.03);
+    EXPECT_FALSE(run.headers[i].complete()) << i;  // the default floor: 0.9
+    EXPECT_TRUE(run.headers[i].below_completeness);
+  }
+  EXPECT_GE(run.counters.below_completeness, run.headers.size() - 2);
+  // With a floor of 0.75 they are complete again.
+  ScanAssemblerConfig lenient;
+  lenient.min_completeness = 0.75;
+  const Assembled taken = assemble(lossy, lenient);
+  for (std::size_t i = 1; i + 1 < taken.headers.size(); ++i)
+    EXPECT_TRUE(taken.headers[i].complete()) << i;
+}
+
 TEST(ScanAssembler, DropsDuplicatePackets) {
   StreamSpec spec;
   spec.seconds = 0.5;

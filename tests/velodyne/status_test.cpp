@@ -132,11 +132,33 @@ TEST(StatusDecoder, RealS21CalibrationRoundTripsWithTheLengthChecksum) {
   auto file = load_calibration(shared_data(kS21Xml));
   ASSERT_TRUE(file) << file.error().message;
   StatusDecoder d(Model::kS2_1);
-  feed(d, sequence(Model::kS2_1, *file));
+  const auto bytes = sequence(Model::kS2_1, *file);
+  feed(d, bytes);
+  // Issue 31: the S2.1 has no CRC, so one dump alone is not used; the next, identical, confirms.
+  EXPECT_FALSE(d.has_calibration());
+  EXPECT_EQ(d.counters().unconfirmed, 1u);
+  feed(d, bytes);
   auto stream = d.calibration();
   ASSERT_TRUE(stream) << stream.error().message;
   expect_same_within_quantisation(*file, *stream);
   EXPECT_FALSE(d.unit().crc_checked);  // the S2.1 writes 1820 where the S3 writes its CRC
+}
+
+TEST(StatusDecoder, AFlippedBitInAnS21DumpIsNeverUsed) {
+  STAC_REQUIRE_SHARED_DATA(kS21Xml);
+  auto file = load_calibration(shared_data(kS21Xml));
+  ASSERT_TRUE(file) << file.error().message;
+  const auto good = sequence(Model::kS2_1, *file);
+  LaserCalibration& l = file->lasers[7];
+  l.rot_correction_rad += 0.001;  // a different value where a flipped bit would be
+  const auto other = sequence(Model::kS2_1, *file);
+  StatusDecoder d(Model::kS2_1);
+  feed(d, good);
+  feed(d, other);  // differs from the one before: neither is used
+  EXPECT_FALSE(d.has_calibration());
+  EXPECT_EQ(d.counters().unconfirmed, 2u);
+  feed(d, other);  // the same twice: used
+  ASSERT_TRUE(d.has_calibration());
 }
 
 TEST_F(RealS3Dump, DecodesTimeGpsTemperatureFirmwareAndUnitParameters) {
@@ -309,7 +331,7 @@ TEST(StatusTrailerWriter, ScanHeadersCarryUtcAndGpsStateAndTheCalibrationArrives
   auto writer = StatusTrailerWriter::create(Model::kS2_1, sensor, example_unit(), flat);
   ASSERT_TRUE(writer) << writer.error().message;
   stac::testing::StreamSpec spec;
-  spec.seconds = 1.5;                                             // more than one 4160-packet dump
+  spec.seconds = 2.8;  // more than two 4160-packet dumps (an S2.1 dump is used once confirmed)
   spec.start_ns = 1'795'453'200'000'000'000 + 3'599'500'000'000;  // 0.5 s before 18:00 UTC
   auto packets = stac::testing::make_stream(spec);
   ScanAssemblerConfig config;
