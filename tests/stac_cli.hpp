@@ -14,8 +14,9 @@ struct CliResult {
   std::string output;  // stdout and stderr
 };
 
-inline CliResult stac(const std::string& args) {
-  const std::string cmd = std::string(STAC_CLI) + " " + args + " 2>&1";
+// Runs a shell command line, its stderr into its stdout.
+inline CliResult run_shell(const std::string& command) {
+  const std::string cmd = command + " 2>&1";
   FILE* p = popen(cmd.c_str(), "r");
   if (p == nullptr) return {-1, "popen failed"};
   std::string out;
@@ -23,6 +24,16 @@ inline CliResult stac(const std::string& args) {
   while (std::size_t n = std::fread(buf, 1, sizeof(buf), p)) out.append(buf, n);
   const int status = pclose(p);
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+}
+
+inline CliResult stac(const std::string& args) {
+  return run_shell(std::string(STAC_CLI) + " " + args);
+}
+
+// `stac ARGS`, killed after `seconds` (exit code 137) if it has not ended by then.
+inline CliResult stac_within(int seconds, const std::string& args) {
+  return run_shell("timeout -s KILL " + std::to_string(seconds) + " " + std::string(STAC_CLI) +
+                   " " + args);
 }
 
 // An empty folder of this name under the system's temp folder (emptied first).

@@ -26,6 +26,7 @@ constexpr const char* kYaml = "velodyne/calib/rosdrivers_64e_s2.1-sztaki.yaml";
 
 using stac::testing::CliResult;
 using stac::testing::stac;
+using stac::testing::stac_within;
 
 std::filesystem::path fresh_dir(const std::string& name) {
   return stac::testing::fresh_dir("stac_cli_" + name);
@@ -61,19 +62,6 @@ TEST(Cli, HelpExplainsEveryCommand) {
   EXPECT_NE(d.output.find("scan,laser,azimuth"), std::string::npos) << d.output;
   const CliResult none = stac("");
   EXPECT_NE(none.code, 0);  // a subcommand is required
-}
-
-// `stac ARGS`, killed after `seconds` (exit code 137) if it has not ended.
-CliResult stac_within(int seconds, const std::string& args) {
-  const std::string cmd = "timeout -s KILL " + std::to_string(seconds) + " " +
-                          std::string(STAC_CLI) + " " + args + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  if (p == nullptr) return {-1, "popen failed"};
-  std::string out;
-  char buf[4096];
-  while (std::size_t n = std::fread(buf, 1, sizeof(buf), p)) out.append(buf, n);
-  const int status = pclose(p);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
 }
 
 // Issue 31: numbers a command cannot use are refused at once, naming the option; none hangs
