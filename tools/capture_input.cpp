@@ -59,4 +59,8 @@ std::string nothing_decoded_reason(const std::string& capture, const io::PcapCou
          "); a complete scan turns once from the cut angle back to it";
 }
 
+std::string capture_breaks_off(const std::string& reader_error) {
+  return reader_error + " (the capture breaks off there; what comes after it is lost)";
+}
+
 }  // namespace stac::tools

@@ -21,4 +21,8 @@ std::string packet_drops_summary(const velodyne::AssemblerCounters& a);
 std::string nothing_decoded_reason(const std::string& capture, const io::PcapCounters& pc,
                                    const velodyne::AssemblerCounters& a, std::uint16_t port);
 
+// The error of a capture that cannot be read to its end (the reader's error, which names the file,
+// the record and the cause), for every command that reads one: it is never only a warning.
+std::string capture_breaks_off(const std::string& reader_error);
+
 }  // namespace stac::tools

@@ -16,6 +16,7 @@
 #include "drivers/velodyne/scan_stream.hpp"
 #include "pipeline/scan_pipeline.hpp"
 #include "sim/world.hpp"
+#include "tools/capture_input.hpp"
 #include "tools/capture_poses.hpp"
 #include "tools/commands.hpp"
 #include "tools/dataset_file.hpp"
@@ -156,9 +157,7 @@ class Builder : public classification::TrackClassifier::Observer {
       progress.update(static_cast<double>(reader->bytes_read()));
     }
     progress.finish();
-    if (!reader->error().empty())
-      return rt::make_error(reader->error() +
-                            " (the capture breaks off there; what comes after it is lost)");
+    if (!reader->error().empty()) return rt::make_error(capture_breaks_off(reader->error()));
     for (auto& [id, b] : live_) finish(b);
     live_.clear();
     if (counts_.scans == 0) return rt::make_error(in + ": no complete scan in the capture");

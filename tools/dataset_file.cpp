@@ -224,6 +224,17 @@ rt::Result<Dataset> read_dataset(const std::filesystem::path& dir) {
   return d;
 }
 
+learning::TrackExample track_example(DatasetTrack t) {
+  learning::TrackExample e;
+  e.label = t.label;
+  e.segments = std::move(t.segment_rows);
+  const std::size_t hd = holistic_dims();
+  if (t.holistic_rows.size() >= hd)
+    e.holistic.assign(t.holistic_rows.end() - static_cast<std::ptrdiff_t>(hd),
+                      t.holistic_rows.end());
+  return e;
+}
+
 rt::Result<Dataset> read_labelled_dataset(const std::filesystem::path& dir,
                                           const std::string& job) {
   auto d = read_dataset(dir);
@@ -235,11 +246,6 @@ rt::Result<Dataset> read_labelled_dataset(const std::filesystem::path& dir,
 }
 
 rt::Result<bool> append_dataset(Dataset& into, Dataset&& more, const std::string& more_name) {
-  const auto list = [](const classification::ClassNames& names) {
-    std::string s;
-    for (const std::string& n : names) s += (s.empty() ? "" : ", ") + n;
-    return s;
-  };
   if (into.tracks.empty() && into.sources.empty()) {
     into.classes = more.classes;
     into.labelled = more.labelled;
@@ -249,8 +255,9 @@ rt::Result<bool> append_dataset(Dataset& into, Dataset&& more, const std::string
                           ", the other datasets " +
                           (into.labelled ? "labelled" : "without labels") + "; do not mix them");
   if (more.classes != into.classes)
-    return rt::make_error(more_name + ": its classes (" + list(more.classes) +
-                          ") differ from the other datasets' (" + list(into.classes) +
+    return rt::make_error(more_name + ": its classes (" + classification::joined(more.classes) +
+                          ") differ from the other datasets' (" +
+                          classification::joined(into.classes) +
                           "); make every dataset with the same --class options");
   const auto offset = static_cast<std::uint32_t>(into.sources.size());
   for (std::string& s : more.sources) into.sources.push_back(std::move(s));

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "perception/classification/grid_classifier.hpp"
+#include "perception/learning/track_training.hpp"
 #include "rt/expected.hpp"
 
 namespace stac::tools {
@@ -62,6 +63,10 @@ std::uint32_t off_label_segments(classification::ClassIndex label,
   return static_cast<double>(t.off_label_segments) <=
          kMaxOffLabelFraction * static_cast<double>(t.segments);
 }
+
+// A track as training takes it: its label, every segment row, and its last holistic descriptor
+// (the rows are moved out of `t`).
+learning::TrackExample track_example(DatasetTrack t);
 
 // Creates DIR when missing; overwrites tracks.bin and manifest.json.
 rt::Result<bool> write_dataset(const std::filesystem::path& dir, const Dataset& data);

@@ -113,8 +113,7 @@ int run_decode(const DecodeOptions& o) {
                static_cast<unsigned long long>(dc.no_return),
                static_cast<unsigned long long>(dc.out_of_range),
                static_cast<unsigned long long>(dc.disabled), packet_drops_summary(a).c_str());
-  if (!capture_error.empty())
-    return fail(capture_error + " (the capture breaks off there; what comes after it is lost)");
+  if (!capture_error.empty()) return fail(capture_breaks_off(capture_error));
   if (scans == 0) return fail(nothing_decoded_reason(o.in, pc, a, s.port));
   return 0;
 }

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "drivers/applanix/capture_reader.hpp"
+#include "tools/capture_input.hpp"
 #include "tools/commands.hpp"
 
 namespace stac::tools {
@@ -110,8 +111,7 @@ int run_decode_applanix(const ApplanixDecodeOptions& o) {
                week ? std::to_string(*week).c_str() : "unknown (no Group 3)", ull(pc.bad_checksum),
                ull(pc.bad_length), ull(pc.bad_terminator), ull(pc.oversize), ull(pc.malformed),
                ull(pc.truncated), ull(pc.garbage_bytes));
-  if (!capture_error.empty())
-    return fail(capture_error + " (the capture breaks off there; what comes after it is lost)");
+  if (!capture_error.empty()) return fail(capture_breaks_off(capture_error));
   if (rows == 0) {
     return fail(o.in + ": no Group 1 navigation solution found" +
                 (reader->is_pcap() ? " (wrong --port?)" : ""));

@@ -62,18 +62,9 @@ struct InductOptions {
   bool baseline = false;
 };
 
-std::string join(const std::vector<std::string>& v) {
-  std::string s;
-  for (const std::string& x : v) s += (s.empty() ? "" : ", ") + x;
-  return s;
-}
-
 learning::TrackExample example_of(const DatasetTrack& t, ClassIndex label) {
-  learning::TrackExample e;
+  learning::TrackExample e = track_example(DatasetTrack(t));
   e.label = label;
-  e.segments = t.segment_rows;
-  e.holistic.assign(t.holistic_rows.end() - static_cast<std::ptrdiff_t>(kHolDims),
-                    t.holistic_rows.end());
   return e;
 }
 
@@ -142,9 +133,10 @@ rt::Result<const Dataset*> Inductor::dataset(const std::string& path) {
     for (std::size_t k = 0; k < s_.classes.size(); ++k) {
       const auto it = std::find(d->classes.begin(), d->classes.end(), s_.classes[k]);
       if (it == d->classes.end())
-        return rt::make_error(
-            path + ": its classes (" + join(d->classes) + ") lack " + s_.classes[k] +
-            ", a class of the state; make it with `stac dataset --class " + s_.classes[k] + "`");
+        return rt::make_error(path + ": its classes (" + classification::joined(d->classes) +
+                              ") lack " + s_.classes[k] +
+                              ", a class of the state; make it with `stac dataset --class " +
+                              s_.classes[k] + "`");
       to[static_cast<std::size_t>(it - d->classes.begin())] = static_cast<ClassIndex>(k);
     }
     for (DatasetTrack& t : d->tracks)
@@ -321,7 +313,8 @@ rt::Result<bool> Inductor::apply_answers() {
     if (label != "skip" && label != "background") {
       const auto it = std::find(s_.classes.begin(), s_.classes.end(), label);
       if (it == s_.classes.end())
-        return bad("label " + label + " is none of " + join(s_.classes) + ", background, skip");
+        return bad("label " + label + " is none of " + classification::joined(s_.classes) +
+                   ", background, skip");
       cls = static_cast<ClassIndex>(it - s_.classes.begin());
     }
     s_.answers_applied = line_no;
@@ -597,7 +590,7 @@ rt::Result<bool> Inductor::chart() {
   }
   if (curve.x.empty()) return true;
   Chart c;
-  c.title = "held-out track accuracy (" + join(s_.classes) + ", background)";
+  c.title = "held-out track accuracy (" + classification::joined(s_.classes) + ", background)";
   c.x_label = "user labels";
   c.y_label = "accuracy";
   c.series.push_back(curve);

@@ -26,26 +26,10 @@ STREAM=(urban:312 urban:313 urban:314 urban:315 urban:316 intersection:319 crowd
         urban:337 intersection:338 urban:339 parking-lot:340)
 TEST=(urban:317 urban:341 intersection:342 crowd:343 urban:344)
 
-[[ -x "$STAC" ]] || { echo "$0: $STAC is missing: build first (cmake --build build)" >&2; exit 1; }
-mkdir -p "$WORK"
-
-drive() {
-  local name=${1%%:*} seed=${1##*:} dir="$WORK/$1"
-  [[ -f "$dir/data/manifest.json" ]] && return 0
-  mkdir -p "$dir"
-  "$STAC" sim --scenario "$name" --seed "$seed" --duration "$DURATION" \
-    --out "$dir/run.pcap" --truth "$dir/run.truth.jsonl" > "$dir/sim.log" 2>&1
-  "$STAC" dataset --in "$dir/run.pcap" --truth "$dir/run.truth.jsonl" --out "$dir/data.tmp" \
-    > "$dir/dataset.log" 2>&1
-  rm -rf "$dir/data" && mv "$dir/data.tmp" "$dir/data"
-  rm -f "$dir/run.pcap"
-  echo "  $1: $(tail -n 1 "$dir/dataset.log")"
-}
-export -f drive
-export STAC WORK DURATION
+source tools/simulated_drives.sh
 all=("${BACKGROUND[@]}" "${LABELS[@]}" "${STREAM[@]}" "${TEST[@]}")
 echo "$0: ${#all[@]} drives of ${DURATION} s in $WORK"
-printf '%s\n' "${all[@]}" | xargs -P "$JOBS" -I{} bash -c 'drive {}'
+make_drives "${all[@]}"
 
 args() {  # args FLAG DRIVE... -> FLAG WORK/DRIVE/data ...
   local flag=$1

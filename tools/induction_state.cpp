@@ -1,10 +1,6 @@
 #include "tools/induction_state.hpp"
 
-#include <fcntl.h>
-#include <unistd.h>
-
 #include <bit>
-#include <cerrno>
 #include <cstring>
 #include <fstream>
 #include <iterator>
@@ -84,98 +80,7 @@ struct Reader {
   }
 };
 
-rt::Result<bool> sync_folder(const std::filesystem::path& dir) {
-  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (fd < 0) return rt::make_error(dir.string() + ": cannot open the folder to sync it");
-  const int r = ::fsync(fd);
-  ::close(fd);
-  if (r != 0) return rt::make_error(dir.string() + ": fsync failed (" + std::strerror(errno) + ")");
-  return true;
-}
-
-// A torn last line (no '\n' at the end): the file back to just after its last complete line.
-rt::Result<bool> cut_tail(int fd, const std::filesystem::path& path) {
-  off_t end = ::lseek(fd, 0, SEEK_END);
-  char last = '\n';
-  if (end > 0 && ::pread(fd, &last, 1, end - 1) == 1 && last != '\n') {
-    char c = 0;
-    while (end > 0 && ::pread(fd, &c, 1, end - 1) == 1 && c != '\n') --end;
-    if (::ftruncate(fd, end) != 0 || ::fsync(fd) != 0)
-      return rt::make_error(path.string() + ": cannot cut its torn last line (" +
-                            std::strerror(errno) + ")");
-  }
-  return true;
-}
-
 }  // namespace
-
-rt::Result<bool> write_file_durably(const std::filesystem::path& path,
-                                    std::span<const std::uint8_t> bytes) {
-  std::filesystem::path tmp = path;
-  tmp += ".tmp";
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0)
-    return rt::make_error(tmp.string() + ": cannot create (" + std::strerror(errno) +
-                          "); check the folder exists and is writable");
-  std::size_t done = 0;
-  while (done < bytes.size()) {
-    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) {
-      const std::string why = std::strerror(errno);
-      ::close(fd);
-      ::unlink(tmp.c_str());
-      return rt::make_error(path.string() + ": write failed (" + why + "); nothing was replaced");
-    }
-    done += static_cast<std::size_t>(n);
-  }
-  if (::fsync(fd) != 0 || ::close(fd) != 0) {
-    ::unlink(tmp.c_str());
-    return rt::make_error(path.string() + ": fsync failed; nothing was replaced");
-  }
-  if (::rename(tmp.c_str(), path.c_str()) != 0) {
-    const std::string why = std::strerror(errno);
-    ::unlink(tmp.c_str());
-    return rt::make_error(path.string() + ": cannot replace (" + why + ")");
-  }
-  return sync_folder(path.has_parent_path() ? path.parent_path() : std::filesystem::path("."));
-}
-
-rt::Result<bool> cut_torn_tail(const std::filesystem::path& path) {
-  std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) return true;
-  const int fd = ::open(path.c_str(), O_RDWR | O_CLOEXEC);
-  if (fd < 0) return rt::make_error(path.string() + ": cannot open (" + std::strerror(errno) + ")");
-  auto r = cut_tail(fd, path);
-  ::close(fd);
-  return r;
-}
-
-rt::Result<bool> append_line_durably(const std::filesystem::path& path, const std::string& line) {
-  const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
-  if (fd < 0)
-    return rt::make_error(path.string() + ": cannot open for appending (" + std::strerror(errno) +
-                          ")");
-  if (auto cut = cut_tail(fd, path); !cut) {
-    ::close(fd);
-    return cut;
-  }
-  const std::string text = line + "\n";
-  std::size_t done = 0;
-  while (done < text.size()) {
-    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) {
-      ::close(fd);
-      return rt::make_error(path.string() + ": append failed (" + std::strerror(errno) + ")");
-    }
-    done += static_cast<std::size_t>(n);
-  }
-  const bool synced = ::fsync(fd) == 0;
-  ::close(fd);
-  if (!synced) return rt::make_error(path.string() + ": fsync failed");
-  return true;
-}
 
 rt::Result<bool> write_induction_state(const std::filesystem::path& dir, const InductionState& s) {
   Writer w;

@@ -14,6 +14,7 @@
 #include "perception/classification/model.hpp"
 #include "perception/learning/induction.hpp"
 #include "rt/expected.hpp"
+#include "tools/durable_file.hpp"
 
 namespace stac::tools {
 
@@ -59,14 +60,5 @@ inline constexpr std::uint32_t kInductionStateVersion = 1;
 rt::Result<InductionState> read_induction_state(const std::filesystem::path& dir);
 rt::Result<bool> write_induction_state(const std::filesystem::path& dir,
                                        const InductionState& state);
-
-// `bytes` to `path` through PATH.tmp: written, fsynced, renamed over `path`, the folder fsynced.
-rt::Result<bool> write_file_durably(const std::filesystem::path& path,
-                                    std::span<const std::uint8_t> bytes);
-// One line (a '\n' is added) appended to `path` and fsynced before returning. A torn last line
-// (a kill during an earlier append, never acknowledged) is cut off first.
-rt::Result<bool> append_line_durably(const std::filesystem::path& path, const std::string& line);
-// Cuts a torn last line (no '\n': a kill during an append) off `path`, if it exists.
-rt::Result<bool> cut_torn_tail(const std::filesystem::path& path);
 
 }  // namespace stac::tools

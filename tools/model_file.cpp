@@ -6,36 +6,13 @@
 #include <system_error>
 #include <vector>
 
+#include "tools/durable_file.hpp"
+
 namespace stac::tools {
 
 rt::Result<bool> write_model_file(const std::filesystem::path& path,
                                   const classification::TrackClassifierModel& model) {
-  const std::vector<std::uint8_t> bytes = classification::serialize(model);
-  std::filesystem::path tmp = path;
-  tmp += ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) {
-      return rt::make_error(path.string() +
-                            ": cannot create the model file; check the folder exists and is "
-                            "writable");
-    }
-    out.write(reinterpret_cast<const char*>(bytes.data()),
-              static_cast<std::streamsize>(bytes.size()));
-    out.close();
-    if (!out) {
-      std::error_code ec;
-      std::filesystem::remove(tmp, ec);
-      return rt::make_error(path.string() + ": write failed (disk full?); nothing was written");
-    }
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    return rt::make_error(path.string() + ": cannot replace the model file (" + ec.message() + ")");
-  }
-  return true;
+  return write_file_durably(path, classification::serialize(model));
 }
 
 rt::Result<classification::TrackClassifierModel> read_model_file(

@@ -11,7 +11,8 @@
 
 namespace stac::tools {
 
-// Writes through a temporary file renamed over `path`, so a failed write leaves no half model.
+// Writes through a temporary file, fsynced and renamed over `path` (durable_file.hpp), so a
+// failed write or a kill leaves no half model.
 rt::Result<bool> write_model_file(const std::filesystem::path& path,
                                   const classification::TrackClassifierModel& model);
 // Missing, unreadable, truncated, corrupt, another format version or descriptor layout: an error

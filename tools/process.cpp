@@ -323,8 +323,7 @@ int run_process(const ProcessOptions& o) {
         static_cast<unsigned long long>(dds_errors));
   }
   print_stats(stages);
-  if (!capture_error.empty())
-    return fail(capture_error + " (the capture breaks off there; what comes after it is lost)");
+  if (!capture_error.empty()) return fail(capture_breaks_off(capture_error));
   if (scans == 0) return fail(nothing_decoded_reason(o.in, reader->counters(), ac, vs.port));
   return 0;
 }

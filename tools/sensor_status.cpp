@@ -5,6 +5,7 @@
 #include <string>
 
 #include "drivers/velodyne/packet.hpp"
+#include "tools/capture_input.hpp"
 #include "tools/commands.hpp"
 #include "tools/settings.hpp"
 
@@ -30,9 +31,7 @@ rt::Result<CaptureStatus> read_capture_status(const std::filesystem::path& captu
     out.status.add(packet->trailer[4], packet->trailer[5]);
     if (until_calibration && out.status.has_calibration()) break;
   }
-  if (!reader->error().empty())
-    return rt::make_error(reader->error() +
-                          " (the capture breaks off there; what comes after it is lost)");
+  if (!reader->error().empty()) return rt::make_error(capture_breaks_off(reader->error()));
   out.pcap = reader->counters();
   return out;
 }

@@ -14,6 +14,7 @@
 #include "drivers/io/pcap_reader.hpp"
 #include "drivers/velodyne/scan_stream.hpp"
 #include "tools/birds_eye.hpp"
+#include "tools/capture_input.hpp"
 #include "tools/chart.hpp"
 #include "tools/cli_checks.hpp"
 #include "tools/commands.hpp"
@@ -344,8 +345,7 @@ int run_compare(const CompareOptions& o) {
   }
   (void)stream.finish();
   drain();
-  if (!reader->error().empty())
-    return fail(reader->error() + " (the capture breaks off there; what comes after it is lost)");
+  if (!reader->error().empty()) return fail(capture_breaks_off(reader->error()));
   if (sim.scans == 0) {
     return fail(o.sim + ": no complete scan decoded (simulate at least 0.3 s, port " +
                 std::to_string(settings->port) + ")");

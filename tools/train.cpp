@@ -7,7 +7,6 @@
 #include <string>
 #include <vector>
 
-#include "perception/classification/holistic.hpp"
 #include "perception/learning/track_training.hpp"
 #include "tools/commands.hpp"
 #include "tools/dataset_file.hpp"
@@ -54,14 +53,8 @@ int run_train(const TrainOptions& o) {
       ++inconsistent;
       continue;
     }
-    learning::TrackExample e;
-    e.label = t.label;
-    e.segments = std::move(t.segment_rows);
-    const std::size_t hd = classification::kHolisticDimensions;
-    e.holistic.assign(t.holistic_rows.end() - static_cast<std::ptrdiff_t>(hd),
-                      t.holistic_rows.end());
-    examples.push_back(std::move(e));
     ++per[t.label == classification::kBackground ? classes : t.label];
+    examples.push_back(track_example(std::move(t)));
   }
   if (examples.empty())
     return fail(

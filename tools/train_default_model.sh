@@ -28,27 +28,9 @@ TRAIN=(urban:101 urban:102 urban:103 urban:104 urban:105 urban:106 urban:107 urb
        urban:184 urban:185 urban:186)
 TEST=(urban:201 urban:202 urban:203 urban:204 intersection:221 empty:261)
 
-[[ -x "$STAC" ]] || { echo "$0: $STAC is missing: build first (cmake --build build)" >&2; exit 1; }
-mkdir -p "$WORK"
-
-# One drive: simulated and described, skipped when its dataset is already there.
-drive() {
-  local name=${1%%:*} seed=${1##*:} dir="$WORK/$1"
-  [[ -f "$dir/data/manifest.json" ]] && return 0
-  mkdir -p "$dir"
-  "$STAC" sim --scenario "$name" --seed "$seed" --duration "$DURATION" \
-    --out "$dir/run.pcap" --truth "$dir/run.truth.jsonl" > "$dir/sim.log" 2>&1
-  "$STAC" dataset --in "$dir/run.pcap" --truth "$dir/run.truth.jsonl" --out "$dir/data.tmp" \
-    > "$dir/dataset.log" 2>&1
-  rm -rf "$dir/data" && mv "$dir/data.tmp" "$dir/data"
-  rm -f "$dir/run.pcap"  # 90 MB a drive; the dataset is what training reads
-  echo "  $1: $(tail -n 1 "$dir/dataset.log")"
-}
-export -f drive
-export STAC WORK DURATION
-
+source tools/simulated_drives.sh
 echo "$0: ${#TRAIN[@]} training and ${#TEST[@]} held-out drives of ${DURATION} s in $WORK"
-printf '%s\n' "${TRAIN[@]}" "${TEST[@]}" | xargs -P "$JOBS" -I{} bash -c 'drive {}'
+make_drives "${TRAIN[@]}" "${TEST[@]}"
 
 train_args=() test_args=()
 for d in "${TRAIN[@]}"; do train_args+=(--data "$WORK/$d/data"); done

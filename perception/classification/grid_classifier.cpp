@@ -40,6 +40,12 @@ const char* class_name(const ClassNames& names, ClassIndex c) noexcept {
   return c < names.size() ? names[c].c_str() : "unknown";
 }
 
+std::string joined(const ClassNames& names) {
+  std::string s;
+  for (const std::string& n : names) s += (s.empty() ? "" : ", ") + n;
+  return s;
+}
+
 std::string check_class_names(const ClassNames& names) {
   if (names.empty() || names.size() > kMaxClasses)
     return std::to_string(names.size()) + " classes, not 1.." + std::to_string(kMaxClasses);

@@ -32,6 +32,8 @@ const char* class_name(const ClassNames& names, ClassIndex c) noexcept;
 // Empty when `names` can be a model's classes (1..kMaxClasses non-empty, unique names of
 // printable ASCII other than space, none "background" or "unknown"), else what is wrong.
 std::string check_class_names(const ClassNames& names);
+// "car, pedestrian, bicyclist": the names for messages.
+std::string joined(const ClassNames& names);
 
 // log P(class | x) / P(not class | x) per foreground class; entries from the model's class count
 // on are unused (0).

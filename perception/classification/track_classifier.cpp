@@ -59,13 +59,9 @@ std::string TrackClassifier::check_swap(const TrackClassifierModel& model) const
   if (model.segment.dimensions() != descriptors::kDimensions ||
       model.holistic.dimensions() != kHolisticDimensions)
     return "the model's descriptor sizes are not this build's (retrain it)";
-  if (model.classes != model_->classes) {
-    std::string now, next;
-    for (const std::string& c : model_->classes) now += (now.empty() ? "" : ", ") + c;
-    for (const std::string& c : model.classes) next += (next.empty() ? "" : ", ") + c;
-    return "its classes (" + next + ") are not the running model's (" + now +
-           "): restart with it instead";
-  }
+  if (model.classes != model_->classes)
+    return "its classes (" + joined(model.classes) + ") are not the running model's (" +
+           joined(model_->classes) + "): restart with it instead";
   return "";
 }
 

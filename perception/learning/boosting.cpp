@@ -53,6 +53,17 @@ double loss_after(const CellStats& s, float c) noexcept {
   return s.positive * std::exp(-0.5 * c) + s.negative * std::exp(0.5 * c);
 }
 
+LogOdds prior_log_odds(const TrainingSet& data) noexcept {
+  LogOdds prior{};
+  const double n = static_cast<double>(data.size());
+  for (std::size_t k = 0; k < data.classes && k < prior.size(); ++k) {
+    double positives = 0;
+    for (const auto label : data.labels) positives += sign(label, k) > 0 ? 1 : 0;
+    prior[k] = static_cast<float>(std::log((positives + 1.0) / (n - positives + 1.0)));
+  }
+  return prior;
+}
+
 rt::Result<GridClassifier> initial_classifier(const TrainingSet& data,
                                               const classification::Layout& layout,
                                               const BoostingConfig& config) {
@@ -96,11 +107,7 @@ rt::Result<GridClassifier> initial_classifier(const TrainingSet& data,
       m.scale.push_back(static_cast<float>(bins / (hi - lo)));
     }
   }
-  for (std::size_t k = 0; k < data.classes; ++k) {
-    double positives = 0;
-    for (const auto label : data.labels) positives += sign(label, k) > 0 ? 1 : 0;
-    m.prior[k] = static_cast<float>(std::log((positives + 1.0) / (double(n) - positives + 1.0)));
-  }
+  m.prior = prior_log_odds(data);
   std::size_t cells = 0;
   for (const auto bins : config.resolutions) cells += bins;
   m.table.assign(cells * d * data.classes, 0.0f);

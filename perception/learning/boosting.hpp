@@ -57,6 +57,9 @@ float newton_response(const CellStats& s, float max_response) noexcept;
 // The cell's loss after adding response c: positive*exp(-c/2) + negative*exp(c/2).
 double loss_after(const CellStats& s, float c) noexcept;
 
+// The prior log odds of a training set: L0 = log((n_pos+1)/(n_neg+1)) per class (0 past them).
+LogOdds prior_log_odds(const TrainingSet& data) noexcept;
+
 // A classifier with data-derived grids, prior log odds L0 = log((n_pos+1)/(n_neg+1)) per class
 // and an all-zero table, for data.classes classes. Fails on an empty set, a layout whose size is
 // not `dimensions`, a class count not 1..kMaxClasses, a label past it or a configuration

@@ -24,18 +24,6 @@ std::vector<LogOdds> log_odds_of(const GridClassifier& segment, std::span<const 
   return out;
 }
 
-// Training-set priors: log((n_pos+1)/(n_neg+1)) per class, as initial_classifier sets them.
-LogOdds priors_of(const TrainingSet& data) noexcept {
-  LogOdds prior{};
-  const double n = static_cast<double>(data.size());
-  for (std::size_t k = 0; k < data.classes; ++k) {
-    double positives = 0;
-    for (const ClassIndex label : data.labels) positives += sign(label, k) > 0 ? 1 : 0;
-    prior[k] = static_cast<float>(std::log((positives + 1.0) / (n - positives + 1.0)));
-  }
-  return prior;
-}
-
 }  // namespace
 
 std::string validate(const InductionConfig& config) {
@@ -185,7 +173,7 @@ rt::Result<GridClassifier> reset_classifier(const GridClassifier& grids, const T
                           " classes, the classifier " + std::to_string(grids.classes()));
   classification::GridModel m = grids.model();
   std::fill(m.table.begin(), m.table.end(), 0.0f);
-  m.prior = priors_of(data);
+  m.prior = prior_log_odds(data);
   return GridClassifier::create(std::move(m));
 }
 
@@ -224,26 +212,6 @@ rt::Result<classification::TrackClassifierModel> training_phase(
   next.segment = std::move(seg).value();
   next.holistic = std::move(hol).value();
   return next;
-}
-
-rt::Result<classification::AdbfParams> fit_filter(const classification::TrackClassifierModel& model,
-                                                  std::span<const TrackExample> tracks,
-                                                  std::size_t segment_dimensions,
-                                                  const LogisticConfig& config) {
-  std::vector<TrackSample> samples;
-  samples.reserve(tracks.size());
-  for (const TrackExample& t : tracks) {
-    TrackSample s;
-    s.label = t.label;
-    classification::TrackEvidence evidence;
-    LogOdds h{};
-    for (std::size_t i = 0; i + segment_dimensions <= t.segments.size(); i += segment_dimensions)
-      (void)add_segment(model, std::span(t.segments).subspan(i, segment_dimensions), evidence, h);
-    s.segment_mean = evidence.segment_mean();
-    (void)model.holistic.classify(t.holistic, s.holistic);
-    samples.push_back(s);
-  }
-  return fit_adbf(samples, model.holistic.model().prior, model.classes.size(), config);
 }
 
 rt::Result<classification::TrackClassifierModel> initial_model(

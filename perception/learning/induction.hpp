@@ -122,13 +122,6 @@ rt::Result<classification::TrackClassifierModel> training_phase(
     const classification::TrackClassifierModel& current, const RoundData& data, bool reset,
     const TrainingPhaseConfig& config);
 
-// The augmented filter's alpha, beta, gamma fitted (fit_adbf) on labelled tracks through `model`'s
-// classifiers; every track's last holistic row is its holistic descriptor.
-rt::Result<classification::AdbfParams> fit_filter(const classification::TrackClassifierModel& model,
-                                                  std::span<const TrackExample> tracks,
-                                                  std::size_t segment_dimensions,
-                                                  const LogisticConfig& config);
-
 // A first model for a new set of classes: grids from every row of `range` (labelled, B0 and
 // unlabeled alike), priors from `data`, tables zero, the filter's parameters all 1.
 rt::Result<classification::TrackClassifierModel> initial_model(

@@ -7,6 +7,30 @@
 
 namespace stac::learning {
 
+TrackSample track_sample(const classification::TrackClassifierModel& model,
+                         const TrackExample& track, std::size_t segment_dimensions) noexcept {
+  TrackSample s;
+  s.label = track.label;
+  classification::TrackEvidence evidence;
+  classification::LogOdds h{};
+  for (std::size_t i = 0; i + segment_dimensions <= track.segments.size(); i += segment_dimensions)
+    (void)add_segment(model, std::span(track.segments).subspan(i, segment_dimensions), evidence, h);
+  s.segment_mean = evidence.segment_mean();
+  (void)model.holistic.classify(track.holistic, s.holistic);
+  return s;
+}
+
+rt::Result<classification::AdbfParams> fit_filter(const classification::TrackClassifierModel& model,
+                                                  std::span<const TrackExample> tracks,
+                                                  std::size_t segment_dimensions,
+                                                  const LogisticConfig& config) {
+  std::vector<TrackSample> samples;
+  samples.reserve(tracks.size());
+  for (const TrackExample& t : tracks)
+    samples.push_back(track_sample(model, t, segment_dimensions));
+  return fit_adbf(samples, model.holistic.model().prior, model.classes.size(), config);
+}
+
 rt::Result<classification::TrackClassifierModel> train_track_classifier(
     std::span<const TrackExample> tracks, const classification::ClassNames& classes,
     const classification::ExpectedLayouts& layouts, const TrackTrainingConfig& config) {
@@ -74,17 +98,8 @@ rt::Result<classification::TrackClassifierModel> train_track_classifier(
   model.holistic = std::move(hol).value();
 
   std::vector<TrackSample> samples;
-  for (const TrackExample* t : held_out) {
-    TrackSample s;
-    s.label = t->label;
-    classification::TrackEvidence evidence;
-    classification::LogOdds h{};
-    for (std::size_t i = 0; i < t->segments.size(); i += seg_dims)
-      (void)add_segment(model, std::span(t->segments).subspan(i, seg_dims), evidence, h);
-    s.segment_mean = evidence.segment_mean();
-    (void)model.holistic.classify(t->holistic, s.holistic);
-    samples.push_back(s);
-  }
+  samples.reserve(held_out.size());
+  for (const TrackExample* t : held_out) samples.push_back(track_sample(model, *t, seg_dims));
   auto adbf = fit_adbf(samples, model.holistic.model().prior, classes.size(), config.filter);
   if (!adbf) return rt::make_error("filter: " + adbf.error().message);
   model.adbf = *adbf;

@@ -35,6 +35,18 @@ struct TrackTrainingConfig {
   std::function<void(double)> progress;
 };
 
+// One track through `model`'s classifiers, as the filter's fit sees it: its holistic log odds
+// (its holistic descriptor) and the mean of its segments' evidence.
+TrackSample track_sample(const classification::TrackClassifierModel& model,
+                         const TrackExample& track, std::size_t segment_dimensions) noexcept;
+
+// The augmented filter's alpha, beta, gamma fitted (fit_adbf) on labelled tracks through
+// `model`'s classifiers.
+rt::Result<classification::AdbfParams> fit_filter(const classification::TrackClassifierModel& model,
+                                                  std::span<const TrackExample> tracks,
+                                                  std::size_t segment_dimensions,
+                                                  const LogisticConfig& config);
+
 // A model of the classes `classes` (labels index them). Fails with a message on class names
 // check_class_names refuses, a label past them, an empty split, descriptors of the wrong size,
 // or a failed fit.

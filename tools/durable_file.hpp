@@ -1,0 +1,25 @@
+// Files that a kill at any moment leaves whole (stac induct's state, model files): a replaced
+// file goes through PATH.tmp, fsynced, renamed over PATH, its folder fsynced; an appended line is
+// fsynced before the call returns, and a torn last line (a kill during an append, never
+// acknowledged) is cut off before the next.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <span>
+#include <string>
+
+#include "rt/expected.hpp"
+
+namespace stac::tools {
+
+// `bytes` to `path` through PATH.tmp: written, fsynced, renamed over `path`, the folder fsynced.
+rt::Result<bool> write_file_durably(const std::filesystem::path& path,
+                                    std::span<const std::uint8_t> bytes);
+// One line (a '\n' is added) appended to `path` and fsynced before returning. A torn last line
+// (a kill during an earlier append, never acknowledged) is cut off first.
+rt::Result<bool> append_line_durably(const std::filesystem::path& path, const std::string& line);
+// Cuts a torn last line (no '\n': a kill during an append) off `path`, if it exists.
+rt::Result<bool> cut_torn_tail(const std::filesystem::path& path);
+
+}  // namespace stac::tools
