@@ -14,16 +14,16 @@
 
 #include "drivers/io/pcap_reader.hpp"
 #include "drivers/velodyne/scan_stream.hpp"
+#include "formats/capture_input.hpp"
+#include "formats/capture_poses.hpp"
+#include "formats/dataset_file.hpp"
 #include "pipeline/scan_pipeline.hpp"
+#include "settings/settings.hpp"
 #include "sim/world.hpp"
-#include "tools/capture_input.hpp"
-#include "tools/capture_poses.hpp"
 #include "tools/commands.hpp"
-#include "tools/dataset_file.hpp"
-#include "tools/progress.hpp"
-#include "tools/sensor_status.hpp"
-#include "tools/settings.hpp"
-#include "tools/truth_composition.hpp"
+#include "tools/evaluation/truth_composition.hpp"
+#include "tools/status.hpp"
+#include "tools/support/progress.hpp"
 
 namespace stac::tools {
 namespace {

@@ -8,14 +8,14 @@
 
 #include "drivers/io/pcap_reader.hpp"
 #include "drivers/velodyne/scan_stream.hpp"
-#include "tools/birds_eye.hpp"
-#include "tools/capture_input.hpp"
-#include "tools/cli_checks.hpp"
+#include "formats/capture_input.hpp"
+#include "formats/scan_writers.hpp"
+#include "settings/settings.hpp"
 #include "tools/commands.hpp"
-#include "tools/progress.hpp"
-#include "tools/scan_writers.hpp"
-#include "tools/sensor_status.hpp"
-#include "tools/settings.hpp"
+#include "tools/pictures/birds_eye.hpp"
+#include "tools/status.hpp"
+#include "tools/support/cli_checks.hpp"
+#include "tools/support/progress.hpp"
 
 namespace stac::tools {
 namespace {

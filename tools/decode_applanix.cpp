@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "drivers/applanix/capture_reader.hpp"
-#include "tools/capture_input.hpp"
+#include "formats/capture_input.hpp"
 #include "tools/commands.hpp"
 
 namespace stac::tools {

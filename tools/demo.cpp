@@ -3,7 +3,7 @@
 // HDL-64E's UDP packets and the Applanix TCP stream at the recorded pace) into the live component
 // (`stac run`, Cyclone on config/dds/loopback.xml), both run as child processes exactly as a user
 // would run them; this process subscribes to the DDS topics, prints a line per scan as the tracks
-// arrive, and at the end a summary and pictures (tools/demo_pictures.hpp).
+// arrive, and at the end a summary and pictures (tools/pictures/demo_pictures.hpp).
 #include <arpa/inet.h>
 #include <netinet/in.h>
 #include <sys/socket.h>
@@ -25,15 +25,15 @@
 #include <vector>
 
 #include "dds/idl_types.hpp"
+#include "dds/reading.hpp"
+#include "formats/capture_scans.hpp"
 #include "rt/unique_fd.hpp"
-#include "tools/capture_scans.hpp"
-#include "tools/child_process.hpp"
+#include "settings/dds_settings.hpp"
+#include "settings/settings.hpp"
 #include "tools/commands.hpp"
-#include "tools/dds_reading.hpp"
-#include "tools/dds_settings.hpp"
-#include "tools/demo_pictures.hpp"
-#include "tools/settings.hpp"
+#include "tools/pictures/demo_pictures.hpp"
 #include "tools/sim.hpp"
+#include "tools/support/child_process.hpp"
 
 namespace stac::tools {
 namespace {

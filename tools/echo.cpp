@@ -6,13 +6,13 @@
 #include <string>
 
 #include "dds/idl_types.hpp"
+#include "dds/reading.hpp"
 #include "dds/topics.hpp"
 #include "rt/deadline_monitor.hpp"
-#include "tools/cli_checks.hpp"
+#include "settings/dds_settings.hpp"
+#include "settings/settings.hpp"
 #include "tools/commands.hpp"
-#include "tools/dds_reading.hpp"
-#include "tools/dds_settings.hpp"
-#include "tools/settings.hpp"
+#include "tools/support/cli_checks.hpp"
 
 namespace stac::tools {
 namespace {

@@ -8,10 +8,10 @@
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
-#include "tools/class_eval.hpp"
 #include "tools/commands.hpp"
-#include "tools/evaluation.hpp"
-#include "tools/progress.hpp"
+#include "tools/eval_classes.hpp"
+#include "tools/evaluation/evaluation.hpp"
+#include "tools/support/progress.hpp"
 
 namespace stac::tools {
 namespace {

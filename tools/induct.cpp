@@ -20,15 +20,15 @@
 #include <string>
 #include <vector>
 
+#include "formats/dataset_file.hpp"
+#include "formats/induction_state.hpp"
+#include "formats/model_file.hpp"
 #include "perception/classification/holistic.hpp"
 #include "perception/descriptors/descriptors.hpp"
 #include "perception/learning/induction.hpp"
-#include "tools/chart.hpp"
 #include "tools/commands.hpp"
-#include "tools/dataset_file.hpp"
-#include "tools/induction_state.hpp"
-#include "tools/model_file.hpp"
-#include "tools/progress.hpp"
+#include "tools/pictures/chart.hpp"
+#include "tools/support/progress.hpp"
 
 namespace stac::tools {
 namespace {

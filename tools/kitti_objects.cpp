@@ -13,14 +13,14 @@
 #include <string>
 #include <vector>
 
+#include "formats/kitti_files.hpp"
+#include "formats/model_file.hpp"
 #include "perception/classification/track_classifier.hpp"
 #include "perception/segmentation/segmenter.hpp"
-#include "tools/birds_eye.hpp"
-#include "tools/cli_checks.hpp"
+#include "settings/settings.hpp"
 #include "tools/commands.hpp"
-#include "tools/kitti_files.hpp"
-#include "tools/model_file.hpp"
-#include "tools/settings.hpp"
+#include "tools/pictures/birds_eye.hpp"
+#include "tools/support/cli_checks.hpp"
 
 namespace stac::tools {
 namespace {

@@ -5,8 +5,8 @@
 #include <exception>
 #include <new>
 
-#include "tools/cli_checks.hpp"
 #include "tools/commands.hpp"
+#include "tools/support/cli_checks.hpp"
 
 namespace stac::tools {
 

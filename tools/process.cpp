@@ -13,20 +13,20 @@
 #include <vector>
 
 #include "dds/idl_types.hpp"
+#include "dds/scan_publishing.hpp"
 #include "drivers/io/pcap_reader.hpp"
 #include "drivers/velodyne/scan_stream.hpp"
+#include "formats/capture_input.hpp"
+#include "formats/capture_poses.hpp"
+#include "formats/model_file.hpp"
 #include "pipeline/scan_pipeline.hpp"
-#include "tools/capture_input.hpp"
-#include "tools/capture_poses.hpp"
+#include "settings/dds_settings.hpp"
+#include "settings/settings.hpp"
 #include "tools/commands.hpp"
-#include "tools/dds_settings.hpp"
-#include "tools/model_file.hpp"
-#include "tools/progress.hpp"
-#include "tools/scan_publishing.hpp"
-#include "tools/sensor_status.hpp"
-#include "tools/settings.hpp"
-#include "tools/tracks_jsonl.hpp"
-#include "tools/truth_composition.hpp"
+#include "tools/evaluation/tracks_jsonl.hpp"
+#include "tools/evaluation/truth_composition.hpp"
+#include "tools/status.hpp"
+#include "tools/support/progress.hpp"
 
 namespace stac::tools {
 namespace {

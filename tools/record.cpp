@@ -6,9 +6,9 @@
 #include "drivers/io/pcap_writer.hpp"
 #include "drivers/io/udp_receiver.hpp"
 #include "rt/clock.hpp"
-#include "tools/cli_checks.hpp"
+#include "settings/settings.hpp"
 #include "tools/commands.hpp"
-#include "tools/settings.hpp"
+#include "tools/support/cli_checks.hpp"
 
 namespace stac::tools {
 namespace {

@@ -9,11 +9,11 @@
 #include <thread>
 #include <vector>
 
-#include "drivers/io/tcp_replay.hpp"
-#include "drivers/io/udp_replay.hpp"
 #include "rt/clock.hpp"
-#include "tools/cli_checks.hpp"
 #include "tools/commands.hpp"
+#include "tools/replay/tcp_replay.hpp"
+#include "tools/replay/udp_replay.hpp"
+#include "tools/support/cli_checks.hpp"
 
 namespace stac::tools {
 namespace {

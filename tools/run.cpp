@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "dds/idl_types.hpp"
+#include "dds/scan_publishing.hpp"
 #include "drivers/applanix/tcp_client.hpp"
 #include "drivers/applanix/udp_listener.hpp"
 #include "drivers/can/dbc.hpp"
@@ -26,6 +27,7 @@
 #include "drivers/velodyne/calibration.hpp"
 #include "drivers/velodyne/scan_stream.hpp"
 #include "ego/ego_estimator.hpp"
+#include "formats/model_file.hpp"
 #include "pipeline/scan_pipeline.hpp"
 #include "rt/clock.hpp"
 #include "rt/deadline_monitor.hpp"
@@ -33,14 +35,12 @@
 #include "rt/slot_exchange.hpp"
 #include "rt/spsc_ring.hpp"
 #include "rt/watchdog.hpp"
-#include "tools/can_input.hpp"
-#include "tools/cli_checks.hpp"
+#include "runtime/can_input.hpp"
+#include "settings/dds_settings.hpp"
+#include "settings/run_settings.hpp"
+#include "settings/settings.hpp"
 #include "tools/commands.hpp"
-#include "tools/dds_settings.hpp"
-#include "tools/model_file.hpp"
-#include "tools/run_settings.hpp"
-#include "tools/scan_publishing.hpp"
-#include "tools/settings.hpp"
+#include "tools/support/cli_checks.hpp"
 
 namespace stac::tools {
 namespace {

@@ -14,14 +14,14 @@
 #include <vector>
 
 #include "drivers/velodyne/scan_stream.hpp"
+#include "formats/capture_scans.hpp"
+#include "formats/kitti_files.hpp"
 #include "perception/segmentation/segmenter.hpp"
-#include "tools/birds_eye.hpp"
-#include "tools/capture_scans.hpp"
-#include "tools/cli_checks.hpp"
+#include "settings/settings.hpp"
 #include "tools/commands.hpp"
-#include "tools/kitti_files.hpp"
-#include "tools/sensor_status.hpp"
-#include "tools/settings.hpp"
+#include "tools/pictures/birds_eye.hpp"
+#include "tools/status.hpp"
+#include "tools/support/cli_checks.hpp"
 
 namespace stac::tools {
 namespace {

@@ -12,12 +12,12 @@
 #include "drivers/io/pcap_writer.hpp"
 #include "drivers/velodyne/decoder.hpp"
 #include "drivers/velodyne/status.hpp"
+#include "settings/settings.hpp"
 #include "sim/ins.hpp"
 #include "sim/run.hpp"
 #include "sim/vehicle_can.hpp"
 #include "tools/commands.hpp"
-#include "tools/progress.hpp"
-#include "tools/settings.hpp"
+#include "tools/support/progress.hpp"
 
 namespace stac::tools {
 namespace {

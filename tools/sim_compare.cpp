@@ -13,12 +13,12 @@
 
 #include "drivers/io/pcap_reader.hpp"
 #include "drivers/velodyne/scan_stream.hpp"
-#include "tools/birds_eye.hpp"
-#include "tools/capture_input.hpp"
-#include "tools/chart.hpp"
-#include "tools/cli_checks.hpp"
+#include "formats/capture_input.hpp"
+#include "settings/settings.hpp"
 #include "tools/commands.hpp"
-#include "tools/settings.hpp"
+#include "tools/pictures/birds_eye.hpp"
+#include "tools/pictures/chart.hpp"
+#include "tools/support/cli_checks.hpp"
 
 namespace stac::tools {
 namespace {

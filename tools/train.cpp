@@ -7,11 +7,11 @@
 #include <string>
 #include <vector>
 
+#include "formats/dataset_file.hpp"
+#include "formats/model_file.hpp"
 #include "perception/learning/track_training.hpp"
 #include "tools/commands.hpp"
-#include "tools/dataset_file.hpp"
-#include "tools/model_file.hpp"
-#include "tools/progress.hpp"
+#include "tools/support/progress.hpp"
 
 namespace stac::tools {
 namespace {

@@ -1,4 +1,4 @@
-// What the `can:` section of config/stac.yaml sets (loaded at the edge: tools/settings.hpp,
+// What the `can:` section of config/stac.yaml sets (loaded at the edge: settings/settings.hpp,
 // load_can_settings). The DBC path is relative to the config file.
 #pragma once
 

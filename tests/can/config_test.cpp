@@ -4,7 +4,7 @@
 #include <regex>
 #include <sstream>
 
-#include "tools/settings.hpp"
+#include "settings/settings.hpp"
 
 namespace stac::can {
 namespace {

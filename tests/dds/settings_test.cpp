@@ -5,7 +5,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "tools/dds_settings.hpp"
+#include "settings/dds_settings.hpp"
 
 namespace stac::tools {
 namespace {

@@ -20,9 +20,9 @@
 #include "rt/clock.hpp"
 #include "rt/slot_exchange.hpp"
 #include "rt/testing/alloc_counter.hpp"
+#include "settings/settings.hpp"
 #include "shared_data.hpp"
 #include "stac_cli.hpp"
-#include "tools/settings.hpp"
 
 namespace stac::pipeline {
 namespace {

@@ -11,9 +11,9 @@
 #include <string>
 #include <vector>
 
+#include "formats/dataset_file.hpp"
 #include "stac_cli.hpp"
-#include "tools/dataset_file.hpp"
-#include "tools/tracks_jsonl.hpp"
+#include "tools/evaluation/tracks_jsonl.hpp"
 
 namespace {
 

@@ -8,7 +8,7 @@
 
 #include "sim/run.hpp"
 #include "stac_cli.hpp"
-#include "tools/tracks_jsonl.hpp"
+#include "tools/evaluation/tracks_jsonl.hpp"
 
 namespace stac::tools {
 namespace {

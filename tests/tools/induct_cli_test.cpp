@@ -14,8 +14,8 @@
 #include <string>
 #include <vector>
 
+#include "formats/induction_state.hpp"
 #include "stac_cli.hpp"
-#include "tools/induction_state.hpp"
 
 namespace {
 

@@ -8,9 +8,9 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "formats/kitti_files.hpp"
 #include "shared_data.hpp"
 #include "stac_cli.hpp"
-#include "tools/kitti_files.hpp"
 
 namespace stac::tools {
 namespace {

@@ -7,7 +7,7 @@
 
 #include "shared_data.hpp"
 #include "stac_cli.hpp"
-#include "tools/tracks_jsonl.hpp"
+#include "tools/evaluation/tracks_jsonl.hpp"
 
 namespace stac::tools {
 namespace {

@@ -20,10 +20,10 @@
 #include "dds/dds_test_support.hpp"
 #include "dds/idl_types.hpp"
 #include "drivers/can/gs_usb_device.hpp"
+#include "formats/model_file.hpp"
 #include "shared_data.hpp"
 #include "stac_cli.hpp"
-#include "tools/child_process.hpp"
-#include "tools/model_file.hpp"
+#include "tools/support/child_process.hpp"
 
 namespace stac::tools {
 namespace {

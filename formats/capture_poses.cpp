@@ -1,0 +1,46 @@
+#include "formats/capture_poses.hpp"
+
+#include <variant>
+
+#include "drivers/applanix/capture_reader.hpp"
+
+namespace stac::tools {
+
+rt::Result<std::optional<CapturePoses>> load_capture_poses(const std::filesystem::path& capture,
+                                                           const EgoSettings& settings) {
+  // First pass: how many fixes, to size the history for the whole drive.
+  std::uint64_t group1 = 0;
+  {
+    auto reader = applanix::CaptureReader::open(capture, settings.ins_port);
+    if (!reader) return rt::Unexpected<rt::Error>{reader.error()};
+    applanix::Parsed m;
+    while (reader->next(m)) group1 += std::holds_alternative<applanix::Group1>(m.content) ? 1 : 0;
+    if (!reader->error().empty()) return rt::make_error(reader->error());
+    const applanix::ParserCounters& pc = reader->parser().counters();
+    const std::uint64_t bad = pc.bad_checksum + pc.bad_length + pc.bad_terminator + pc.malformed;
+    if (group1 == 0 && bad > 0)
+      return rt::make_error(capture.string() + ": the INS stream on port " +
+                            std::to_string(settings.ins_port) + " has " + std::to_string(bad) +
+                            " messages dropped (" + std::to_string(pc.bad_checksum) +
+                            " bad checksums) and no valid Group 1: it is corrupt; --no-deskew "
+                            "processes the scans without it");
+  }
+  if (group1 == 0) return std::optional<CapturePoses>{};
+
+  CapturePoses out;
+  out.group1 = group1;
+  out.frame = std::make_unique<ego::LocalFrame>(settings.origin);
+  ego::PoseHistoryConfig hc = settings.history;
+  hc.capacity = std::max<std::size_t>(hc.capacity, static_cast<std::size_t>(group1) + 16);
+  out.history = std::make_unique<ego::PoseHistory>(hc);
+  ego::EgoEstimator estimator(settings.estimator, *out.frame, *out.history);
+  auto reader = applanix::CaptureReader::open(capture, settings.ins_port);
+  if (!reader) return rt::Unexpected<rt::Error>{reader.error()};
+  applanix::Parsed m;
+  while (reader->next(m)) estimator.add_ins(m, reader->parser());
+  out.counters = estimator.counters();
+  out.parser = reader->parser().counters();
+  return std::optional<CapturePoses>{std::move(out)};
+}
+
+}  // namespace stac::tools

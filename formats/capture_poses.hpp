@@ -1,0 +1,31 @@
+// The ego poses of a whole capture, for offline jobs (`stac process`): every Applanix message in
+// the pcap (TCP from, or UDP to, the configured INS port) goes through the EgoEstimator into a
+// PoseHistory sized to hold the whole drive (allocated once, before the per-scan loop).
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <optional>
+
+#include "ego/ego_estimator.hpp"
+#include "rt/expected.hpp"
+#include "settings/settings.hpp"
+
+namespace stac::tools {
+
+struct CapturePoses {
+  std::unique_ptr<ego::LocalFrame> frame;
+  std::unique_ptr<ego::PoseHistory> history;
+  ego::EgoCounters counters;
+  applanix::ParserCounters parser;  // the INS stream's messages dropped, by cause
+  std::uint64_t group1 = 0;         // Group 1 messages in the capture
+};
+
+// Empty (no error) when the capture holds no Group 1 on the port: a parked sensor, identity pose.
+// An error when it holds none but messages dropped for bad checksums or framing: the INS stream
+// is there but corrupt, which must not pass for a parked sensor.
+rt::Result<std::optional<CapturePoses>> load_capture_poses(const std::filesystem::path& capture,
+                                                           const EgoSettings& settings);
+
+}  // namespace stac::tools

@@ -1,0 +1,236 @@
+#include "formats/induction_state.hpp"
+
+#include <bit>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+
+#include "perception/classification/holistic.hpp"
+#include "perception/descriptors/descriptors.hpp"
+
+namespace stac::tools {
+namespace {
+
+static_assert(std::endian::native == std::endian::little, "the state format is little-endian");
+constexpr char kMagic[8] = {'S', 'T', 'A', 'C', 'I', 'N', 'D', '\0'};
+constexpr std::size_t kMaxString = 4096;
+constexpr std::uint64_t kMaxCount = 100'000'000;
+
+struct Writer {
+  std::vector<std::uint8_t> b;
+  void bytes(const void* p, std::size_t n) {
+    const std::size_t at = b.size();
+    b.resize(at + n);
+    if (n != 0) std::memcpy(b.data() + at, p, n);
+  }
+  template <class T>
+  void put(const T& v) {
+    bytes(&v, sizeof(T));
+  }
+  void string(const std::string& s) {
+    put(static_cast<std::uint32_t>(s.size()));
+    bytes(s.data(), s.size());
+  }
+  void floats(const std::vector<float>& v) {
+    put(static_cast<std::uint64_t>(v.size()));
+    bytes(v.data(), v.size() * sizeof(float));
+  }
+};
+
+struct Reader {
+  std::span<const std::uint8_t> b;
+  std::size_t at = 0;
+  bool ok = true;
+  template <class T>
+  T get() {
+    T v{};
+    if (!ok || b.size() - at < sizeof(T)) {
+      ok = false;
+      return v;
+    }
+    std::memcpy(&v, b.data() + at, sizeof(T));
+    at += sizeof(T);
+    return v;
+  }
+  std::string string() {
+    const auto n = get<std::uint32_t>();
+    if (!ok || n > kMaxString || b.size() - at < n) {
+      ok = false;
+      return {};
+    }
+    std::string s(reinterpret_cast<const char*>(b.data() + at), n);
+    at += n;
+    return s;
+  }
+  std::vector<float> floats() {
+    const auto n = get<std::uint64_t>();
+    if (!ok || n > kMaxCount || (b.size() - at) / sizeof(float) < n) {
+      ok = false;
+      return {};
+    }
+    std::vector<float> v(n);
+    std::memcpy(v.data(), b.data() + at, n * sizeof(float));
+    at += n * sizeof(float);
+    return v;
+  }
+  std::uint64_t count() {
+    const auto n = get<std::uint64_t>();
+    if (n > kMaxCount) ok = false;
+    return ok ? n : 0;
+  }
+};
+
+}  // namespace
+
+rt::Result<bool> write_induction_state(const std::filesystem::path& dir, const InductionState& s) {
+  Writer w;
+  w.bytes(kMagic, sizeof(kMagic));
+  w.put(kInductionStateVersion);
+  w.put(static_cast<std::uint32_t>(descriptors::kDimensions));
+  w.put(static_cast<std::uint32_t>(classification::kHolisticDimensions));
+  w.put(static_cast<std::uint32_t>(s.classes.size()));
+  for (const std::string& c : s.classes) w.string(c);
+  w.put(static_cast<std::uint64_t>(s.induction.max_group_size));
+  w.put(static_cast<std::uint8_t>(s.induction.dual ? 1 : 0));
+  w.put(s.induction.eps_max);
+  w.put(static_cast<std::uint64_t>(s.induction.buffer_groups));
+  w.put(s.rounds);
+  w.put(static_cast<std::uint8_t>(s.reset_pending ? 1 : 0));
+  w.put(s.answers_applied);
+  w.put(static_cast<std::uint64_t>(s.sources.size()));
+  for (const InductionSource& src : s.sources) {
+    w.string(src.path);
+    w.put(static_cast<std::uint8_t>(src.role));
+    w.put(static_cast<std::uint8_t>(src.stage));
+  }
+  w.put(static_cast<std::uint64_t>(s.labels.size()));
+  for (const LabelledTrack& t : s.labels) {
+    w.put(t.source);
+    w.put(t.track);
+    w.put(t.label);
+    w.floats(t.segments);
+    w.floats(t.holistic);
+  }
+  w.put(static_cast<std::uint64_t>(s.buffer.size()));
+  for (const learning::Group& g : s.buffer) {
+    w.put(g.source);
+    w.put(g.track);
+    w.put(g.first);
+    w.put(g.label);
+    w.put(g.usefulness);
+    w.put(g.margin);
+    w.floats(g.segments);
+    w.floats(g.holistic);
+  }
+  w.put(static_cast<std::uint64_t>(s.seen.size()));
+  for (const auto& [source, track] : s.seen) w.put(source), w.put(track);
+  w.put(static_cast<std::uint8_t>(s.has_model ? 1 : 0));
+  if (s.has_model) {
+    const std::vector<std::uint8_t> model = classification::serialize(s.model);
+    w.put(static_cast<std::uint64_t>(model.size()));
+    w.bytes(model.data(), model.size());
+  }
+  w.put(classification::fnv1a64(w.b));
+  return write_file_durably(dir / "state.bin", w.b);
+}
+
+rt::Result<InductionState> read_induction_state(const std::filesystem::path& dir) {
+  const std::filesystem::path file = dir / "state.bin";
+  const std::string name = file.string();
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(file, ec))
+    return rt::make_error(name + ": missing; start a state with `stac induct --state " +
+                          dir.string() + " --classes ...` or `--model FILE`");
+  std::ifstream in(file, std::ios::binary);
+  const std::vector<std::uint8_t> bytes{std::istreambuf_iterator<char>(in),
+                                        std::istreambuf_iterator<char>()};
+  const auto bad = [&](const std::string& what) {
+    return rt::make_error(name + ": " + what +
+                          "; the state is damaged: restore the folder from a backup, or start a "
+                          "new one (the answers in labels.jsonl can be given again)");
+  };
+  if (bytes.size() < sizeof(kMagic) + 8 || std::memcmp(bytes.data(), kMagic, 8) != 0)
+    return bad("not a stac induction state (bad magic or too short)");
+  std::uint64_t stored = 0;
+  std::memcpy(&stored, bytes.data() + bytes.size() - 8, 8);
+  const auto body = std::span(bytes).first(bytes.size() - 8);
+  if (classification::fnv1a64(body) != stored)
+    return bad("checksum mismatch (truncated or corrupt)");
+  Reader r{body, sizeof(kMagic)};
+  InductionState s;
+  const auto version = r.get<std::uint32_t>();
+  if (version != kInductionStateVersion)
+    return bad("format version " + std::to_string(version) + ", this build reads " +
+               std::to_string(kInductionStateVersion));
+  if (r.get<std::uint32_t>() != descriptors::kDimensions ||
+      r.get<std::uint32_t>() != classification::kHolisticDimensions)
+    return bad("descriptor dimensions differ from this build's");
+  const auto nclasses = r.get<std::uint32_t>();
+  if (nclasses > classification::kMaxClasses) return bad("bad class count");
+  s.classes.resize(nclasses);
+  for (std::string& c : s.classes) c = r.string();
+  s.induction.max_group_size = r.get<std::uint64_t>();
+  s.induction.dual = r.get<std::uint8_t>() != 0;
+  s.induction.eps_max = r.get<double>();
+  s.induction.buffer_groups = r.get<std::uint64_t>();
+  s.rounds = r.get<std::uint32_t>();
+  s.reset_pending = r.get<std::uint8_t>() != 0;
+  s.answers_applied = r.get<std::uint64_t>();
+  s.sources.resize(r.count());
+  for (InductionSource& src : s.sources) {
+    src.path = r.string();
+    const auto role = r.get<std::uint8_t>();
+    const auto stage = r.get<std::uint8_t>();
+    if (role > 2 || stage > 2) r.ok = false;
+    src.role = static_cast<SourceRole>(role);
+    src.stage = static_cast<ChunkStage>(stage);
+  }
+  const auto source_ok = [&s](std::uint32_t i) { return i < s.sources.size(); };
+  s.labels.resize(r.count());
+  for (LabelledTrack& t : s.labels) {
+    t.source = r.get<std::uint32_t>();
+    t.track = r.get<std::uint64_t>();
+    t.label = r.get<classification::ClassIndex>();
+    t.segments = r.floats();
+    t.holistic = r.floats();
+    if (!source_ok(t.source) ||
+        (t.label != classification::kBackground && t.label >= s.classes.size()))
+      r.ok = false;
+  }
+  s.buffer.resize(r.count());
+  for (learning::Group& g : s.buffer) {
+    g.source = r.get<std::uint32_t>();
+    g.track = r.get<std::uint64_t>();
+    g.first = r.get<std::uint32_t>();
+    g.label = r.get<classification::ClassIndex>();
+    g.usefulness = r.get<double>();
+    g.margin = r.get<double>();
+    g.segments = r.floats();
+    g.holistic = r.floats();
+    if (!source_ok(g.source) || (g.label != classification::kBackground &&
+                                 g.label != learning::kUninducted && g.label >= s.classes.size()))
+      r.ok = false;
+  }
+  s.seen.resize(r.count());
+  for (auto& [source, track] : s.seen)
+    source = r.get<std::uint32_t>(), track = r.get<std::uint64_t>();
+  s.has_model = r.get<std::uint8_t>() != 0;
+  if (!r.ok) return bad("truncated or inconsistent records");
+  if (const std::string wrong = classification::check_class_names(s.classes); !wrong.empty())
+    return bad("bad classes: " + wrong);
+  if (const std::string wrong = learning::validate(s.induction); !wrong.empty())
+    return bad("bad settings: " + wrong);
+  if (s.has_model) {
+    const auto n = r.count();
+    if (!r.ok || r.b.size() - r.at < n) return bad("truncated model");
+    auto model = classification::deserialize(r.b.subspan(r.at, n));
+    if (!model) return bad("its model: " + model.error().message);
+    if (model->classes != s.classes) return bad("its model's classes differ from the state's");
+    s.model = std::move(model).value();
+    r.at += n;
+  }
+  if (r.at != r.b.size()) return bad("trailing bytes");
+  return s;
+}
+
+}  // namespace stac::tools

@@ -1,0 +1,64 @@
+// The resumable state of `stac induct` (docs/learning.md "The state folder"): DIR/state.bin holds
+// the classes, the settings, the sources read, the user's labelled tracks, the buffer of groups
+// and the current model; it is replaced atomically (written to a temporary file, fsynced, renamed,
+// the folder fsynced) once per round, so a kill at any moment loses at most the round in progress.
+// The user's answers live in DIR/labels.jsonl, appended and fsynced one line at a time.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "formats/durable_file.hpp"
+#include "perception/classification/model.hpp"
+#include "perception/learning/induction.hpp"
+#include "rt/expected.hpp"
+
+namespace stac::tools {
+
+// A dataset folder the state has read, and what it was read as.
+enum class SourceRole : std::uint8_t { kUnlabeled = 0, kLabels = 1, kBackground = 2 };
+
+// How far an unlabeled chunk got: a rerun after a kill goes on from there.
+enum class ChunkStage : std::uint8_t { kNew = 0, kTrained = 1, kAsked = 2 };
+
+struct InductionSource {
+  std::string path;  // as given on the command line
+  SourceRole role = SourceRole::kUnlabeled;
+  ChunkStage stage = ChunkStage::kNew;  // unlabeled chunks: its round done, its questions asked
+};
+
+// A track the user labelled (an answer of labels.jsonl with its descriptors).
+struct LabelledTrack {
+  std::uint32_t source = 0;  // index into InductionState::sources
+  std::uint64_t track = 0;   // index of the track in that dataset
+  classification::ClassIndex label = classification::kBackground;
+  std::vector<float> segments;  // rows of segment descriptors
+  std::vector<float> holistic;  // the track's last holistic descriptor
+};
+
+struct InductionState {
+  classification::ClassNames classes;
+  learning::InductionConfig induction;
+  std::uint32_t rounds = 0;           // rounds done
+  bool reset_pending = true;          // the next training phase restarts H (retrospection)
+  std::uint64_t answers_applied = 0;  // lines of labels.jsonl taken into `labels`
+  std::vector<InductionSource> sources;
+  std::vector<LabelledTrack> labels;
+  std::vector<learning::Group> buffer;  // Group::source indexes `sources`
+  // Tracks the user has answered about (labelled or skipped): never asked again.
+  std::vector<std::pair<std::uint32_t, std::uint64_t>> seen;
+  bool has_model = false;
+  classification::TrackClassifierModel model;
+};
+
+inline constexpr std::uint32_t kInductionStateVersion = 1;
+
+// DIR/state.bin. Errors name the file and say what to do.
+rt::Result<InductionState> read_induction_state(const std::filesystem::path& dir);
+rt::Result<bool> write_induction_state(const std::filesystem::path& dir,
+                                       const InductionState& state);
+
+}  // namespace stac::tools

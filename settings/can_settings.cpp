@@ -1,0 +1,65 @@
+// The `can:` section of config/stac.yaml (see settings/settings.hpp).
+#include <cmath>
+
+#include "settings/config_section.hpp"
+#include "settings/settings.hpp"
+
+namespace stac::tools {
+
+rt::Result<can::CanConfig> load_can_settings(const std::filesystem::path& config_file) {
+  const std::string file = config_file.string();
+  auto section = ConfigSection::open(config_file, "can");
+  if (!section) return rt::Unexpected<rt::Error>{section.error()};
+  const ConfigSection& c = *section;
+
+  using namespace can;
+  CanConfig cfg;
+#define STAC_GET(type, key, dst) STAC_CONFIG_GET(c, type, key, dst)
+  std::string transport, dbc;
+  long long bitrate = 0;
+  int channel = 0;
+  double stale_s = 0;
+  STAC_GET(std::string, "transport", transport);
+  STAC_GET(std::string, "interface", cfg.socketcan.interface);
+  STAC_GET(long long, "bitrate_bps", bitrate);
+  STAC_GET(int, "gs_usb_channel", channel);
+  STAC_GET(bool, "gs_usb_listen_only", cfg.gs_usb.listen_only);
+  STAC_GET(std::string, "dbc", dbc);
+  STAC_GET(std::string, "speed_message", cfg.signals.speed_message);
+  STAC_GET(std::string, "speed_signal", cfg.signals.speed_signal);
+  STAC_GET(std::string, "yaw_rate_message", cfg.signals.yaw_rate_message);
+  STAC_GET(std::string, "yaw_rate_signal", cfg.signals.yaw_rate_signal);
+  STAC_GET(double, "yaw_rate_sign", cfg.signals.yaw_rate_sign);
+  STAC_GET(double, "stale_timeout_s", stale_s);
+#undef STAC_GET
+
+  if (transport == "socketcan") {
+    cfg.transport = Transport::kSocketCan;
+  } else if (transport == "gs_usb") {
+    cfg.transport = Transport::kGsUsb;
+  } else {
+    return rt::make_error(file + ": 'can.transport' is '" + transport +
+                          "'; use socketcan or gs_usb");
+  }
+  if (cfg.socketcan.interface.empty() || cfg.socketcan.interface.size() > 15) {
+    return rt::make_error(file + ": 'can.interface' must have 1..15 characters");
+  }
+  if (bitrate < 10'000 || bitrate > 1'000'000) {
+    return rt::make_error(file + ": 'can.bitrate_bps' must be in 10000..1000000 (classic CAN)");
+  }
+  cfg.gs_usb.bitrate_bps = static_cast<std::uint32_t>(bitrate);
+  if (channel < 0 || channel > 7)
+    return rt::make_error(file + ": 'can.gs_usb_channel' must be in 0..7");
+  cfg.gs_usb.channel = static_cast<std::uint8_t>(channel);
+  if (cfg.signals.yaw_rate_sign != 1.0 && cfg.signals.yaw_rate_sign != -1.0) {
+    return rt::make_error(file + ": 'can.yaw_rate_sign' must be 1 or -1");
+  }
+  if (!(stale_s > 0 && stale_s <= 10))
+    return rt::make_error(file + ": 'can.stale_timeout_s' must be in (0, 10]");
+  cfg.dead_reckoning.stale_timeout_ns = std::llround(stale_s * 1e9);
+  if (dbc.empty()) return rt::make_error(file + ": 'can.dbc' must name a DBC file");
+  cfg.dbc = c.path(dbc);
+  return cfg;
+}
+
+}  // namespace stac::tools

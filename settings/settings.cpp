@@ -1,0 +1,110 @@
+#include "settings/settings.hpp"
+
+#include <cmath>
+#include <cstdlib>
+
+#include "settings/config_section.hpp"
+
+namespace stac::tools {
+
+std::filesystem::path default_config_path() {
+  if (const char* env = std::getenv("STAC_CONFIG"); env != nullptr && *env != '\0') return env;
+  return std::filesystem::path(STAC_SOURCE_DIR) / "config" / "stac.yaml";
+}
+
+std::filesystem::path config_path(const std::string& option) {
+  return option.empty() ? default_config_path() : std::filesystem::path(option);
+}
+
+rt::Result<VelodyneSettings> load_velodyne_settings(const std::filesystem::path& config_file) {
+  const std::string file = config_file.string();
+  auto section = ConfigSection::open(config_file, "velodyne");
+  if (!section) return rt::Unexpected<rt::Error>{section.error()};
+  const ConfigSection& v = *section;
+
+  VelodyneSettings s;
+  auto& a = s.assembler;
+#define STAC_GET(type, key, dst) STAC_CONFIG_GET(v, type, key, dst)
+  std::string model, calibration;
+  double cut_deg = 0, min_range = 0, max_range = 0;
+  int port = 0;
+  STAC_GET(std::string, "model", model);
+  STAC_GET(std::string, "calibration", calibration);
+  STAC_GET(std::string, "bind_address", s.bind_address);
+  STAC_GET(int, "port", port);
+  auto sender = v.get_or<std::string>("sender_address", std::string{});
+  if (!sender) return rt::Unexpected<rt::Error>{sender.error()};
+  s.sender_address = *sender;
+  STAC_GET(int, "receive_buffer_bytes", s.receive_buffer_bytes);
+  STAC_GET(double, "cut_angle_deg", cut_deg);
+  STAC_GET(double, "min_rpm", a.min_rpm);
+  STAC_GET(double, "min_range_m", min_range);
+  STAC_GET(double, "max_range_m", max_range);
+  STAC_GET(bool, "gate_two_point_correction", a.decoder.gate_two_point_correction);
+  STAC_GET(bool, "ros_intensity_units", a.decoder.ros_intensity_units);
+  STAC_GET(double, "max_gap_s", a.max_gap_s);
+  STAC_GET(double, "max_scan_duration_s", a.max_scan_duration_s);
+  STAC_GET(double, "min_scan_completeness", a.min_completeness);
+  STAC_GET(int, "scan_slots", s.scan_slots);
+#undef STAC_GET
+
+  const auto parsed = velodyne::parse_model(model);
+  if (!parsed)
+    return rt::make_error(file + ": 'velodyne.model' is '" + model + "'; use S2, S2.1 or S3");
+  a.decoder.model = *parsed;
+  if (calibration != "stream") {
+    s.calibration = v.path(calibration);
+  } else if (velodyne::traits(a.decoder.model).trailer != velodyne::TrailerKind::kGpsStatus) {
+    return rt::make_error(file + ": 'velodyne.calibration: stream' needs an S2.1 or S3; the " +
+                          model + " sends no calibration in its packets");
+  }
+  if (port <= 0 || port > 65535) return rt::make_error(file + ": 'velodyne.port' must be 1..65535");
+  s.port = static_cast<std::uint16_t>(port);
+  if (cut_deg < 0 || cut_deg >= 360)
+    return rt::make_error(file + ": 'velodyne.cut_angle_deg' must be in [0, 360)");
+  a.cut_angle = static_cast<std::uint16_t>(std::lround(cut_deg * 100.0) % 36000);
+  if (a.min_rpm < 60 || a.min_rpm > 1200)
+    return rt::make_error(file + ": 'velodyne.min_rpm' must be in 60..1200");
+  if (min_range < 0 || max_range <= min_range) {
+    return rt::make_error(file + ": need 0 <= 'velodyne.min_range_m' < 'velodyne.max_range_m'");
+  }
+  a.decoder.min_range_m = static_cast<float>(min_range);
+  a.decoder.max_range_m = static_cast<float>(max_range);
+  if (a.max_gap_s <= 0 || a.max_scan_duration_s <= 0) {
+    return rt::make_error(file +
+                          ": 'velodyne.max_gap_s' and 'velodyne.max_scan_duration_s' must be > 0");
+  }
+  if (!(a.min_completeness >= 0.0 && a.min_completeness <= 1.0))
+    return rt::make_error(file + ": 'velodyne.min_scan_completeness' must be in [0, 1]");
+  if (s.scan_slots < 2 || s.scan_slots > 64)
+    return rt::make_error(file + ": 'velodyne.scan_slots' must be in 2..64");
+  if (s.receive_buffer_bytes < 65536) {
+    return rt::make_error(file + ": 'velodyne.receive_buffer_bytes' must be at least 65536");
+  }
+  return s;
+}
+
+rt::Result<PipelineSettings> load_pipeline_settings(const std::filesystem::path& config_file) {
+  PipelineSettings s;
+  auto velodyne = load_velodyne_settings(config_file);
+  if (!velodyne) return rt::Unexpected<rt::Error>{velodyne.error()};
+  auto ego = load_ego_settings(config_file);
+  if (!ego) return rt::Unexpected<rt::Error>{ego.error()};
+  auto segmenter = load_segmentation_settings(config_file);
+  if (!segmenter) return rt::Unexpected<rt::Error>{segmenter.error()};
+  auto tracker = load_tracking_config(config_file);
+  if (!tracker) return rt::Unexpected<rt::Error>{tracker.error()};
+  auto classification = load_classification_settings(config_file);
+  if (!classification) return rt::Unexpected<rt::Error>{classification.error()};
+  // The classifier keeps one accumulated cloud per track: capacities of two sections together.
+  classification::TrackClassifierConfig together = classification->classifier;
+  together.max_tracks = tracker->max_tracks;
+  if (const char* why = classification::validate(together); *why != '\0') {
+    return rt::make_error(config_file.string() +
+                          ": 'tracking.max_tracks' and 'classification:': " + why);
+  }
+  return PipelineSettings{std::move(*velodyne), std::move(*ego), *segmenter, *tracker,
+                          std::move(*classification)};
+}
+
+}  // namespace stac::tools

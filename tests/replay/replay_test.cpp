@@ -1,0 +1,235 @@
+#include <gtest/gtest.h>
+
+#include <array>
+#include <atomic>
+#include <cstdio>
+#include <thread>
+#include <vector>
+
+#include "drivers/io/pcap_writer.hpp"
+#include "drivers/io/udp_receiver.hpp"
+#include "rt/clock.hpp"
+#include "tools/replay/udp_replay.hpp"
+
+namespace stac::io {
+namespace {
+
+using Bytes = std::vector<std::uint8_t>;
+
+std::filesystem::path temp(const std::string& name) {
+  return std::filesystem::temp_directory_path() / ("stac_replay_test_" + name);
+}
+
+// `n` datagrams of different sizes and contents, `gap_ns` apart, captured to port 2368.
+std::vector<Bytes> write_capture(const std::filesystem::path& path, int n, std::int64_t gap_ns,
+                                 std::uint16_t dst_port = 2368) {
+  auto w = PcapWriter::open(path);
+  EXPECT_TRUE(w);
+  std::vector<Bytes> payloads;
+  for (int i = 0; i < n; ++i) {
+    Bytes b(static_cast<std::size_t>(100 + (i * 37) % 1107));
+    for (std::size_t j = 0; j < b.size(); ++j)
+      b[j] = static_cast<std::uint8_t>(i * 7 + static_cast<int>(j));
+    Datagram d;
+    d.payload = b;
+    d.stamp_ns = 1'700'000'000'000'000'000 + i * gap_ns;
+    d.src_ip = 0xC0A8032B;
+    d.dst_ip = 0xFFFFFFFF;
+    d.src_port = 2368;
+    d.dst_port = dst_port;
+    EXPECT_TRUE(w->write_udp(d));
+    payloads.push_back(std::move(b));
+  }
+  EXPECT_TRUE(w->close());
+  return payloads;
+}
+
+UdpReceiver loopback_receiver() {
+  UdpReceiverConfig c;
+  c.bind_address = "127.0.0.1";
+  c.port = 0;
+  c.receive_buffer_bytes = 8 << 20;
+  auto r = UdpReceiver::open(c);
+  EXPECT_TRUE(r) << r.error().message;
+  return std::move(*r);
+}
+
+// Receives until `expected` datagrams arrived or the socket stayed quiet for a second.
+std::vector<Bytes> drain(UdpReceiver& r, std::size_t expected) {
+  std::vector<Bytes> got;
+  std::array<Datagram, 32> batch{};
+  std::int64_t quiet_since = rt::monotonic_ns();
+  while (got.size() < expected && rt::monotonic_ns() - quiet_since < 1'000'000'000) {
+    const int n = r.receive(batch, 50);
+    if (n > 0) quiet_since = rt::monotonic_ns();
+    for (int i = 0; i < n; ++i) {
+      const auto& p = batch[static_cast<std::size_t>(i)].payload;
+      got.emplace_back(p.begin(), p.end());
+    }
+  }
+  return got;
+}
+
+struct Outcome {
+  ReplayPlan plan;
+  ReplayReport report;
+  std::vector<Bytes> received;
+};
+
+Outcome replay_into_socket(const std::filesystem::path& capture, ReplayConfig config,
+                           std::size_t expected) {
+  UdpReceiver receiver = loopback_receiver();
+  config.address = "127.0.0.1";
+  config.port = receiver.port();
+  auto replay = UdpReplay::open(capture, config);
+  EXPECT_TRUE(replay) << replay.error().message;
+  Outcome o;
+  o.plan = replay->plan();
+  std::thread rx([&] { o.received = drain(receiver, expected); });
+  const std::atomic<bool> never{false};
+  auto report = replay->run(never);
+  rx.join();
+  EXPECT_TRUE(report) << report.error().message;
+  o.report = *report;
+  return o;
+}
+
+TEST(UdpReplay, EveryDatagramArrivesByteIdenticalAndInOrder) {
+  const auto path = temp("order.pcap");
+  const auto sent = write_capture(path, 300, 1'000'000);
+  const Outcome o = replay_into_socket(path, ReplayConfig{}, sent.size());
+  EXPECT_EQ(o.plan.packets, 300u);
+  EXPECT_EQ(o.plan.span_ns, 299 * 1'000'000);
+  ASSERT_EQ(o.received.size(), sent.size());
+  for (std::size_t i = 0; i < sent.size(); ++i)
+    EXPECT_EQ(o.received[i], sent[i]) << "datagram " << i;
+  EXPECT_EQ(o.report.packets, 300u);
+  EXPECT_EQ(o.report.passes, 1u);
+  EXPECT_EQ(o.report.send_failures, 0u);
+  EXPECT_EQ(o.report.scheduled_ns, 299 * 1'000'000);
+  // The pacing statistics are ordered and measured.
+  EXPECT_GE(o.report.error_median_ns, 0);
+  EXPECT_LE(o.report.error_median_ns, o.report.error_p99_ns);
+  EXPECT_LE(o.report.error_p99_ns, o.report.error_max_ns);
+  // Nothing is sent before its time: the last one went out no earlier than scheduled.
+  EXPECT_GE(o.report.elapsed_ns, o.report.scheduled_ns);
+}
+
+TEST(UdpReplay, RateDividesTheSchedule) {
+  const auto path = temp("rate.pcap");
+  const auto sent = write_capture(path, 120, 2'000'000);
+  ReplayConfig c;
+  c.rate = 4.0;
+  const Outcome o = replay_into_socket(path, c, sent.size());
+  EXPECT_EQ(o.received.size(), sent.size());
+  EXPECT_EQ(o.report.scheduled_ns, 119 * 2'000'000 / 4);
+  EXPECT_GE(o.report.elapsed_ns, o.report.scheduled_ns);
+}
+
+TEST(UdpReplay, LoopingSendsTheCaptureNTimes) {
+  const auto path = temp("loop.pcap");
+  const auto sent = write_capture(path, 50, 500'000);
+  ReplayConfig c;
+  c.loops = 3;
+  c.rate = 2.0;
+  const Outcome o = replay_into_socket(path, c, 3 * sent.size());
+  ASSERT_EQ(o.received.size(), 3 * sent.size());
+  for (std::size_t i = 0; i < o.received.size(); ++i)
+    EXPECT_EQ(o.received[i], sent[i % sent.size()]);
+  EXPECT_EQ(o.report.passes, 3u);
+  EXPECT_EQ(o.report.packets, 150u);
+  // A pass lasts the span plus one mean gap: the third pass starts 2 x 50 x 0.5 ms in.
+  EXPECT_EQ(o.plan.pass_period_ns, 50 * 500'000);
+  EXPECT_EQ(o.report.scheduled_ns, (2 * 50 * 500'000 + 49 * 500'000) / 2);
+}
+
+TEST(UdpReplay, FastSendsEverythingWithoutASchedule) {
+  const auto path = temp("fast.pcap");
+  const auto sent = write_capture(path, 200, 100'000'000);  // 20 s recorded
+  ReplayConfig c;
+  c.fast = true;
+  const Outcome o = replay_into_socket(path, c, sent.size());
+  EXPECT_EQ(o.received, sent);
+  EXPECT_EQ(o.report.scheduled_ns, 0);
+  EXPECT_EQ(o.report.error_median_ns, -1);
+  EXPECT_LT(o.report.elapsed_ns, 19'900'000'000);  // far from the recorded 19.9 s
+}
+
+TEST(UdpReplay, StopFlagEndsAnEndlessReplay) {
+  const auto path = temp("forever.pcap");
+  write_capture(path, 20, 1'000'000);
+  UdpReceiver receiver = loopback_receiver();
+  ReplayConfig c;
+  c.port = receiver.port();
+  c.loops = 0;
+  auto replay = UdpReplay::open(path, c);
+  ASSERT_TRUE(replay) << replay.error().message;
+  std::atomic<bool> stop{false};
+  std::thread stopper([&] {
+    std::array<Datagram, 32> batch{};
+    std::size_t got = 0;
+    const std::int64_t deadline = rt::monotonic_ns() + 10'000'000'000;
+    while (got < 100 && rt::monotonic_ns() < deadline)
+      got += static_cast<std::size_t>(std::max(0, receiver.receive(batch, 100)));
+    stop = true;
+  });
+  auto report = replay->run(stop);
+  stopper.join();
+  ASSERT_TRUE(report);
+  EXPECT_TRUE(report->stopped);
+  // Stopped after the 100th datagram arrived: five whole passes went out, maybe part of a sixth.
+  EXPECT_GE(report->passes, 5u);
+  EXPECT_GE(report->packets, 100u);
+  EXPECT_LT(report->packets, 20 * (report->passes + 1));
+}
+
+TEST(UdpReplay, MissingCaptureIsNamed) {
+  auto r = UdpReplay::open(temp("does_not_exist.pcap"), ReplayConfig{});
+  ASSERT_FALSE(r);
+  EXPECT_NE(r.error().message.find("does_not_exist.pcap"), std::string::npos) << r.error().message;
+}
+
+TEST(UdpReplay, CaptureWithoutUdpIsAClearError) {
+  // A pcap with one ARP frame: no UDP at all.
+  const auto path = temp("arp.pcap");
+  {
+    std::FILE* f = std::fopen(path.c_str(), "wb");
+    ASSERT_NE(f, nullptr);
+    const std::uint32_t header[6] = {0xA1B2C3D4, 0x00040002, 0, 0, 65535, 1};  // v2.4, Ethernet
+    std::fwrite(header, sizeof(header), 1, f);
+    std::array<std::uint8_t, 42> frame{};
+    frame.fill(0xFF);
+    frame[12] = 0x08;  // EtherType 0x0806: ARP
+    frame[13] = 0x06;
+    const std::uint32_t record[4] = {1'700'000'000, 0, 42, 42};
+    std::fwrite(record, sizeof(record), 1, f);
+    std::fwrite(frame.data(), frame.size(), 1, f);
+    std::fclose(f);
+  }
+  auto r = UdpReplay::open(path, ReplayConfig{});
+  ASSERT_FALSE(r);
+  EXPECT_NE(r.error().message.find("no UDP datagram"), std::string::npos) << r.error().message;
+  EXPECT_NE(r.error().message.find("1 not IPv4"), std::string::npos) << r.error().message;
+}
+
+TEST(UdpReplay, FilterPortWithoutMatchesIsAClearError) {
+  const auto path = temp("filter.pcap");
+  write_capture(path, 5, 1'000'000, 2368);
+  ReplayConfig c;
+  c.filter_port = 8308;
+  auto r = UdpReplay::open(path, c);
+  ASSERT_FALSE(r);
+  EXPECT_NE(r.error().message.find("to port 8308"), std::string::npos) << r.error().message;
+  EXPECT_NE(r.error().message.find("5 UDP to other ports"), std::string::npos) << r.error().message;
+}
+
+TEST(UdpReplay, RateMustBePositive) {
+  const auto path = temp("zero_rate.pcap");
+  write_capture(path, 2, 1'000'000);
+  ReplayConfig c;
+  c.rate = 0.0;
+  EXPECT_FALSE(UdpReplay::open(path, c));
+}
+
+}  // namespace
+}  // namespace stac::io

@@ -1,0 +1,191 @@
+// The configuration readers of the edge: the shipped config/stac.yaml loads, and every broken
+// key is named.
+#include "settings/settings.hpp"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <fstream>
+#include <regex>
+#include <sstream>
+
+namespace stac::tools {
+namespace {
+
+const std::filesystem::path kShipped = std::filesystem::path(STAC_SOURCE_DIR) / "config/stac.yaml";
+
+// The shipped file with one line of the ego section replaced.
+std::filesystem::path with_line(const std::string& pattern, const std::string& replacement) {
+  std::ifstream in(kShipped);
+  std::stringstream text;
+  text << in.rdbuf();
+  const std::string edited = std::regex_replace(text.str(), std::regex(pattern), replacement);
+  EXPECT_NE(edited, text.str()) << pattern;
+  // One file per test and process: ctest runs the tests of this file in parallel.
+  const auto path = std::filesystem::temp_directory_path() /
+                    ("stac_settings_test_" +
+                     std::string(testing::UnitTest::GetInstance()->current_test_info()->name()) +
+                     "_" + std::to_string(::getpid()) + ".yaml");
+  std::ofstream(path) << edited;
+  return path;
+}
+
+TEST(EgoSettings, TheShippedConfigLoads) {
+  auto s = load_ego_settings(kShipped);
+  ASSERT_TRUE(s) << s.error().message;
+  EXPECT_FALSE(s->origin);  // auto
+  EXPECT_NEAR(s->deskew.vehicle_T_sensor.translation().z(), 1.73, 1e-12);
+  EXPECT_EQ(s->history.capacity, 2500u);  // 10 s at 200 Hz + 25 %
+  EXPECT_EQ(s->deskew.bucket_ns, 100'000);
+  EXPECT_EQ(s->ins_port, 5602);
+}
+
+TEST(EgoSettings, OriginAndExtrinsicsAreRead) {
+  auto s = load_ego_settings(with_line("origin: auto", "origin: [44.2, -76.5, 80.0]"));
+  ASSERT_TRUE(s) << s.error().message;
+  ASSERT_TRUE(s->origin);
+  EXPECT_EQ(s->origin->lat_deg, 44.2);
+  auto yawed = load_ego_settings(
+      with_line(R"(sensor_rpy_deg: \[0.0, 0.0, 0.0\])", "sensor_rpy_deg: [0, 0, 90]"));
+  ASSERT_TRUE(yawed) << yawed.error().message;
+  const Eigen::Vector3d x = yawed->deskew.vehicle_T_sensor.linear() * Eigen::Vector3d::UnitX();
+  EXPECT_NEAR(x.y(), 1.0, 1e-12);  // the sensor's forward points to the vehicle's left
+}
+
+TEST(EgoSettings, EveryBrokenKeyIsNamed) {
+  const std::pair<std::string, std::string> cases[] = {
+      {"origin: auto", "origin: somewhere"},
+      {"origin: auto", "origin: [95.0, 0.0, 0.0]"},
+      {R"(sensor_xyz_m: \[0.0, 0.0, 1.73\])", "sensor_xyz_m: [0.0, 1.73]"},
+      {"pose_history_s: 10.0", "pose_history_s: 0"},
+      {"ins_port: 5602", "ins_port: 70000"},
+      {"max_alignment_status: 2", "max_alignment_status: nine"},
+      {"deskew_bucket_us: 100", "deskew_buckets_us: 100"},
+  };
+  for (const auto& [pattern, replacement] : cases) {
+    auto s = load_ego_settings(with_line(pattern, replacement));
+    ASSERT_FALSE(s) << replacement;
+    const std::string key = replacement.substr(0, replacement.find(':'));
+    EXPECT_NE(s.error().message.find("ego." + key), std::string::npos) << s.error().message;
+  }
+}
+
+// A file that is not a configuration, or a key or section the shipped file does not know.
+TEST(ConfigFile, WhatIsNotAConfigurationIsNamedAndNothingThrows) {
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("stac_cfg_dir_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const auto write = [&](const std::string& name, const std::string& text) {
+    const auto path = dir / name;
+    std::ofstream(path) << text;
+    return path;
+  };
+  struct Case {
+    std::filesystem::path file;
+    std::string expected;
+  };
+  const Case cases[] = {
+      {dir, "is a directory"},
+      {dir / "absent.yaml", "no such configuration file"},
+      {write("scalar.yaml", "42\n"),
+       "the configuration is a single value; it must be a map of sections"},
+      {write("list.yaml", "- velodyne\n- ego\n"), "the configuration is a list"},
+      {write("empty.yaml", ""), "the configuration is empty"},
+      {write("binary.yaml", std::string("\x01\x02\xff\xfe\x00garbage", 12)),
+       "cannot read the configuration"},
+      {write("section_list.yaml", "velodyne: [1, 2]\n"),
+       "the 'velodyne:' section (line 1) is a list; it must be a map of keys"},
+  };
+  for (const auto& c : cases) {
+    auto s = load_velodyne_settings(c.file);
+    ASSERT_FALSE(s) << c.file;
+    EXPECT_NE(s.error().message.find(c.expected), std::string::npos) << s.error().message;
+  }
+  std::filesystem::remove_all(dir);
+}
+
+TEST(ConfigFile, AMisspelledKeyOrSectionIsAnErrorWithTheNearestKnownName) {
+  auto typo =
+      load_velodyne_settings(with_line(R"(sender_address: "")", R"(sender_adress: "10.9.9.9")"));
+  ASSERT_FALSE(typo);
+  EXPECT_NE(typo.error().message.find("unknown key 'velodyne.sender_adress' (line "),
+            std::string::npos)
+      << typo.error().message;
+  EXPECT_NE(typo.error().message.find("did you mean 'sender_address'?"), std::string::npos)
+      << typo.error().message;
+  // Any section's loader checks every section's name.
+  auto section = load_velodyne_settings(with_line("\nsegmentation:", "\nsegmentaton:"));
+  ASSERT_FALSE(section);
+  EXPECT_NE(section.error().message.find("unknown section 'segmentaton:'"), std::string::npos)
+      << section.error().message;
+  EXPECT_NE(section.error().message.find("did you mean 'segmentation'?"), std::string::npos)
+      << section.error().message;
+  auto far =
+      load_ego_settings(with_line("  ins_port: 5602", "  ins_port: 5602\n  wheelbase_m: 2.7"));
+  ASSERT_FALSE(far);
+  EXPECT_NE(far.error().message.find("unknown key 'ego.wheelbase_m'"), std::string::npos)
+      << far.error().message;
+}
+
+TEST(ConfigFile, AKeyWrittenTwiceIsAnError) {
+  auto twice =
+      load_tracking_config(with_line("  max_tracks: 512", "  max_tracks: 512\n  max_tracks: 0"));
+  ASSERT_FALSE(twice);
+  EXPECT_NE(twice.error().message.find("key 'tracking.max_tracks' (line "), std::string::npos)
+      << twice.error().message;
+  EXPECT_NE(twice.error().message.find("appears twice"), std::string::npos)
+      << twice.error().message;
+}
+
+TEST(ConfigFile, CapacitiesOfTwoSectionsAreCheckedTogether) {
+  auto s =
+      load_pipeline_settings(with_line("accumulated_points: 1024", "accumulated_points: 1000000"));
+  ASSERT_FALSE(s);
+  EXPECT_NE(s.error().message.find(
+                "'tracking.max_tracks' and 'classification:': max_tracks x accumulated_points"),
+            std::string::npos)
+      << s.error().message;
+}
+
+TEST(ConfigFile, TheShippedFileHasEveryKeyTheLoadersRead) {
+  EXPECT_TRUE(load_pipeline_settings(kShipped)) << load_pipeline_settings(kShipped).error().message;
+}
+
+// classification.model's line (velodyne.model is another key of the same name).
+const char* const kModelLine = R"(model: \S+( +# track classifier))";
+
+TEST(ClassificationSettings, TheShippedConfigLoadsAndPathsAreRelativeToTheFile) {
+  auto s = load_classification_settings(kShipped);
+  ASSERT_TRUE(s) << s.error().message;
+  EXPECT_EQ(s->classifier.accumulated_points, 1024u);
+  EXPECT_EQ(s->classifier.holistic_every, 5u);
+  EXPECT_EQ(s->classifier.descriptors.max_points, 1024u);
+  const auto edited = with_line(kModelLine, "model: models/x.stacmodel$1");
+  auto m = load_classification_settings(edited);
+  ASSERT_TRUE(m) << m.error().message;
+  EXPECT_EQ(m->model, edited.parent_path() / "models/x.stacmodel");
+  auto none = load_classification_settings(with_line(kModelLine, "model:  none$1"));
+  ASSERT_TRUE(none) << none.error().message;
+  EXPECT_TRUE(none->model.empty());
+}
+
+TEST(ClassificationSettings, EveryBrokenKeyIsNamed) {
+  const std::pair<std::string, std::string> cases[] = {
+      {kModelLine, "model: \"\"$1"},
+      {"accumulated_points: 1024", "accumulated_points: 0"},
+      {"holistic_every: 5", "holistic_every: 0"},
+      {"holistic_every: 5", "holistic_every: often"},
+      {"max_segment_points: 1024", "max_segment_pts: 1024"},
+  };
+  for (const auto& [pattern, replacement] : cases) {
+    auto s = load_classification_settings(with_line(pattern, replacement));
+    ASSERT_FALSE(s) << replacement;
+    const std::string key = replacement.substr(0, replacement.find(':'));  // a misspelling: itself
+    EXPECT_NE(s.error().message.find("classification." + key), std::string::npos)
+        << s.error().message;
+  }
+}
+
+}  // namespace
+}  // namespace stac::tools

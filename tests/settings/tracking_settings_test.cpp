@@ -1,0 +1,67 @@
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "settings/settings.hpp"
+
+namespace stac::tools {
+namespace {
+
+const std::filesystem::path kShipped =
+    std::filesystem::path(STAC_SOURCE_DIR) / "config" / "stac.yaml";
+
+// The shipped file with the line holding `key:` in the tracking section replaced.
+std::filesystem::path edited(const std::string& name, const std::string& key,
+                             const std::string& replacement) {
+  std::ifstream in(kShipped);
+  const auto path = std::filesystem::temp_directory_path() / ("stac_tracking_" + name + ".yaml");
+  std::ofstream out(path);
+  std::string line;
+  bool in_tracking = false;
+  while (std::getline(in, line)) {
+    if (line.rfind("tracking:", 0) == 0) in_tracking = true;
+    if (in_tracking && line.find("  " + key + ":") == 0) line = replacement;
+    out << line << "\n";
+  }
+  return path;
+}
+
+TEST(TrackingSettings, ShippedConfigMatchesTheDefaults) {
+  auto c = load_tracking_config(kShipped);
+  ASSERT_TRUE(c) << c.error().message;
+  const tracking::TrackerConfig d;
+  EXPECT_EQ(c->max_tracks, d.max_tracks);
+  EXPECT_EQ(c->max_detections, d.max_detections);
+  EXPECT_DOUBLE_EQ(c->gate_mahalanobis_sq, d.gate_mahalanobis_sq);
+  EXPECT_DOUBLE_EQ(c->gate_distance_m, d.gate_distance_m);
+  EXPECT_DOUBLE_EQ(c->max_position_std_m, d.max_position_std_m);
+  EXPECT_EQ(c->confirm_hits, d.confirm_hits);
+  EXPECT_EQ(c->max_coast_scans, d.max_coast_scans);
+  EXPECT_DOUBLE_EQ(c->accel_std_mps2, d.accel_std_mps2);
+  EXPECT_DOUBLE_EQ(c->box_smoothing, d.box_smoothing);
+}
+
+TEST(TrackingSettings, MissingWrongOrInvalidKeysAreNamed) {
+  auto missing = load_tracking_config(edited("missing", "gate_distance_m", ""));
+  ASSERT_FALSE(missing);
+  EXPECT_NE(missing.error().message.find("missing required key 'tracking.gate_distance_m'"),
+            std::string::npos)
+      << missing.error().message;
+  auto wrong = load_tracking_config(edited("wrong", "confirm_hits", "  confirm_hits: three"));
+  ASSERT_FALSE(wrong);
+  EXPECT_NE(wrong.error().message.find("'tracking.confirm_hits' has the wrong type"),
+            std::string::npos)
+      << wrong.error().message;
+  auto invalid = load_tracking_config(edited("invalid", "box_smoothing", "  box_smoothing: 0"));
+  ASSERT_FALSE(invalid);
+  EXPECT_NE(invalid.error().message.find("box_smoothing"), std::string::npos)
+      << invalid.error().message;
+  auto absent = load_tracking_config("/nonexistent/stac.yaml");
+  ASSERT_FALSE(absent);
+  EXPECT_NE(absent.error().message.find("/nonexistent/stac.yaml"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace stac::tools

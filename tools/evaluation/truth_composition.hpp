@@ -1,0 +1,36 @@
+// What `stac process` and `stac dataset` share: the offline pipeline configuration, the truth
+// scan of a scan, and the truth composition of segments (which `stac sim` truth box each
+// segment point lies in).
+#pragma once
+
+#include <Eigen/Geometry>
+#include <memory>
+#include <vector>
+
+#include "drivers/velodyne/scan.hpp"
+#include "perception/segmentation/segments.hpp"
+#include "pipeline/scan_pipeline.hpp"
+#include "settings/settings.hpp"
+#include "tools/evaluation/tracks_jsonl.hpp"
+
+namespace stac::tools {
+
+// The per-scan pipeline of the settings, timed by thread CPU time (offline, deterministic).
+// `model` null: no classification (unless `describe`: the classify stage runs for an observer).
+pipeline::PipelineConfig offline_pipeline_config(
+    const PipelineSettings& settings,
+    std::shared_ptr<const classification::TrackClassifierModel> model = nullptr,
+    bool describe = false);
+
+// Advances `next` to the truth scan nearest `stamp_ns` (truth in time order, not empty) and
+// returns it when within 1 ms, else null.
+const TruthScanRecord* nearest_truth_scan(const std::vector<TruthScanRecord>& truth,
+                                          std::size_t& next, std::int64_t stamp_ns);
+
+// Which truth object each segment point lies in (the smallest box holding it, grown by 5 cm),
+// counted per segment; -1 for points in no box.
+void truth_composition(const TruthScanRecord& truth, const velodyne::Scan& scan,
+                       const segmentation::Segments& segments,
+                       const Eigen::Isometry3d& world_T_sensor, std::vector<SegmentRecord>& out);
+
+}  // namespace stac::tools

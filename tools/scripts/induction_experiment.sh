@@ -1,0 +1,71 @@
+#!/usr/bin/env bash
+# The group induction experiment of docs/learning.md (the thesis's Fig. 2.6 on simulated drives):
+# a few labelled tracks per class, an empty street as B0, a stream of unlabeled drives (one
+# chunk a round), the oracle answering the active-learning questions, accuracy on held-out drives
+# after every round; beside it (a) `stac train` on the same user labels + B0 without induction
+# and (b) `stac train` on every label of every drive. No test uses these seeds.
+#
+#   tools/scripts/induction_experiment.sh [WORK_DIR]     (default: build/induction-experiment)
+#
+# Environment: STAC (default build/tools/stac), JOBS (drives made in parallel, default 1),
+# DURATION (s per drive, default 15), SEED_LABELS (per class, default 5), ASK (questions per
+# class and kind after each chunk, default 3), ROUNDS (boosting rounds of the baselines, 1000).
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+STAC=${STAC:-build/tools/stac}
+WORK=${1:-build/induction-experiment}
+JOBS=${JOBS:-1}
+DURATION=${DURATION:-15}
+SEED_LABELS=${SEED_LABELS:-5}
+ASK=${ASK:-3}
+ROUNDS=${ROUNDS:-1000}
+BACKGROUND=(empty:301 empty:302 empty:303)
+LABELS=(urban:311)
+STREAM=(urban:312 urban:313 urban:314 urban:315 urban:316 intersection:319 crowd:320
+        urban:318 urban:331 urban:332 intersection:333 urban:334 urban:335 crowd:336
+        urban:337 intersection:338 urban:339 parking-lot:340)
+TEST=(urban:317 urban:341 intersection:342 crowd:343 urban:344)
+
+source tools/scripts/simulated_drives.sh
+all=("${BACKGROUND[@]}" "${LABELS[@]}" "${STREAM[@]}" "${TEST[@]}")
+echo "$0: ${#all[@]} drives of ${DURATION} s in $WORK"
+make_drives "${all[@]}"
+
+args() {  # args FLAG DRIVE... -> FLAG WORK/DRIVE/data ...
+  local flag=$1
+  shift
+  for d in "$@"; do printf '%s\n' "$flag" "$WORK/$d/data"; done
+}
+mapfile -t bg < <(args --background "${BACKGROUND[@]}")
+mapfile -t labels < <(args --labels "${LABELS[@]}")
+mapfile -t stream < <(args --unlabeled "${STREAM[@]}")
+mapfile -t test < <(args --eval "${TEST[@]}")
+mapfile -t test_data < <(args --data "${TEST[@]}")
+
+# (b) fully supervised: every label of the labels' and the stream's drives, and B0.
+mapfile -t everything < <(args --data "${BACKGROUND[@]}" "${LABELS[@]}" "${STREAM[@]}")
+"$STAC" train "${everything[@]}" --rounds "$ROUNDS" --out "$WORK/supervised_all.stacmodel"
+"$STAC" eval --classes "${test_data[@]}" --model "$WORK/supervised_all.stacmodel" \
+  --report "$WORK/supervised_all"
+all_acc=$(sed -n 's/.*"track_accuracy": *\([0-9.]*\).*/\1/p' "$WORK/supervised_all/metrics.json" | head -n 1)
+
+# Group induction, the oracle answering; after each round, the same labels without induction.
+rm -rf "$WORK/state"
+"$STAC" induct --state "$WORK/state" --classes car,pedestrian,bicyclist "${bg[@]}" "${labels[@]}" \
+  --baseline \
+  --labels-per-class "$SEED_LABELS" "${stream[@]}" --rounds 2 --oracle --ask "$ASK" "${test[@]}" \
+  --export "$WORK/user_labels"
+"$STAC" eval --classes "${test_data[@]}" --model "$WORK/state/model.stacmodel" \
+  --report "$WORK/group_induction"
+
+# (a) the same user labels and B0, no induction.
+"$STAC" train --data "$WORK/user_labels" --rounds "$ROUNDS" --out "$WORK/supervised_labels.stacmodel"
+"$STAC" eval --classes "${test_data[@]}" --model "$WORK/supervised_labels.stacmodel" \
+  --report "$WORK/supervised_labels"
+labels_acc=$(sed -n 's/.*"track_accuracy": *\([0-9.]*\).*/\1/p' "$WORK/supervised_labels/metrics.json" | head -n 1)
+
+# The chart again, with the baselines as lines.
+"$STAC" induct --state "$WORK/state" --reference "stac train, every label (b)=$all_acc" \
+  --reference "stac train, final user labels (a)=$labels_acc"
+echo "$0: $WORK/state/learning.png; history $WORK/state/history.jsonl; reports in" \
+  "$WORK/{group_induction,supervised_labels,supervised_all}/metrics.json"
