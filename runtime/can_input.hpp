@@ -1,7 +1,7 @@
-// stac run's CAN input (docs/run.md, "CAN"): the read step both transports share, the counters it
-// leaves for the publisher's health, and the loop of the CAN thread that reads a gs_usb adapter
-// (a libusb bulk read blocks, so it cannot share the pose thread's INS poll) into a ring the pose
-// thread drains. No allocation, lock or exception after start-up.
+// The live component's CAN input (docs/run.md, "CAN"): the read step both transports share, the
+// counters it leaves for the publisher's health, and the loop of the CAN thread that reads a gs_usb
+// adapter (a libusb bulk read blocks, so it cannot share the pose thread's INS poll) into a ring
+// the pose thread drains. No allocation, lock or exception after start-up.
 #pragma once
 
 #include <array>
@@ -15,7 +15,7 @@
 #include "rt/spsc_ring.hpp"
 #include "rt/watchdog.hpp"
 
-namespace stac::tools {
+namespace stac::runtime {
 
 // The CAN input's counters for other threads: stored by the thread that reads CAN after each
 // read, loaded by the publisher (each field on its own, relaxed).
@@ -81,4 +81,4 @@ can::InputEvent read_can_until_end(can::OdometryInput<Reader>& in,
   }
 }
 
-}  // namespace stac::tools
+}  // namespace stac::runtime

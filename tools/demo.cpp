@@ -119,7 +119,7 @@ class DriveWatch {
                               static_cast<float>(std::hypot(v.x, v.y)), o.state, c.name});
       if (o.state == 0) continue;  // tentative
       ++confirmed;
-      paths_[o.object_id].emplace_back(static_cast<float>(p.x), static_cast<float>(p.y));
+      paths_[o.object_id].push_back({static_cast<float>(p.x), static_cast<float>(p.y)});
       classes_[o.object_id] = c.name;
       shown.push_back(&o);
     }
@@ -171,7 +171,7 @@ class DriveWatch {
     const double* q = s.orientation;  // x, y, z, w
     ego_yaw_ =
         std::atan2(2.0 * (q[3] * q[2] + q[0] * q[1]), 1.0 - 2.0 * (q[1] * q[1] + q[2] * q[2]));
-    ego_path_.emplace_back(static_cast<float>(ego_x_), static_cast<float>(ego_y_));
+    ego_path_.push_back({static_cast<float>(ego_x_), static_cast<float>(ego_y_)});
   }
 
   void on_segments(const typename T::ScanSegments& s, dds_time_t, const dds_sample_info_t&) {
@@ -209,17 +209,16 @@ class DriveWatch {
   double first_stamp_s_ = 0, ego_x_ = 0, ego_y_ = 0, ego_yaw_ = 0;
   ScanView last_;
   std::vector<BoxView> segments_;
-  std::vector<cv::Point2f> ego_path_;
-  std::map<std::uint64_t, std::vector<cv::Point2f>> paths_;
+  std::vector<PointM> ego_path_;
+  std::map<std::uint64_t, std::vector<PointM>> paths_;
   std::map<std::uint64_t, std::string> classes_;  // each confirmed track's latest class
   std::vector<std::string> pending_;
 };
 
 // The points of complete scan `index` of the capture (the scan stac run published as that index
 // when no packet was lost), in the vehicle frame (the sensor's extrinsics; not deskewed).
-rt::Result<std::vector<cv::Point3f>> last_scan_points(const std::string& config,
-                                                      const std::string& pcap,
-                                                      std::uint64_t index) {
+rt::Result<std::vector<Point3M>> last_scan_points(const std::string& config,
+                                                  const std::string& pcap, std::uint64_t index) {
   auto vs = load_velodyne_settings(config);
   if (!vs) return rt::Unexpected<rt::Error>{vs.error()};
   auto es = load_ego_settings(config);
@@ -227,14 +226,14 @@ rt::Result<std::vector<cv::Point3f>> last_scan_points(const std::string& config,
   auto calibration = velodyne::load_calibration(vs->calibration);
   if (!calibration) return rt::Unexpected<rt::Error>{calibration.error()};
   const Eigen::Isometry3f vehicle_T_sensor = es->deskew.vehicle_T_sensor.cast<float>();
-  std::vector<cv::Point3f> points;
+  std::vector<Point3M> points;
   std::uint64_t k = 0;
   auto n = for_each_complete_scan(pcap, *calibration, *vs, [&](const velodyne::Scan& scan) {
     if (k++ < index) return true;
     points.reserve(scan.points.size());
     for (const velodyne::Point& p : scan.points) {
       const Eigen::Vector3f v = vehicle_T_sensor * Eigen::Vector3f(p.x, p.y, p.z);
-      points.emplace_back(v.x(), v.y(), v.z());
+      points.push_back({v.x(), v.y(), v.z()});
     }
     return false;
   });

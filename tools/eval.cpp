@@ -4,13 +4,12 @@
 #include <cstdio>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 #include <sstream>
 
 #include "tools/commands.hpp"
 #include "tools/eval_classes.hpp"
 #include "tools/evaluation/evaluation.hpp"
+#include "tools/pictures/drawing.hpp"
 #include "tools/support/progress.hpp"
 
 namespace stac::tools {
@@ -111,55 +110,6 @@ nlohmann::json metrics_json(const EvalResult& r, const EvalConfig& c) {
   return j;
 }
 
-// A bar chart of named series per group, values in [lo, 1].
-bool bar_chart(const std::filesystem::path& png, const std::string& title,
-               const std::vector<std::string>& groups, const std::vector<std::string>& series,
-               const std::vector<std::vector<double>>& values, double lo) {
-  const int w = 900, h = 480, left = 60, right = 20, top = 50, bottom = 70;
-  cv::Mat img(h, w, CV_8UC3, cv::Scalar(255, 255, 255));
-  const cv::Scalar palette[] = {
-      {180, 119, 31}, {14, 127, 255}, {44, 160, 44}, {40, 39, 214}, {189, 103, 148}};
-  auto y_of = [&](double v) {
-    v = std::clamp(v, lo, 1.0);
-    return top + static_cast<int>((1.0 - (v - lo) / (1.0 - lo)) * (h - top - bottom));
-  };
-  for (int t = 0; t <= 4; ++t) {
-    const double v = lo + (1.0 - lo) * t / 4.0;
-    cv::line(img, {left, y_of(v)}, {w - right, y_of(v)}, cv::Scalar(220, 220, 220), 1);
-    char buf[16];
-    std::snprintf(buf, sizeof(buf), "%.2f", v);
-    cv::putText(img, buf, {5, y_of(v) + 4}, cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(60, 60, 60),
-                1, cv::LINE_AA);
-  }
-  cv::putText(img, title, {left, 30}, cv::FONT_HERSHEY_SIMPLEX, 0.6, cv::Scalar(0, 0, 0), 1,
-              cv::LINE_AA);
-  const int ng = std::max<int>(1, static_cast<int>(groups.size()));
-  const int group_w = (w - left - right) / ng;
-  const int bar_w = std::max(4, (group_w - 20) / std::max<int>(1, static_cast<int>(series.size())));
-  for (int g = 0; g < static_cast<int>(groups.size()); ++g) {
-    const int x0 = left + g * group_w + 10;
-    for (int s = 0; s < static_cast<int>(series.size()); ++s) {
-      const double v = values[static_cast<std::size_t>(s)][static_cast<std::size_t>(g)];
-      if (!std::isfinite(v)) continue;
-      cv::rectangle(img, {x0 + s * bar_w, y_of(v)}, {x0 + (s + 1) * bar_w - 2, y_of(lo)},
-                    palette[s % 5], cv::FILLED);
-    }
-    cv::putText(img, groups[static_cast<std::size_t>(g)], {x0, h - bottom + 20},
-                cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
-  }
-  for (int s = 0; s < static_cast<int>(series.size()); ++s) {
-    const cv::Point p(left + 150 * s, h - 20);
-    cv::rectangle(img, p + cv::Point(0, -10), p + cv::Point(12, 2), palette[s % 5], cv::FILLED);
-    cv::putText(img, series[static_cast<std::size_t>(s)], p + cv::Point(16, 0),
-                cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
-  }
-  try {
-    return cv::imwrite(png.string(), img);
-  } catch (const cv::Exception&) {
-    return false;
-  }
-}
-
 std::string fmt(double v) {
   char buf[32];
   std::snprintf(buf, sizeof(buf), "%.3f", v);
@@ -229,12 +179,17 @@ int write_report(const std::filesystem::path& dir, const EvalResult& r, const Ev
     class_values[2].push_back(seg ? sk->second.under_rate() : NAN);
     class_values[3].push_back(seg ? sk->second.over_rate() : NAN);
   }
-  const bool plots =
-      bar_chart(dir / "range.png", "MOTA and HOTA by range band", bands, {"MOTA", "HOTA"},
-                band_values, 0.0) &&
-      bar_chart(dir / "classes.png", "Per class: recall, AssA, under- and over-segmentation",
-                classes, {"recall", "AssA", "under-seg", "over-seg"}, class_values, 0.0);
-  if (!plots) return fail(dir.string() + ": cannot write the plots");
+  if (auto saved = save_bar_chart(dir / "range.png", "MOTA and HOTA by range band", bands,
+                                  {"MOTA", "HOTA"}, band_values, 0.0);
+      !saved) {
+    return fail(saved.error().message);
+  }
+  if (auto saved = save_bar_chart(dir / "classes.png",
+                                  "Per class: recall, AssA, under- and over-segmentation", classes,
+                                  {"recall", "AssA", "under-seg", "over-seg"}, class_values, 0.0);
+      !saved) {
+    return fail(saved.error().message);
+  }
   std::ofstream md(dir / "report.md");
   md << "# STAC evaluation\n\n"
      << "- truth: `" << o.truth << "` (" << r.truth_scans << " scans)\n"

@@ -5,8 +5,6 @@
 #include <cstdio>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 #include <span>
 
 #include "formats/dataset_file.hpp"
@@ -15,6 +13,7 @@
 #include "perception/classification/model.hpp"
 #include "tools/commands.hpp"
 #include "tools/pictures/chart.hpp"
+#include "tools/pictures/drawing.hpp"
 #include "tools/support/progress.hpp"
 
 namespace stac::tools {
@@ -88,45 +87,15 @@ void pr_curve(std::vector<Scored> s, ChartSeries& out) {
 
 rt::Result<bool> save_confusion(const Tally& t, const ClassNames& names, const std::string& title,
                                 const std::filesystem::path& png) {
-  constexpr int kCell = 90, kLeft = 120, kTop = 70;
-  const int n = static_cast<int>(t.labels);
-  const auto name = [&](std::size_t i) {
-    return classification::class_name(
-        names, i + 1 == t.labels ? classification::kBackground : static_cast<ClassIndex>(i));
-  };
-  cv::Mat img(kTop + kCell * n + 40, kLeft + kCell * n + 20, CV_8UC3, cv::Scalar(255, 255, 255));
-  cv::putText(img, title, {10, 25}, cv::FONT_HERSHEY_SIMPLEX, 0.6, {0, 0, 0}, 1, cv::LINE_AA);
-  cv::putText(img, "rows: truth, columns: predicted", {10, 50}, cv::FONT_HERSHEY_SIMPLEX, 0.45,
-              {80, 80, 80}, 1, cv::LINE_AA);
+  std::vector<std::string> labels;
+  std::vector<std::vector<std::uint64_t>> counts;
   for (std::size_t i = 0; i < t.labels; ++i) {
-    std::uint64_t row = 0;
-    for (std::uint64_t v : t.confusion[i]) row += v;
-    const int y = kTop + static_cast<int>(i) * kCell;
-    cv::putText(img, name(i), {5, y + kCell / 2}, cv::FONT_HERSHEY_SIMPLEX, 0.45, {0, 0, 0}, 1,
-                cv::LINE_AA);
-    for (std::size_t j = 0; j < t.labels; ++j) {
-      const int x = kLeft + static_cast<int>(j) * kCell;
-      const double f =
-          row == 0 ? 0.0 : static_cast<double>(t.confusion[i][j]) / static_cast<double>(row);
-      const auto shade = static_cast<int>(255.0 * (1.0 - f));
-      cv::rectangle(img, {x, y}, {x + kCell - 2, y + kCell - 2}, cv::Scalar(255, shade, shade),
-                    cv::FILLED);
-      cv::putText(img, std::to_string(t.confusion[i][j]), {x + 20, y + kCell / 2},
-                  cv::FONT_HERSHEY_SIMPLEX, 0.6,
-                  f > 0.5 ? cv::Scalar(255, 255, 255) : cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
-      if (i == 0) {
-        cv::putText(img, name(j), {x, kTop + kCell * n + 25}, cv::FONT_HERSHEY_SIMPLEX, 0.4,
-                    {0, 0, 0}, 1, cv::LINE_AA);
-      }
-    }
+    labels.push_back(classification::class_name(
+        names, i + 1 == t.labels ? classification::kBackground : static_cast<ClassIndex>(i)));
+    counts.emplace_back(t.confusion[i].begin(),
+                        t.confusion[i].begin() + static_cast<long>(t.labels));
   }
-  try {
-    if (!cv::imwrite(png.string(), img))
-      return rt::make_error(png.string() + ": cannot write the PNG");
-  } catch (const cv::Exception& e) {
-    return rt::make_error(png.string() + ": " + e.what());
-  }
-  return true;
+  return save_confusion_matrix(png, title, labels, counts);
 }
 
 }  // namespace

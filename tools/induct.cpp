@@ -652,8 +652,11 @@ int Inductor::run() {
   for (const std::string& path : o_.eval)
     if (auto r = labelled(path, "--eval"); !r) return fail(r.error().message);
   if (auto r = read_background(); !r) return fail(r.error().message);
-  for (const std::string& path : o_.labels)
+  for (const std::string& path : o_.labels) {
     if (auto r = labelled(path, "--labels"); !r) return fail(r.error().message);
+    // Known before a killed run's answers are read: they may come from it.
+    if (auto i = source_index(path, SourceRole::kLabels); !i) return fail(i.error().message);
+  }
   std::vector<std::uint32_t> chunks;
   for (const std::string& path : o_.unlabeled) {
     auto i = source_index(path, SourceRole::kUnlabeled);

@@ -140,7 +140,7 @@ int run_kitti_objects(const KittiObjectsOptions& o) {
         BirdsEyeOptions{.range_m = o.max_range_m + 5, .size_px = 1000, .height_bar = false});
     for (std::size_t i = 0; i < n; ++i) {
       picture.add_point(v[4 * i], v[4 * i + 1],
-                        owner[i] < 0 ? cv::Vec3b(80, 80, 80) : cv::Vec3b(200, 200, 200));
+                        owner[i] < 0 ? Bgr{80, 80, 80} : Bgr{200, 200, 200});
     }
     for (const KittiObject& obj : *labels) {
       const Eigen::Vector3d centre_rect = obj.bottom_centre - Eigen::Vector3d(0, obj.height / 2, 0);
@@ -190,9 +190,9 @@ int run_kitti_objects(const KittiObjectsOptions& o) {
       }
       r.status = status_of(r);
       const double yaw = -obj.rotation_y - M_PI / 2;  // about the velodyne's z
-      const cv::Scalar colour = r.status == "segmented"   ? cv::Scalar(80, 220, 80)
-                                : r.status == "no points" ? cv::Scalar(120, 120, 120)
-                                                          : cv::Scalar(60, 60, 240);
+      const Bgr colour = r.status == "segmented"   ? Bgr{80, 220, 80}
+                         : r.status == "no points" ? Bgr{120, 120, 120}
+                                                   : Bgr{60, 60, 240};
       picture.add_box(static_cast<float>(c.x()), static_cast<float>(c.y()),
                       static_cast<float>(obj.length), static_cast<float>(obj.width),
                       static_cast<float>(yaw), colour);

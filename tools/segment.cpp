@@ -8,7 +8,6 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
-#include <opencv2/imgproc.hpp>
 #include <optional>
 #include <string>
 #include <vector>
@@ -36,13 +35,6 @@ double thread_cpu_ms() {
   timespec ts{};
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
   return static_cast<double>(ts.tv_sec) * 1e3 + static_cast<double>(ts.tv_nsec) * 1e-6;
-}
-
-cv::Vec3b segment_colour(std::size_t i) {
-  // Well separated hues (golden-angle steps), bright on the dark background.
-  cv::Mat hsv(1, 1, CV_8UC3, cv::Scalar(static_cast<double>((i * 47) % 180), 200, 255)), bgr;
-  cv::cvtColor(hsv, bgr, cv::COLOR_HSV2BGR);
-  return bgr.at<cv::Vec3b>(0, 0);
 }
 
 rt::Result<bool> write_csv(const std::string& path, const segmentation::Segments& out) {
@@ -88,7 +80,7 @@ int report(const SegmentOptions& o, const segmentation::SegmenterConfig& config,
     for (std::size_t i = 0; i < points.count; ++i) {
       float x, y, z;
       points.read(i, x, y, z);
-      if (owner[i] < 0) picture.add_point(x, y, cv::Vec3b(90, 90, 90));
+      if (owner[i] < 0) picture.add_point(x, y, Bgr{90, 90, 90});
     }
     for (std::size_t i = 0; i < points.count; ++i) {
       float x, y, z;
@@ -98,9 +90,8 @@ int report(const SegmentOptions& o, const segmentation::SegmenterConfig& config,
     }
     for (std::size_t i = 0; i < out.segments.size(); ++i) {
       const auto& b = out.segments[i].box;
-      const cv::Vec3b c = segment_colour(i);
-      picture.add_box(b.cx, b.cy, std::max(b.length, 0.1f), std::max(b.width, 0.1f), b.yaw,
-                      cv::Scalar(c[0], c[1], c[2]));
+      const Bgr c = segment_colour(i);
+      picture.add_box(b.cx, b.cy, std::max(b.length, 0.1f), std::max(b.width, 0.1f), b.yaw, c);
     }
     picture.add_legend(what);
     picture.add_legend(std::to_string(out.segments.size()) +

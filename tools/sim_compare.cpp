@@ -8,8 +8,6 @@
 #include <fstream>
 #include <memory>
 #include <numbers>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include "drivers/io/pcap_reader.hpp"
 #include "drivers/velodyne/scan_stream.hpp"
@@ -268,14 +266,7 @@ rt::Result<bool> draw_pair(const std::vector<P>& sim, const std::string& sim_lab
     pic.add_legend(std::to_string(pts.size()) + " points");
     if (auto r = pic.save(k == 0 ? a : b); !r) return r;
   }
-  cv::Mat both;
-  cv::hconcat(cv::imread(a.string()), cv::imread(b.string()), both);
-  if (!cv::imwrite((dir / "birds_eye_side_by_side.png").string(), both,
-                   {cv::IMWRITE_PNG_COMPRESSION, 9})) {
-    return rt::make_error((dir / "birds_eye_side_by_side.png").string() +
-                          ": cannot write the picture");
-  }
-  return true;
+  return save_side_by_side(a, b, dir / "birds_eye_side_by_side.png");
 }
 
 int run_compare(const CompareOptions& o) {

@@ -1,6 +1,6 @@
 // deploy/stac.service: parsed as systemd reads it (sections, Key=Value) with the settings
 // docs/run.md promises, and verified by `systemd-analyze verify` where that is installed (with
-// ExecStart pointed at the stac just built, since verify checks that the command exists).
+// ExecStart pointed at the stac-node just built, since verify checks that the command exists).
 // deploy/60-stac-gs-usb.rules: the udev rule for the gs_usb adapter the driver opens;
 // deploy/60-stac-cpu-latency.rules: the one for the PM QoS device of run.cpu_wake_latency_us.
 #include <gtest/gtest-spi.h>
@@ -70,9 +70,9 @@ bool have_systemd_analyze() {
   return std::system("command -v systemd-analyze > /dev/null 2>&1") == 0;
 }
 
-TEST(SystemdUnit, RunsStacRunWithTheVehicleConfigRestartsOnFailureAndAllowsRealTime) {
+TEST(SystemdUnit, RunsStacNodeWithTheVehicleConfigRestartsOnFailureAndAllowsRealTime) {
   const auto keys = parse_unit(read(kUnit));
-  EXPECT_EQ(keys.at("Service.ExecStart"), "/usr/local/bin/stac run --config /etc/stac/stac.yaml");
+  EXPECT_EQ(keys.at("Service.ExecStart"), "/usr/local/bin/stac-node --config /etc/stac/stac.yaml");
   EXPECT_EQ(keys.at("Service.Type"), "simple");
   EXPECT_EQ(keys.at("Service.Restart"), "on-failure");
   EXPECT_EQ(keys.at("Service.LimitMEMLOCK"), "infinity");  // run.lock_memory: mlockall
@@ -82,16 +82,19 @@ TEST(SystemdUnit, RunsStacRunWithTheVehicleConfigRestartsOnFailureAndAllowsRealT
   EXPECT_EQ(keys.at("Service.User"), "stac");
   EXPECT_EQ(keys.at("Install.WantedBy"), "multi-user.target");
   EXPECT_TRUE(keys.count("Unit.Description"));
-  // The command line is one stac accepts.
-  const auto help = stac::testing::stac("run --help");
+  // The command line is one stac-node accepts.
+  const auto help = stac::testing::run_shell(std::string(STAC_NODE) + " --help");
   EXPECT_EQ(help.code, 0);
   EXPECT_NE(help.output.find("--config"), std::string::npos);
+  const auto version = stac::testing::run_shell(std::string(STAC_NODE) + " --version");
+  EXPECT_EQ(version.code, 0);
+  EXPECT_NE(version.output.find("stac-node "), std::string::npos) << version.output;
 }
 
 TEST(SystemdUnit, SystemdAnalyzeVerifiesItAndWouldNameAnError) {
   if (!have_systemd_analyze()) GTEST_SKIP() << "systemd-analyze not installed (the parse test ran)";
   std::string text = read(kUnit);
-  text = std::regex_replace(text, std::regex("/usr/local/bin/stac"), std::string(STAC_CLI));
+  text = std::regex_replace(text, std::regex("/usr/local/bin/stac-node"), std::string(STAC_NODE));
   EXPECT_EQ(verify(text), "");
   // The check can fail: a restart policy systemd does not know is named.
   const std::string broken =

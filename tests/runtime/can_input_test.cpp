@@ -12,7 +12,7 @@
 #include "can/socketcan_pair.hpp"
 #include "rt/testing/alloc_counter.hpp"
 
-namespace stac::tools {
+namespace stac::runtime {
 namespace {
 
 using Input = can::OdometryInput<can::SocketCanReader>;
@@ -125,4 +125,4 @@ TEST(CanCounterCells, EveryFieldRoundTrips) {
 }
 
 }  // namespace
-}  // namespace stac::tools
+}  // namespace stac::runtime

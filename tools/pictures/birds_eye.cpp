@@ -9,7 +9,7 @@ namespace stac::tools {
 namespace {
 
 // A perceptual blue-to-yellow ramp (viridis-like) for t in [0, 1].
-cv::Vec3b ramp(double t) {
+Bgr ramp(double t) {
   static const double stops[5][3] = {
       {68, 1, 84}, {59, 82, 139}, {33, 145, 140}, {94, 201, 98}, {253, 231, 37}};  // RGB
   t = std::clamp(t, 0.0, 1.0) * 4.0;
@@ -21,17 +21,35 @@ cv::Vec3b ramp(double t) {
   return {mix(2), mix(1), mix(0)};  // BGR
 }
 
+cv::Scalar scalar(Bgr c) {
+  return {static_cast<double>(c.b), static_cast<double>(c.g), static_cast<double>(c.r)};
+}
+
+// The picture's pixels as an OpenCV image (no copy).
+cv::Mat canvas(std::vector<std::uint8_t>& image, int size_px) {
+  return {size_px, size_px, CV_8UC3, image.data()};
+}
+
+// A point (m) -> its pixel: x forward is up in the picture, y left is left.
+cv::Point pixel(const BirdsEyeOptions& o, double px_per_m, double x, double y) noexcept {
+  return {static_cast<int>(std::lround(o.size_px / 2.0 - y * px_per_m)),
+          static_cast<int>(std::lround(o.size_px / 2.0 - x * px_per_m))};
+}
+
 }  // namespace
 
 BirdsEye::BirdsEye(const BirdsEyeOptions& options)
     : options_(options),
       px_per_m_(options.size_px / (2.0 * options.range_m)),
-      image_(options.size_px, options.size_px, CV_8UC3, cv::Scalar(20, 20, 20)) {
+      image_(
+          static_cast<std::size_t>(options.size_px) * static_cast<std::size_t>(options.size_px) * 3,
+          20) {
+  cv::Mat img = canvas(image_, options.size_px);
   const cv::Point centre(options.size_px / 2, options.size_px / 2);
   for (int r = 10; r <= static_cast<int>(options.range_m * 1.5); r += 10) {
-    cv::circle(image_, centre, static_cast<int>(r * px_per_m_), cv::Scalar(60, 60, 60), 1,
+    cv::circle(img, centre, static_cast<int>(r * px_per_m_), cv::Scalar(60, 60, 60), 1,
                cv::LINE_AA);
-    cv::putText(image_, std::to_string(r) + " m",
+    cv::putText(img, std::to_string(r) + " m",
                 centre + cv::Point(4, -static_cast<int>(r * px_per_m_) + 12),
                 cv::FONT_HERSHEY_SIMPLEX, 0.35, cv::Scalar(110, 110, 110), 1, cv::LINE_AA);
   }
@@ -41,33 +59,34 @@ void BirdsEye::add_point(float x, float y, float z) noexcept {
   add_point(x, y, ramp((z - options_.z_min_m) / (options_.z_max_m - options_.z_min_m)));
 }
 
-void BirdsEye::add_point(float x, float y, const cv::Vec3b& bgr) noexcept {
-  const cv::Point p = pixel(x, y);
+void BirdsEye::add_point(float x, float y, Bgr colour) noexcept {
+  const cv::Point p = pixel(options_, px_per_m_, x, y);
   if (p.x < 0 || p.y < 0 || p.x >= options_.size_px || p.y >= options_.size_px) return;
-  image_.at<cv::Vec3b>(p.y, p.x) = bgr;
+  const std::size_t at =
+      (static_cast<std::size_t>(p.y) * static_cast<std::size_t>(options_.size_px) +
+       static_cast<std::size_t>(p.x)) *
+      3;
+  image_[at] = colour.b;
+  image_[at + 1] = colour.g;
+  image_[at + 2] = colour.r;
 }
 
-cv::Point BirdsEye::pixel(double x, double y) const noexcept {
-  // x forward is up in the picture, y left is left.
-  return {static_cast<int>(std::lround(options_.size_px / 2.0 - y * px_per_m_)),
-          static_cast<int>(std::lround(options_.size_px / 2.0 - x * px_per_m_))};
-}
-
-void BirdsEye::add_path(std::span<const cv::Point2f> points_m, const cv::Scalar& bgr,
-                        int thickness_px) {
+void BirdsEye::add_path(std::span<const PointM> points_m, Bgr colour, int thickness_px) {
+  cv::Mat img = canvas(image_, options_.size_px);
   for (std::size_t i = 1; i < points_m.size(); ++i) {
-    cv::line(image_, pixel(points_m[i - 1].x, points_m[i - 1].y),
-             pixel(points_m[i].x, points_m[i].y), bgr, thickness_px, cv::LINE_AA);
+    cv::line(img, pixel(options_, px_per_m_, points_m[i - 1].x, points_m[i - 1].y),
+             pixel(options_, px_per_m_, points_m[i].x, points_m[i].y), scalar(colour), thickness_px,
+             cv::LINE_AA);
   }
 }
 
-void BirdsEye::add_label(float x, float y, const std::string& text, const cv::Scalar& bgr) {
-  cv::putText(image_, text, pixel(x, y) + cv::Point(4, -4), cv::FONT_HERSHEY_SIMPLEX, 0.35, bgr, 1,
-              cv::LINE_AA);
+void BirdsEye::add_label(float x, float y, const std::string& text, Bgr colour) {
+  cv::Mat img = canvas(image_, options_.size_px);
+  cv::putText(img, text, pixel(options_, px_per_m_, x, y) + cv::Point(4, -4),
+              cv::FONT_HERSHEY_SIMPLEX, 0.35, scalar(colour), 1, cv::LINE_AA);
 }
 
-void BirdsEye::add_box(float cx, float cy, float length, float width, float yaw,
-                       const cv::Scalar& bgr) {
+void BirdsEye::add_box(float cx, float cy, float length, float width, float yaw, Bgr colour) {
   const double c = std::cos(yaw), s = std::sin(yaw);
   const double corners[4][2] = {{length / 2.0, width / 2.0},
                                 {-length / 2.0, width / 2.0},
@@ -77,22 +96,25 @@ void BirdsEye::add_box(float cx, float cy, float length, float width, float yaw,
   for (int i = 0; i < 4; ++i) {
     const double x = cx + c * corners[i][0] - s * corners[i][1];
     const double y = cy + s * corners[i][0] + c * corners[i][1];
-    px[i] = pixel(x, y);
+    px[i] = pixel(options_, px_per_m_, x, y);
   }
-  for (int i = 0; i < 4; ++i) cv::line(image_, px[i], px[(i + 1) % 4], bgr, 1, cv::LINE_AA);
+  cv::Mat img = canvas(image_, options_.size_px);
+  for (int i = 0; i < 4; ++i) cv::line(img, px[i], px[(i + 1) % 4], scalar(colour), 1, cv::LINE_AA);
 }
 
 void BirdsEye::add_legend(const std::string& line) {
-  cv::putText(image_, line, cv::Point(10, 20 + 18 * legend_lines_++), cv::FONT_HERSHEY_SIMPLEX, 0.5,
+  cv::Mat img = canvas(image_, options_.size_px);
+  cv::putText(img, line, cv::Point(10, 20 + 18 * legend_lines_++), cv::FONT_HERSHEY_SIMPLEX, 0.5,
               cv::Scalar(230, 230, 230), 1, cv::LINE_AA);
 }
 
 rt::Result<bool> BirdsEye::save(const std::filesystem::path& png) const {
-  cv::Mat out = image_.clone();
+  std::vector<std::uint8_t> copy = image_;
+  cv::Mat out = canvas(copy, options_.size_px);
   if (options_.height_bar) {  // height colour bar, bottom left
     const int bar_w = 200, bar_h = 10, x0 = 10, y0 = options_.size_px - 30;
     for (int i = 0; i < bar_w; ++i) {
-      cv::line(out, {x0 + i, y0}, {x0 + i, y0 + bar_h}, cv::Scalar(ramp(i / (bar_w - 1.0))), 1);
+      cv::line(out, {x0 + i, y0}, {x0 + i, y0 + bar_h}, scalar(ramp(i / (bar_w - 1.0))), 1);
     }
     char label[64];
     std::snprintf(label, sizeof(label), "z %.1f m .. %.1f m", options_.z_min_m, options_.z_max_m);

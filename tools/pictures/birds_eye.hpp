@@ -3,12 +3,14 @@
 // in the real-time loop.
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
-#include <opencv2/core.hpp>
 #include <span>
 #include <string>
+#include <vector>
 
 #include "rt/expected.hpp"
+#include "tools/pictures/drawing.hpp"
 
 namespace stac::tools {
 
@@ -26,23 +28,22 @@ class BirdsEye {
 
   // A point coloured by its height.
   void add_point(float x, float y, float z) noexcept;
-  // A point in a given colour (BGR).
-  void add_point(float x, float y, const cv::Vec3b& bgr) noexcept;
+  // A point in a given colour.
+  void add_point(float x, float y, Bgr colour) noexcept;
   // An oriented rectangle: centre (m), length along yaw (rad, from x), width across.
-  void add_box(float cx, float cy, float length, float width, float yaw, const cv::Scalar& bgr);
+  void add_box(float cx, float cy, float length, float width, float yaw, Bgr colour);
   // A polyline through points (m), e.g. a track's path.
-  void add_path(std::span<const cv::Point2f> points_m, const cv::Scalar& bgr, int thickness_px = 1);
+  void add_path(std::span<const PointM> points_m, Bgr colour, int thickness_px = 1);
   // A short text next to a point (m), e.g. a track id.
-  void add_label(float x, float y, const std::string& text, const cv::Scalar& bgr);
+  void add_label(float x, float y, const std::string& text, Bgr colour);
   // A text line in the legend (top left).
   void add_legend(const std::string& line);
   rt::Result<bool> save(const std::filesystem::path& png) const;
 
  private:
-  [[nodiscard]] cv::Point pixel(double x, double y) const noexcept;
   BirdsEyeOptions options_;
   double px_per_m_;
-  cv::Mat image_;
+  std::vector<std::uint8_t> image_;  // size_px x size_px, 3 bytes (Bgr) a pixel
   int legend_lines_ = 0;
 };
 

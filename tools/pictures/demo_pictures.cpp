@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <opencv2/core.hpp>
 #include <set>
 #include <string_view>
 
@@ -16,27 +17,29 @@ struct ToVehicle {
   float x0, y0, c, s, yaw;
   ToVehicle(const DriveView& v)
       : x0(v.ego_x), y0(v.ego_y), c(std::cos(v.ego_yaw)), s(std::sin(v.ego_yaw)), yaw(v.ego_yaw) {}
-  [[nodiscard]] cv::Point2f operator()(float x, float y) const {
+  [[nodiscard]] PointM operator()(float x, float y) const {
     const float dx = x - x0, dy = y - y0;
     return {c * dx + s * dy, -s * dx + c * dy};
   }
 };
 
 // A colour per track id, spread around the hue circle (BGR).
-cv::Scalar track_colour(std::uint64_t id) {
+Bgr track_colour(std::uint64_t id) {
   const double h = std::fmod(static_cast<double>(id) * 0.61803398875, 1.0) * 6.0;
   const int i = static_cast<int>(h);
   const double f = h - i;
   const double q = 1 - f;
   const double rgb[6][3] = {{1, f, 0}, {q, 1, 0}, {0, 1, f}, {0, q, 1}, {f, 0, 1}, {1, 0, q}};
   const auto& c = rgb[std::clamp(i, 0, 5)];
-  return {60 + 195 * c[2], 60 + 195 * c[1], 60 + 195 * c[0]};
+  return {cv::saturate_cast<std::uint8_t>(60 + 195 * c[2]),
+          cv::saturate_cast<std::uint8_t>(60 + 195 * c[1]),
+          cv::saturate_cast<std::uint8_t>(60 + 195 * c[0])};
 }
 
-std::vector<cv::Point2f> in_vehicle(const std::vector<cv::Point2f>& world, const ToVehicle& to) {
-  std::vector<cv::Point2f> out;
+std::vector<PointM> in_vehicle(const std::vector<PointM>& world, const ToVehicle& to) {
+  std::vector<PointM> out;
   out.reserve(world.size());
-  for (const cv::Point2f& p : world) out.push_back(to(p.x, p.y));
+  for (const PointM& p : world) out.push_back(to(p.x, p.y));
   return out;
 }
 
@@ -54,7 +57,7 @@ rt::Result<bool> draw_drive(const DriveView& v, DrivePicture picture,
   double centre_x = 0, centre_y = 0;
   if (picture == DrivePicture::kWholeDrive) {  // the extent of the vehicle's path, with a margin
     float x_min = 0, x_max = 0, y_min = 0, y_max = 0;
-    for (const cv::Point2f& p : in_vehicle(v.ego_path, to)) {
+    for (const PointM& p : in_vehicle(v.ego_path, to)) {
       x_min = std::min(x_min, p.x), x_max = std::max(x_max, p.x);
       y_min = std::min(y_min, p.y), y_max = std::max(y_max, p.y);
     }
@@ -62,19 +65,19 @@ rt::Result<bool> draw_drive(const DriveView& v, DrivePicture picture,
     o.range_m = std::max(50.0, std::max(x_max - x_min, y_max - y_min) / 2.0 + 30.0);
   }
   BirdsEye bev(o);
-  const auto shift = [&](cv::Point2f p) {
-    return cv::Point2f(static_cast<float>(p.x - centre_x), static_cast<float>(p.y - centre_y));
+  const auto shift = [&](PointM p) {
+    return PointM{static_cast<float>(p.x - centre_x), static_cast<float>(p.y - centre_y)};
   };
-  const auto shifted = [&](const std::vector<cv::Point2f>& world) {
-    std::vector<cv::Point2f> out = in_vehicle(world, to);
-    for (cv::Point2f& p : out) p = shift(p);
+  const auto shifted = [&](const std::vector<PointM>& world) {
+    std::vector<PointM> out = in_vehicle(world, to);
+    for (PointM& p : out) p = shift(p);
     return out;
   };
   if (picture == DrivePicture::kLastScan) {
-    for (const cv::Point3f& p : v.points) bev.add_point(p.x, p.y, p.z);
+    for (const Point3M& p : v.points) bev.add_point(p.x, p.y, p.z);
     for (const BoxView& b : v.segments) {
-      const cv::Point2f c = to(b.x, b.y);
-      bev.add_box(c.x, c.y, b.length, b.width, b.yaw - to.yaw, cv::Scalar(90, 90, 90));
+      const PointM c = to(b.x, b.y);
+      bev.add_box(c.x, c.y, b.length, b.width, b.yaw - to.yaw, Bgr{90, 90, 90});
     }
   }
   // Paths of the tracks that moved (more than kMovedM from where they were first confirmed),
@@ -82,18 +85,20 @@ rt::Result<bool> draw_drive(const DriveView& v, DrivePicture picture,
   constexpr float kMovedM = 3.0f;
   std::set<std::uint64_t> moved;
   for (const auto& [id, path] : v.paths) {
-    if (path.size() < 2 || cv::norm(path.back() - path.front()) < kMovedM) continue;
+    if (path.size() < 2 ||
+        std::hypot(path.back().x - path.front().x, path.back().y - path.front().y) < kMovedM)
+      continue;
     if (const auto c = v.classes.find(id); c != v.classes.end() && c->second == "background")
       continue;
     moved.insert(id);
     bev.add_path(shifted(path), track_colour(id));
   }
-  bev.add_path(shifted(v.ego_path), cv::Scalar(255, 255, 255), 2);
+  bev.add_path(shifted(v.ego_path), Bgr{255, 255, 255}, 2);
   std::size_t confirmed = 0;
   for (const TrackView& t : v.last.tracks) {
     if (t.state == 0) continue;  // tentative tracks: their segment box is drawn already
     ++confirmed;
-    const cv::Point2f c = shift(to(t.x, t.y));
+    const PointM c = shift(to(t.x, t.y));
     bev.add_box(c.x, c.y, t.length, t.width, t.yaw - to.yaw, track_colour(t.id));
     if (picture == DrivePicture::kWholeDrive && moved.count(t.id) == 0) continue;
     const bool classified = t.class_name != "unknown";
@@ -102,8 +107,8 @@ rt::Result<bool> draw_drive(const DriveView& v, DrivePicture picture,
                   classified ? " " : "", classified ? t.class_name.c_str() : "");
     bev.add_label(c.x, c.y, label, track_colour(t.id));
   }
-  const cv::Point2f ego = shift({0, 0});
-  bev.add_box(ego.x, ego.y, 4.5f, 1.8f, 0, cv::Scalar(255, 255, 255));  // the vehicle
+  const PointM ego = shift({0, 0});
+  bev.add_box(ego.x, ego.y, 4.5f, 1.8f, 0, Bgr{255, 255, 255});  // the vehicle
   char line[160];
   std::snprintf(line, sizeof(line),
                 "stac demo: scan %llu, %zu confirmed tracks (boxes, ids, class)",

@@ -7,11 +7,11 @@
 #include <cstdint>
 #include <filesystem>
 #include <map>
-#include <opencv2/core.hpp>
 #include <string>
 #include <vector>
 
 #include "rt/expected.hpp"
+#include "tools/pictures/drawing.hpp"
 
 namespace stac::tools {
 
@@ -31,12 +31,12 @@ struct ScanView {
 };
 struct DriveView {
   ScanView last;
-  std::vector<BoxView> segments;    // the last segments sample
-  std::vector<cv::Point3f> points;  // the last scan's points, vehicle frame of the last pose (m)
-  float ego_x = 0, ego_y = 0, ego_yaw = 0;                  // the last pose (world)
-  std::vector<cv::Point2f> ego_path;                        // world
-  std::map<std::uint64_t, std::vector<cv::Point2f>> paths;  // confirmed tracks' positions, world
-  std::map<std::uint64_t, std::string> classes;  // their latest class ("unknown" before one)
+  std::vector<BoxView> segments;  // the last segments sample
+  std::vector<Point3M> points;    // the last scan's points, vehicle frame of the last pose (m)
+  float ego_x = 0, ego_y = 0, ego_yaw = 0;             // the last pose (world)
+  std::vector<PointM> ego_path;                        // world
+  std::map<std::uint64_t, std::vector<PointM>> paths;  // confirmed tracks' positions, world
+  std::map<std::uint64_t, std::string> classes;        // their latest class ("unknown" before one)
 };
 
 enum class DrivePicture {

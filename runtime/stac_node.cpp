@@ -1,0 +1,39 @@
+// stac-node: the live component alone, as the vehicle runs it (deploy/stac.service): the
+// configuration file says everything; SIGINT/SIGTERM stop it (with a summary on stderr), SIGHUP
+// reloads the model. `stac run` is the same component with options for people.
+#include <CLI/CLI.hpp>
+#include <cstdio>
+
+#include "runtime/component.hpp"
+#include "settings/settings.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "stac-node - the STAC live component: Velodyne UDP, INS and CAN in; segmented, tracked\n"
+      "and classified objects and health out on DDS (docs/run.md). Everything comes from the\n"
+      "configuration file; `stac run --help` has the same component with overrides.",
+      "stac-node"};
+  std::string config;
+  double seconds = 0;
+  app.add_option("--config", config,
+                 "configuration file (default: $STAC_CONFIG or the shipped config/stac.yaml)");
+  app.add_option("--seconds", seconds, "stop after this many seconds (default: run until stopped)")
+      ->check(CLI::Range(0.0, 1e9));
+  app.set_version_flag("--version", std::string("stac-node ") + STAC_VERSION);
+  CLI11_PARSE(app, argc, argv);
+  auto settings = stac::runtime::load_component_settings(stac::tools::config_path(config));
+  if (!settings) {
+    std::fprintf(stderr, "stac-node: %s\n", settings.error().message.c_str());
+    return 1;
+  }
+  settings->name = "stac-node";
+  settings->stop_after_s = seconds;
+  auto component = stac::runtime::Component::create(*settings);
+  if (!component) {
+    std::fprintf(stderr, "stac-node: %s\n", component.error().message.c_str());
+    return 1;
+  }
+  stac::runtime::run_with_signals(**component);
+  stac::runtime::print_summary((*component)->summary(), settings->name, stderr);
+  return 0;
+}

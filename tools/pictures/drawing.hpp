@@ -1,0 +1,47 @@
+// The plain types of the pictures' interfaces, so that no caller needs OpenCV, and the small
+// drawings the reports share: a palette for segments, bar charts, confusion matrices, two
+// pictures side by side. PNG files; every failure names the file.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "rt/expected.hpp"
+
+namespace stac::tools {
+
+struct Bgr {  // a colour, in OpenCV's byte order
+  std::uint8_t b = 0, g = 0, r = 0;
+};
+struct PointM {  // a point on the ground (m)
+  float x = 0, y = 0;
+};
+struct Point3M {  // a point in space (m)
+  float x = 0, y = 0, z = 0;
+};
+
+// Distinct, bright hues for segment i (a cycle of 180 hues).
+Bgr segment_colour(std::size_t i);
+
+// A bar chart of named series per group, values clamped to [lo, 1]; values[s][g] is series s in
+// group g (NaN: no bar).
+rt::Result<bool> save_bar_chart(const std::filesystem::path& png, const std::string& title,
+                                const std::vector<std::string>& groups,
+                                const std::vector<std::string>& series,
+                                const std::vector<std::vector<double>>& values, double lo);
+
+// A confusion matrix: counts[truth][predicted], rows and columns named, cells shaded by the row's
+// share.
+rt::Result<bool> save_confusion_matrix(const std::filesystem::path& png, const std::string& title,
+                                       const std::vector<std::string>& names,
+                                       const std::vector<std::vector<std::uint64_t>>& counts);
+
+// Two PNG pictures of the same height next to each other.
+rt::Result<bool> save_side_by_side(const std::filesystem::path& left,
+                                   const std::filesystem::path& right,
+                                   const std::filesystem::path& png);
+
+}  // namespace stac::tools
