@@ -9,6 +9,23 @@
 namespace stac::pipeline {
 namespace {
 
+std::int64_t now_ns(StageClock c) noexcept;
+
+// Writes the time from its construction to its end into `slot` (ns, the stage's clock).
+class StageTimer {
+ public:
+  StageTimer(StageClock clock, std::int64_t& slot) noexcept
+      : clock_(clock), slot_(slot), start_ns_(now_ns(clock)) {}
+  ~StageTimer() { slot_ = now_ns(clock_) - start_ns_; }
+  StageTimer(const StageTimer&) = delete;
+  StageTimer& operator=(const StageTimer&) = delete;
+
+ private:
+  StageClock clock_;
+  std::int64_t& slot_;
+  std::int64_t start_ns_;
+};
+
 std::int64_t now_ns(StageClock c) noexcept {
   timespec t{};
   clock_gettime(c == StageClock::kThreadCpu ? CLOCK_THREAD_CPUTIME_ID : CLOCK_MONOTONIC, &t);
@@ -113,7 +130,39 @@ void ScanPipeline::fill_cloud(const velodyne::Scan& scan, ScanResult& out) noexc
 
 void ScanPipeline::process(velodyne::Scan& scan, const ego::PoseHistory* poses, ScanResult& out,
                            std::int64_t classify_until_ns) noexcept {
-  const std::int64_t t0 = now_ns(config_.clock);
+  {
+    const StageTimer timer(config_.clock, out.stage_ns[kDeskew]);
+    place_in_world(scan, poses, out);
+  }
+  {
+    const StageTimer timer(config_.clock, out.stage_ns[kSegment]);
+    segmenter_.segment(segmentation::PointView{&scan.points.data()->x, scan.points.size(),
+                                               sizeof(velodyne::Point)},
+                       out.segments);
+  }
+  {
+    const StageTimer timer(config_.clock, out.stage_ns[kTrack]);
+    const Eigen::Vector2f sensor_xy = out.world_T_sensor.translation().head<2>().cast<float>();
+    detect_in_world(out, sensor_xy);
+    tracker_.update(out.stamp_ns,
+                    std::span<const tracking::Detection>(detections_.data(), detections_.size()),
+                    out.tracked, &sensor_xy);
+  }
+  out.classes.clear();
+  out.classes_late = out.classes_current = 0;
+  out.stage_ns[kClassify] = 0;
+  if (classifier_ != nullptr) {
+    const StageTimer timer(config_.clock, out.stage_ns[kClassify]);
+    classify(scan, out, classify_until_ns);
+  }
+  fill_cloud(scan, out);  // before the handover: the scan's points are the receiver's again after
+  out.stage_ns[kClassifyDeferred] = deferred_classify_ns_;
+}
+
+// The scan's clock and, with poses, its deskew and its place in the world (parked: the vehicle's
+// frame is the world).
+void ScanPipeline::place_in_world(velodyne::Scan& scan, const ego::PoseHistory* poses,
+                                  ScanResult& out) noexcept {
   const ego::ScanClock clock =
       ego::scan_clock(scan.header, config_.trailer,
                       poses != nullptr && poses->pushed() > 0
@@ -140,13 +189,12 @@ void ScanPipeline::process(velodyne::Scan& scan, const ego::PoseHistory* poses, 
       ++without_pose_;
     }
   }
-  const std::int64_t t1 = now_ns(config_.clock);
-  segmenter_.segment(
-      segmentation::PointView{&scan.points.data()->x, scan.points.size(), sizeof(velodyne::Point)},
-      out.segments);
-  const std::int64_t t2 = now_ns(config_.clock);
+}
+
+// Each segment as a tracker detection in the world frame (end-on boxes completed).
+void ScanPipeline::detect_in_world(const ScanResult& out,
+                                   const Eigen::Vector2f& sensor_xy) noexcept {
   detections_.clear();
-  const Eigen::Vector2f sensor_xy = out.world_T_sensor.translation().head<2>().cast<float>();
   for (std::size_t i = 0; i < out.segments.segments.size(); ++i) {
     const segmentation::Segment& s = out.segments.segments[i];
     const Eigen::Vector3d c =
@@ -160,13 +208,13 @@ void ScanPipeline::process(velodyne::Scan& scan, const ego::PoseHistory* poses, 
           s.count,         static_cast<std::uint32_t>(i)};
     (void)tracking::complete_end_on(config_.tracker, sensor_xy, *d);
   }
-  tracker_.update(out.stamp_ns,
-                  std::span<const tracking::Detection>(detections_.data(), detections_.size()),
-                  out.tracked, &sensor_xy);
-  const std::int64_t t3 = now_ns(config_.clock);
-  out.classes.clear();
-  out.classes_late = out.classes_current = 0;
-  if (classifier_ != nullptr && config_.split_classification) {
+}
+
+// With split_classification the tracks to publish until classify_until_ns (the rest in
+// finish_scan()); else every track.
+void ScanPipeline::classify(const velodyne::Scan& scan, ScanResult& out,
+                            std::int64_t classify_until_ns) noexcept {
+  if (config_.split_classification) {
     classifier_->begin(out.segments, out.tracked);
     const classification::UpdateCount n = classifier_->update(
         &scan.points.data()->x, sizeof(velodyne::Point),
@@ -174,17 +222,10 @@ void ScanPipeline::process(velodyne::Scan& scan, const ego::PoseHistory* poses, 
     out.classes_late = static_cast<std::uint32_t>(n.late);
     out.classes_current = static_cast<std::uint32_t>(n.classified);
     classifier_->report(out.tracked, out.classes);
-  } else if (classifier_ != nullptr) {
+  } else {
     classifier_->classify(&scan.points.data()->x, sizeof(velodyne::Point), out.segments,
                           out.tracked, out.classes);
   }
-  const std::int64_t t4 = classifier_ != nullptr ? now_ns(config_.clock) : t3;
-  fill_cloud(scan, out);  // before the handover: the scan's points are the receiver's again after
-  out.stage_ns[kDeskew] = t1 - t0;
-  out.stage_ns[kSegment] = t2 - t1;
-  out.stage_ns[kTrack] = t3 - t2;
-  out.stage_ns[kClassify] = t4 - t3;
-  out.stage_ns[kClassifyDeferred] = deferred_classify_ns_;
 }
 
 void ScanPipeline::finish_scan(const velodyne::Scan& scan) noexcept {

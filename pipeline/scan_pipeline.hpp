@@ -138,6 +138,12 @@ class ScanPipeline {
   std::unique_ptr<classification::TrackClassifier> classifier_;
   rt::FixedVector<tracking::Detection> detections_;
   rt::FixedVector<std::uint16_t> point_segment_;  // per point: its segment (cloud_stride > 0)
+  // The stages of process(), in order (segmentation and tracking are calls of their own).
+  void place_in_world(velodyne::Scan& scan, const ego::PoseHistory* poses,
+                      ScanResult& out) noexcept;
+  void detect_in_world(const ScanResult& out, const Eigen::Vector2f& sensor_xy) noexcept;
+  void classify(const velodyne::Scan& scan, ScanResult& out,
+                std::int64_t classify_until_ns) noexcept;
   void fill_cloud(const velodyne::Scan& scan, ScanResult& out) noexcept;
   Eigen::Isometry3d sensor_T_vehicle_;
   std::uint64_t without_pose_ = 0;

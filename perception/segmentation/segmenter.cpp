@@ -201,6 +201,20 @@ struct Segmenter::State {
   rt::FixedVector<std::uint32_t> split_queue;
   rt::FixedVector<Part> parts;
   rt::FixedVector<float> fit_x, fit_y;  // box fit: the sampled points about the centroid
+  std::size_t occupied = 0;             // occupied cells this scan (cell_id's size)
+
+  // The steps of one scan, in the order Segmenter::segment calls them.
+  void bin_points(const PointView& points, std::size_t count, const SegmenterConfig& c,
+                  SegmentCounters& k) noexcept;
+  void local_ground() noexcept;
+  void classify_points(std::size_t count, const SegmenterConfig& c, SegmentCounters& k) noexcept;
+  void mark_obstacle_cells(const SegmenterConfig& c) noexcept;
+  // Returns the points of the kept segments.
+  std::uint32_t flood_fill(const SegmenterConfig& c, Segments& out) noexcept;
+  bool split(std::uint32_t comp, const SegmenterConfig& c) noexcept;
+  void keep(Part& p, const SegmenterConfig& c, Segments& out, std::uint32_t& cursor) noexcept;
+  void scatter(std::size_t count, std::uint32_t cursor, Segments& out) noexcept;
+  void describe(const PointView& points, const SegmenterConfig& c, Segments& out) noexcept;
 };
 
 Segmenter::Segmenter(const SegmenterConfig& config) : config_(config) {
@@ -345,23 +359,33 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
   out.counters = SegmentCounters{};
   SegmentCounters& k = out.counters;
   k.points_in = points.count;
+  const std::size_t count = std::min(points.count, std::min(c.max_points, s.point_slot.capacity()));
+  k.ignored_over_capacity = points.count - count;
+  s.bin_points(points, count, c, k);
+  s.local_ground();
+  s.classify_points(count, c, k);
+  s.mark_obstacle_cells(c);
+  const std::uint32_t kept_points = s.flood_fill(c, out);
+  s.scatter(count, kept_points, out);
+  s.describe(points, c, out);
+}
 
+// Bin the points: per fine cell its lowest point. First a streaming pass keeps each point's
+// dense cell index (kNone when ignored) in point_slot and its z in point_z; then the cells,
+// with the grid entry of the point 16 ahead prefetched (slot_of is megabytes: its loads are
+// the binning's cost).
+void Segmenter::State::bin_points(const PointView& points, std::size_t count,
+                                  const SegmenterConfig& c, SegmentCounters& k) noexcept {
+  State& s = *this;
   const float range = static_cast<float>(c.range_m);
   const float min_range2 = static_cast<float>(c.min_range_m * c.min_range_m);
   const float inv_cell = static_cast<float>(1.0 / c.cell_m);
-  const std::size_t count = std::min(points.count, std::min(c.max_points, s.point_slot.capacity()));
-  k.ignored_over_capacity = points.count - count;
   s.ground_cells.clear();
   s.cell_id.clear();
   (void)s.point_slot.resize(count);
   (void)s.point_z.resize(count);
   std::size_t slots = 0;
   const std::size_t max_slots = s.cell_id.capacity();
-
-  // 1. Bin the points: per fine cell its lowest point. First a streaming pass keeps each point's
-  // dense cell index (kNone when ignored) in point_slot and its z in point_z; then the cells,
-  // with the grid entry of the point 16 ahead prefetched (slot_of is megabytes: its loads are
-  // the binning's cost).
   constexpr float kMaxAbsZ = 1e4f;  // also rejects NaN and infinities
   const float lowest = -static_cast<float>(c.sensor_height_m + c.below_ground_m);
   const float below_slope = static_cast<float>(c.below_ground_slope);
@@ -417,11 +441,16 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
   }
   (void)s.cell_id.resize(slots);
   k.occupied_cells = slots;
+  s.occupied = slots;
+}
 
-  // 2. Local ground: per coarse cell the second lowest of its fine cells' lowest points (a stray
-  // return below the road counts once; the lowest when alone); then the
-  // lowest over the cells within ground_radius_m of their value + max_slope x distance. A curb,
-  // or a cell where a car hides the road, thus gets the ground of the road around it.
+// Local ground: per coarse cell the second lowest of its fine cells' lowest points (a stray
+// return below the road counts once; the lowest when alone); then the
+// lowest over the cells within ground_radius_m of their value + max_slope x distance. A curb,
+// or a cell where a car hides the road, thus gets the ground of the road around it.
+void Segmenter::State::local_ground() noexcept {
+  State& s = *this;
+  const std::size_t slots = s.occupied;
   const float inf = std::numeric_limits<float>::infinity();
   for (std::size_t slot = 0; slot < slots; ++slot) {
     s.band_max[slot] = -inf;
@@ -453,8 +482,12 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
   for (std::size_t slot = 0; slot < slots; ++slot) {
     s.ground_at[slot] = s.ground[s.coarse_id[slot]];  // one load per use below, not two
   }
+}
 
-  // 3. Points against their local ground: ground, above, or obstacle candidates per cell.
+// Points against their local ground: ground, above, or obstacle candidates per cell.
+void Segmenter::State::classify_points(std::size_t count, const SegmenterConfig& c,
+                                       SegmentCounters& k) noexcept {
+  State& s = *this;
   const float clearance = static_cast<float>(c.ground_clearance_m);
   const float max_height = static_cast<float>(c.max_height_m);
   for (std::size_t i = 0; i < count; ++i) {
@@ -474,10 +507,14 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
       s.band_min[slot] = std::min(s.band_min[slot], z);
     }
   }
+}
 
-  // 4. Obstacle cells: high above the ground, or spread vertically (Junior's criterion). Cells
-  // with only low points above the clearance are weak: they join an obstacle they touch (a
-  // bumper, feet, the lower returns of a far car) up to weak_join_cells deep, never start one.
+// Obstacle cells: high above the ground, or spread vertically (Junior's criterion). Cells
+// with only low points above the clearance are weak: they join an obstacle they touch (a
+// bumper, feet, the lower returns of a far car) up to weak_join_cells deep, never start one.
+void Segmenter::State::mark_obstacle_cells(const SegmenterConfig& c) noexcept {
+  State& s = *this;
+  const std::size_t slots = s.occupied;
   const float obstacle_height = static_cast<float>(c.obstacle_height_m);
   const float obstacle_spread = static_cast<float>(c.obstacle_spread_m);
   const bool overhead_on = c.overhead_m > 0;
@@ -493,10 +530,16 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
     s.overhead[slot] = overhead_on && s.band_min[slot] - s.ground_at[slot] >= overhead_low;
     State::set(s.open, s.dense_of(static_cast<std::uint32_t>(slot)));
   }
+}
 
-  // 5. Flood fill 8-connected obstacle cells (a fixed queue, no recursion); keep or drop each.
+// Flood fill 8-connected obstacle cells (a fixed queue, no recursion); keep or drop each.
+std::uint32_t Segmenter::State::flood_fill(const SegmenterConfig& c, Segments& out) noexcept {
+  State& s = *this;
+  SegmentCounters& k = out.counters;
+  const std::size_t slots = s.occupied;
+  const float range = static_cast<float>(c.range_m);
+  const float inv_cell = static_cast<float>(1.0 / c.cell_m);
   const double max_extent_cells = c.max_segment_extent_m / c.cell_m;
-  const std::uint32_t n = s.n;
   std::uint32_t cursor = 0;
   std::uint32_t component = 0;
   // Across unseen cells along the sensor's ray: the roof of a car beside the sensor is hit by
@@ -560,160 +603,8 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
       }
     }
   };
-  // Split of one component (its cells in component_cells, labelled comp) into s.parts, each
-  // cell's part in s.part; false when it has fewer than two seeds. High cells (top split_height_m
-  // above the ground) are grouped, linked up to two cells apart so that a missing cell does not
-  // split a person; each person-sized group is a seed, all other groups one seed together (a car
-  // cabin, a wall). A breadth-first fill from all seeds at once gives every cell its nearest
-  // seed over 8-connected cells of the component; cells it does not reach (joined by a ray
-  // bridge) go to the part whose reached cells' bounds are nearest.
   const float split_height = static_cast<float>(c.split_height_m);
   const auto person_cells = static_cast<std::uint32_t>(c.split_person_m / c.cell_m + 1e-9);
-  auto split = [&](std::uint32_t comp) {
-    s.parts.clear();
-    s.split_queue.clear();
-    std::uint32_t highs = 0;
-    for (const std::uint32_t slot : s.component_cells) {
-      const bool high = s.band_max[slot] - s.ground_at[slot] >= split_height;
-      s.part[slot] = high ? kUnvisited : kNone;
-      if (!high) continue;
-      ++highs;
-      State::set(s.high, s.dense_of(slot));
-    }
-    if (highs == 0) return false;  // no seed
-    // Every high cell's bit is cleared when it joins a group; on an early return the rest are.
-    const auto clear_high = [&] {
-      for (const std::uint32_t slot : s.component_cells) s.high[s.dense_of(slot) >> 6] = 0;
-    };
-    std::uint32_t shared = kNone;  // the seed of all groups that are not one person
-    std::uint32_t persons = 0;
-    for (const std::uint32_t start : s.component_cells) {
-      if (s.part[start] != kUnvisited) continue;
-      const std::size_t begin = s.split_queue.size();
-      State::unset(s.high, s.dense_of(start));
-      s.part[start] = kQueued;
-      (void)s.split_queue.push_back(start);  // each cell once: never full
-      Part group;
-      for (std::size_t head = begin; head < s.split_queue.size(); ++head) {
-        const std::uint32_t id = s.cell_id[s.split_queue[head]];
-        const std::uint32_t cx = id & 0xFFFFu, cy = id >> 16;
-        group.add(cx, cy, s.obstacle_count[s.split_queue[head]]);
-        for (std::uint32_t yy = cy < 2 ? 0 : cy - 2; yy <= std::min(cy + 2, n - 1); ++yy) {
-          for (std::uint32_t xx = cx < 2 ? 0 : cx - 2; xx <= std::min(cx + 2, n - 1); ++xx) {
-            const std::size_t d = s.dense(xx, yy);
-            if (!State::test(s.high, d)) continue;  // not a high cell of comp left to group
-            State::unset(s.high, d);
-            const std::uint32_t other = s.slot_of[d];
-            s.part[other] = kQueued;
-            (void)s.split_queue.push_back(other);
-          }
-        }
-      }
-      const bool person = group.points >= c.split_min_points &&
-                          group.x1 - group.x0 < person_cells &&
-                          group.y1 - group.y0 < person_cells &&
-                          s.parts.size() + 1 < s.parts.capacity();  // room left for `shared`
-      // More person-sized groups than a group of people has: foliage (bush tops), left whole.
-      if (person && ++persons > kMaxPersons) {
-        clear_high();
-        return false;
-      }
-      if (!person && shared == kNone) shared = static_cast<std::uint32_t>(s.parts.size());
-      const std::uint32_t seed = person ? static_cast<std::uint32_t>(s.parts.size()) : shared;
-      if (seed == s.parts.size()) *s.parts.append() = Part{};  // capacity kept above
-      Part& p = s.parts[seed];
-      for (std::size_t i = begin; i < s.split_queue.size(); ++i) {
-        const std::uint32_t id = s.cell_id[s.split_queue[i]];
-        s.part[s.split_queue[i]] = seed;
-        p.seed_x += id & 0xFFFFu, p.seed_y += id >> 16, ++p.seed_cells;
-      }
-    }
-    if (s.parts.size() < 2) return false;
-    for (std::size_t head = 0; head < s.split_queue.size(); ++head) {
-      const std::uint32_t slot = s.split_queue[head];
-      const std::uint32_t id = s.cell_id[slot];
-      const std::uint32_t cx = id & 0xFFFFu, cy = id >> 16;
-      for (std::uint32_t yy = cy == 0 ? 0 : cy - 1; yy <= std::min(cy + 1, n - 1); ++yy) {
-        for (std::uint32_t xx = cx == 0 ? 0 : cx - 1; xx <= std::min(cx + 1, n - 1); ++xx) {
-          const std::uint32_t other = s.slot_of[s.dense(xx, yy)];
-          if (other == kNone || s.label[other] != comp || s.part[other] != kNone) continue;
-          s.part[other] = s.part[slot];
-          (void)s.split_queue.push_back(other);
-        }
-      }
-    }
-    // The cells the fill reached first; the others (each once: after the reached ones in
-    // split_queue, which holds every cell of the component at most once) wait for the bounds.
-    const std::size_t reached = s.split_queue.size();
-    for (const std::uint32_t slot : s.component_cells) {
-      if (s.part[slot] == kNone) {
-        (void)s.split_queue.push_back(slot);
-        continue;
-      }
-      const std::uint32_t id = s.cell_id[slot];
-      s.parts[s.part[slot]].add(id & 0xFFFFu, id >> 16, s.obstacle_count[slot]);
-    }
-    // A cell not 8-connected to any seed goes to the part whose reached cells' bounds are
-    // nearest, ties to the nearest seed centre. A person's part takes such a cell only within
-    // kPersonReach cells of its bounds when there is a shared part: a bicyclist passing a
-    // parked car shadows the car's side, and the pieces of the side left between the shadows,
-    // bridged to the rider's wheels along their rays, are nearer the rider than the car's
-    // cabin. The bounds are those of the reached cells, so the order of these cells does not
-    // matter.
-    constexpr std::uint64_t kPersonReach = 2;
-    const std::size_t parts_n = s.parts.size();
-    for (std::size_t q = reached; q < s.split_queue.size(); ++q) {
-      const std::uint32_t slot = s.split_queue[q];
-      const std::uint32_t id = s.cell_id[slot];
-      const std::uint32_t cx = id & 0xFFFFu, cy = id >> 16;
-      std::uint64_t best_box = std::numeric_limits<std::uint64_t>::max();
-      double best_centre = std::numeric_limits<double>::infinity();
-      std::uint32_t best = 0;
-      for (std::uint32_t i = 0; i < parts_n; ++i) {
-        const Part& p = s.parts[i];
-        const std::uint64_t gx = cx < p.x0 ? p.x0 - cx : (cx > p.x1 ? cx - p.x1 : 0);
-        const std::uint64_t gy = cy < p.y0 ? p.y0 - cy : (cy > p.y1 ? cy - p.y1 : 0);
-        const std::uint64_t box = gx * gx + gy * gy;  // an empty part: x0 = kNone, far
-        if (i != shared && shared != kNone && box > kPersonReach * kPersonReach) continue;
-        const double dx = p.seed_x / p.seed_cells - cx, dy = p.seed_y / p.seed_cells - cy;
-        const double centre = dx * dx + dy * dy;
-        if (box < best_box || (box == best_box && centre < best_centre)) {
-          best_box = box, best_centre = centre, best = i;
-        }
-      }
-      s.part[slot] = best;
-    }
-    for (std::size_t q = reached; q < s.split_queue.size(); ++q) {
-      const std::uint32_t slot = s.split_queue[q];
-      const std::uint32_t id = s.cell_id[slot];
-      s.parts[s.part[slot]].add(id & 0xFFFFu, id >> 16, s.obstacle_count[slot]);
-    }
-    return true;
-  };
-  // Keeps a part as a segment or counts why not; its points go to [first, first + points).
-  auto keep = [&](Part& p) {
-    if (p.points < c.min_segment_points) {
-      ++k.dropped_too_small;
-      return;
-    }
-    if (p.points > c.max_segment_points || (p.x1 - p.x0 + 1) > max_extent_cells ||
-        (p.y1 - p.y0 + 1) > max_extent_cells) {
-      ++k.dropped_too_large;
-      return;
-    }
-    Segment* seg = out.segments.append();
-    if (seg == nullptr || cursor + p.points > out.point_indices.capacity()) {
-      if (seg != nullptr) out.segments.pop_back();
-      ++k.dropped_segment_overflow;
-      return;
-    }
-    *seg = Segment{};
-    seg->first = cursor;
-    seg->count = static_cast<std::uint32_t>(p.points);
-    seg->cells = p.cells;
-    p.first = cursor;
-    cursor += seg->count;
-  };
   for (std::size_t seed = 0; seed < slots; ++seed) {
     if (s.label[seed] != kUnvisited) continue;  // components start at strong cells only
     // Breadth first: component_cells is the queue. depth: 0 for strong cells, else the weak
@@ -759,7 +650,7 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
     // Smaller than a person on both sides: one object, nothing to split.
     const bool too_small = x1 - x0 < person_cells && y1 - y0 < person_cells;
     if (!(split_height > 0 && !too_large && !too_small &&
-          split(component))) {  // one part: the whole
+          split(component, c))) {  // one part: the whole
       s.parts.clear();
       Part* whole = s.parts.append();  // capacity max_segments + 1 >= 2
       *whole = Part{pts, static_cast<std::uint32_t>(s.component_cells.size()), x0, x1, y0, y1};
@@ -767,7 +658,7 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
     }
     ++component;
     k.split_segments += s.parts.size() - 1;
-    for (Part& p : s.parts) keep(p);
+    for (Part& p : s.parts) keep(p, c, out, cursor);
     for (const std::uint32_t slot : s.component_cells) {
       Part& p = s.parts[s.part[slot]];
       if (p.first == kNone) continue;
@@ -793,16 +684,183 @@ void Segmenter::segment(const PointView& points, Segments& out) noexcept {
     s.open[d >> 6] = 0;
     s.seen[d >> 6] = 0;
   }
+  return cursor;
+}
 
-  // 6. Scatter the point indices of kept segments, contiguous per segment.
+// Split of one component (its cells in component_cells, labelled comp) into s.parts, each
+// cell's part in s.part; false when it has fewer than two seeds. High cells (top split_height_m
+// above the ground) are grouped, linked up to two cells apart so that a missing cell does not
+// split a person; each person-sized group is a seed, all other groups one seed together (a car
+// cabin, a wall). A breadth-first fill from all seeds at once gives every cell its nearest
+// seed over 8-connected cells of the component; cells it does not reach (joined by a ray
+// bridge) go to the part whose reached cells' bounds are nearest.
+bool Segmenter::State::split(std::uint32_t comp, const SegmenterConfig& c) noexcept {
+  State& s = *this;
+  const float split_height = static_cast<float>(c.split_height_m);
+  const auto person_cells = static_cast<std::uint32_t>(c.split_person_m / c.cell_m + 1e-9);
+  s.parts.clear();
+  s.split_queue.clear();
+  std::uint32_t highs = 0;
+  for (const std::uint32_t slot : s.component_cells) {
+    const bool is_high = s.band_max[slot] - s.ground_at[slot] >= split_height;
+    s.part[slot] = is_high ? kUnvisited : kNone;
+    if (!is_high) continue;
+    ++highs;
+    State::set(s.high, s.dense_of(slot));
+  }
+  if (highs == 0) return false;  // no seed
+  // Every high cell's bit is cleared when it joins a group; on an early return the rest are.
+  const auto clear_high = [&] {
+    for (const std::uint32_t slot : s.component_cells) s.high[s.dense_of(slot) >> 6] = 0;
+  };
+  std::uint32_t shared = kNone;  // the seed of all groups that are not one person
+  std::uint32_t persons = 0;
+  for (const std::uint32_t start : s.component_cells) {
+    if (s.part[start] != kUnvisited) continue;
+    const std::size_t begin = s.split_queue.size();
+    State::unset(s.high, s.dense_of(start));
+    s.part[start] = kQueued;
+    (void)s.split_queue.push_back(start);  // each cell once: never full
+    Part group;
+    for (std::size_t head = begin; head < s.split_queue.size(); ++head) {
+      const std::uint32_t id = s.cell_id[s.split_queue[head]];
+      const std::uint32_t cx = id & 0xFFFFu, cy = id >> 16;
+      group.add(cx, cy, s.obstacle_count[s.split_queue[head]]);
+      for (std::uint32_t yy = cy < 2 ? 0 : cy - 2; yy <= std::min(cy + 2, n - 1); ++yy) {
+        for (std::uint32_t xx = cx < 2 ? 0 : cx - 2; xx <= std::min(cx + 2, n - 1); ++xx) {
+          const std::size_t d = s.dense(xx, yy);
+          if (!State::test(s.high, d)) continue;  // not a high cell of comp left to group
+          State::unset(s.high, d);
+          const std::uint32_t other = s.slot_of[d];
+          s.part[other] = kQueued;
+          (void)s.split_queue.push_back(other);
+        }
+      }
+    }
+    const bool person = group.points >= c.split_min_points && group.x1 - group.x0 < person_cells &&
+                        group.y1 - group.y0 < person_cells &&
+                        s.parts.size() + 1 < s.parts.capacity();  // room left for `shared`
+    // More person-sized groups than a group of people has: foliage (bush tops), left whole.
+    if (person && ++persons > kMaxPersons) {
+      clear_high();
+      return false;
+    }
+    if (!person && shared == kNone) shared = static_cast<std::uint32_t>(s.parts.size());
+    const std::uint32_t seed = person ? static_cast<std::uint32_t>(s.parts.size()) : shared;
+    if (seed == s.parts.size()) *s.parts.append() = Part{};  // capacity kept above
+    Part& p = s.parts[seed];
+    for (std::size_t i = begin; i < s.split_queue.size(); ++i) {
+      const std::uint32_t id = s.cell_id[s.split_queue[i]];
+      s.part[s.split_queue[i]] = seed;
+      p.seed_x += id & 0xFFFFu, p.seed_y += id >> 16, ++p.seed_cells;
+    }
+  }
+  if (s.parts.size() < 2) return false;
+  for (std::size_t head = 0; head < s.split_queue.size(); ++head) {
+    const std::uint32_t slot = s.split_queue[head];
+    const std::uint32_t id = s.cell_id[slot];
+    const std::uint32_t cx = id & 0xFFFFu, cy = id >> 16;
+    for (std::uint32_t yy = cy == 0 ? 0 : cy - 1; yy <= std::min(cy + 1, n - 1); ++yy) {
+      for (std::uint32_t xx = cx == 0 ? 0 : cx - 1; xx <= std::min(cx + 1, n - 1); ++xx) {
+        const std::uint32_t other = s.slot_of[s.dense(xx, yy)];
+        if (other == kNone || s.label[other] != comp || s.part[other] != kNone) continue;
+        s.part[other] = s.part[slot];
+        (void)s.split_queue.push_back(other);
+      }
+    }
+  }
+  // The cells the fill reached first; the others (each once: after the reached ones in
+  // split_queue, which holds every cell of the component at most once) wait for the bounds.
+  const std::size_t reached = s.split_queue.size();
+  for (const std::uint32_t slot : s.component_cells) {
+    if (s.part[slot] == kNone) {
+      (void)s.split_queue.push_back(slot);
+      continue;
+    }
+    const std::uint32_t id = s.cell_id[slot];
+    s.parts[s.part[slot]].add(id & 0xFFFFu, id >> 16, s.obstacle_count[slot]);
+  }
+  // A cell not 8-connected to any seed goes to the part whose reached cells' bounds are
+  // nearest, ties to the nearest seed centre. A person's part takes such a cell only within
+  // kPersonReach cells of its bounds when there is a shared part: a bicyclist passing a
+  // parked car shadows the car's side, and the pieces of the side left between the shadows,
+  // bridged to the rider's wheels along their rays, are nearer the rider than the car's
+  // cabin. The bounds are those of the reached cells, so the order of these cells does not
+  // matter.
+  constexpr std::uint64_t kPersonReach = 2;
+  const std::size_t parts_n = s.parts.size();
+  for (std::size_t q = reached; q < s.split_queue.size(); ++q) {
+    const std::uint32_t slot = s.split_queue[q];
+    const std::uint32_t id = s.cell_id[slot];
+    const std::uint32_t cx = id & 0xFFFFu, cy = id >> 16;
+    std::uint64_t best_box = std::numeric_limits<std::uint64_t>::max();
+    double best_centre = std::numeric_limits<double>::infinity();
+    std::uint32_t best = 0;
+    for (std::uint32_t i = 0; i < parts_n; ++i) {
+      const Part& p = s.parts[i];
+      const std::uint64_t gx = cx < p.x0 ? p.x0 - cx : (cx > p.x1 ? cx - p.x1 : 0);
+      const std::uint64_t gy = cy < p.y0 ? p.y0 - cy : (cy > p.y1 ? cy - p.y1 : 0);
+      const std::uint64_t box = gx * gx + gy * gy;  // an empty part: x0 = kNone, far
+      if (i != shared && shared != kNone && box > kPersonReach * kPersonReach) continue;
+      const double dx = p.seed_x / p.seed_cells - cx, dy = p.seed_y / p.seed_cells - cy;
+      const double centre = dx * dx + dy * dy;
+      if (box < best_box || (box == best_box && centre < best_centre)) {
+        best_box = box, best_centre = centre, best = i;
+      }
+    }
+    s.part[slot] = best;
+  }
+  for (std::size_t q = reached; q < s.split_queue.size(); ++q) {
+    const std::uint32_t slot = s.split_queue[q];
+    const std::uint32_t id = s.cell_id[slot];
+    s.parts[s.part[slot]].add(id & 0xFFFFu, id >> 16, s.obstacle_count[slot]);
+  }
+  return true;
+}
+
+// Keeps a part as a segment or counts why not; its points go to [first, first + points).
+void Segmenter::State::keep(Part& p, const SegmenterConfig& c, Segments& out,
+                            std::uint32_t& cursor) noexcept {
+  SegmentCounters& k = out.counters;
+  const double max_extent_cells = c.max_segment_extent_m / c.cell_m;
+  if (p.points < c.min_segment_points) {
+    ++k.dropped_too_small;
+    return;
+  }
+  if (p.points > c.max_segment_points || (p.x1 - p.x0 + 1) > max_extent_cells ||
+      (p.y1 - p.y0 + 1) > max_extent_cells) {
+    ++k.dropped_too_large;
+    return;
+  }
+  Segment* seg = out.segments.append();
+  if (seg == nullptr || cursor + p.points > out.point_indices.capacity()) {
+    if (seg != nullptr) out.segments.pop_back();
+    ++k.dropped_segment_overflow;
+    return;
+  }
+  *seg = Segment{};
+  seg->first = cursor;
+  seg->count = static_cast<std::uint32_t>(p.points);
+  seg->cells = p.cells;
+  p.first = cursor;
+  cursor += seg->count;
+}
+
+// Scatter the point indices of kept segments, contiguous per segment.
+void Segmenter::State::scatter(std::size_t count, std::uint32_t cursor, Segments& out) noexcept {
+  State& s = *this;
   (void)out.point_indices.resize(cursor);
   for (std::size_t i = 0; i < count; ++i) {
     const std::uint32_t slot = s.point_slot[i];
     if (slot == kNone || s.offset[slot] == kNone) continue;
     out.point_indices[s.offset[slot]++] = static_cast<std::uint32_t>(i);
   }
+}
 
-  // 7. Per segment: centroid, height span, oriented box from the XY principal axis.
+// Per segment: centroid, height span, oriented box from the XY principal axis.
+void Segmenter::State::describe(const PointView& points, const SegmenterConfig& c,
+                                Segments& out) noexcept {
+  State& s = *this;
   for (Segment& seg : out.segments) {
     // Sums relative to the first point keep the second moments well conditioned.
     float x0, y0, z0;
