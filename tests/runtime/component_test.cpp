@@ -93,7 +93,10 @@ TEST(Component, RunsAReplayedDriveInOneProcessAndPublishesEveryScan) {
   run.join();
   const Summary& s = (*component)->summary();
   EXPECT_TRUE(s.stop_requested);
-  EXPECT_GE(s.scans, 15u) << "a 2 s drive is about 20 scans";
+  // A 2 s drive is about 20 scans: each processed, or dropped and counted (a slow build, such as
+  // one with ThreadSanitizer, cannot keep up with the sensor's pace).
+  EXPECT_GT(s.scans, 0u);
+  EXPECT_GE(s.scans + s.incomplete + s.scan_slots_full, 15u);
   EXPECT_EQ(s.published, s.scans);
   EXPECT_EQ(s.publish_errors, 0u);
   EXPECT_EQ(s.received, sent->packets);
