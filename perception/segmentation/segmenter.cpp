@@ -535,6 +535,7 @@ void Segmenter::State::mark_obstacle_cells(const SegmenterConfig& c) noexcept {
 // Flood fill 8-connected obstacle cells (a fixed queue, no recursion); keep or drop each.
 std::uint32_t Segmenter::State::flood_fill(const SegmenterConfig& c, Segments& out) noexcept {
   State& s = *this;
+  const std::uint32_t side = n;  // a local: the stores below cannot change it
   SegmentCounters& k = out.counters;
   const std::size_t slots = s.occupied;
   const float range = static_cast<float>(c.range_m);
@@ -569,7 +570,7 @@ std::uint32_t Segmenter::State::flood_fill(const SegmenterConfig& c, Segments& o
         if (qx < 0 || qy < 0) break;
         const auto ix = static_cast<std::uint32_t>(qx * inv_cell),
                    iy = static_cast<std::uint32_t>(qy * inv_cell);
-        if (ix >= n || iy >= n) break;
+        if (ix >= side || iy >= side) break;
         if ((iy << 16 | ix) == last) continue;
         last = iy << 16 | ix;
         const std::size_t d = s.dense(ix, iy);
@@ -615,7 +616,7 @@ std::uint32_t Segmenter::State::flood_fill(const SegmenterConfig& c, Segments& o
     s.depth[seed] = 0;
     (void)s.component_cells.push_back(static_cast<std::uint32_t>(seed));  // each cell once
     std::uint64_t pts = 0;
-    std::uint32_t x0 = n, x1 = 0, y0 = n, y1 = 0;
+    std::uint32_t x0 = side, x1 = 0, y0 = side, y1 = 0;
     for (std::size_t head = 0; head < s.component_cells.size(); ++head) {
       const std::uint32_t slot = s.component_cells[head];
       const std::uint32_t id = s.cell_id[slot];
@@ -623,8 +624,8 @@ std::uint32_t Segmenter::State::flood_fill(const SegmenterConfig& c, Segments& o
       x0 = std::min(x0, cx), x1 = std::max(x1, cx), y0 = std::min(y0, cy), y1 = std::max(y1, cy);
       pts += s.obstacle_count[slot];
       const bool spreads_weak = s.depth[slot] < c.weak_join_cells;
-      for (std::uint32_t yy = cy == 0 ? 0 : cy - 1; yy <= std::min(cy + 1, n - 1); ++yy) {
-        for (std::uint32_t xx = cx == 0 ? 0 : cx - 1; xx <= std::min(cx + 1, n - 1); ++xx) {
+      for (std::uint32_t yy = cy == 0 ? 0 : cy - 1; yy <= std::min(cy + 1, side - 1); ++yy) {
+        for (std::uint32_t xx = cx == 0 ? 0 : cx - 1; xx <= std::min(cx + 1, side - 1); ++xx) {
           const std::size_t d = s.dense(xx, yy);
           if (!State::test(s.open, d)) continue;  // empty, ground only, or in a component
           const std::uint32_t other = s.slot_of[d];
@@ -696,6 +697,7 @@ std::uint32_t Segmenter::State::flood_fill(const SegmenterConfig& c, Segments& o
 // bridge) go to the part whose reached cells' bounds are nearest.
 bool Segmenter::State::split(std::uint32_t comp, const SegmenterConfig& c) noexcept {
   State& s = *this;
+  const std::uint32_t side = n;  // a local: the stores below cannot change it
   const float split_height = static_cast<float>(c.split_height_m);
   const auto person_cells = static_cast<std::uint32_t>(c.split_person_m / c.cell_m + 1e-9);
   s.parts.clear();
@@ -726,8 +728,8 @@ bool Segmenter::State::split(std::uint32_t comp, const SegmenterConfig& c) noexc
       const std::uint32_t id = s.cell_id[s.split_queue[head]];
       const std::uint32_t cx = id & 0xFFFFu, cy = id >> 16;
       group.add(cx, cy, s.obstacle_count[s.split_queue[head]]);
-      for (std::uint32_t yy = cy < 2 ? 0 : cy - 2; yy <= std::min(cy + 2, n - 1); ++yy) {
-        for (std::uint32_t xx = cx < 2 ? 0 : cx - 2; xx <= std::min(cx + 2, n - 1); ++xx) {
+      for (std::uint32_t yy = cy < 2 ? 0 : cy - 2; yy <= std::min(cy + 2, side - 1); ++yy) {
+        for (std::uint32_t xx = cx < 2 ? 0 : cx - 2; xx <= std::min(cx + 2, side - 1); ++xx) {
           const std::size_t d = s.dense(xx, yy);
           if (!State::test(s.high, d)) continue;  // not a high cell of comp left to group
           State::unset(s.high, d);
@@ -760,8 +762,8 @@ bool Segmenter::State::split(std::uint32_t comp, const SegmenterConfig& c) noexc
     const std::uint32_t slot = s.split_queue[head];
     const std::uint32_t id = s.cell_id[slot];
     const std::uint32_t cx = id & 0xFFFFu, cy = id >> 16;
-    for (std::uint32_t yy = cy == 0 ? 0 : cy - 1; yy <= std::min(cy + 1, n - 1); ++yy) {
-      for (std::uint32_t xx = cx == 0 ? 0 : cx - 1; xx <= std::min(cx + 1, n - 1); ++xx) {
+    for (std::uint32_t yy = cy == 0 ? 0 : cy - 1; yy <= std::min(cy + 1, side - 1); ++yy) {
+      for (std::uint32_t xx = cx == 0 ? 0 : cx - 1; xx <= std::min(cx + 1, side - 1); ++xx) {
         const std::uint32_t other = s.slot_of[s.dense(xx, yy)];
         if (other == kNone || s.label[other] != comp || s.part[other] != kNone) continue;
         s.part[other] = s.part[slot];
