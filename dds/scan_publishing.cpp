@@ -51,7 +51,7 @@ rt::Result<bool> ScanPublishing::check_capacities(const pipeline::PipelineConfig
 }
 
 rt::Result<bool> ScanPublishing::publish(const pipeline::ScanResult& r, std::uint64_t scan_index,
-                                         std::uint8_t source) {
+                                         ego::EgoSource source) {
   const dds::ScanStamp stamp{r.stamp_ns, scan_index};
   std::size_t n_tracks = 0;
   for (std::size_t i = 0; i < r.tracked.tracks.size() && n_tracks < objects_.size(); ++i) {
@@ -96,7 +96,9 @@ rt::Result<bool> ScanPublishing::publish(const pipeline::ScanResult& r, std::uin
     pose.orientation = {p.attitude.x(), p.attitude.y(), p.attitude.z(), p.attitude.w()};
     pose.velocity = {p.velocity_mps.x(), p.velocity_mps.y(), p.velocity_mps.z()};
     pose.yaw_rate = static_cast<float>(p.angular_rate_rps.z());
-    pose.source = source;
+    pose.source = source == ego::EgoSource::kIns             ? 1
+                  : source == ego::EgoSource::kDeadReckoning ? 2
+                                                             : 0;
   } else {
     const Eigen::Vector3d t = r.world_T_vehicle_start.translation();
     const Eigen::Quaterniond q(r.world_T_vehicle_start.linear());

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "dds/publisher.hpp"
+#include "ego/ego_estimator.hpp"
 #include "pipeline/scan_pipeline.hpp"
 #include "rt/expected.hpp"
 
@@ -32,11 +33,11 @@ class ScanPublishing {
   // Checks at start-up that the pipeline's capacities fit the IDL bounds (errors name the key).
   static rt::Result<bool> check_capacities(const pipeline::PipelineConfig& config);
 
-  // Publishes tracked_objects, segments and ego_pose; `source` is the ego pose's (0 none, 1 INS,
-  // 2 CAN).
-  // The first failed write is returned (the others are still tried).
+  // Publishes tracked_objects, segments and ego_pose; `source`: where the ego pose came from
+  // (ego_pose.source: 0 none or lost, 1 INS, 2 CAN dead reckoning). The first failed write is
+  // returned (the others are still tried).
   rt::Result<bool> publish(const pipeline::ScanResult& result, std::uint64_t scan_index,
-                           std::uint8_t source);
+                           ego::EgoSource source);
   // Publishes point_cloud when the result has one (PipelineConfig::cloud_stride > 0) and a
   // reader is matched, its returns labelled with their segments' classes: true when written,
   // false when skipped (no cloud built for this scan, or nobody reading). Separate, so that it

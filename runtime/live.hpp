@@ -139,7 +139,7 @@ struct Component::Live {
   CanCounterCells can_cells;
   std::optional<CanReport> can_report;
   ModelHandover model_handover;
-  std::atomic<std::uint8_t> ego_source{0};  // 0 none, 1 INS, 2 CAN dead reckoning
+  std::atomic<ego::EgoSource> ego_source{ego::EgoSource::kNone};  // the newest pose's
   // Stop: requested (stop() or a limit); the receiver drains its socket first, then each thread
   // ends once the one before it is done.
   std::atomic<bool> stopping{false}, stop_requested{false}, reload_requested{false};

@@ -90,10 +90,7 @@ void pose_loop(Component::Live& live) noexcept {
         std::this_thread::sleep_for(std::chrono::milliseconds(timeout_ms));
       }
     }
-    const ego::EgoSource s = estimator.source(live.history->newest_stamp_ns());
-    live.ego_source.store(s == ego::EgoSource::kIns             ? 1
-                          : s == ego::EgoSource::kDeadReckoning ? 2
-                                                                : 0,
+    live.ego_source.store(estimator.source(live.history->newest_stamp_ns()),
                           std::memory_order_relaxed);
     if (stopped) return;
   }

@@ -240,7 +240,8 @@ int run_process(const ProcessOptions& o) {
     append_json_line(rec, line);
     out << line;
     if (dds_out) {
-      auto st = dds_out->scans->publish(result, scans, result.has_pose ? 1 : 0);
+      auto st = dds_out->scans->publish(
+          result, scans, result.has_pose ? ego::EgoSource::kIns : ego::EgoSource::kNone);
       if (auto c = dds_out->scans->publish_cloud(result, scans); !c && st) st = c;
       pipeline.want_cloud(dds_out->scans->cloud_reader());
       if (!st && dds_errors++ == 0)
