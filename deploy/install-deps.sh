@@ -14,6 +14,7 @@ packages=(
   cyclonedds-dev cyclonedds-tools  # DDS publishing edge (dds/, idl/): C API and idlc
   openssl  # deploy/dds-security.sh: the DDS Security CAs, certificates and signed documents
   clang-format clang-tidy  # .ci/check-style (STYLE.md rule 14)
+  clang-14 libclang-rt-14-dev  # fuzz/: libFuzzer harnesses with ASan + UBSan (fuzz/run.sh)
 )
 
 missing=()

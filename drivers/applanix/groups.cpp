@@ -239,6 +239,9 @@ std::optional<std::int64_t> gps_time_ns(TimeType type, double time_s, std::uint3
   if (type != TimeType::gps && type != TimeType::utc) return std::nullopt;
   if (!std::isfinite(time_s) || !std::isfinite(gps_utc_offset_s)) return std::nullopt;
   const double of_week = type == TimeType::utc ? time_s + gps_utc_offset_s : time_s;
+  // A week no receiver sends yet, or seconds far outside one week: no time (and no int64
+  // overflow below; found by fuzz/applanix_stream_fuzz).
+  if (week > kMaxGpsWeek || !(std::fabs(of_week) <= 2.0 * kSecondsPerWeek)) return std::nullopt;
   const auto ns_of_week = static_cast<std::int64_t>(std::llround(of_week * 1e9));
   return static_cast<std::int64_t>(week) * kSecondsPerWeek * 1'000'000'000 + ns_of_week;
 }

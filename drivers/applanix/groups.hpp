@@ -107,10 +107,13 @@ std::size_t encode_message(std::uint16_t id, std::uint16_t transaction,
                            std::span<std::uint8_t> out) noexcept;
 
 inline constexpr std::int64_t kSecondsPerWeek = 604'800;
+// The last GPS week a time is made for (the year 2171); int64 ns overflow past week 15,250.
+inline constexpr std::uint32_t kMaxGpsWeek = 10'000;
 
 // Absolute GPS time (ns since 1980-01-06 00:00:00 GPS) of a GPS or UTC seconds-of-week `time_s`
 // in `week`; UTC times are shifted by `gps_utc_offset_s` (carried into the next week when the
-// shift crosses Sunday). Empty for POS and USER times.
+// shift crosses Sunday). Empty for POS and USER times, a week past kMaxGpsWeek, and seconds more
+// than two weeks from the week's start (garbage, not a receiver's time).
 std::optional<std::int64_t> gps_time_ns(TimeType type, double time_s, std::uint32_t week,
                                         double gps_utc_offset_s) noexcept;
 

@@ -1,6 +1,8 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <fstream>
+#include <iterator>
 #include <random>
 #include <set>
 #include <type_traits>
@@ -404,6 +406,48 @@ TEST(ApplanixRealCapture, LastGroup1AndGroupIdsMatchTheReadme) {
   EXPECT_EQ(g3.gps_utc_offset_s, 15.0);
   ASSERT_TRUE(last_gps_ns);
   EXPECT_EQ(*last_gps_ns, 1694 * 604'800'000'000'000 + std::llround(last_time.time1_s * 1e9));
+}
+
+}  // namespace
+}  // namespace stac::applanix
+
+namespace stac::applanix {
+namespace {
+
+// Found by fuzz/applanix_stream_fuzz: a week number no receiver sends (a 32-bit field of
+// garbage) overflowed the nanoseconds (undefined behaviour); such a time is now no time.
+TEST(ApplanixGroups, GpsTimeOfAWeekOrSecondsNoReceiverSendsIsNoTime) {
+  const auto ok = gps_time_ns(TimeType::gps, 100.5, 2300, 18.0);
+  ASSERT_TRUE(ok.has_value());
+  EXPECT_EQ(*ok, (2300 * kSecondsPerWeek + 100) * 1'000'000'000 + 500'000'000);
+  EXPECT_FALSE(gps_time_ns(TimeType::gps, 100.5, 0xFFFF'FFFFu, 18.0).has_value());
+  EXPECT_FALSE(gps_time_ns(TimeType::gps, 100.5, kMaxGpsWeek + 1, 18.0).has_value());
+  EXPECT_FALSE(gps_time_ns(TimeType::gps, 1e300, 2300, 18.0).has_value());
+  EXPECT_FALSE(gps_time_ns(TimeType::utc, 100.0, 2300, -1e300).has_value());
+  EXPECT_TRUE(gps_time_ns(TimeType::gps, 0.0, kMaxGpsWeek, 0.0).has_value());
+}
+
+// The fuzzer's input itself, through the stream parser, chunk by chunk.
+TEST(ApplanixStreamParser, TheFuzzersWeekOverflowInputIsParsedWithoutATime) {
+  std::ifstream f(
+      std::string(STAC_SOURCE_DIR) + "/fuzz/corpus/applanix_stream_fuzz/crash_gps_week_overflow",
+      std::ios::binary);
+  const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(f)),
+                                        std::istreambuf_iterator<char>());
+  ASSERT_FALSE(bytes.empty());
+  StreamParser parser;
+  parser.feed(bytes);
+  Parsed m;
+  int messages = 0;
+  while (parser.next(m)) {
+    ++messages;
+    if (m.time1_gps_ns) {
+      EXPECT_GE(*m.time1_gps_ns, 0);
+      EXPECT_LE(*m.time1_gps_ns, std::int64_t{kMaxGpsWeek + 1} * kSecondsPerWeek * 1'000'000'000);
+    }
+  }
+  parser.end_of_stream();
+  EXPECT_GT(messages + parser.counters().garbage_bytes, 0u);
 }
 
 }  // namespace

@@ -1,0 +1,91 @@
+#!/usr/bin/env python3
+"""Seed corpora for the harnesses, from real files (../shared/data, config/): fuzz/corpus/<target>/.
+Run from the repository root: python3 fuzz/make_seeds.py"""
+import os
+import struct
+
+SHARED = "../shared/data"
+
+
+def payloads(pcap):
+    """UDP and TCP payloads of a classic little-endian pcap (Ethernet, IPv4)."""
+    data = open(pcap, "rb").read()
+    at, out = 24, []
+    while at + 16 <= len(data):
+        incl = struct.unpack_from("<I", data, at + 8)[0]
+        frame = data[at + 16:at + 16 + incl]
+        at += 16 + incl
+        if len(frame) < 34 or frame[12:14] != b"\x08\x00":
+            continue
+        ihl = (frame[14] & 15) * 4
+        proto = frame[23]
+        l4 = 14 + ihl
+        if proto == 17:
+            out.append(frame[l4 + 8:])
+        elif proto == 6:
+            off = (frame[l4 + 12] >> 4) * 4
+            if len(frame) > l4 + off:
+                out.append(frame[l4 + off:])
+    return out
+
+
+def put(target, name, data):
+    d = os.path.join("fuzz", "corpus", target)
+    os.makedirs(d, exist_ok=True)
+    with open(os.path.join(d, name), "wb") as f:
+        f.write(data)
+
+
+packet = open(f"{SHARED}/velodyne/hdl64e_s2_manual_sample_packet_1206B.bin", "rb").read()
+framed = struct.pack("<H", len(packet)) + packet
+put("velodyne_stream_fuzz", "one_packet", framed)
+put("velodyne_stream_fuzz", "three_packets", framed * 3)
+
+grp = b"".join(payloads(f"{SHARED}/applanix/clearpath_basic_data_smoke.pcap"))
+for i in range(4):
+    put("applanix_stream_fuzz", f"capture_{i}", grp[i * 3000:(i + 1) * 3000])
+
+put("can_text_fuzz", "vehicle.dbc", open("config/can/vehicle.dbc", "rb").read())
+put("can_text_fuzz", "candump.log",
+    b"(1700000000.000000) can0 123#DEADBEEF00112233\n(1700000000.010000) can0 1F0#0102\n"
+    b"(1700000000.020000) can0 7FF##1112233\n\n")
+
+model = open("config/models/stac_default.stacmodel", "rb").read()
+put("model_file_fuzz", "default_model_head", model[:4096])
+
+# Lines of a real `stac process` tracks file and `stac sim` truth file (fuzz/seeds/, kept small).
+for name in ("tracks.jsonl", "truth.jsonl"):
+    for k, line in enumerate(open(os.path.join("fuzz", "seeds", name), "rb").read().splitlines()):
+        put("json_lines_fuzz", f"{name}_{k}", line)
+
+put("config_files_fuzz", "stac.yaml", open("config/stac.yaml", "rb").read())
+put("config_files_fuzz", "calibration.yaml",
+    open(f"{SHARED}/velodyne/calib/rosdrivers_64e_s2.1-sztaki.yaml", "rb").read())
+put("config_files_fuzz", "db.xml",
+    open(f"{SHARED}/velodyne/calib/rosdrivers_64e_s2.1-sztaki_db.xml", "rb").read())
+
+
+def put_dict(target, words):
+    d = os.path.join("fuzz", "dict")
+    os.makedirs(d, exist_ok=True)
+    with open(os.path.join(d, f"{target}.dict"), "w") as f:
+        for w in sorted(set(words)):
+            f.write('"' + w.replace("\\", "\\\\").replace('"', '\\"') + '"\n')
+
+
+# Dictionaries: the formats' keywords (libFuzzer -dict).
+keys = []
+for line in open("config/stac.yaml"):
+    stripped = line.strip()
+    if stripped and not stripped.startswith("#") and ":" in stripped:
+        keys.append(stripped.split(":")[0].strip("- ") + ":")
+keys += ["lasers:", "laser_id:", "rot_correction:", "vert_correction:", "dist_correction:",
+         "<item>", "</item>", "<px>", "<rotCorrection_>", "<vertCorrection_>", "<distCorrection_>",
+         "<enabled_>", "<intensity_>", "<minIntensity_>", "<maxIntensity_>", "<points_>"]
+put_dict("config_files_fuzz", keys)
+put_dict("can_text_fuzz", ["VERSION", "NS_", "BS_:", "BU_:", "BO_", "SG_", "CM_", "BA_DEF_", "BA_",
+                           "VAL_", "SIG_VALTYPE_", "@1+", "@0-", "|", "#", "##", "can0", "(", ")"])
+put_dict("json_lines_fuzz", ['"scan"', '"time"', '"end_time"', '"ego"', '"segments"', '"tracks"',
+                             '"objects"', '"box"', '"origin"', '"class"', '"log_odds"', '"state"',
+                             '"truth"', '"id"', "null", "true", "false", "1e308", "-0"])
+put_dict("applanix_stream_fuzz", ["$GRP", "$MSG", "$#"])
