@@ -26,8 +26,8 @@ void start_thread(const Component::Live& live, const char* name, const rt::Threa
                  r.error().message.c_str());
 }
 
-// Reads the model file again and hands it to perception; false (counted, said on stderr) when
-// it is refused. `next` holds it until perception took it.
+// Reads the model file again and hands it to perception through `next`, which holds it until
+// perception took it; a refused file is counted and said on stderr, and `next` stays empty.
 void reload(Component::Live& l, std::shared_ptr<const classification::TrackClassifierModel>& next) {
   std::string refused;
   auto m = l.model_path.empty() ? rt::Result<classification::TrackClassifierModel>(

@@ -5,6 +5,8 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "tools/pictures/png.hpp"
+
 namespace stac::tools {
 namespace {
 
@@ -121,14 +123,7 @@ rt::Result<bool> BirdsEye::save(const std::filesystem::path& png) const {
     cv::putText(out, label, {x0, y0 - 5}, cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(200, 200, 200),
                 1, cv::LINE_AA);
   }
-  try {
-    if (!cv::imwrite(png.string(), out)) {
-      return rt::make_error(png.string() + ": cannot write the picture (is the folder there?)");
-    }
-  } catch (const cv::Exception& e) {
-    return rt::make_error(png.string() + ": cannot write the picture: " + e.what());
-  }
-  return true;
+  return write_png(png, out);
 }
 
 }  // namespace stac::tools

@@ -7,11 +7,12 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "tools/pictures/png.hpp"
+
 namespace stac::tools {
-namespace {
 
 rt::Result<bool> write_png(const std::filesystem::path& png, const cv::Mat& img,
-                           const std::vector<int>& params = {}) {
+                           const std::vector<int>& params) {
   try {
     if (!cv::imwrite(png.string(), img, params)) {
       return rt::make_error(png.string() + ": cannot write the picture (is the folder there?)");
@@ -21,8 +22,6 @@ rt::Result<bool> write_png(const std::filesystem::path& png, const cv::Mat& img,
   }
   return true;
 }
-
-}  // namespace
 
 Bgr segment_colour(std::size_t i) {
   // Hues spread by a step prime to 180 (OpenCV's hue range), full value.

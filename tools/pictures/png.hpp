@@ -1,0 +1,16 @@
+// Writing a picture of tools/pictures as PNG (inside this folder only: it takes an OpenCV image).
+#pragma once
+
+#include <filesystem>
+#include <opencv2/core.hpp>
+#include <vector>
+
+#include "rt/expected.hpp"
+
+namespace stac::tools {
+
+// Fails naming the file: unwritable (is the folder there?), or OpenCV's own error.
+rt::Result<bool> write_png(const std::filesystem::path& png, const cv::Mat& img,
+                           const std::vector<int>& params = {});
+
+}  // namespace stac::tools
