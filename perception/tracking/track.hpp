@@ -10,7 +10,7 @@
 namespace stac::tracking {
 
 enum class TrackState : std::uint8_t {
-  kTentative,  // fewer than confirm_hits hits so far
+  kTentative,  // fewer than life.confirm_hits hits so far
   kConfirmed,  // matched in this scan (and confirmed)
   kCoasting,   // confirmed, missed in this scan: position predicted only
 };

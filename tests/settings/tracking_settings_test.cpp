@@ -34,13 +34,31 @@ TEST(TrackingSettings, ShippedConfigMatchesTheDefaults) {
   const tracking::TrackerConfig d;
   EXPECT_EQ(c->max_tracks, d.max_tracks);
   EXPECT_EQ(c->max_detections, d.max_detections);
-  EXPECT_DOUBLE_EQ(c->gate_mahalanobis_sq, d.gate_mahalanobis_sq);
-  EXPECT_DOUBLE_EQ(c->gate_distance_m, d.gate_distance_m);
-  EXPECT_DOUBLE_EQ(c->max_position_std_m, d.max_position_std_m);
-  EXPECT_EQ(c->confirm_hits, d.confirm_hits);
-  EXPECT_EQ(c->max_coast_scans, d.max_coast_scans);
-  EXPECT_DOUBLE_EQ(c->accel_std_mps2, d.accel_std_mps2);
+  EXPECT_DOUBLE_EQ(c->gate.mahalanobis_sq, d.gate.mahalanobis_sq);
+  EXPECT_DOUBLE_EQ(c->gate.distance_m, d.gate.distance_m);
+  EXPECT_DOUBLE_EQ(c->life.max_position_std_m, d.life.max_position_std_m);
+  EXPECT_EQ(c->life.confirm_hits, d.life.confirm_hits);
+  EXPECT_EQ(c->life.max_coast_scans, d.life.max_coast_scans);
+  EXPECT_DOUBLE_EQ(c->kalman.accel_std_mps2, d.kalman.accel_std_mps2);
   EXPECT_DOUBLE_EQ(c->box_smoothing, d.box_smoothing);
+}
+
+TEST(TrackingSettings, FlatKeysFillTheNestedFieldOfTheirPart) {
+  const auto loaded = [](const std::string& key, const std::string& value) {
+    auto c = load_tracking_config(edited("nested_" + key, key, "  " + key + ": " + value));
+    EXPECT_TRUE(c) << c.error().message;
+    return c ? *c : tracking::TrackerConfig{};
+  };
+  EXPECT_DOUBLE_EQ(loaded("accel_std_mps2", "2.5").kalman.accel_std_mps2, 2.5);
+  EXPECT_DOUBLE_EQ(loaded("gate_distance_m", "2.75").gate.distance_m, 2.75);
+  EXPECT_EQ(loaded("max_coast_scans", "7").life.max_coast_scans, 7u);
+  EXPECT_DOUBLE_EQ(loaded("absorb_max_width_m", "2.4").object.max_width_m, 2.4);
+  EXPECT_DOUBLE_EQ(loaded("absorb_keep_wide_height_m", "1.7").person.wide_min_height_m, 1.7);
+  EXPECT_DOUBLE_EQ(loaded("absorb_narrow_gap_m", "0.25").person.gap_m, 0.25);
+  EXPECT_DOUBLE_EQ(loaded("overlap_margin_m", "0.75").fragments.overlap_margin_m, 0.75);
+  EXPECT_DOUBLE_EQ(loaded("end_on_max_depth_m", "1.5").end_on.max_depth_m, 1.5);
+  EXPECT_DOUBLE_EQ(loaded("extent_memory_length_m", "7").body.memory_length_m, 7.0);
+  EXPECT_FALSE(loaded("body_gating", "false").body.gating);
 }
 
 TEST(TrackingSettings, MissingWrongOrInvalidKeysAreNamed) {

@@ -124,8 +124,8 @@ TEST(Tracker, GlobalAssignmentKeepsIdsWhereGreedyWouldSwap) {
   // and A cannot reach B's detection (gate 1.5 m), so greedy matching would hand A's detection
   // to B and drop A. The global solution keeps both.
   TrackerConfig c;
-  c.gate_mahalanobis_sq = 1e6;  // Euclidean gate only, to make the geometry exact
-  c.gate_distance_m = 1.5;
+  c.gate.mahalanobis_sq = 1e6;  // Euclidean gate only, to make the geometry exact
+  c.gate.distance_m = 1.5;
   Tracker tracker(c);
   TrackerOutput out(c.max_tracks);
   std::uint64_t id_a = 0, id_b = 0;
@@ -142,7 +142,7 @@ TEST(Tracker, GlobalAssignmentKeepsIdsWhereGreedyWouldSwap) {
       const double pa_db = std::abs(yb - a->position.y()), pb_db = std::abs(yb - b->position.y());
       ASSERT_LT(pb_da, pa_da);
       ASSERT_LT(pb_da, pb_db);
-      ASSERT_GT(pa_db, c.gate_distance_m);
+      ASSERT_GT(pa_db, c.gate.distance_m);
     }
     tracker.update(k * kScanNs, std::vector<Detection>{det(x, ya, 0), det(x, yb, 1)}, out);
     const Track* a = by_segment(out, 0);
@@ -186,7 +186,7 @@ TEST(Tracker, OccludedTargetCoastsAndIsReassociated) {
 
 TEST(Tracker, TargetThatLeavesIsDeletedWhenUncertaintyPassesTheThreshold) {
   TrackerConfig c;
-  c.max_coast_scans = 1000;  // only the uncertainty can end it
+  c.life.max_coast_scans = 1000;  // only the uncertainty can end it
   Tracker tracker(c);
   TrackerOutput out(c.max_tracks);
   for (int k = 0; k < 20; ++k)
@@ -199,7 +199,7 @@ TEST(Tracker, TargetThatLeavesIsDeletedWhenUncertaintyPassesTheThreshold) {
     if (out.tracks.empty()) break;
     EXPECT_EQ(out.tracks[0].state, TrackState::kCoasting);
     EXPECT_GT(out.tracks[0].position_std_m, previous_std) << "uncertainty grows while coasting";
-    EXPECT_LE(out.tracks[0].position_std_m, c.max_position_std_m);
+    EXPECT_LE(out.tracks[0].position_std_m, c.life.max_position_std_m);
     previous_std = out.tracks[0].position_std_m;
   }
   EXPECT_TRUE(out.tracks.empty()) << "still alive after " << k - 20 << " missed scans";
@@ -211,8 +211,8 @@ TEST(Tracker, TargetThatLeavesIsDeletedWhenUncertaintyPassesTheThreshold) {
 
 TEST(Tracker, CoastingTooLongDeletesTheTrack) {
   TrackerConfig c;
-  c.max_coast_scans = 3;
-  c.max_position_std_m = 100.0;
+  c.life.max_coast_scans = 3;
+  c.life.max_position_std_m = 100.0;
   Tracker tracker(c);
   TrackerOutput out(c.max_tracks);
   for (int k = 0; k < 10; ++k)
@@ -235,7 +235,7 @@ TEST(Tracker, LargeSegmentsConfirmAfterFewerHits) {
   };
   for (const Case& k : {Case{60, 50, 1}, Case{49, 50, 2}, Case{500, 0, 2}}) {
     TrackerConfig c;
-    c.confirm_large_points = k.large_points;
+    c.life.confirm_large_points = k.large_points;
     Tracker tracker(c);
     TrackerOutput out(c.max_tracks);
     for (int s = 0; s < 4; ++s) {
@@ -457,7 +457,7 @@ TEST(Tracker, AnEstablishedTrackBesideAnOlderOneKeepsItsOwnId) {
   for (const std::uint32_t established : {10u, 0u}) {
     SCOPED_TRACE(established);
     TrackerConfig c;
-    c.absorb_established_hits = established;
+    c.fragments.established_hits = established;
     Tracker tracker(c);
     TrackerOutput out(c.max_tracks);
     const std::uint64_t older = pieces_closing_in(tracker, out, 0.03, 40);
@@ -498,7 +498,7 @@ TEST(Tracker, PeopleAndWholeCarsAreNeverJoined) {
 TEST(Tracker, AFlatStripBesideACarIsItsSideNotAPerson) {
   for (const double strip_width : {0.1, 0.0}) {
     TrackerConfig c;
-    c.absorb_strip_width_m = strip_width;
+    c.person.strip_width_m = strip_width;
     Tracker tracker(c);
     TrackerOutput out(c.max_tracks);
     piece_then_fragment(tracker, out, box(30.0, 0, 1.5, 2.0, 1.5, 0, 0),
@@ -527,7 +527,7 @@ TEST(Tracker, TallPiecesOfATruckMakeOneTrackUpToTheTallLength) {
   };
   for (const Case& k : {Case{2.3, 2.1, 1}, Case{1.9, 2.1, 2}, Case{2.3, 0.0, 2}}) {
     TrackerConfig c;
-    c.absorb_tall_height_m = k.tall_height;
+    c.object.tall_height_m = k.tall_height;
     Tracker tracker(c);
     TrackerOutput out(c.max_tracks);
     for (int s = 0; s < 5; ++s)
@@ -553,7 +553,7 @@ TEST(Tracker, TallPiecesOfATruckMakeOneTrackUpToTheTallLength) {
 
 TEST(Tracker, AbsorbingIsOffWithAZeroGap) {
   TrackerConfig c;
-  c.absorb_gap_m = 0;
+  c.fragments.gap_m = 0;
   Tracker tracker(c);
   TrackerOutput out(c.max_tracks);
   piece_then_fragment(tracker, out, box(30.5, 0, 1.0, 1.8, 0.6, 0, 0),
@@ -597,7 +597,7 @@ TEST(CompleteEndOn, LeavesSidesPeopleLowWallsNearAndUnboxedDetectionsAlone) {
     EXPECT_EQ(d.length, before.length);
   }
   TrackerConfig off;
-  off.end_on_length_m = 0;
+  off.end_on.length_m = 0;
   Detection d = box(40, 0, 1.8, 0.3, 1.4, M_PI / 2, 0);
   EXPECT_FALSE(complete_end_on(off, sensor, d));
 }
@@ -620,7 +620,7 @@ TEST(Tracker, AnEndOnFaceOfATruckSeenWholeBeforeIsMeasuredAtTheTrucksCentre) {
   // centre. With the memory off it falls 2.25 m behind it.
   const auto run = [](double memory_m, TrackerCounters& counters) {
     TrackerConfig c;
-    c.extent_memory_length_m = memory_m;
+    c.body.memory_length_m = memory_m;
     Tracker tracker(c);
     TrackerOutput out(c.max_tracks);
     const Eigen::Vector2f sensor(0, 0);
@@ -641,7 +641,7 @@ TEST(Tracker, AnEndOnFaceOfATruckSeenWholeBeforeIsMeasuredAtTheTrucksCentre) {
     return worst;
   };
   TrackerCounters counters;
-  EXPECT_LT(run(TrackerConfig{}.extent_memory_length_m, counters), 0.3);
+  EXPECT_LT(run(TrackerConfig{}.body.memory_length_m, counters), 0.3);
   EXPECT_EQ(counters.anchored_detections, 15u);
   EXPECT_GT(run(0.0, counters), 2.0);
   EXPECT_EQ(counters.anchored_detections, 0u);
@@ -690,7 +690,7 @@ TEST(Tracker, ATrucksCargoBoxSeenApartFromItsCabIsGatedAsAPieceOfTheTruck) {
   std::size_t tracks = 0;
   EXPECT_LT(truck_then_pieces(c, pieces, tracks), 0.3);
   EXPECT_EQ(tracks, 1u);
-  c.body_gating = false;
+  c.body.gating = false;
   EXPECT_GT(truck_then_pieces(c, pieces, tracks), 1.0);
 }
 
@@ -739,7 +739,7 @@ TEST(Tracker, PiecesInsideATrucksKnownBodyJoinItAndAPersonBesideItDoesNot) {
   std::size_t tracks = 0;
   EXPECT_LT(truck_then_pieces(c, pieces, tracks), 0.3);
   EXPECT_EQ(tracks, 2u);  // the truck and the person
-  c.absorb_known_margin_m = -1;
+  c.fragments.known_margin_m = -1;
   (void)truck_then_pieces(c, pieces, tracks);
   EXPECT_EQ(tracks, 4u);
 }
@@ -859,8 +859,8 @@ TEST(Tracker, NewTrackInsideAnOlderTracksBoxMergesIntoItAndTheOldIdLivesOn) {
   // is merged into the old id at once. With the merge off, the return keeps a track of its own.
   const auto run = [](double overlap_margin_m, TrackerOutput& out) {
     TrackerConfig c;
-    c.gate_distance_m = 1.0;
-    c.overlap_margin_m = overlap_margin_m;
+    c.gate.distance_m = 1.0;
+    c.fragments.overlap_margin_m = overlap_margin_m;
     Tracker tracker(c);
     for (int k = 0; k < 10; ++k)
       tracker.update(k * kScanNs, std::vector<Detection>{box(30, 5, 4.5, 1.8, 1.5, 0, 0)}, out);
@@ -870,7 +870,7 @@ TEST(Tracker, NewTrackInsideAnOlderTracksBoxMergesIntoItAndTheOldIdLivesOn) {
     return std::pair{id, tracker.counters().deleted_overlap};
   };
   TrackerOutput out(TrackerConfig{}.max_tracks);
-  const auto [id, merged] = run(TrackerConfig{}.overlap_margin_m, out);
+  const auto [id, merged] = run(TrackerConfig{}.fragments.overlap_margin_m, out);
   ASSERT_EQ(out.tracks.size(), 1u);
   EXPECT_EQ(out.tracks[0].id, id);
   EXPECT_EQ(out.tracks[0].state, TrackState::kConfirmed);
@@ -956,21 +956,21 @@ TEST(Tracker, RejectsInvalidConfig) {
   c.box_smoothing = 0;
   EXPECT_THROW(Tracker{c}, std::invalid_argument);
   c = TrackerConfig{};
-  c.absorb_max_width_m = 7;  // wider than absorb_max_length_m
+  c.object.max_width_m = 7;  // wider than absorb_max_length_m
   EXPECT_THROW(Tracker{c}, std::invalid_argument);
   c = TrackerConfig{};
-  c.end_on_min_width_m = 3;  // above end_on_max_width_m
+  c.end_on.min_width_m = 3;  // above end_on_max_width_m
   EXPECT_THROW(Tracker{c}, std::invalid_argument);
   c = TrackerConfig{};
-  c.absorb_strip_width_m = -0.1;
+  c.person.strip_width_m = -0.1;
   EXPECT_THROW(Tracker{c}, std::invalid_argument);
   c = TrackerConfig{};
-  c.extent_memory_length_m = -1;
+  c.body.memory_length_m = -1;
   EXPECT_THROW(Tracker{c}, std::invalid_argument);
   c = TrackerConfig{};
-  c.absorb_known_margin_m = 6;
+  c.fragments.known_margin_m = 6;
   EXPECT_THROW(Tracker{c}, std::invalid_argument);
-  c.absorb_known_margin_m = -1;  // off
+  c.fragments.known_margin_m = -1;  // off
   EXPECT_NO_THROW(Tracker{c});
 }
 
