@@ -180,14 +180,13 @@ void Tracker::update(std::int64_t stamp_ns, std::span<const Detection> detection
     detections = detections.first(config_.max_detections);
   }
   scan_ = detections;
-  const std::size_t tracks_before = live_.size();
   predict_all(stamp_ns);
   // Global assignment over the gated sub-matrix, per connected component of the allowed pairs.
   const Gated gated = gate(detections);
   if (gated.rows > 0) assign(detections.size(), gated.rows, gated.cols);
   absorb_fragments(detections);
   correct_matched(stamp_ns, detections.size());
-  prune(tracks_before);
+  prune();
   spawn_unmatched(stamp_ns, detections);
   merge_overlapping(stamp_ns);
   report(stamp_ns, out);
@@ -227,8 +226,10 @@ void Tracker::correct_matched(std::int64_t stamp_ns, std::size_t nd) noexcept {
   }
 }
 
-void Tracker::prune(std::size_t nt) noexcept {
-  // Misses and uncertainty, compacting the live list in place, order kept.
+void Tracker::prune() noexcept {
+  // Misses and uncertainty, compacting the live list in place, order kept. Only the steps after
+  // this one change the live list: its indices are still those of merged_track_.
+  const std::size_t nt = live_.size();
   std::size_t kept = 0;
   for (std::size_t ti = 0; ti < nt; ++ti) {
     const std::uint32_t index = live_[ti];

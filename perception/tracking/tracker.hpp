@@ -116,7 +116,7 @@ class Tracker {
                            Eigen::Matrix2d& spread, float& gap,
                            Eigen::Vector2f& centre) const noexcept;
   void correct_matched(std::int64_t stamp_ns, std::size_t nd) noexcept;
-  void prune(std::size_t nt) noexcept;  // of the first nt live tracks (those before spawning)
+  void prune() noexcept;
   void spawn_unmatched(std::int64_t stamp_ns, std::span<const Detection> detections) noexcept;
   void merge_overlapping(std::int64_t stamp_ns) noexcept;
   void report(std::int64_t stamp_ns, TrackerOutput& out) noexcept;
