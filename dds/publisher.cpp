@@ -13,7 +13,7 @@
 namespace stac::dds {
 namespace {
 
-using Status = rt::Result<bool>;
+using Status = rt::Status;
 
 // The bounds above against the generated C types (the IDL is the source of truth).
 static_assert(sizeof(stac_msgs_msg_TrackedObjects::frame_id) == 32);
@@ -50,11 +50,11 @@ Status copy_string(char (&dst)[N], const char* src, const char* field) {
   }
   std::memcpy(dst, src == nullptr ? "" : src, len);
   dst[len] = '\0';
-  return true;
+  return {};
 }
 
 Status check_bound(std::size_t n, std::uint32_t bound, const char* field) {
-  if (n <= bound) return true;
+  if (n <= bound) return {};
   return rt::make_error(std::string(field) + ": " + std::to_string(n) +
                         " elements exceed the bound of " + std::to_string(bound) +
                         " (idl/stac.idl); nothing was published");
@@ -74,7 +74,7 @@ Status to_time(std::int64_t stamp_ns, Time& t) {
   }
   t.sec = static_cast<std::int32_t>(sec);
   t.nanosec = static_cast<std::uint32_t>(ns);
-  return true;
+  return {};
 }
 
 // Copies a name into a bounded IDL string, cut at its bound (class names are checked to fit when
@@ -147,7 +147,7 @@ class TypedPublisher final : public Publisher {
       if (writers_[i] < 0)
         return dds_error("creating the DDS writer of '" + name + "'", writers_[i]);
     }
-    return true;
+    return {};
   }
 
   Status publish_tracked_objects(const ScanStamp& scan,
@@ -303,7 +303,7 @@ class TypedPublisher final : public Publisher {
   Status write(Topic t, const void* sample) {
     const dds_return_t rc = dds_write(writer(t), sample);
     if (rc < 0) return dds_error(std::string("writing DDS topic ") + topic_suffix(t), rc);
-    return true;
+    return {};
   }
 
   PublisherConfig config_;

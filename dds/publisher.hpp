@@ -132,13 +132,13 @@ class Publisher {
   static rt::Result<std::unique_ptr<Publisher>> create(const PublisherConfig& config);
   virtual ~Publisher() = default;
 
-  virtual rt::Result<bool> publish_tracked_objects(const ScanStamp& scan,
-                                                   std::span<const TrackedObjectIn> objects) = 0;
-  virtual rt::Result<bool> publish_segments(const ScanStamp& scan,
-                                            std::span<const SegmentIn> segments) = 0;
-  virtual rt::Result<bool> publish_ego_pose(const EgoPoseIn& pose) = 0;
-  virtual rt::Result<bool> publish_health(const HealthIn& health) = 0;
-  virtual rt::Result<bool> publish_point_cloud(const PointCloudIn& cloud) = 0;
+  virtual rt::Status publish_tracked_objects(const ScanStamp& scan,
+                                             std::span<const TrackedObjectIn> objects) = 0;
+  virtual rt::Status publish_segments(const ScanStamp& scan,
+                                      std::span<const SegmentIn> segments) = 0;
+  virtual rt::Status publish_ego_pose(const EgoPoseIn& pose) = 0;
+  virtual rt::Status publish_health(const HealthIn& health) = 0;
+  virtual rt::Status publish_point_cloud(const PointCloudIn& cloud) = 0;
 
   // The writer of a topic (for status queries: matched readers, deadline misses).
   [[nodiscard]] virtual dds_entity_t writer(Topic t) const noexcept = 0;

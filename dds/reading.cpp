@@ -2,7 +2,7 @@
 
 #include "dds/idl_types.hpp"
 
-namespace stac::tools {
+namespace stac::dds {
 namespace {
 
 template <bool Ros2>
@@ -80,4 +80,4 @@ std::string TopicReaders::topic_name(dds::Topic t) const {
   return dds::topic_name(t, config_.topic_prefix, config_.ros2_names);
 }
 
-}  // namespace stac::tools
+}  // namespace stac::dds

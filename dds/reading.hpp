@@ -16,7 +16,7 @@
 #include "dds/topics.hpp"
 #include "rt/expected.hpp"
 
-namespace stac::tools {
+namespace stac::dds {
 
 class TopicReaders {
  public:
@@ -96,4 +96,4 @@ double seconds(const Time& t) noexcept {
   return static_cast<double>(t.sec) + 1e-9 * static_cast<double>(t.nanosec);
 }
 
-}  // namespace stac::tools
+}  // namespace stac::dds

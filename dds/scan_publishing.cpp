@@ -5,7 +5,7 @@
 
 #include "dds/idl_types.hpp"
 
-namespace stac::tools {
+namespace stac::dds {
 
 ScanPublishing::ScanPublishing(dds::Publisher& publisher, bool tentative_tracks,
                                classification::ClassNames classes)
@@ -36,7 +36,7 @@ void ScanPublishing::segment_labels(const pipeline::ScanResult& r, std::size_t c
   }
 }
 
-rt::Result<bool> ScanPublishing::check_capacities(const pipeline::PipelineConfig& config) {
+rt::Status ScanPublishing::check_capacities(const pipeline::PipelineConfig& config) {
   if (config.tracker.max_tracks > dds::kMaxObjects) {
     return rt::make_error("'tracking.max_tracks' " + std::to_string(config.tracker.max_tracks) +
                           " exceeds the tracked_objects bound of " +
@@ -47,11 +47,11 @@ rt::Result<bool> ScanPublishing::check_capacities(const pipeline::PipelineConfig
         "'segmentation.max_segments' " + std::to_string(config.segmenter.max_segments) +
         " exceeds the segments bound of " + std::to_string(dds::kMaxSegments) + " (idl/stac.idl)");
   }
-  return true;
+  return {};
 }
 
-rt::Result<bool> ScanPublishing::publish(const pipeline::ScanResult& r, std::uint64_t scan_index,
-                                         ego::EgoSource source) {
+rt::Status ScanPublishing::publish(const pipeline::ScanResult& r, std::uint64_t scan_index,
+                                   ego::EgoSource source) {
   const dds::ScanStamp stamp{r.stamp_ns, scan_index};
   std::size_t n_tracks = 0;
   for (std::size_t i = 0; i < r.tracked.tracks.size() && n_tracks < objects_.size(); ++i) {
@@ -72,7 +72,7 @@ rt::Result<bool> ScanPublishing::publish(const pipeline::ScanResult& r, std::uin
       o.class_age = r.classes[i].age;
     }
   }
-  rt::Result<bool> status = publisher_.publish_tracked_objects(stamp, {objects_.data(), n_tracks});
+  rt::Status status = publisher_.publish_tracked_objects(stamp, {objects_.data(), n_tracks});
 
   const std::size_t n_segments =
       std::min<std::size_t>(r.segments.segments.size(), segments_.size());
@@ -138,7 +138,9 @@ rt::Result<bool> ScanPublishing::publish_cloud(const pipeline::ScanResult& r,
                                 {r.cloud_origin.x(), r.cloud_origin.y(), r.cloud_origin.z()},
                                 pipeline::kCloudResolution,
                                 {cloud_.data(), n}};
-  return publisher_.publish_point_cloud(cloud);
+  if (auto written = publisher_.publish_point_cloud(cloud); !written)
+    return rt::Unexpected<rt::Error>{std::move(written).error()};
+  return true;
 }
 
-}  // namespace stac::tools
+}  // namespace stac::dds

@@ -12,7 +12,7 @@
 #include "pipeline/scan_pipeline.hpp"
 #include "rt/expected.hpp"
 
-namespace stac::tools {
+namespace stac::dds {
 
 class ScanPublishing {
  public:
@@ -31,13 +31,13 @@ class ScanPublishing {
                              std::span<std::uint8_t> labels) noexcept;
 
   // Checks at start-up that the pipeline's capacities fit the IDL bounds (errors name the key).
-  static rt::Result<bool> check_capacities(const pipeline::PipelineConfig& config);
+  static rt::Status check_capacities(const pipeline::PipelineConfig& config);
 
   // Publishes tracked_objects, segments and ego_pose; `source`: where the ego pose came from
   // (ego_pose.source: 0 none or lost, 1 INS, 2 CAN dead reckoning). The first failed write is
   // returned (the others are still tried).
-  rt::Result<bool> publish(const pipeline::ScanResult& result, std::uint64_t scan_index,
-                           ego::EgoSource source);
+  rt::Status publish(const pipeline::ScanResult& result, std::uint64_t scan_index,
+                     ego::EgoSource source);
   // Publishes point_cloud when the result has one (PipelineConfig::cloud_stride > 0) and a
   // reader is matched, its returns labelled with their segments' classes: true when written,
   // false when skipped (no cloud built for this scan, or nobody reading). Separate, so that it
@@ -58,4 +58,4 @@ class ScanPublishing {
   bool cloud_reader_ = true;
 };
 
-}  // namespace stac::tools
+}  // namespace stac::dds

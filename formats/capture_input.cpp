@@ -1,6 +1,6 @@
 #include "formats/capture_input.hpp"
 
-namespace stac::tools {
+namespace stac::formats {
 
 namespace {
 
@@ -63,4 +63,4 @@ std::string capture_breaks_off(const std::string& reader_error) {
   return reader_error + " (the capture breaks off there; what comes after it is lost)";
 }
 
-}  // namespace stac::tools
+}  // namespace stac::formats

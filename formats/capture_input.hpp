@@ -8,7 +8,7 @@
 #include "drivers/io/pcap_reader.hpp"
 #include "drivers/velodyne/scan_assembler.hpp"
 
-namespace stac::tools {
+namespace stac::formats {
 
 // "N frames: P to port X, T truncated (...), ..." (the causes that are not zero).
 std::string capture_frames_summary(const io::PcapCounters& pc, std::uint64_t packets,
@@ -25,4 +25,4 @@ std::string nothing_decoded_reason(const std::string& capture, const io::PcapCou
 // the record and the cause), for every command that reads one: it is never only a warning.
 std::string capture_breaks_off(const std::string& reader_error);
 
-}  // namespace stac::tools
+}  // namespace stac::formats

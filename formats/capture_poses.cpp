@@ -4,10 +4,10 @@
 
 #include "drivers/applanix/capture_reader.hpp"
 
-namespace stac::tools {
+namespace stac::formats {
 
 rt::Result<std::optional<CapturePoses>> load_capture_poses(const std::filesystem::path& capture,
-                                                           const EgoSettings& settings) {
+                                                           const settings::EgoSettings& settings) {
   // First pass: how many fixes, to size the history for the whole drive.
   std::uint64_t group1 = 0;
   {
@@ -43,4 +43,4 @@ rt::Result<std::optional<CapturePoses>> load_capture_poses(const std::filesystem
   return std::optional<CapturePoses>{std::move(out)};
 }
 
-}  // namespace stac::tools
+}  // namespace stac::formats

@@ -12,7 +12,7 @@
 #include "rt/expected.hpp"
 #include "settings/settings.hpp"
 
-namespace stac::tools {
+namespace stac::formats {
 
 struct CapturePoses {
   std::unique_ptr<ego::LocalFrame> frame;
@@ -26,6 +26,6 @@ struct CapturePoses {
 // An error when it holds none but messages dropped for bad checksums or framing: the INS stream
 // is there but corrupt, which must not pass for a parked sensor.
 rt::Result<std::optional<CapturePoses>> load_capture_poses(const std::filesystem::path& capture,
-                                                           const EgoSettings& settings);
+                                                           const settings::EgoSettings& settings);
 
-}  // namespace stac::tools
+}  // namespace stac::formats

@@ -3,11 +3,12 @@
 #include "drivers/io/pcap_reader.hpp"
 #include "formats/capture_input.hpp"
 
-namespace stac::tools {
+namespace stac::formats {
 
 rt::Result<std::uint64_t> for_each_complete_scan(
     const std::filesystem::path& capture, const velodyne::Calibration& calibration,
-    const VelodyneSettings& settings, const std::function<bool(const velodyne::Scan&)>& on_scan) {
+    const settings::VelodyneSettings& settings,
+    const std::function<bool(const velodyne::Scan&)>& on_scan) {
   auto reader = io::PcapReader::open(
       capture, io::PcapFilter{.udp_dst_port = settings.port, .udp_src_port = {}});
   if (!reader) return rt::Unexpected<rt::Error>{reader.error()};
@@ -38,4 +39,4 @@ rt::Result<std::uint64_t> for_each_complete_scan(
   return complete;
 }
 
-}  // namespace stac::tools
+}  // namespace stac::formats

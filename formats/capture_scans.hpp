@@ -11,12 +11,13 @@
 #include "rt/expected.hpp"
 #include "settings/settings.hpp"
 
-namespace stac::tools {
+namespace stac::formats {
 
 // Calls on_scan(scan) for each complete scan until it returns false; returns how many were passed
 // (an error when the capture cannot be opened or holds no complete scan, saying why).
 rt::Result<std::uint64_t> for_each_complete_scan(
     const std::filesystem::path& capture, const velodyne::Calibration& calibration,
-    const VelodyneSettings& settings, const std::function<bool(const velodyne::Scan&)>& on_scan);
+    const settings::VelodyneSettings& settings,
+    const std::function<bool(const velodyne::Scan&)>& on_scan);
 
-}  // namespace stac::tools
+}  // namespace stac::formats

@@ -10,7 +10,7 @@
 
 #include "perception/classification/holistic.hpp"
 
-namespace stac::tools {
+namespace stac::formats {
 namespace {
 
 static_assert(std::endian::native == std::endian::little, "the dataset format is little-endian");
@@ -64,7 +64,7 @@ struct Reader {
 
 }  // namespace
 
-rt::Result<bool> write_dataset(const std::filesystem::path& dir, const Dataset& data) {
+rt::Status write_dataset(const std::filesystem::path& dir, const Dataset& data) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec)
@@ -136,7 +136,7 @@ rt::Result<bool> write_dataset(const std::filesystem::path& dir, const Dataset& 
   m << manifest.dump(2) << '\n';
   m.close();
   if (!m) return rt::make_error((dir / "manifest.json").string() + ": write failed");
-  return true;
+  return {};
 }
 
 rt::Result<Dataset> read_dataset(const std::filesystem::path& dir) {
@@ -245,7 +245,7 @@ rt::Result<Dataset> read_labelled_dataset(const std::filesystem::path& dir,
   return d;
 }
 
-rt::Result<bool> append_dataset(Dataset& into, Dataset&& more, const std::string& more_name) {
+rt::Status append_dataset(Dataset& into, Dataset&& more, const std::string& more_name) {
   if (into.tracks.empty() && into.sources.empty()) {
     into.classes = more.classes;
     into.labelled = more.labelled;
@@ -265,7 +265,7 @@ rt::Result<bool> append_dataset(Dataset& into, Dataset&& more, const std::string
     t.source += offset;
     into.tracks.push_back(std::move(t));
   }
-  return true;
+  return {};
 }
 
 std::uint32_t off_label_segments(ClassIndex label, std::span<const SegmentTruth> segments) {
@@ -289,4 +289,4 @@ std::uint32_t off_label_segments(ClassIndex label, std::span<const SegmentTruth>
   return off;
 }
 
-}  // namespace stac::tools
+}  // namespace stac::formats

@@ -13,7 +13,7 @@
 #include "perception/learning/track_training.hpp"
 #include "rt/expected.hpp"
 
-namespace stac::tools {
+namespace stac::formats {
 
 // One labelled track: per segment it was updated with (in time order), the segment's
 // descriptors and the track's holistic descriptor after that segment.
@@ -69,13 +69,13 @@ std::uint32_t off_label_segments(classification::ClassIndex label,
 learning::TrackExample track_example(DatasetTrack t);
 
 // Creates DIR when missing; overwrites tracks.bin and manifest.json.
-rt::Result<bool> write_dataset(const std::filesystem::path& dir, const Dataset& data);
+rt::Status write_dataset(const std::filesystem::path& dir, const Dataset& data);
 // Errors name the file and what is wrong (missing, truncated, checksum, version, layout).
 rt::Result<Dataset> read_dataset(const std::filesystem::path& dir);
 // read_dataset, refusing a dataset without labels with a message saying what `job` needs.
 rt::Result<Dataset> read_labelled_dataset(const std::filesystem::path& dir, const std::string& job);
 // Appends `more` to `into` (sources renumbered). Fails (nothing appended) when their classes
 // differ or one is labelled and the other not; `more_name` names `more` in the message.
-rt::Result<bool> append_dataset(Dataset& into, Dataset&& more, const std::string& more_name);
+rt::Status append_dataset(Dataset& into, Dataset&& more, const std::string& more_name);
 
-}  // namespace stac::tools
+}  // namespace stac::formats

@@ -6,7 +6,7 @@
 #include <cerrno>
 #include <cstring>
 
-namespace stac::tools {
+namespace stac::formats {
 namespace {
 
 // Every byte to `fd` (retrying short writes and EINTR); false with errno set on a failure.
@@ -25,17 +25,17 @@ bool write_all(int fd, const void* data, std::size_t size) noexcept {
   return true;
 }
 
-rt::Result<bool> sync_folder(const std::filesystem::path& dir) {
+rt::Status sync_folder(const std::filesystem::path& dir) {
   const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   if (fd < 0) return rt::make_error(dir.string() + ": cannot open the folder to sync it");
   const int r = ::fsync(fd);
   ::close(fd);
   if (r != 0) return rt::make_error(dir.string() + ": fsync failed (" + std::strerror(errno) + ")");
-  return true;
+  return {};
 }
 
 // A torn last line (no '\n' at the end): the file back to just after its last complete line.
-rt::Result<bool> cut_tail(int fd, const std::filesystem::path& path) {
+rt::Status cut_tail(int fd, const std::filesystem::path& path) {
   off_t end = ::lseek(fd, 0, SEEK_END);
   char last = '\n';
   if (end > 0 && ::pread(fd, &last, 1, end - 1) == 1 && last != '\n') {
@@ -45,13 +45,13 @@ rt::Result<bool> cut_tail(int fd, const std::filesystem::path& path) {
       return rt::make_error(path.string() + ": cannot cut its torn last line (" +
                             std::strerror(errno) + ")");
   }
-  return true;
+  return {};
 }
 
 }  // namespace
 
-rt::Result<bool> write_file_durably(const std::filesystem::path& path,
-                                    std::span<const std::uint8_t> bytes) {
+rt::Status write_file_durably(const std::filesystem::path& path,
+                              std::span<const std::uint8_t> bytes) {
   std::filesystem::path tmp = path;
   tmp += ".tmp";
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
@@ -76,9 +76,9 @@ rt::Result<bool> write_file_durably(const std::filesystem::path& path,
   return sync_folder(path.has_parent_path() ? path.parent_path() : std::filesystem::path("."));
 }
 
-rt::Result<bool> cut_torn_tail(const std::filesystem::path& path) {
+rt::Status cut_torn_tail(const std::filesystem::path& path) {
   std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) return true;
+  if (!std::filesystem::exists(path, ec)) return {};
   const int fd = ::open(path.c_str(), O_RDWR | O_CLOEXEC);
   if (fd < 0) return rt::make_error(path.string() + ": cannot open (" + std::strerror(errno) + ")");
   auto r = cut_tail(fd, path);
@@ -86,7 +86,7 @@ rt::Result<bool> cut_torn_tail(const std::filesystem::path& path) {
   return r;
 }
 
-rt::Result<bool> append_line_durably(const std::filesystem::path& path, const std::string& line) {
+rt::Status append_line_durably(const std::filesystem::path& path, const std::string& line) {
   const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
   if (fd < 0)
     return rt::make_error(path.string() + ": cannot open for appending (" + std::strerror(errno) +
@@ -104,7 +104,7 @@ rt::Result<bool> append_line_durably(const std::filesystem::path& path, const st
   const bool synced = ::fsync(fd) == 0;
   ::close(fd);
   if (!synced) return rt::make_error(path.string() + ": fsync failed");
-  return true;
+  return {};
 }
 
-}  // namespace stac::tools
+}  // namespace stac::formats

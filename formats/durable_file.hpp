@@ -11,15 +11,15 @@
 
 #include "rt/expected.hpp"
 
-namespace stac::tools {
+namespace stac::formats {
 
 // `bytes` to `path` through PATH.tmp: written, fsynced, renamed over `path`, the folder fsynced.
-rt::Result<bool> write_file_durably(const std::filesystem::path& path,
-                                    std::span<const std::uint8_t> bytes);
+rt::Status write_file_durably(const std::filesystem::path& path,
+                              std::span<const std::uint8_t> bytes);
 // One line (a '\n' is added) appended to `path` and fsynced before returning. A torn last line
 // (a kill during an earlier append, never acknowledged) is cut off first.
-rt::Result<bool> append_line_durably(const std::filesystem::path& path, const std::string& line);
+rt::Status append_line_durably(const std::filesystem::path& path, const std::string& line);
 // Cuts a torn last line (no '\n': a kill during an append) off `path`, if it exists.
-rt::Result<bool> cut_torn_tail(const std::filesystem::path& path);
+rt::Status cut_torn_tail(const std::filesystem::path& path);
 
-}  // namespace stac::tools
+}  // namespace stac::formats

@@ -8,7 +8,7 @@
 #include "perception/classification/holistic.hpp"
 #include "perception/descriptors/descriptors.hpp"
 
-namespace stac::tools {
+namespace stac::formats {
 namespace {
 
 static_assert(std::endian::native == std::endian::little, "the state format is little-endian");
@@ -82,7 +82,7 @@ struct Reader {
 
 }  // namespace
 
-rt::Result<bool> write_induction_state(const std::filesystem::path& dir, const InductionState& s) {
+rt::Status write_induction_state(const std::filesystem::path& dir, const InductionState& s) {
   Writer w;
   w.bytes(kMagic, sizeof(kMagic));
   w.put(kInductionStateVersion);
@@ -233,4 +233,4 @@ rt::Result<InductionState> read_induction_state(const std::filesystem::path& dir
   return s;
 }
 
-}  // namespace stac::tools
+}  // namespace stac::formats

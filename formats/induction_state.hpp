@@ -16,7 +16,7 @@
 #include "perception/learning/induction.hpp"
 #include "rt/expected.hpp"
 
-namespace stac::tools {
+namespace stac::formats {
 
 // A dataset folder the state has read, and what it was read as.
 enum class SourceRole : std::uint8_t { kUnlabeled = 0, kLabels = 1, kBackground = 2 };
@@ -58,7 +58,6 @@ inline constexpr std::uint32_t kInductionStateVersion = 1;
 
 // DIR/state.bin. Errors name the file and say what to do.
 rt::Result<InductionState> read_induction_state(const std::filesystem::path& dir);
-rt::Result<bool> write_induction_state(const std::filesystem::path& dir,
-                                       const InductionState& state);
+rt::Status write_induction_state(const std::filesystem::path& dir, const InductionState& state);
 
-}  // namespace stac::tools
+}  // namespace stac::formats

@@ -6,7 +6,7 @@
 #include <fstream>
 #include <sstream>
 
-namespace stac::tools {
+namespace stac::formats {
 
 rt::Result<std::vector<float>> load_kitti_scan(const std::string& path) {
   std::error_code ec;
@@ -98,8 +98,9 @@ rt::Result<std::vector<KittiObject>> load_kitti_labels(const std::string& path) 
       return rt::make_error(path + ":" + std::to_string(n) +
                             ": not a KITTI label line (type, 14 numbers)");
     }
-    static const char* const kTypes[] = {"Car",     "Van",  "Truck", "Pedestrian", "Person_sitting",
-                                         "Cyclist", "Tram", "Misc",  "DontCare"};
+    static constexpr const char* kTypes[] = {
+        "Car",     "Van",  "Truck", "Pedestrian", "Person_sitting",
+        "Cyclist", "Tram", "Misc",  "DontCare"};
     if (std::find(std::begin(kTypes), std::end(kTypes), o.type) == std::end(kTypes)) {
       return rt::make_error(path + ":" + std::to_string(n) + ": type '" + o.type +
                             "' is not a KITTI class (Car, Van, Truck, Pedestrian, Person_sitting, "
@@ -114,4 +115,4 @@ rt::Result<std::vector<KittiObject>> load_kitti_labels(const std::string& path) 
   return out;
 }
 
-}  // namespace stac::tools
+}  // namespace stac::formats

@@ -8,7 +8,7 @@
 
 #include "rt/expected.hpp"
 
-namespace stac::tools {
+namespace stac::formats {
 
 // float32 x, y, z, reflectance per point (velodyne frame, m; reflectance 0..1).
 rt::Result<std::vector<float>> load_kitti_scan(const std::string& path);
@@ -31,4 +31,4 @@ struct KittiObject {
 // Every object but DontCare.
 rt::Result<std::vector<KittiObject>> load_kitti_labels(const std::string& path);
 
-}  // namespace stac::tools
+}  // namespace stac::formats

@@ -8,10 +8,10 @@
 
 #include "formats/durable_file.hpp"
 
-namespace stac::tools {
+namespace stac::formats {
 
-rt::Result<bool> write_model_file(const std::filesystem::path& path,
-                                  const classification::TrackClassifierModel& model) {
+rt::Status write_model_file(const std::filesystem::path& path,
+                            const classification::TrackClassifierModel& model) {
   return write_file_durably(path, classification::serialize(model));
 }
 
@@ -50,4 +50,4 @@ rt::Result<std::shared_ptr<const classification::TrackClassifierModel>> job_mode
   return std::make_shared<const classification::TrackClassifierModel>(std::move(*m));
 }
 
-}  // namespace stac::tools
+}  // namespace stac::formats

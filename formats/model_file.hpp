@@ -9,12 +9,12 @@
 #include "perception/classification/model.hpp"
 #include "rt/expected.hpp"
 
-namespace stac::tools {
+namespace stac::formats {
 
 // Writes through a temporary file, fsynced and renamed over `path` (durable_file.hpp), so a
 // failed write or a kill leaves no half model.
-rt::Result<bool> write_model_file(const std::filesystem::path& path,
-                                  const classification::TrackClassifierModel& model);
+rt::Status write_model_file(const std::filesystem::path& path,
+                            const classification::TrackClassifierModel& model);
 // Missing, unreadable, truncated, corrupt, another format version or descriptor layout: an error
 // "<path>: <what>; <what to do>".
 rt::Result<classification::TrackClassifierModel> read_model_file(const std::filesystem::path& path);
@@ -24,4 +24,4 @@ rt::Result<classification::TrackClassifierModel> read_model_file(const std::file
 rt::Result<std::shared_ptr<const classification::TrackClassifierModel>> job_model(
     const std::string& option, const std::filesystem::path& configured);
 
-}  // namespace stac::tools
+}  // namespace stac::formats

@@ -5,7 +5,7 @@
 #include <cstring>
 #include <vector>
 
-namespace stac::tools {
+namespace stac::formats {
 namespace {
 
 class CsvWriter final : public ScanWriter {
@@ -15,7 +15,7 @@ class CsvWriter final : public ScanWriter {
   }
   ~CsvWriter() override { (void)close(); }
 
-  rt::Result<bool> write(const velodyne::Scan& scan) override {
+  rt::Status write(const velodyne::Scan& scan) override {
     char line[256];
     for (const velodyne::Point& p : scan.points) {
       char* o = line;
@@ -52,14 +52,14 @@ class CsvWriter final : public ScanWriter {
       std::fwrite(line, 1, static_cast<std::size_t>(o - line), file_);
     }
     if (std::ferror(file_)) return rt::make_error(path_.string() + ": write failed");
-    return true;
+    return {};
   }
-  rt::Result<bool> close() override {
-    if (file_ == nullptr) return true;
+  rt::Status close() override {
+    if (file_ == nullptr) return {};
     const bool ok = std::fclose(file_) == 0;
     file_ = nullptr;
     if (!ok) return rt::make_error(path_.string() + ": write failed on close");
-    return true;
+    return {};
   }
 
  private:
@@ -70,7 +70,7 @@ class CsvWriter final : public ScanWriter {
 class KittiWriter final : public ScanWriter {
  public:
   explicit KittiWriter(std::filesystem::path dir) : dir_(std::move(dir)) {}
-  rt::Result<bool> write(const velodyne::Scan& scan) override {
+  rt::Status write(const velodyne::Scan& scan) override {
     char name[32];
     std::snprintf(name, sizeof(name), "%06llu.bin",
                   static_cast<unsigned long long>(scan.header.sequence));
@@ -88,9 +88,9 @@ class KittiWriter final : public ScanWriter {
     }
     const bool ok = std::fwrite(buffer_.data(), sizeof(float), buffer_.size(), f) == buffer_.size();
     if (std::fclose(f) != 0 || !ok) return rt::make_error(path.string() + ": write failed");
-    return true;
+    return {};
   }
-  rt::Result<bool> close() override { return true; }
+  rt::Status close() override { return {}; }
 
  private:
   std::filesystem::path dir_;
@@ -118,4 +118,4 @@ rt::Result<std::unique_ptr<ScanWriter>> make_scan_writer(const std::string& form
   return rt::make_error("unknown format '" + format + "': use csv or kitti");
 }
 
-}  // namespace stac::tools
+}  // namespace stac::formats

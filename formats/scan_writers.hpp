@@ -10,17 +10,17 @@
 #include "drivers/velodyne/scan.hpp"
 #include "rt/expected.hpp"
 
-namespace stac::tools {
+namespace stac::formats {
 
 class ScanWriter {
  public:
   virtual ~ScanWriter() = default;
-  virtual rt::Result<bool> write(const velodyne::Scan& scan) = 0;
-  virtual rt::Result<bool> close() = 0;
+  virtual rt::Status write(const velodyne::Scan& scan) = 0;
+  virtual rt::Status close() = 0;
 };
 
 // format: "csv" or "kitti"; for kitti `out` is a directory, created if missing.
 rt::Result<std::unique_ptr<ScanWriter>> make_scan_writer(const std::string& format,
                                                          const std::filesystem::path& out);
 
-}  // namespace stac::tools
+}  // namespace stac::formats

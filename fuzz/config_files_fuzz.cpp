@@ -10,9 +10,9 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const auto yaml = stac::fuzz::as_file(data, size, ".yaml");
-  (void)stac::tools::load_pipeline_settings(yaml);
-  (void)stac::tools::load_run_settings(yaml);
-  (void)stac::tools::load_can_settings(yaml);
+  (void)stac::settings::load_pipeline_settings(yaml);
+  (void)stac::settings::load_run_settings(yaml);
+  (void)stac::settings::load_can_settings(yaml);
   (void)stac::velodyne::load_ros_yaml(yaml);
   const auto xml = stac::fuzz::as_file(data, size, ".xml");
   (void)stac::velodyne::load_db_xml(xml);

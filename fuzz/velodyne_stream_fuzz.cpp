@@ -15,7 +15,7 @@ std::optional<stac::velodyne::ScanStream> g_stream;
 }
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
-  auto vs = stac::tools::load_velodyne_settings(stac::fuzz::source_file("config/stac.yaml"));
+  auto vs = stac::settings::load_velodyne_settings(stac::fuzz::source_file("config/stac.yaml"));
   auto calibration = stac::velodyne::load_calibration(
       stac::fuzz::source_file("../shared/data/velodyne/calib/rosdrivers_64e_s2.1-sztaki.yaml"));
   if (!vs || !calibration) __builtin_trap();  // the harness cannot start: say so loudly

@@ -57,6 +57,31 @@ class [[nodiscard]] Expected {
   std::variant<T, E> storage_;
 };
 
+// The result of a step that yields nothing but success or an error: a default-constructed
+// Expected<void, E> is success (`return {};`).
+template <class E>
+class [[nodiscard]] Expected<void, E> {
+ public:
+  Expected() = default;
+  Expected(Unexpected<E> u) : error_(std::move(u.error)), failed_(true) {}  // NOLINT implicit
+
+  [[nodiscard]] bool has_value() const noexcept { return !failed_; }
+  explicit operator bool() const noexcept { return has_value(); }
+
+  const E& error() const& noexcept {
+    assert(failed_);
+    return error_;
+  }
+  E&& error() && noexcept {
+    assert(failed_);
+    return std::move(error_);
+  }
+
+ private:
+  E error_{};
+  bool failed_ = false;
+};
+
 // Start-up errors carry a message meant for a person: what failed and what to fix.
 struct Error {
   std::string message;
@@ -64,6 +89,9 @@ struct Error {
 
 template <class T>
 using Result = Expected<T, Error>;
+
+// Success or an error, for steps that produce no value (write a file, apply a schedule).
+using Status = Expected<void, Error>;
 
 inline Unexpected<Error> make_error(std::string message) {
   return {Error{std::move(message)}};

@@ -13,25 +13,25 @@
 
 namespace stac::rt {
 
-Result<bool> validate(const ThreadSchedule& s, const std::string& what) {
+Status validate(const ThreadSchedule& s, const std::string& what) {
   if (s.fifo_priority < 0 || s.fifo_priority > 99) {
     return make_error(what + ": SCHED_FIFO priority " + std::to_string(s.fifo_priority) +
                       " is not 0..99");
   }
   if (s.cpu < -1 || s.cpu >= CPU_SETSIZE)
     return make_error(what + ": cpu " + std::to_string(s.cpu) + " is not -1..");
-  return true;
+  return {};
 }
 
-Result<bool> lock_memory() noexcept {
-  if (mlockall(MCL_CURRENT | MCL_FUTURE) == 0) return true;
+Status lock_memory() noexcept {
+  if (mlockall(MCL_CURRENT | MCL_FUTURE) == 0) return {};
   const int e = errno;
   return make_error(std::string("mlockall(MCL_CURRENT|MCL_FUTURE) refused (") + std::strerror(e) +
                     "): memory may page-fault; needs CAP_IPC_LOCK or a larger RLIMIT_MEMLOCK "
                     "(ulimit -l unlimited / LimitMEMLOCK=infinity)");
 }
 
-Result<bool> apply_schedule(const std::string& thread, const ThreadSchedule& s) {
+Status apply_schedule(const std::string& thread, const ThreadSchedule& s) {
   if (auto v = validate(s, thread); !v) return v;
   std::string refused;
   if (s.cpu >= 0) {
@@ -57,7 +57,7 @@ Result<bool> apply_schedule(const std::string& thread, const ThreadSchedule& s) 
     }
   }
   if (!refused.empty()) return make_error(refused);
-  return true;
+  return {};
 }
 
 Result<CpuLatencyRequest> CpuLatencyRequest::hold(int max_us, const char* device) {

@@ -21,14 +21,14 @@ struct ThreadSchedule {
 };
 
 // Checks the values (not the permissions): priority 0..99, cpu >= -1. Errors name `what`.
-Result<bool> validate(const ThreadSchedule& s, const std::string& what);
+Status validate(const ThreadSchedule& s, const std::string& what);
 
 // mlockall(MCL_CURRENT | MCL_FUTURE): no page fault on memory touched later.
-Result<bool> lock_memory() noexcept;
+Status lock_memory() noexcept;
 
 // Applies `s` to the calling thread: CPU affinity, then the policy. Returns an error naming
 // `thread` for the first part refused (the other part is still tried); nothing to do is true.
-Result<bool> apply_schedule(const std::string& thread, const ThreadSchedule& s);
+Status apply_schedule(const std::string& thread, const ThreadSchedule& s);
 
 // A PM QoS request on the CPUs' wake-up latency (Linux /dev/cpu_dma_latency), held while the
 // object lives: idle CPUs only enter states that wake within max_us microseconds. 0 keeps the

@@ -32,7 +32,7 @@ void reload(Component::Live& l, std::shared_ptr<const classification::TrackClass
   std::string refused;
   auto m = l.model_path.empty() ? rt::Result<classification::TrackClassifierModel>(
                                       rt::make_error("no model file is configured"))
-                                : tools::read_model_file(l.model_path);
+                                : formats::read_model_file(l.model_path);
   if (!m) {
     refused = m.error().message;
   } else if (l.pipeline->classifier() == nullptr || l.model == nullptr) {
@@ -129,17 +129,17 @@ void fill_summary(Component::Live& l, std::int64_t start_ns) {
 
 rt::Result<ComponentSettings> load_component_settings(const std::filesystem::path& config) {
   ComponentSettings s;
-  auto pipeline = tools::load_pipeline_settings(config);
+  auto pipeline = settings::load_pipeline_settings(config);
   if (!pipeline) return rt::Unexpected<rt::Error>{pipeline.error()};
   s.pipeline = std::move(*pipeline);
-  auto dds = tools::load_dds_settings(config);
+  auto dds = settings::load_dds_settings(config);
   if (!dds) return rt::Unexpected<rt::Error>{dds.error()};
   s.dds = std::move(*dds);
-  auto run = tools::load_run_settings(config);
+  auto run = settings::load_run_settings(config);
   if (!run) return rt::Unexpected<rt::Error>{run.error()};
   s.run = std::move(*run);
   if (s.run.can) {
-    auto c = tools::load_can_settings(config);
+    auto c = settings::load_can_settings(config);
     if (!c) return rt::Unexpected<rt::Error>{c.error()};
     s.can = std::move(*c);
   }
@@ -154,9 +154,9 @@ rt::Result<std::unique_ptr<Component>> Component::create(const ComponentSettings
   Live& l = *live;
   l.settings = settings;
   ComponentSettings& s = l.settings;
-  tools::VelodyneSettings& vs = s.pipeline.velodyne;
-  tools::EgoSettings& es = s.pipeline.ego;
-  const tools::RunSettings& rs = s.run;
+  settings::VelodyneSettings& vs = s.pipeline.velodyne;
+  settings::EgoSettings& es = s.pipeline.ego;
+  const settings::RunSettings& rs = s.run;
   if (vs.calibration.empty()) {
     return rt::make_error("'velodyne.calibration': " + s.name +
                           " needs the unit's calibration file");
@@ -170,7 +170,7 @@ rt::Result<std::unique_ptr<Component>> Component::create(const ComponentSettings
     if (auto r = rt::lock_memory(); !r)
       std::fprintf(stderr, "%s: warning: %s\n", s.name.c_str(), r.error().message.c_str());
   }
-  auto model = tools::job_model(s.model, s.pipeline.classification.model);
+  auto model = formats::job_model(s.model, s.pipeline.classification.model);
   if (!model) return rt::Unexpected<rt::Error>{model.error()};
   l.model = *model;
   l.model_path = !s.model.empty() && s.model != "none" ? std::filesystem::path(s.model)
@@ -187,11 +187,8 @@ rt::Result<std::unique_ptr<Component>> Component::create(const ComponentSettings
                                     .cloud_stride = s.dds.point_cloud_stride,
                                     .cloud_max_points = dds::kMaxCloudPoints,
                                     .clock = pipeline::StageClock::kMonotonic};
-  if (auto r = tools::ScanPublishing::check_capacities(pc); !r)
+  if (auto r = dds::ScanPublishing::check_capacities(pc); !r)
     return rt::Unexpected<rt::Error>{r.error()};
-  auto publisher = dds::Publisher::create(s.dds);
-  if (!publisher) return rt::Unexpected<rt::Error>{publisher.error()};
-  l.publisher = std::move(*publisher);
   auto receiver = io::UdpReceiver::open({.bind_address = vs.bind_address,
                                          .port = vs.port,
                                          .receive_buffer_bytes = vs.receive_buffer_bytes,
@@ -200,11 +197,11 @@ rt::Result<std::unique_ptr<Component>> Component::create(const ComponentSettings
                                          .max_payload = 2048});
   if (!receiver) return rt::Unexpected<rt::Error>{receiver.error()};
   l.receiver.emplace(std::move(*receiver));
-  if (rs.ins == tools::InsTransport::kTcp) {
+  if (rs.ins == settings::InsTransport::kTcp) {
     auto c = applanix::TcpClient::open({.address = rs.ins_address, .port = es.ins_port});
     if (!c) return rt::Unexpected<rt::Error>{c.error()};
     l.inputs.tcp.emplace(std::move(*c));
-  } else if (rs.ins == tools::InsTransport::kUdp) {
+  } else if (rs.ins == settings::InsTransport::kUdp) {
     auto u = applanix::UdpListener::open({.bind_address = "0.0.0.0",
                                           .port = es.ins_port,
                                           .receive_buffer_bytes = 1 << 20,
@@ -218,6 +215,10 @@ rt::Result<std::unique_ptr<Component>> Component::create(const ComponentSettings
     if (auto r = open_can(*s.can, l.inputs); !r) return rt::Unexpected<rt::Error>{r.error()};
     es.estimator.odometry = s.can->dead_reckoning;
   }
+  // The writers last: a reader that sees them matched may send at once, and the inputs are open.
+  auto publisher = dds::Publisher::create(s.dds);
+  if (!publisher) return rt::Unexpected<rt::Error>{publisher.error()};
+  l.publisher = std::move(*publisher);
   l.frame.emplace(es.origin);
   l.history.emplace(es.history);
   l.estimator.emplace(es.estimator, *l.frame, *l.history);
@@ -225,7 +226,7 @@ rt::Result<std::unique_ptr<Component>> Component::create(const ComponentSettings
   l.pipeline.emplace(pc);
   l.results.emplace(rs.result_slots, [&] { return Frame{l.pipeline->make_result()}; });
   l.scan_publishing.emplace(*l.publisher, s.dds.tentative_tracks,
-                            tools::ScanPublishing::classes_of(pc));
+                            dds::ScanPublishing::classes_of(pc));
   l.monitor.emplace(rs.deadline, kHealthStages);
   l.watchdog.start(
       {rs.velodyne_timeout_ns, l.inputs.ins() ? es.estimator.ins_timeout_ns : std::int64_t{0},
@@ -236,9 +237,9 @@ rt::Result<std::unique_ptr<Component>> Component::create(const ComponentSettings
   l.summary.latencies.reserve(kHealthStages + 1);
   std::fprintf(stderr, "%s: Velodyne UDP %s:%u, INS %s, CAN %s, DDS domain %u; Ctrl-C stops\n",
                s.name.c_str(), vs.bind_address.c_str(), l.receiver->port(),
-               rs.ins == tools::InsTransport::kTcp
+               rs.ins == settings::InsTransport::kTcp
                    ? (rs.ins_address + ":" + std::to_string(es.ins_port) + " (tcp)").c_str()
-               : rs.ins == tools::InsTransport::kUdp
+               : rs.ins == settings::InsTransport::kUdp
                    ? ("udp port " + std::to_string(es.ins_port)).c_str()
                    : "none (parked sensor)",
                s.can ? can_description(*s.can).c_str() : "none", s.dds.domain_id);
@@ -247,7 +248,7 @@ rt::Result<std::unique_ptr<Component>> Component::create(const ComponentSettings
 
 void Component::run() {
   Live& l = *live_;
-  const tools::RunSettings& rs = l.settings.run;
+  const settings::RunSettings& rs = l.settings.run;
   std::optional<rt::CpuLatencyRequest> cpu_latency;  // held while the run lasts
   if (rs.cpu_wake_latency_us >= 0) {
     if (auto r = rt::CpuLatencyRequest::hold(rs.cpu_wake_latency_us); r) {

@@ -30,9 +30,9 @@
 namespace stac::runtime {
 
 struct ComponentSettings {
-  tools::PipelineSettings pipeline;
+  settings::PipelineSettings pipeline{};
   dds::PublisherConfig dds;
-  tools::RunSettings run;
+  settings::RunSettings run{};
   std::optional<can::CanConfig> can;  // when run.can
   // The track classifier: a model file, "none", or empty for classification.model. SIGHUP (or
   // reload_model()) reads the same file again.

@@ -132,7 +132,7 @@ struct Component::Live {
   std::optional<velodyne::ScanStream> stream;
   std::optional<pipeline::ScanPipeline> pipeline;
   std::optional<rt::SlotExchange<Frame>> results;
-  std::optional<tools::ScanPublishing> scan_publishing;
+  std::optional<dds::ScanPublishing> scan_publishing;
   std::optional<rt::DeadlineMonitor> monitor;
   rt::Watchdog watchdog;
   rt::Counters<Count> counts;
@@ -156,7 +156,7 @@ void pose_loop(Component::Live& live) noexcept;
 void perception_loop(Component::Live& live) noexcept;
 void publisher_loop(Component::Live& live) noexcept;
 // Opens the configured CAN transport into live.inputs.
-rt::Result<bool> open_can(can::CanConfig& config, PoseInputs& inputs);
+rt::Status open_can(can::CanConfig& config, PoseInputs& inputs);
 std::string can_description(const can::CanConfig& c);
 
 }  // namespace stac::runtime

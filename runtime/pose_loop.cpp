@@ -105,7 +105,7 @@ std::string can_description(const can::CanConfig& c) {
 
 // The DBC signal map's decoder over the configured transport. SocketCAN gets the mapped ids as
 // its kernel filter; a gs_usb adapter delivers the whole bus and the decoder drops the rest.
-rt::Result<bool> open_can(can::CanConfig& c, PoseInputs& inputs) {
+rt::Status open_can(can::CanConfig& c, PoseInputs& inputs) {
   auto db = can::load_dbc(c.dbc);
   if (!db) return rt::Unexpected<rt::Error>{db.error()};
   auto decoder = can::OdometryDecoder::create(*db, c.signals);
@@ -121,7 +121,7 @@ rt::Result<bool> open_can(can::CanConfig& c, PoseInputs& inputs) {
     inputs.gs_usb.emplace(std::move(*device), std::move(*decoder));
     inputs.odometry.emplace(kOdometryRing);
   }
-  return true;
+  return {};
 }
 
 }  // namespace stac::runtime

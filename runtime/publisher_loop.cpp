@@ -19,7 +19,7 @@ constexpr std::int64_t kIdleHealthNs = 1'000'000'000;
 
 void publisher_loop(Component::Live& live) noexcept {
   rt::SlotExchange<Frame>& results = *live.results;
-  tools::ScanPublishing& scan_publishing = *live.scan_publishing;
+  dds::ScanPublishing& scan_publishing = *live.scan_publishing;
   dds::Publisher& publisher = *live.publisher;
   HealthAssembly health(live);
   std::array<std::int64_t, kHealthStages> stage_ns{};
@@ -67,7 +67,8 @@ void publisher_loop(Component::Live& live) noexcept {
     if (auto r = publisher.publish_health(h); !r && status) status = r;
     last_health_ns = rt::monotonic_ns();
     // The viewers' cloud last, outside the scan's end-to-end latency (it is the largest sample).
-    if (auto c = scan_publishing.publish_cloud(f->result, index); !c && status) status = c;
+    if (auto c = scan_publishing.publish_cloud(f->result, index); !c && status)
+      status = rt::Unexpected<rt::Error>{c.error()};
     live.pipeline->want_cloud(scan_publishing.cloud_reader());  // as publish_cloud found it
     results.release();
     if (status) {

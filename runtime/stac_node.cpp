@@ -3,11 +3,13 @@
 // reloads the model. `stac run` is the same component with options for people.
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <exception>
+#include <new>
 
 #include "runtime/component.hpp"
 #include "settings/settings.hpp"
 
-int main(int argc, char** argv) {
+int main(int argc, char** argv) try {
   CLI::App app{
       "stac-node - the STAC live component: Velodyne UDP, INS and CAN in; segmented, tracked\n"
       "and classified objects and health out on DDS (docs/run.md). Everything comes from the\n"
@@ -21,7 +23,7 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.0, 1e9));
   app.set_version_flag("--version", std::string("stac-node ") + STAC_VERSION);
   CLI11_PARSE(app, argc, argv);
-  auto settings = stac::runtime::load_component_settings(stac::tools::config_path(config));
+  auto settings = stac::runtime::load_component_settings(stac::settings::config_path(config));
   if (!settings) {
     std::fprintf(stderr, "stac-node: %s\n", settings.error().message.c_str());
     return 1;
@@ -36,4 +38,15 @@ int main(int argc, char** argv) {
   stac::runtime::run_with_signals(**component);
   stac::runtime::print_summary((*component)->summary(), settings->name, stderr);
   return 0;
+} catch (const std::bad_alloc&) {
+  std::fprintf(stderr,
+               "stac-node: out of memory while allocating what the configuration asks for; lower "
+               "the capacities (max_* keys, classification.accumulated_points) or free memory\n");
+  return 1;
+} catch (const std::exception& e) {
+  std::fprintf(stderr, "stac-node: %s\n", e.what());
+  return 1;
+} catch (...) {
+  std::fprintf(stderr, "stac-node: stopped by an unknown exception\n");
+  return 1;
 }

@@ -4,7 +4,7 @@
 #include "settings/config_section.hpp"
 #include "settings/settings.hpp"
 
-namespace stac::tools {
+namespace stac::settings {
 
 rt::Result<can::CanConfig> load_can_settings(const std::filesystem::path& config_file) {
   const std::string file = config_file.string();
@@ -62,4 +62,4 @@ rt::Result<can::CanConfig> load_can_settings(const std::filesystem::path& config
   return cfg;
 }
 
-}  // namespace stac::tools
+}  // namespace stac::settings

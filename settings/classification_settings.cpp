@@ -4,7 +4,7 @@
 #include "settings/config_section.hpp"
 #include "settings/settings.hpp"
 
-namespace stac::tools {
+namespace stac::settings {
 
 rt::Result<ClassificationSettings> load_classification_settings(
     const std::filesystem::path& config_file) {
@@ -34,4 +34,4 @@ rt::Result<ClassificationSettings> load_classification_settings(
   return s;
 }
 
-}  // namespace stac::tools
+}  // namespace stac::settings

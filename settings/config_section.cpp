@@ -6,7 +6,7 @@
 #include <system_error>
 #include <vector>
 
-namespace stac::tools {
+namespace stac::settings {
 
 extern const char* const kShippedConfigYaml;  // default_config.cpp, generated from config/stac.yaml
 
@@ -65,8 +65,8 @@ std::string hint(const std::string& key, const YAML::Node& known, bool list_all)
 }
 
 // The keys of `map` (named `where`) must be unique and known to `schema` (a map).
-rt::Result<bool> check_keys(const std::string& file, const YAML::Node& map,
-                            const YAML::Node& schema, const std::string& where, bool sections) {
+rt::Status check_keys(const std::string& file, const YAML::Node& map, const YAML::Node& schema,
+                      const std::string& where, bool sections) {
   std::set<std::string> seen;
   for (const auto& kv : map) {
     if (!kv.first.IsScalar()) {
@@ -85,7 +85,7 @@ rt::Result<bool> check_keys(const std::string& file, const YAML::Node& map,
                             hint(key, schema, sections));
     }
   }
-  return true;
+  return {};
 }
 
 }  // namespace
@@ -139,4 +139,4 @@ std::filesystem::path ConfigSection::path(const std::string& written) const {
   return p.is_absolute() ? p : std::filesystem::path(file_).parent_path() / p;
 }
 
-}  // namespace stac::tools
+}  // namespace stac::settings

@@ -16,7 +16,7 @@
 
 #include "rt/expected.hpp"
 
-namespace stac::tools {
+namespace stac::settings {
 
 class ConfigSection {
  public:
@@ -36,11 +36,11 @@ class ConfigSection {
   }
   // get() into an existing variable, for reading many keys in one list.
   template <class T>
-  rt::Result<bool> read(const char* key, T& out) const {
+  rt::Status read(const char* key, T& out) const {
     auto v = get<T>(key);
     if (!v) return rt::Unexpected<rt::Error>{v.error()};
     out = *v;
-    return true;
+    return {};
   }
   // "FILE: 'section.key' WHAT", as an error value.
   rt::Unexpected<rt::Error> error(const char* key, const std::string& what) const {
@@ -63,7 +63,7 @@ class ConfigSection {
   std::string file_, name_;
 };
 
-}  // namespace stac::tools
+}  // namespace stac::settings
 
 // Reads `key` of section `s` into `dst`, returning the error from the enclosing function.
 #define STAC_CONFIG_GET(s, type, key, dst)                                   \

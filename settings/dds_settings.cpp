@@ -4,7 +4,7 @@
 
 #include "settings/config_section.hpp"
 
-namespace stac::tools {
+namespace stac::settings {
 
 rt::Result<dds::PublisherConfig> load_dds_settings(const std::filesystem::path& config_file) {
   auto section = ConfigSection::open(config_file, "dds");
@@ -40,4 +40,4 @@ rt::Result<dds::PublisherConfig> load_dds_settings(const std::filesystem::path& 
   return c;
 }
 
-}  // namespace stac::tools
+}  // namespace stac::settings

@@ -7,8 +7,8 @@
 #include "dds/publisher.hpp"
 #include "rt/expected.hpp"
 
-namespace stac::tools {
+namespace stac::settings {
 
 rt::Result<dds::PublisherConfig> load_dds_settings(const std::filesystem::path& config_file);
 
-}  // namespace stac::tools
+}  // namespace stac::settings

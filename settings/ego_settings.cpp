@@ -8,7 +8,7 @@
 #include "settings/config_section.hpp"
 #include "settings/settings.hpp"
 
-namespace stac::tools {
+namespace stac::settings {
 namespace {
 
 rt::Result<Eigen::Vector3d> triple(const ConfigSection& s, const char* key) {
@@ -94,4 +94,4 @@ rt::Result<EgoSettings> load_ego_settings(const std::filesystem::path& config_fi
   return s;
 }
 
-}  // namespace stac::tools
+}  // namespace stac::settings

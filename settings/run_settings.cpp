@@ -6,18 +6,18 @@
 
 #include "settings/config_section.hpp"
 
-namespace stac::tools {
+namespace stac::settings {
 namespace {
 
-rt::Result<bool> read_schedule(const ConfigSection& s, const char* priority_key,
-                               const char* cpu_key, rt::ThreadSchedule& out) {
+rt::Status read_schedule(const ConfigSection& s, const char* priority_key, const char* cpu_key,
+                         rt::ThreadSchedule& out) {
   STAC_CONFIG_GET(s, int, priority_key, out.fifo_priority);
   STAC_CONFIG_GET(s, int, cpu_key, out.cpu);
   if (out.fifo_priority < 0 || out.fifo_priority > 99)
     return s.error(priority_key, "must be 0..99 (0: no SCHED_FIFO)");
   if (out.cpu < -1 || out.cpu > 1023)
     return s.error(cpu_key, "must be -1 (any CPU) or a CPU index 0..1023");
-  return true;
+  return {};
 }
 
 }  // namespace
@@ -86,4 +86,4 @@ rt::Result<RunSettings> load_run_settings(const std::filesystem::path& config_fi
   return s;
 }
 
-}  // namespace stac::tools
+}  // namespace stac::settings

@@ -10,7 +10,7 @@
 #include "rt/expected.hpp"
 #include "rt/scheduling.hpp"
 
-namespace stac::tools {
+namespace stac::settings {
 
 enum class InsTransport : std::uint8_t { kTcp, kUdp, kNone };
 
@@ -33,4 +33,4 @@ struct RunSettings {
 rt::Result<RunSettings> load_run_settings(const std::filesystem::path& config_file);
 rt::Result<InsTransport> parse_ins_transport(const std::string& text);
 
-}  // namespace stac::tools
+}  // namespace stac::settings

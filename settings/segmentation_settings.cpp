@@ -6,7 +6,7 @@
 #include "settings/config_section.hpp"
 #include "settings/settings.hpp"
 
-namespace stac::tools {
+namespace stac::settings {
 
 rt::Result<segmentation::SegmenterConfig> load_segmentation_settings(
     const std::filesystem::path& config_file) {
@@ -17,7 +17,7 @@ rt::Result<segmentation::SegmenterConfig> load_segmentation_settings(
   segmentation::SegmenterConfig c;
   // Counts: integers in lowest..limit.
   auto count = [&](const char* key, std::uint64_t limit, auto& dst,
-                   std::int64_t lowest = 1) -> rt::Result<bool> {
+                   std::int64_t lowest = 1) -> rt::Status {
     std::int64_t v = 0;
     if (auto r = s.read(key, v); !r) return r;
     if (v < lowest || static_cast<std::uint64_t>(v) > limit) {
@@ -25,7 +25,7 @@ rt::Result<segmentation::SegmenterConfig> load_segmentation_settings(
                             std::to_string(lowest) + ".." + std::to_string(limit));
     }
     dst = static_cast<std::remove_reference_t<decltype(dst)>>(v);
-    return true;
+    return {};
   };
   constexpr std::uint64_t kMaxCount = 100'000'000;
   for (const auto& r : {s.read("cell_m", c.cell_m),
@@ -67,4 +67,4 @@ rt::Result<segmentation::SegmenterConfig> load_segmentation_settings(
   return c;
 }
 
-}  // namespace stac::tools
+}  // namespace stac::settings

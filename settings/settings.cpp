@@ -5,7 +5,7 @@
 
 #include "settings/config_section.hpp"
 
-namespace stac::tools {
+namespace stac::settings {
 
 std::filesystem::path default_config_path() {
   if (const char* env = std::getenv("STAC_CONFIG"); env != nullptr && *env != '\0') return env;
@@ -107,4 +107,4 @@ rt::Result<PipelineSettings> load_pipeline_settings(const std::filesystem::path&
                           std::move(*classification)};
 }
 
-}  // namespace stac::tools
+}  // namespace stac::settings

@@ -17,7 +17,7 @@
 #include "perception/tracking/tracker.hpp"
 #include "rt/expected.hpp"
 
-namespace stac::tools {
+namespace stac::settings {
 
 struct VelodyneSettings {
   velodyne::ScanAssemblerConfig assembler;
@@ -77,4 +77,4 @@ std::filesystem::path default_config_path();
 // The --config option's value, or the default when it is empty.
 std::filesystem::path config_path(const std::string& option);
 
-}  // namespace stac::tools
+}  // namespace stac::settings

@@ -5,7 +5,7 @@
 #include "settings/config_section.hpp"
 #include "settings/settings.hpp"
 
-namespace stac::tools {
+namespace stac::settings {
 
 rt::Result<tracking::TrackerConfig> load_tracking_config(const std::filesystem::path& config_file) {
   const std::string file = config_file.string();
@@ -70,4 +70,4 @@ rt::Result<tracking::TrackerConfig> load_tracking_config(const std::filesystem::
   return c;
 }
 
-}  // namespace stac::tools
+}  // namespace stac::settings

@@ -17,6 +17,8 @@
 #include "tools/commands.hpp"
 
 namespace stac::tools {
+
+using namespace stac::settings;
 namespace {
 
 struct CandumpOptions {

@@ -26,6 +26,10 @@ void add_train_command(CLI::App& app);
 void add_induct_command(CLI::App& app);
 void add_kitti_objects_command(CLI::App& app);
 
+// Marks an option that asks for a picture (--png): in a build without pictures
+// (-DSTAC_PICTURES=OFF) it is refused before any work, saying how to get them.
+CLI::Option* needs_pictures(CLI::Option* option);
+
 // Prints "stac: <message>" on stderr and returns the exit code 1, for command callbacks.
 int fail(const std::string& message);
 

@@ -26,6 +26,9 @@
 #include "tools/support/progress.hpp"
 
 namespace stac::tools {
+
+using namespace stac::settings;
+using namespace stac::formats;
 namespace {
 
 using classification::ClassIndex;

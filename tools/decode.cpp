@@ -18,6 +18,9 @@
 #include "tools/support/progress.hpp"
 
 namespace stac::tools {
+
+using namespace stac::settings;
+using namespace stac::formats;
 namespace {
 
 // Applies the command line over the configuration file's velodyne section.
@@ -63,7 +66,7 @@ int run_decode(const DecodeOptions& o) {
   if (!o.png.empty()) picture.emplace(BirdsEyeOptions{});
   std::uint64_t scans = 0, complete = 0, points = 0;
   Progress progress("decode", static_cast<double>(std::filesystem::file_size(o.in)));
-  auto drain = [&]() -> rt::Result<bool> {
+  auto drain = [&]() -> rt::Status {
     while (const velodyne::Scan* scan = stream.take()) {
       auto w = (*writer)->write(*scan);
       if (!w) return w;
@@ -77,7 +80,7 @@ int run_decode(const DecodeOptions& o) {
       }
       stream.release();
     }
-    return true;
+    return {};
   };
   io::Datagram d;
   while (reader->next(d)) {
@@ -145,7 +148,8 @@ void add_decode_command(CLI::App& app) {
   cmd->add_option("--cut-angle", o->cut_angle_deg,
                   "scan cut angle in degrees (default: the config's)")
       ->check(finite_range(0.0, 359.99));
-  cmd->add_option("--png", o->png, "also draw the first complete scan from above into this PNG");
+  needs_pictures(cmd->add_option("--png", o->png,
+                                 "also draw the first complete scan from above into this PNG"));
   CLI::App* applanix = add_decode_applanix_command(*cmd);
   cmd->callback([o, applanix] {
     if (applanix->parsed()) return;

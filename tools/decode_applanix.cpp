@@ -14,6 +14,8 @@
 #include "tools/commands.hpp"
 
 namespace stac::tools {
+
+using namespace stac::formats;
 namespace {
 
 struct ApplanixDecodeOptions {

@@ -36,6 +36,9 @@
 #include "tools/support/child_process.hpp"
 
 namespace stac::tools {
+
+using namespace stac::settings;
+using namespace stac::formats;
 namespace {
 
 struct DemoOptions {
@@ -100,10 +103,10 @@ class DriveWatch {
  public:
   void on_tracked(const typename T::TrackedObjects& s, dds_time_t now,
                   const dds_sample_info_t& info) {
-    const double t = seconds(s.stamp);
-    if (scans_.empty()) first_stamp_s_ = t;
-    latency_ms_.push_back(static_cast<double>(now - info.source_timestamp) * 1e-6);
-    scans_.push_back(s.scan_index);
+    const double t = dds::seconds(s.stamp);
+    if (scans.empty()) first_stamp_s_ = t;
+    latency_ms.push_back(static_cast<double>(now - info.source_timestamp) * 1e-6);
+    scans.push_back(s.scan_index);
     last_ = ScanView{};
     last_.scan_index = s.scan_index;
     std::uint32_t confirmed = 0;
@@ -112,7 +115,7 @@ class DriveWatch {
       const auto& o = s.objects._buffer[i];
       const auto& p = o.kinematics.position;
       const auto& v = o.kinematics.velocity;
-      const ShownClass c = shown_class(o);
+      const dds::ShownClass c = dds::shown_class(o);
       last_.tracks.push_back({o.object_id, static_cast<float>(p.x), static_cast<float>(p.y),
                               static_cast<float>(o.shape.dimensions.x),
                               static_cast<float>(o.shape.dimensions.y), o.shape.yaw,
@@ -124,9 +127,9 @@ class DriveWatch {
       shown.push_back(&o);
     }
     for (std::uint32_t i = 0; i < s.objects._length; ++i)
-      ids_.insert(s.objects._buffer[i].object_id);
-    confirmed_per_scan_.push_back(confirmed);
-    tracks_per_scan_.push_back(s.objects._length);
+      ids.insert(s.objects._buffer[i].object_id);
+    confirmed_per_scan.push_back(confirmed);
+    tracks_per_scan.push_back(s.objects._length);
     // The three confirmed tracks nearest the vehicle (its last pose), nearest first.
     const auto distance = [&](const typename T::TrackedObject* o) {
       return std::hypot(o->kinematics.position.x - ego_x_, o->kinematics.position.y - ego_y_);
@@ -142,7 +145,7 @@ class DriveWatch {
       const auto& o = *shown[i];
       at += std::snprintf(text + at, sizeof(text) - static_cast<std::size_t>(at),
                           "  | #%llu %s (%.1f, %.1f) %.1f m/s",
-                          static_cast<unsigned long long>(o.object_id), shown_class(o).name,
+                          static_cast<unsigned long long>(o.object_id), dds::shown_class(o).name,
                           o.kinematics.position.x, o.kinematics.position.y,
                           std::hypot(o.kinematics.velocity.x, o.kinematics.velocity.y));
     }
@@ -158,11 +161,11 @@ class DriveWatch {
 
   void on_health(const typename T::Health& s, dds_time_t, const dds_sample_info_t&) {
     if (s.stages._length > 0)
-      end_to_end_ms_.push_back(static_cast<double>(s.end_to_end_latency_us) * 1e-3);
-    deadline_misses_ = s.deadline_misses;
-    drops_.clear();
+      end_to_end_ms.push_back(static_cast<double>(s.end_to_end_latency_us) * 1e-3);
+    deadline_misses = s.deadline_misses;
+    drops.clear();
     for (std::uint32_t i = 0; i < s.drops._length; ++i)
-      drops_.emplace_back(s.drops._buffer[i].cause, s.drops._buffer[i].count);
+      drops.emplace_back(s.drops._buffer[i].cause, s.drops._buffer[i].count);
   }
 
   void on_pose(const typename T::EgoPose& s, dds_time_t, const dds_sample_info_t&) {
@@ -198,12 +201,12 @@ class DriveWatch {
     return v;
   }
 
-  std::vector<std::uint64_t> scans_;
-  std::vector<std::uint32_t> tracks_per_scan_, confirmed_per_scan_;
-  std::vector<double> latency_ms_, end_to_end_ms_;
-  std::uint64_t deadline_misses_ = 0;
-  std::vector<std::pair<std::string, std::uint64_t>> drops_;
-  std::set<std::uint64_t> ids_;
+  std::vector<std::uint64_t> scans;
+  std::vector<std::uint32_t> tracks_per_scan, confirmed_per_scan;
+  std::vector<double> latency_ms, end_to_end_ms;
+  std::uint64_t deadline_misses = 0;
+  std::vector<std::pair<std::string, std::uint64_t>> drops;
+  std::set<std::uint64_t> ids;
 
  private:
   double first_stamp_s_ = 0, ego_x_ = 0, ego_y_ = 0, ego_yaw_ = 0;
@@ -268,9 +271,10 @@ int watch_drive(const DemoOptions& o, const std::filesystem::path& dir, const st
       ++arrived;
     };
   };
-  auto readers = TopicReaders::create(dds_config);  // after what its callbacks use: deleted first
+  auto readers =
+      dds::TopicReaders::create(dds_config);  // after what its callbacks use: deleted first
   if (!readers) return fail(readers.error().message);
-  TopicReaders& r = **readers;
+  dds::TopicReaders& r = **readers;
   auto tracked = r.listen<typename T::TrackedObjects>(dds::Topic::kTrackedObjects, 64,
                                                       record(&DriveWatch<T>::on_tracked));
   auto health =
@@ -297,7 +301,7 @@ int watch_drive(const DemoOptions& o, const std::filesystem::path& dir, const st
     return fail(what + "; stac run said:\n" + run->log_tail(8));
   };
   for (const dds_time_t end = dds_time() + DDS_SECS(static_cast<long>(kMatchTimeoutS));
-       !(TopicReaders::matched(*tracked) > 0 && TopicReaders::matched(*health) > 0);) {
+       !(dds::TopicReaders::matched(*tracked) > 0 && dds::TopicReaders::matched(*health) > 0);) {
     if (run->poll()) return run_failed("stac run ended at start-up");
     if (g_interrupted) return fail("interrupted");
     if (dds_time() > end) return run_failed("stac run's DDS writers did not match within 30 s");
@@ -350,16 +354,16 @@ int watch_drive(const DemoOptions& o, const std::filesystem::path& dir, const st
   // 4. The summary and the pictures.
   const std::uint64_t published = summary_number(run_log, R"((\d+) published,)").value_or(0);
   std::set<std::uint64_t> arrived_indices;  // of 0..published-1
-  for (std::uint64_t i : w.scans_)
+  for (std::uint64_t i : w.scans)
     if (i < published) arrived_indices.insert(i);
   const std::uint64_t missing = published - arrived_indices.size();
   std::fprintf(stderr, "stac demo: 4/4 the drive is over; stac run's own summary:\n%s",
                run_log.substr(std::min(run_log.size(), run_log.find("stac run: stopped"))).c_str());
   const auto u = [](std::uint64_t v) { return static_cast<unsigned long long>(v); };
-  std::vector<double> per_scan(w.tracks_per_scan_.begin(), w.tracks_per_scan_.end());
-  std::vector<double> confirmed(w.confirmed_per_scan_.begin(), w.confirmed_per_scan_.end());
+  std::vector<double> per_scan(w.tracks_per_scan.begin(), w.tracks_per_scan.end());
+  std::vector<double> confirmed(w.confirmed_per_scan.begin(), w.confirmed_per_scan.end());
   std::string drops;
-  for (const auto& [cause, count] : w.drops_)
+  for (const auto& [cause, count] : w.drops)
     if (count > 0 && cause != "classification.late")
       drops += " " + cause + "=" + std::to_string(count);
   // Published tracks classified before their scan's publication, and those left for after it.
@@ -379,12 +383,11 @@ int watch_drive(const DemoOptions& o, const std::filesystem::path& dir, const st
       "  end to end  last firing -> published: median %.1f ms, p99 %.1f ms (%zu scans, health)\n"
       "  DDS         publish -> receive (tracked_objects): median %.2f ms, p99 %.2f ms, max %.2f "
       "ms\n",
-      o.seconds, u(o.seed), w.scans_.size(), u(published), u(missing), w.ids_.size(),
+      o.seconds, u(o.seed), w.scans.size(), u(published), u(missing), w.ids.size(),
       percentile(per_scan, 0.5), percentile(confirmed, 0.5), percentile(per_scan, 1.0),
-      u(w.deadline_misses_), drops.empty() ? " none" : drops.c_str(), u(current), u(late),
-      percentile(w.end_to_end_ms_, 0.5), percentile(w.end_to_end_ms_, 0.99),
-      w.end_to_end_ms_.size(), percentile(w.latency_ms_, 0.5), percentile(w.latency_ms_, 0.99),
-      percentile(w.latency_ms_, 1.0));
+      u(w.deadline_misses), drops.empty() ? " none" : drops.c_str(), u(current), u(late),
+      percentile(w.end_to_end_ms, 0.5), percentile(w.end_to_end_ms, 0.99), w.end_to_end_ms.size(),
+      percentile(w.latency_ms, 0.5), percentile(w.latency_ms, 0.99), percentile(w.latency_ms, 1.0));
   DriveView view = w.view();
   if (auto p = last_scan_points(config, pcap, view.last.scan_index); p) {
     view.points = std::move(*p);
@@ -399,7 +402,7 @@ int watch_drive(const DemoOptions& o, const std::filesystem::path& dir, const st
   }
   std::fflush(stdout);
   if (g_interrupted) return fail("interrupted");
-  if (w.scans_.empty()) return fail("no scan arrived on DDS");
+  if (w.scans.empty()) return fail("no scan arrived on DDS");
   if (missing > 0) return fail(std::to_string(missing) + " published scans did not arrive on DDS");
   return 0;
 }

@@ -15,6 +15,8 @@
 #include "tools/support/cli_checks.hpp"
 
 namespace stac::tools {
+
+using namespace stac::settings;
 namespace {
 
 struct EchoOptions {
@@ -28,11 +30,12 @@ struct EchoOptions {
 template <class S>
 void print_tracked(const S& s) {
   std::printf("tracked_objects scan %llu t=%.6f objects=%u",
-              static_cast<unsigned long long>(s.scan_index), seconds(s.stamp), s.objects._length);
+              static_cast<unsigned long long>(s.scan_index), dds::seconds(s.stamp),
+              s.objects._length);
   for (std::uint32_t i = 0; i < s.objects._length && i < 5; ++i) {
     const auto& o = s.objects._buffer[i];
     std::printf(" | #%llu %s x=%.2f y=%.2f v=(%.2f,%.2f) age=%u",
-                static_cast<unsigned long long>(o.object_id), shown_class(o).name,
+                static_cast<unsigned long long>(o.object_id), dds::shown_class(o).name,
                 o.kinematics.position.x, o.kinematics.position.y, o.kinematics.velocity.x,
                 o.kinematics.velocity.y, o.age);
   }
@@ -42,20 +45,21 @@ void print_tracked(const S& s) {
 template <class S>
 void print_segments(const S& s) {
   std::printf("segments scan %llu t=%.6f segments=%u\n",
-              static_cast<unsigned long long>(s.scan_index), seconds(s.stamp), s.segments._length);
+              static_cast<unsigned long long>(s.scan_index), dds::seconds(s.stamp),
+              s.segments._length);
 }
 
 template <class S>
 void print_pose(const S& s) {
   std::printf("ego_pose t=%.6f x=%.3f y=%.3f z=%.3f v=(%.2f,%.2f) yaw_rate=%.3f source=%u\n",
-              seconds(s.stamp), s.position.x, s.position.y, s.position.z, s.velocity.x,
+              dds::seconds(s.stamp), s.position.x, s.position.y, s.position.z, s.velocity.x,
               s.velocity.y, static_cast<double>(s.yaw_rate), static_cast<unsigned>(s.source));
 }
 
 template <class S>
 void print_health(const S& s) {
   std::printf("health scan %llu t=%.6f e2e=%uus misses=%llu model=%016llx reloads=%u",
-              static_cast<unsigned long long>(s.scan_index), seconds(s.stamp),
+              static_cast<unsigned long long>(s.scan_index), dds::seconds(s.stamp),
               s.end_to_end_latency_us, static_cast<unsigned long long>(s.deadline_misses),
               static_cast<unsigned long long>(s.model_hash), s.model_reloads);
   for (std::uint32_t i = 0; i < s.stages._length; ++i)
@@ -85,8 +89,8 @@ void print_cloud(const S& s) {
   std::printf(
       "point_cloud scan %llu t=%.6f points=%u origin=(%.2f,%.2f,%.2f) resolution=%.3f none=%u "
       "labels=[",
-      static_cast<unsigned long long>(s.scan_index), seconds(s.stamp), s.points._length, s.origin.x,
-      s.origin.y, s.origin.z, static_cast<double>(s.resolution), by_label[0]);
+      static_cast<unsigned long long>(s.scan_index), dds::seconds(s.stamp), s.points._length,
+      s.origin.x, s.origin.y, s.origin.z, static_cast<double>(s.resolution), by_label[0]);
   for (unsigned label = 1; label <= top; ++label)
     std::printf("%s%u", label == 1 ? "" : ",", by_label[label]);
   std::printf("]\n");
@@ -110,9 +114,9 @@ void print_sample(const S& s) {
 
 // A reader of topic `t` with the topic's sample type, each sample passed to f.
 template <bool Ros2, class F>
-rt::Result<dds_entity_t> listen(TopicReaders& readers, dds::Topic t, int depth, F f) {
+rt::Result<dds_entity_t> listen(dds::TopicReaders& readers, dds::Topic t, int depth, F f) {
   using T = dds::IdlTypes<Ros2>;
-  switch (t) {
+  switch (t) {  // NOLINT(bugprone-branch-clone): the branches differ in the sample type only
     case dds::Topic::kTrackedObjects:
       return readers.listen<typename T::TrackedObjects>(t, depth, f);
     case dds::Topic::kSegments:
@@ -136,7 +140,7 @@ int run_echo(const EchoOptions& o) {
   if (o.domain >= 0) c.domain_id = static_cast<std::uint32_t>(o.domain);
   if (!o.dds_config.empty())
     c.config_uri = "file://" + std::filesystem::absolute(o.dds_config).string();
-  auto readers = TopicReaders::create(c);
+  auto readers = dds::TopicReaders::create(c);
   if (!readers) return fail(readers.error().message);
   const std::string name = (*readers)->topic_name(*topic);
 

@@ -17,6 +17,8 @@
 #include "tools/support/progress.hpp"
 
 namespace stac::tools {
+
+using namespace stac::formats;
 namespace {
 
 using classification::ClassIndex;
@@ -85,8 +87,8 @@ void pr_curve(std::vector<Scored> s, ChartSeries& out) {
   }
 }
 
-rt::Result<bool> save_confusion(const Tally& t, const ClassNames& names, const std::string& title,
-                                const std::filesystem::path& png) {
+rt::Status save_confusion(const Tally& t, const ClassNames& names, const std::string& title,
+                          const std::filesystem::path& png) {
   std::vector<std::string> labels;
   std::vector<std::vector<std::uint64_t>> counts;
   for (std::size_t i = 0; i < t.labels; ++i) {

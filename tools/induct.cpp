@@ -31,6 +31,8 @@
 #include "tools/support/progress.hpp"
 
 namespace stac::tools {
+
+using namespace stac::formats;
 namespace {
 
 using classification::ClassIndex;
@@ -85,17 +87,17 @@ class Inductor {
   int run();
 
  private:
-  rt::Result<bool> open_state();
+  rt::Status open_state();
   rt::Result<const Dataset*> dataset(const std::string& path);
   rt::Result<std::uint32_t> source_index(const std::string& path, SourceRole role);
-  rt::Result<bool> read_background();
-  rt::Result<bool> seed_labels();
-  rt::Result<bool> apply_answers();
-  rt::Result<bool> round(std::uint32_t chunk, std::vector<learning::Group> groups);
-  rt::Result<bool> ask(std::uint32_t chunk);
-  rt::Result<bool> save(const std::string& what);
-  rt::Result<bool> chart();
-  rt::Result<bool> export_labels();
+  rt::Status read_background();
+  rt::Status seed_labels();
+  rt::Status apply_answers();
+  rt::Status round(std::uint32_t chunk, std::vector<learning::Group> groups);
+  rt::Status ask(std::uint32_t chunk);
+  rt::Status save(const std::string& what);
+  rt::Status chart();
+  rt::Status export_labels();
   [[nodiscard]] std::vector<learning::TrackExample> label_examples() const;
   [[nodiscard]] double accuracy(const classification::TrackClassifierModel& model);
   [[nodiscard]] bool seen(std::uint32_t source, std::uint64_t track) const {
@@ -159,7 +161,7 @@ rt::Result<std::uint32_t> Inductor::source_index(const std::string& path, Source
   return static_cast<std::uint32_t>(s_.sources.size() - 1);
 }
 
-rt::Result<bool> Inductor::open_state() {
+rt::Status Inductor::open_state() {
   std::error_code ec;
   const bool exists = fs::exists(dir_ / "state.bin", ec);
   if (exists) {
@@ -211,10 +213,10 @@ rt::Result<bool> Inductor::open_state() {
     creating_ = true;  // on disk once every input has been read (run())
   }
   for (const auto& p : s_.seen) seen_.insert(p);
-  return true;
+  return {};
 }
 
-rt::Result<bool> Inductor::read_background() {
+rt::Status Inductor::read_background() {
   for (const std::string& path : o_.background)
     if (auto i = source_index(path, SourceRole::kBackground); !i)
       return rt::make_error(i.error().message);
@@ -224,12 +226,12 @@ rt::Result<bool> Inductor::read_background() {
     if (!d) return rt::make_error(d.error().message);
     for (const DatasetTrack& t : (*d)->tracks) b0_.push_back(example_of(t, kBackground));
   }
-  return true;
+  return {};
 }
 
 // --labels: up to --labels-per-class tracks of each class (and of background), drawn with
 // --seed, appended to labels.jsonl as answers.
-rt::Result<bool> Inductor::seed_labels() {
+rt::Status Inductor::seed_labels() {
   std::mt19937_64 rng(o_.seed);
   for (const std::string& path : o_.labels) {
     auto i = source_index(path, SourceRole::kLabels);
@@ -254,7 +256,7 @@ rt::Result<bool> Inductor::seed_labels() {
       if (auto a = append_line_durably(dir_ / "labels.jsonl", answer.dump()); !a) return a;
     }
   }
-  return true;
+  return {};
 }
 
 std::vector<learning::TrackExample> Inductor::label_examples() const {
@@ -265,10 +267,10 @@ std::vector<learning::TrackExample> Inductor::label_examples() const {
 }
 
 // The answers of labels.jsonl not taken yet; new labels trigger retrospection (thesis 2.3.2).
-rt::Result<bool> Inductor::apply_answers() {
+rt::Status Inductor::apply_answers() {
   const fs::path file = dir_ / "labels.jsonl";
   std::ifstream in(file);
-  if (!in) return true;  // no answer yet
+  if (!in) return {};  // no answer yet
   std::vector<learning::TrackExample> fresh;
   std::uint64_t line_no = 0;
   std::size_t skipped = 0;
@@ -351,7 +353,7 @@ rt::Result<bool> Inductor::apply_answers() {
                 de);
     s_.reset_pending = true;
   }
-  return true;
+  return {};
 }
 
 double Inductor::accuracy(const classification::TrackClassifierModel& model) {
@@ -370,7 +372,7 @@ double Inductor::accuracy(const classification::TrackClassifierModel& model) {
   return total == 0 ? 0.0 : static_cast<double>(right) / static_cast<double>(total);
 }
 
-rt::Result<bool> Inductor::save(const std::string& what) {
+rt::Status Inductor::save(const std::string& what) {
   if (auto w = write_induction_state(dir_, s_); !w)
     return rt::make_error(w.error().message + " (" + what + ")");
   for (const std::string& line : pending_history_)
@@ -384,10 +386,10 @@ rt::Result<bool> Inductor::save(const std::string& what) {
     if (auto m = write_model_file(dir_ / "models" / name, s_.model); !m) return m;
     if (auto m = write_model_file(dir_ / "model.stacmodel", s_.model); !m) return m;
   }
-  return true;
+  return {};
 }
 
-rt::Result<bool> Inductor::round(std::uint32_t chunk, std::vector<learning::Group> groups) {
+rt::Status Inductor::round(std::uint32_t chunk, std::vector<learning::Group> groups) {
   const auto started = std::chrono::steady_clock::now();
   const std::size_t classes = s_.classes.size();
   // Every third user label and B0 track is kept out of boosting for the filter's fit, as
@@ -527,7 +529,7 @@ rt::Result<bool> Inductor::round(std::uint32_t chunk, std::vector<learning::Grou
 
 // Questions about the chunk's tracks: written to queries.jsonl; with --oracle answered from the
 // dataset's truth labels (an inconsistent track is skipped, as a person would).
-rt::Result<bool> Inductor::ask(std::uint32_t chunk) {
+rt::Status Inductor::ask(std::uint32_t chunk) {
   auto d = dataset(s_.sources[chunk].path);
   if (!d) return rt::make_error(d.error().message);
   std::vector<learning::QueryCandidate> candidates((*d)->tracks.size());
@@ -571,7 +573,7 @@ rt::Result<bool> Inductor::ask(std::uint32_t chunk) {
 
 // DIR/learning.png: held-out accuracy after each round against the user labels so far (the
 // thesis's Fig. 2.6), with --reference lines.
-rt::Result<bool> Inductor::chart() {
+rt::Status Inductor::chart() {
   std::ifstream in(dir_ / "history.jsonl");
   ChartSeries curve{"group induction", {}, {}}, alone{"same labels, no induction", {}, {}};
   for (std::string line; std::getline(in, line);) {
@@ -588,7 +590,7 @@ rt::Result<bool> Inductor::chart() {
       alone.y.push_back(j["accuracy_labels_only"].get<double>());
     }
   }
-  if (curve.x.empty()) return true;
+  if (curve.x.empty()) return {};
   Chart c;
   c.title = "held-out track accuracy (" + classification::joined(s_.classes) + ", background)";
   c.x_label = "user labels";
@@ -612,7 +614,7 @@ rt::Result<bool> Inductor::chart() {
 
 // --export: the user's labels (the tracks as their datasets hold them, with the user's label)
 // and B0 as one dataset, for `stac train` on the same labels without induction.
-rt::Result<bool> Inductor::export_labels() {
+rt::Status Inductor::export_labels() {
   Dataset out;
   out.classes = s_.classes;
   for (const InductionSource& src : s_.sources) {
@@ -636,18 +638,18 @@ rt::Result<bool> Inductor::export_labels() {
   if (auto w = write_dataset(o_.export_dir, out); !w) return w;
   std::printf("exported %zu user labels and %zu B0 tracks to %s\n", s_.labels.size(),
               out.tracks.size() - s_.labels.size(), o_.export_dir.c_str());
-  return true;
+  return {};
 }
 
 int Inductor::run() {
   if (auto r = open_state(); !r) return fail(r.error().message);
-  const auto labelled = [this](const std::string& path, const char* what) -> rt::Result<bool> {
+  const auto labelled = [this](const std::string& path, const char* what) -> rt::Status {
     auto d = dataset(path);
     if (!d) return rt::make_error(d.error().message);
     if (!(*d)->labelled)
       return rt::make_error(path + ": has no labels (made by `stac dataset` without --truth); " +
                             what + " needs labelled tracks");
-    return true;
+    return {};
   };
   for (const std::string& path : o_.eval)
     if (auto r = labelled(path, "--eval"); !r) return fail(r.error().message);

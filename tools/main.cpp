@@ -6,6 +6,7 @@
 #include <new>
 
 #include "tools/commands.hpp"
+#include "tools/pictures/drawing.hpp"
 #include "tools/support/cli_checks.hpp"
 
 namespace stac::tools {
@@ -15,9 +16,18 @@ int fail(const std::string& message) {
   return 1;
 }
 
+CLI::Option* needs_pictures(CLI::Option* option) {
+  return option->check(CLI::Validator(
+      [](const std::string&) -> std::string {
+        if (pictures_built()) return "";
+        return std::string("this stac was built without pictures (") + kWithoutPicturesHint + ")";
+      },
+      "", "pictures"));
+}
+
 }  // namespace stac::tools
 
-int main(int argc, char** argv) {
+int main(int argc, char** argv) try {
   CLI::App app{
       "stac - segmentation, tracking and classification of Velodyne HDL-64E scans.\n"
       "Decodes sensor packets (live UDP or pcap) into calibrated, timed 360-degree scans.\n"
@@ -94,4 +104,10 @@ int main(int argc, char** argv) {
     return 1;
   }
   return 0;
+} catch (const std::exception& e) {  // building the command line itself failed
+  std::fprintf(stderr, "stac: %s\n", e.what());
+  return 1;
+} catch (...) {
+  std::fprintf(stderr, "stac: stopped by an unknown exception\n");
+  return 1;
 }

@@ -29,6 +29,9 @@
 #include "tools/support/progress.hpp"
 
 namespace stac::tools {
+
+using namespace stac::settings;
+using namespace stac::formats;
 namespace {
 
 struct ProcessOptions {
@@ -43,16 +46,16 @@ struct ProcessOptions {
 // --dds: the publishing edge, created before the loop; with --dds-wait, waits for a reader.
 struct ProcessDds {
   std::unique_ptr<dds::Publisher> publisher;
-  std::optional<ScanPublishing> scans;
+  std::optional<dds::ScanPublishing> scans;
 };
 rt::Result<ProcessDds> open_dds(const dds::PublisherConfig& settings, const ProcessOptions& o,
                                 const pipeline::PipelineConfig& pc) {
-  if (auto r = ScanPublishing::check_capacities(pc); !r)
+  if (auto r = dds::ScanPublishing::check_capacities(pc); !r)
     return rt::Unexpected<rt::Error>{r.error()};
   auto p = dds::Publisher::create(settings);
   if (!p) return rt::Unexpected<rt::Error>{p.error()};
   ProcessDds out{std::move(*p), std::nullopt};
-  out.scans.emplace(*out.publisher, settings.tentative_tracks, ScanPublishing::classes_of(pc));
+  out.scans.emplace(*out.publisher, settings.tentative_tracks, dds::ScanPublishing::classes_of(pc));
   const dds_entity_t writer = out.publisher->writer(dds::Topic::kTrackedObjects);
   for (double waited = 0; waited < o.dds_wait_s; waited += 0.01) {
     dds_publication_matched_status_t m{};
@@ -242,7 +245,8 @@ int run_process(const ProcessOptions& o) {
     if (dds_out) {
       auto st = dds_out->scans->publish(
           result, scans, result.has_pose ? ego::EgoSource::kIns : ego::EgoSource::kNone);
-      if (auto c = dds_out->scans->publish_cloud(result, scans); !c && st) st = c;
+      if (auto c = dds_out->scans->publish_cloud(result, scans); !c && st)
+        st = rt::Unexpected<rt::Error>{c.error()};
       pipeline.want_cloud(dds_out->scans->cloud_reader());
       if (!st && dds_errors++ == 0)
         std::fprintf(stderr, "stac process: DDS: %s\n", st.error().message.c_str());
@@ -276,26 +280,25 @@ int run_process(const ProcessOptions& o) {
                capture_frames_summary(reader->counters(), ac.packets, vs.port).c_str(),
                packet_drops_summary(ac).c_str());
   if (poses) {
-    std::fprintf(
-        stderr,
-        "  ego         %llu INS fixes (%llu skipped before a GPS week, %llu not aligned, "
-        "%llu impossible, %llu time jumps, %llu jumps back); "
-        "scan clock: %s; %llu scans without a pose (not deskewed)\n"
-        "  ins input   dropped: bad checksum %llu, bad framing %llu, malformed %llu; %llu "
-        "bytes skipped\n",
-        static_cast<unsigned long long>(poses->counters.ins_fixes),
-        static_cast<unsigned long long>(poses->counters.no_absolute_time),
-        static_cast<unsigned long long>(poses->counters.not_aligned),
-        static_cast<unsigned long long>(poses->counters.impossible),
-        static_cast<unsigned long long>(poses->counters.time_jumps),
-        static_cast<unsigned long long>(poses->counters.backward_jumps),
-        ego::to_string(result.clock_source),
-        static_cast<unsigned long long>(pipeline.scans_without_pose()),
-        static_cast<unsigned long long>(poses->parser.bad_checksum),
-        static_cast<unsigned long long>(poses->parser.bad_length + poses->parser.bad_terminator +
-                                        poses->parser.oversize),
-        static_cast<unsigned long long>(poses->parser.malformed),
-        static_cast<unsigned long long>(poses->parser.garbage_bytes));
+    std::fprintf(stderr,
+                 "  ego         %llu INS fixes (%llu skipped before a GPS week, %llu not aligned, "
+                 "%llu impossible, %llu time jumps, %llu jumps back); "
+                 "scan clock: %s; %llu scans without a pose (not deskewed)\n"
+                 "  ins input   dropped: bad checksum %llu, bad framing %llu, malformed %llu; %llu "
+                 "bytes skipped\n",
+                 static_cast<unsigned long long>(poses->counters.ins_fixes),
+                 static_cast<unsigned long long>(poses->counters.no_absolute_time),
+                 static_cast<unsigned long long>(poses->counters.not_aligned),
+                 static_cast<unsigned long long>(poses->counters.impossible),
+                 static_cast<unsigned long long>(poses->counters.time_jumps),
+                 static_cast<unsigned long long>(poses->counters.backward_jumps),
+                 ego::to_string(result.clock_source),
+                 static_cast<unsigned long long>(pipeline.scans_without_pose()),
+                 static_cast<unsigned long long>(poses->parser.bad_checksum),
+                 static_cast<unsigned long long>(poses->parser.bad_length) +
+                     poses->parser.bad_terminator + poses->parser.oversize,
+                 static_cast<unsigned long long>(poses->parser.malformed),
+                 static_cast<unsigned long long>(poses->parser.garbage_bytes));
   } else {
     std::fprintf(stderr, "  ego         %s: parked sensor, world = vehicle frame\n",
                  o.no_deskew

@@ -11,6 +11,8 @@
 #include "tools/support/cli_checks.hpp"
 
 namespace stac::tools {
+
+using namespace stac::settings;
 namespace {
 
 struct RecordOptions {

@@ -9,6 +9,8 @@
 #include "tools/support/cli_checks.hpp"
 
 namespace stac::tools {
+
+using namespace stac::settings;
 namespace {
 
 struct RunOptions {

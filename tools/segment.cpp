@@ -23,6 +23,9 @@
 #include "tools/support/cli_checks.hpp"
 
 namespace stac::tools {
+
+using namespace stac::settings;
+using namespace stac::formats;
 namespace {
 
 struct SegmentOptions {
@@ -37,7 +40,7 @@ double thread_cpu_ms() {
   return static_cast<double>(ts.tv_sec) * 1e3 + static_cast<double>(ts.tv_nsec) * 1e-6;
 }
 
-rt::Result<bool> write_csv(const std::string& path, const segmentation::Segments& out) {
+rt::Status write_csv(const std::string& path, const segmentation::Segments& out) {
   std::FILE* f = std::fopen(path.c_str(), "w");
   if (f == nullptr) return rt::make_error(path + ": cannot write (is the folder there?)");
   std::fprintf(f,
@@ -50,7 +53,7 @@ rt::Result<bool> write_csv(const std::string& path, const segmentation::Segments
                  s.box.width, s.box.height, s.box.yaw, s.z_min, s.z_max);
   }
   if (std::fclose(f) != 0) return rt::make_error(path + ": write failed");
-  return true;
+  return {};
 }
 
 // Segments one scan and writes what was asked for.
@@ -204,7 +207,8 @@ void add_segment_command(CLI::App& app) {
       ->required()
       ->check(CLI::ExistingFile);
   cmd->add_option("--out", o->out, "write the segments as csv");
-  cmd->add_option("--png", o->png, "draw the scan from above with the segments coloured and boxed");
+  needs_pictures(cmd->add_option("--png", o->png,
+                                 "draw the scan from above with the segments coloured and boxed"));
   cmd->add_option("--config", o->config,
                   "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
   cmd->add_option("--scan", o->scan, "pcap: which complete scan to segment, from 0 (default 0)");

@@ -20,6 +20,8 @@
 #include "tools/support/progress.hpp"
 
 namespace stac::tools {
+
+using namespace stac::settings;
 namespace {
 
 // The POS LV's Real-Time Data stream (port 5602) into the pcap: one TCP connection from the
@@ -36,7 +38,7 @@ class InsPcapStream {
 
   InsPcapStream(io::PcapWriter& pcap, bool udp) : pcap_(pcap), udp_(udp) {}
 
-  rt::Result<bool> write(const sim::InsMessage& m) {
+  rt::Status write(const sim::InsMessage& m) {
     if (udp_) {
       io::Datagram d;
       d.payload = m.bytes;
@@ -204,12 +206,12 @@ int run_sim(const SimOptions& o) {
   sim::InsSim ins(ic, [r = run->get()](double t) { return r->ego(t); });
   InsPcapStream ins_out(*pcap, o.ins_udp);
   std::uint64_t ins_messages = 0;
-  auto write_ins_until = [&](std::int64_t stamp_ns) -> rt::Result<bool> {
+  auto write_ins_until = [&](std::int64_t stamp_ns) -> rt::Status {
     while (ins.next_stamp_ns() <= stamp_ns) {
       if (auto w = ins_out.write(ins.next()); !w) return w;
       ++ins_messages;
     }
-    return true;
+    return {};
   };
   std::array<std::uint8_t, velodyne::kPacketSize> bytes{};
   for (std::uint32_t k = 0; k < n; ++k) {

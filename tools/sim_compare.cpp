@@ -19,6 +19,9 @@
 #include "tools/support/cli_checks.hpp"
 
 namespace stac::tools {
+
+using namespace stac::settings;
+using namespace stac::formats;
 namespace {
 
 constexpr int kRings = 64;
@@ -251,9 +254,9 @@ std::string difference(double sim, double real, bool relative) {
 }
 
 // The bird's-eye pictures of both, side by side at the same scale.
-rt::Result<bool> draw_pair(const std::vector<P>& sim, const std::string& sim_label,
-                           const std::vector<P>& real, const std::string& real_label,
-                           const std::filesystem::path& dir) {
+rt::Status draw_pair(const std::vector<P>& sim, const std::string& sim_label,
+                     const std::vector<P>& real, const std::string& real_label,
+                     const std::filesystem::path& dir) {
   BirdsEyeOptions bo;
   bo.range_m = 40.0;
   bo.size_px = 520;

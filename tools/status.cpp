@@ -11,6 +11,9 @@
 
 namespace stac::tools {
 
+using namespace stac::settings;
+using namespace stac::formats;
+
 rt::Result<CaptureStatus> read_capture_status(const std::filesystem::path& capture,
                                               std::uint16_t port, velodyne::Model model,
                                               bool until_calibration) {

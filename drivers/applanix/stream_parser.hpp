@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <optional>
 #include <span>
+#include <type_traits>
 #include <variant>
 #include <vector>
 
@@ -23,7 +24,13 @@ struct OtherGroup {  // a valid group this parser does not decode (4, 7, 99, 200
   std::span<const std::uint8_t> data;  // after the time/distance block, pad included
 };
 
+static_assert(std::is_trivially_copyable_v<Group1> && std::is_trivially_copyable_v<Group2> &&
+              std::is_trivially_copyable_v<Group3> && std::is_trivially_copyable_v<OtherGroup> &&
+              std::is_trivially_copyable_v<Message>);
+
 struct Parsed {
+  // Every alternative is trivially copyable, so assigning or emplacing one never throws (the
+  // parser's noexcept functions rely on it; clang-tidy cannot see it through std::variant).
   std::variant<Group1, Group2, Group3, OtherGroup, Message> content;
   TimeDistance time;                         // groups only
   std::optional<std::int64_t> time1_gps_ns;  // absolute GPS time of time1 when it is GPS or UTC
@@ -55,7 +62,7 @@ class StreamParser {
   void feed(std::span<const std::uint8_t> chunk) noexcept;
   // The next accepted message, or false when the chunk is used up (a partial message waits in
   // the buffer for the next chunk).
-  bool next(Parsed& out) noexcept;
+  bool next(Parsed& out) noexcept;  // NOLINT(bugprone-exception-escape): see Parsed
   // The stream ended or restarted (end of file, end of a UDP datagram, TCP reconnect): a
   // partial message is dropped and counted as truncated. The GPS week is kept.
   void end_of_stream() noexcept;
@@ -78,7 +85,7 @@ class StreamParser {
   enum class Verdict { need_more, reject, complete };
   Verdict examine() noexcept;
   void drop_front(std::size_t n) noexcept;
-  void decode(Parsed& out) noexcept;
+  void decode(Parsed& out) noexcept;  // NOLINT(bugprone-exception-escape): see Parsed
 
   std::vector<std::uint8_t> buffer_;
   std::size_t used_ = 0;

@@ -78,7 +78,7 @@ void PcapWriter::write_frame(std::uint8_t protocol, std::uint32_t src_ip, std::u
   pcap_dump(reinterpret_cast<u_char*>(dumper_.get()), &h, f);
 }
 
-rt::Result<bool> PcapWriter::write_udp(const Datagram& d) noexcept {
+rt::Status PcapWriter::write_udp(const Datagram& d) noexcept {
   if (!dumper_) return rt::make_error(path_ + ": already closed");
   if (d.payload.size() > kMaxPayload) {
     return rt::make_error(path_ + ": a UDP payload of " + std::to_string(d.payload.size()) +
@@ -92,10 +92,10 @@ rt::Result<bool> PcapWriter::write_udp(const Datagram& d) noexcept {
   put16(udp + 6, 0);  // no UDP checksum (allowed for IPv4)
   if (!d.payload.empty()) std::memcpy(udp + kUdp, d.payload.data(), d.payload.size());
   write_frame(17, d.src_ip, d.dst_ip, udp_len, d.stamp_ns);
-  return true;
+  return {};
 }
 
-rt::Result<bool> PcapWriter::write_tcp(const TcpSegment& s) noexcept {
+rt::Status PcapWriter::write_tcp(const TcpSegment& s) noexcept {
   if (!dumper_) return rt::make_error(path_ + ": already closed");
   if (s.payload.size() > kMaxPayload + kUdp - kTcp) {
     return rt::make_error(path_ + ": a TCP payload of " + std::to_string(s.payload.size()) +
@@ -113,16 +113,16 @@ rt::Result<bool> PcapWriter::write_tcp(const TcpSegment& s) noexcept {
   put16(tcp + 18, 0);      // urgent pointer
   if (!s.payload.empty()) std::memcpy(tcp + kTcp, s.payload.data(), s.payload.size());
   write_frame(6, s.src_ip, s.dst_ip, kTcp + s.payload.size(), s.stamp_ns);
-  return true;
+  return {};
 }
 
-rt::Result<bool> PcapWriter::close() noexcept {
-  if (!dumper_) return true;
+rt::Status PcapWriter::close() noexcept {
+  if (!dumper_) return {};
   const bool flushed = pcap_dump_flush(dumper_.get()) == 0;
   const bool ok = flushed && std::ferror(pcap_dump_file(dumper_.get())) == 0;
   dumper_.reset();
   if (!ok) return rt::make_error(path_ + ": write failed (disk full?)");
-  return true;
+  return {};
 }
 
 }  // namespace stac::io

@@ -23,12 +23,12 @@ class PcapWriter {
   static rt::Result<PcapWriter> open(const std::filesystem::path& path);
 
   // Payloads up to 65507 bytes; larger ones fail. Stamp and addresses come from `d`.
-  rt::Result<bool> write_udp(const Datagram& d) noexcept;
+  rt::Status write_udp(const Datagram& d) noexcept;
   // One TCP segment with s.seq and s.flags (ACK number 0, window 65535, no options and no TCP
   // checksum); payloads up to 65495 bytes. For tests and replays of TCP streams.
-  rt::Result<bool> write_tcp(const TcpSegment& s) noexcept;
+  rt::Status write_tcp(const TcpSegment& s) noexcept;
   // Flushes and closes; reports a failed write (disk full, ...). Also run by the destructor.
-  rt::Result<bool> close() noexcept;
+  rt::Status close() noexcept;
 
  private:
   struct Closer {

@@ -25,7 +25,7 @@ std::string where(const std::filesystem::path& path, int laser) {
 }
 
 // Sanity limits for an HDL-64E: a value outside them is a broken file, not a sensor.
-rt::Result<bool> check_ranges(const std::filesystem::path& path, const Calibration& c) {
+rt::Status check_ranges(const std::filesystem::path& path, const Calibration& c) {
   for (int i = 0; i < c.num_lasers; ++i) {
     const LaserCalibration& l = c.lasers[i];
     auto bad = [&](const char* field, double value, const char* limit) {
@@ -59,7 +59,7 @@ rt::Result<bool> check_ranges(const std::filesystem::path& path, const Calibrati
       << " m is outside (0, 0.1) m";
     return rt::make_error(s.str());
   }
-  return true;
+  return {};
 }
 
 // Places the parsed lasers by id and checks that ids 0..n-1 each appear once.
@@ -185,8 +185,8 @@ rt::Result<Calibration> load_ros_yaml(const std::filesystem::path& path) {
     l.laser_id = static_cast<int>(*id);
     ctx = where(path, l.laser_id);
     struct Field {
-      const char* key;
-      double* dst;
+      const char* key = nullptr;
+      double* dst = nullptr;
       std::optional<double> fallback;
     };
     double min_i = 0, max_i = 255, two_pt = 0;
@@ -329,11 +329,11 @@ rt::Result<Calibration> load_calibration(const std::filesystem::path& path) {
                         "<boost_serialization> or a 'lasers:' list)");
 }
 
-rt::Result<bool> check_calibration(const Calibration& calibration) {
+rt::Status check_calibration(const Calibration& calibration) {
   return check_ranges(calibration.source, calibration);
 }
 
-rt::Result<bool> save_ros_yaml(const Calibration& c, const std::filesystem::path& path) {
+rt::Status save_ros_yaml(const Calibration& c, const std::filesystem::path& path) {
   YAML::Emitter out;
   out.SetDoublePrecision(17);
   out << YAML::BeginMap << YAML::Key << "distance_resolution" << YAML::Value
@@ -363,7 +363,7 @@ rt::Result<bool> save_ros_yaml(const Calibration& c, const std::filesystem::path
   if (!file) return rt::make_error(path.string() + ": cannot write the calibration file");
   file << out.c_str() << '\n';
   if (!file) return rt::make_error(path.string() + ": write failed");
-  return true;
+  return {};
 }
 
 }  // namespace stac::velodyne

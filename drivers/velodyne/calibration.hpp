@@ -45,9 +45,9 @@ rt::Result<Calibration> load_ros_yaml(const std::filesystem::path& path);
 
 // Checks every correction against an HDL-64E's sanity limits; errors name `source`, the laser
 // and the field. The loaders call it; so does the status-stream calibration.
-rt::Result<bool> check_calibration(const Calibration& calibration);
+rt::Status check_calibration(const Calibration& calibration);
 
 // Writes the ROS yaml form (metres, radians), as gen_calibration.py would, without its bugs.
-rt::Result<bool> save_ros_yaml(const Calibration& calibration, const std::filesystem::path& path);
+rt::Status save_ros_yaml(const Calibration& calibration, const std::filesystem::path& path);
 
 }  // namespace stac::velodyne

@@ -13,9 +13,9 @@ namespace {
 constexpr std::array<std::uint8_t, kStatusTypedBytes> kTypedOrder{'H', 'M', 'S', 'D', 'N',
                                                                   'Y', 'G', 'T', 'V'};
 constexpr char kUnit[] = "UNIT#";
-constexpr int kLaserRecords = 7;              // first laser record in the dump
-constexpr int kLaserRecordSize = 28;          // 4 cycles per laser; 21 bytes used
-constexpr int kTail = kStatusDumpBytes - 28;  // date, humidity, unit parameters, checksum
+constexpr std::size_t kLaserRecords = 7;              // first laser record in the dump
+constexpr std::size_t kLaserRecordSize = 28;          // 4 cycles per laser; 21 bytes used
+constexpr std::size_t kTail = kStatusDumpBytes - 28;  // date, humidity, unit parameters, checksum
 constexpr double kDegToRad = std::numbers::pi / 180.0;
 // Scales of the laser record fields (REFERENCE §1): angles in 0.01 deg, lengths in 0.1 cm (mm),
 // the focal slope in 0.1. valgur/velodyne_decoder reads the focal slope in 0.001 instead; the
@@ -57,10 +57,10 @@ GpsState gps_state(std::uint8_t raw) noexcept {
 
 std::uint16_t checksum_of(const std::array<std::uint8_t, kStatusDumpBytes>& dump) noexcept {
   // CRC over bytes 1..20 of every laser record (the id excluded), as the S3 computes it.
-  std::array<std::uint8_t, kMaxLasers * 20> records{};
+  std::array<std::uint8_t, std::size_t{kMaxLasers} * 20> records{};
   for (int i = 0; i < kMaxLasers; ++i) {
-    std::memcpy(records.data() + i * 20, dump.data() + kLaserRecords + i * kLaserRecordSize + 1,
-                20);
+    std::memcpy(records.data() + static_cast<std::size_t>(i) * 20,
+                dump.data() + kLaserRecords + i * kLaserRecordSize + 1, 20);
   }
   return crc16_8005(records);
 }
@@ -292,8 +292,8 @@ std::optional<std::int64_t> utc_time_ns(const SensorStatus& status,
                                         std::uint32_t usec_past_hour) noexcept {
   if (!status.valid) return std::nullopt;
   const DateTime& t = status.time;
-  const std::int64_t cycle_s =
-      days_from_civil(t.year, t.month, t.day) * 86400 + t.hour * 3600 + t.minute * 60 + t.second;
+  const std::int64_t cycle_s = days_from_civil(t.year, t.month, t.day) * 86400 +
+                               std::int64_t{t.hour} * 3600 + std::int64_t{t.minute} * 60 + t.second;
   return resolve_past_hour_ns(usec_past_hour, cycle_s * 1'000'000'000);
 }
 
@@ -332,9 +332,9 @@ StatusByte typed_status_byte(int position, const SensorStatus& s) noexcept {
   return {kTypedOrder[static_cast<std::size_t>(position)], value};
 }
 
-rt::Result<bool> encode_status_sequence(Model model, const SensorStatus& status,
-                                        const UnitParameters& unit, const Calibration& calibration,
-                                        std::span<StatusByte, kStatusDumpPackets> out) {
+rt::Status encode_status_sequence(Model model, const SensorStatus& status,
+                                  const UnitParameters& unit, const Calibration& calibration,
+                                  std::span<StatusByte, kStatusDumpPackets> out) {
   std::array<std::uint8_t, kStatusDumpBytes> dump{};
   std::memcpy(dump.data(), kUnit, 5);
   dump[5] = unit.upper_noise_threshold;
@@ -404,12 +404,12 @@ rt::Result<bool> encode_status_sequence(Model model, const SensorStatus& status,
       out[static_cast<std::size_t>(k)] = typed_status_byte(p, status);
     } else {
       const int index = p - kStatusTypedBytes;
-      out[static_cast<std::size_t>(k)] = {
-          data_type(model, cycle, index),
-          dump[static_cast<std::size_t>(cycle * kStatusDataBytes + index)]};
+      out[static_cast<std::size_t>(k)] = {data_type(model, cycle, index),
+                                          dump[static_cast<std::size_t>(cycle) * kStatusDataBytes +
+                                               static_cast<std::size_t>(index)]};
     }
   }
-  return true;
+  return {};
 }
 
 DateTime utc_date_time(std::int64_t utc_ns) noexcept {

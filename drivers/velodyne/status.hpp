@@ -141,9 +141,9 @@ struct StatusByte {
 StatusByte typed_status_byte(int position, const SensorStatus& status) noexcept;
 // The 4160 status bytes a unit sends for `calibration` (simulator, tests). Fails naming the
 // laser and field when a correction does not fit the dump's 16-bit fields.
-rt::Result<bool> encode_status_sequence(Model model, const SensorStatus& status,
-                                        const UnitParameters& unit, const Calibration& calibration,
-                                        std::span<StatusByte, kStatusDumpPackets> out);
+rt::Status encode_status_sequence(Model model, const SensorStatus& status,
+                                  const UnitParameters& unit, const Calibration& calibration,
+                                  std::span<StatusByte, kStatusDumpPackets> out);
 
 // The UTC calendar date and time of `utc_ns` (ns since 1970).
 DateTime utc_date_time(std::int64_t utc_ns) noexcept;

@@ -163,8 +163,9 @@ class TrackClassifier {
     bool refresh;  // the accumulated part of the holistic descriptor is new
     std::array<float, kHolisticMotionDimensions> motion;
   };
-  // A track kept by begin() (its segment: kept_segments_.segments[track.segment]).
-  struct Kept {
+  // A track kept by begin() (its segment: kept_segments_.segments[track.segment]). No member
+  // initialisers, as for Pending: begin() sets every member.
+  struct Kept {  // NOLINT(cppcoreguidelines-pro-type-member-init)
     tracking::Track track;
     std::uint32_t priority;  // segments described before this scan (0: a new track)
     bool classified;         // update() has taken it

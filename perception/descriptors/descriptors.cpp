@@ -157,6 +157,9 @@ const char* validate(const DescriptorConfig& c) noexcept {
   return "";
 }
 
+// The layout is built before any scan: DescriptorPipeline's constructor builds it, so the
+// static below is already initialized when the per-scan path reads it and nothing can throw.
+// NOLINTNEXTLINE(bugprone-exception-escape)
 const std::array<Space, kSpaceCount>& spaces() noexcept {
   return layout().spaces;
 }
@@ -208,7 +211,7 @@ struct DescriptorPipeline::State {
                                         // (first its spin image bin)
   std::vector<std::int32_t> row_index;  // a point's row in the view being drawn
   std::vector<float> radius;            // a point's distance from the vertical axis
-  std::uint32_t spin_count[4][kMaxSpinCells + 1];
+  std::uint32_t spin_count[4][kMaxSpinCells + 1]{};
   std::size_t n = 0;
   float yaw = 0.0f;
   // Views (0..255 scale, smoothed) and their sizes; accumulators shared between views.
@@ -218,7 +221,7 @@ struct DescriptorPipeline::State {
   GradientCache gradients;
   HogWindow windows[3];                      // 15x30, 30x30, 15x15
   std::vector<float> projection[kViews][2];  // raw size x kHogProjectedDim (transposed)
-  float raw[kMaxHogRaw];
+  float raw[kMaxHogRaw]{};
 };
 
 DescriptorPipeline::DescriptorPipeline(const DescriptorConfig& config) : config_(config) {
@@ -387,6 +390,7 @@ void mean_row(const float* __restrict sum, const float* __restrict count, int c0
 
 }  // namespace
 
+// NOLINTNEXTLINE(bugprone-exception-escape): the layout exists already (see spaces())
 void DescriptorPipeline::compute(const SegmentView& segment, Descriptors& out) noexcept {
   State& st = *state_;
   out.values.fill(0.0f);

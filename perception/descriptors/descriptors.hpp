@@ -68,7 +68,7 @@ inline constexpr std::size_t kDimensions = 3 + (100 + 98 + 200 + 50) + 24 * 20; 
 inline constexpr std::size_t kHogProjectedDim = 20;
 
 // The 29 spaces in output order (names are stable: models refer to them).
-const std::array<Space, kSpaceCount>& spaces() noexcept;
+const std::array<Space, kSpaceCount>& spaces() noexcept;  // NOLINT(bugprone-exception-escape)
 
 enum class Status : std::uint8_t {
   kOk,
@@ -99,6 +99,7 @@ class DescriptorPipeline {
   ~DescriptorPipeline();
 
   // Overwrites `out` with the descriptors of one segment. No allocation, exception or I/O.
+  // NOLINTNEXTLINE(bugprone-exception-escape): see spaces()
   void compute(const SegmentView& segment, Descriptors& out) noexcept;
 
   // Intermediate results of the last compute() (tests, visualisation). Canonical frame: origin

@@ -12,7 +12,7 @@ namespace {
 const std::filesystem::path kShipped = std::filesystem::path(STAC_SOURCE_DIR) / "config/stac.yaml";
 
 TEST(CanConfig, TheShippedConfigLoadsAndMapsTheShippedDbc) {
-  const auto c = tools::load_can_settings(kShipped);
+  const auto c = settings::load_can_settings(kShipped);
   ASSERT_TRUE(c) << c.error().message;
   EXPECT_EQ(c->transport, Transport::kSocketCan);
   EXPECT_EQ(c->socketcan.interface, "can0");
@@ -49,7 +49,7 @@ TEST(CanConfig, EveryErrorNamesTheKey) {
       {variant("interface", "interface: a_very_long_interface"), "'can.interface' must have"},
   };
   for (const auto& [file, expected] : cases) {
-    const auto c = tools::load_can_settings(file);
+    const auto c = settings::load_can_settings(file);
     ASSERT_FALSE(c) << expected;
     EXPECT_NE(c.error().message.find(expected), std::string::npos) << c.error().message;
     EXPECT_NE(c.error().message.find(file.string()), std::string::npos);

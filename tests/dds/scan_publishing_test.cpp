@@ -8,7 +8,7 @@
 #include "dds/dds_test_support.hpp"
 #include "dds/idl_types.hpp"
 
-namespace stac::tools {
+namespace stac::dds {
 namespace {
 
 TEST(ScanPublishing, SegmentLabelsAreTheClassesOfTheTracksTheyUpdated) {
@@ -131,4 +131,4 @@ TEST(ScanPublishing, PointCloudIsWrittenForAReaderOnlyWithItsSegmentsLabels) {
 }
 
 }  // namespace
-}  // namespace stac::tools
+}  // namespace stac::dds

@@ -7,7 +7,7 @@
 
 #include "settings/dds_settings.hpp"
 
-namespace stac::tools {
+namespace stac::settings {
 namespace {
 
 const std::filesystem::path kConfig = std::filesystem::path(STAC_SOURCE_DIR) / "config/stac.yaml";
@@ -64,4 +64,4 @@ TEST(DdsSettings, MissingAndInvalidKeysAreNamed) {
 }
 
 }  // namespace
-}  // namespace stac::tools
+}  // namespace stac::settings

@@ -15,7 +15,7 @@
 #include "perception/learning/track_training.hpp"
 #include "rt/splitmix64.hpp"
 
-namespace stac::tools {
+namespace stac::formats {
 namespace {
 
 // An empty folder of this name under the system temp folder.
@@ -293,4 +293,4 @@ TEST(DatasetConsistency, OffLabelSegmentsFollowTheThesisRule) {
 }
 
 }  // namespace
-}  // namespace stac::tools
+}  // namespace stac::formats

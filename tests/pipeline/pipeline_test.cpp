@@ -30,7 +30,7 @@ namespace {
 constexpr const char* kYaml = "velodyne/calib/rosdrivers_64e_s2.1-sztaki.yaml";
 
 struct Fixture {
-  tools::VelodyneSettings velodyne;
+  settings::VelodyneSettings velodyne;
   PipelineConfig config;
   std::vector<std::unique_ptr<velodyne::Scan>> scans;  // complete scans, decoded once
 };
@@ -46,12 +46,12 @@ Fixture decoded_drive(const std::string& name) {
                                        stac::testing::shared_data(kYaml).string() + " --out " +
                                        pcap + " --truth " + (dir / "truth.jsonl").string());
   EXPECT_EQ(sim.code, 0) << sim.output;
-  const std::filesystem::path config = tools::default_config_path();
-  f.velodyne = *tools::load_velodyne_settings(config);
-  const tools::EgoSettings ego = *tools::load_ego_settings(config);
+  const std::filesystem::path config = settings::default_config_path();
+  f.velodyne = *settings::load_velodyne_settings(config);
+  const settings::EgoSettings ego = *settings::load_ego_settings(config);
   f.config = {.deskew = ego.deskew,
-              .segmenter = *tools::load_segmentation_settings(config),
-              .tracker = *tools::load_tracking_config(config),
+              .segmenter = *settings::load_segmentation_settings(config),
+              .tracker = *settings::load_tracking_config(config),
               .classifier = {},
               .model = nullptr,
               .describe = false,

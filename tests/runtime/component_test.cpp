@@ -28,7 +28,7 @@ ComponentSettings loopback_settings(std::uint32_t domain, const std::string& mod
   s->pipeline.velodyne.calibration = stac::testing::shared_data(kYaml);
   s->pipeline.velodyne.bind_address = "127.0.0.1";
   s->pipeline.velodyne.port = 0;
-  s->run.ins = tools::InsTransport::kNone;
+  s->run.ins = settings::InsTransport::kNone;
   s->run.can = false;
   s->can.reset();
   s->run.lock_memory = false;

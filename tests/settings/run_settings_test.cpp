@@ -6,7 +6,7 @@
 #include <fstream>
 #include <string>
 
-namespace stac::tools {
+namespace stac::settings {
 namespace {
 
 const std::filesystem::path kShipped =
@@ -102,4 +102,4 @@ TEST(RunSettings, MissingOrInvalidKeysAreNamed) {
 }
 
 }  // namespace
-}  // namespace stac::tools
+}  // namespace stac::settings

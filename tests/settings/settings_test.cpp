@@ -10,7 +10,7 @@
 #include <regex>
 #include <sstream>
 
-namespace stac::tools {
+namespace stac::settings {
 namespace {
 
 const std::filesystem::path kShipped = std::filesystem::path(STAC_SOURCE_DIR) / "config/stac.yaml";
@@ -188,4 +188,4 @@ TEST(ClassificationSettings, EveryBrokenKeyIsNamed) {
 }
 
 }  // namespace
-}  // namespace stac::tools
+}  // namespace stac::settings

@@ -6,7 +6,7 @@
 
 #include "settings/settings.hpp"
 
-namespace stac::tools {
+namespace stac::settings {
 namespace {
 
 const std::filesystem::path kShipped =
@@ -82,4 +82,4 @@ TEST(TrackingSettings, MissingWrongOrInvalidKeysAreNamed) {
 }
 
 }  // namespace
-}  // namespace stac::tools
+}  // namespace stac::settings

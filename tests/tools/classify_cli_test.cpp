@@ -163,13 +163,13 @@ TEST_F(ClassifyCli, DatasetTrainEvalBeatsThePriorOnAHeldOutDrive) {
       if (t.segment >= 0 && t.classified) last[t.id] = t.cls;
     }
   }
-  auto test_set = stac::tools::read_dataset(at("test_data"));
+  auto test_set = stac::formats::read_dataset(at("test_data"));
   ASSERT_TRUE(test_set) << test_set.error().message;
   std::size_t agree = 0, consistent = 0, agree_consistent = 0;
-  for (const stac::tools::DatasetTrack& t : test_set->tracks) {
+  for (const stac::formats::DatasetTrack& t : test_set->tracks) {
     const bool right = last[t.id] == stac::classification::class_name(test_set->classes, t.label);
     agree += right ? 1 : 0;
-    if (stac::tools::consistent(t)) {
+    if (stac::formats::consistent(t)) {
       ++consistent;
       agree_consistent += right ? 1 : 0;
     }
@@ -199,7 +199,7 @@ TEST_F(ClassifyCli, ExtraClassesFromTheDatasetGoThroughTrainEvalAndProcess) {
   const CliResult test_data = stac("dataset --in " + at("test.pcap") + " --truth " +
                                    at("test.jsonl") + classes + " --out " + at("test5"));
   ASSERT_EQ(test_data.code, 0) << test_data.output;
-  auto test_set = stac::tools::read_dataset(at("test5"));
+  auto test_set = stac::formats::read_dataset(at("test5"));
   ASSERT_TRUE(test_set) << test_set.error().message;
   EXPECT_EQ(test_set->classes.size(), 5u);
 

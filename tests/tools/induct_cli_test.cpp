@@ -122,7 +122,7 @@ TEST_F(InductCli, OracleRoundsTeachAModelThatEvalAndProcessTake) {
   EXPECT_NE(again.output.find("taken in an earlier run, skipped"), std::string::npos)
       << again.output;
   EXPECT_NE(again.output.find("round 3:"), std::string::npos) << again.output;
-  auto state = stac::tools::read_induction_state(at("state"));
+  auto state = stac::formats::read_induction_state(at("state"));
   ASSERT_TRUE(state.has_value()) << state.error().message;
   EXPECT_EQ(state->rounds, 3u);
 }
@@ -138,7 +138,7 @@ TEST_F(InductCli, AKillAtAnyMomentLosesAtMostTheRoundInProgress) {
     if (WIFEXITED(status) && WEXITSTATUS(status) == 137) ++kills;
     // Whatever the moment, what is on disk loads (or is not there yet).
     if (fs::exists(at("killed") + "/state.bin")) {
-      auto s = stac::tools::read_induction_state(at("killed"));
+      auto s = stac::formats::read_induction_state(at("killed"));
       ASSERT_TRUE(s.has_value()) << "after a kill at " << after << " s: " << s.error().message;
     }
   }
@@ -146,15 +146,15 @@ TEST_F(InductCli, AKillAtAnyMomentLosesAtMostTheRoundInProgress) {
   // The same command again, as a user would after a kill: it goes on from what is on disk.
   const CliResult r = stac(command);
   ASSERT_EQ(r.code, 0) << r.output;
-  auto s = stac::tools::read_induction_state(at("killed"));
+  auto s = stac::formats::read_induction_state(at("killed"));
   ASSERT_TRUE(s.has_value()) << s.error().message;
   EXPECT_EQ(s->rounds, 2u);  // one round per chunk, none twice
   std::set<std::pair<std::uint32_t, std::uint64_t>> labelled;
   for (const auto& t : s->labels)
     EXPECT_TRUE(labelled.insert({t.source, t.track}).second) << "a track labelled twice";
   for (const auto& src : s->sources) {
-    if (src.role == stac::tools::SourceRole::kUnlabeled) {
-      EXPECT_EQ(src.stage, stac::tools::ChunkStage::kAsked) << src.path;
+    if (src.role == stac::formats::SourceRole::kUnlabeled) {
+      EXPECT_EQ(src.stage, stac::formats::ChunkStage::kAsked) << src.path;
     }
   }
   // Every answer written is a whole line, and every one is in the state.
@@ -214,7 +214,7 @@ TEST_F(InductCli, UnlabeledDrivesAreChunksAndBackgroundButNeverLabels) {
   r = stac("induct --state " + at("unl") + " --rounds 1 --warm-rounds 40 --reset-rounds 120");
   ASSERT_EQ(r.code, 0) << r.output;
   EXPECT_NE(r.output.find("retrospection: 1 new labels"), std::string::npos) << r.output;
-  auto state = stac::tools::read_induction_state(at("unl"));
+  auto state = stac::formats::read_induction_state(at("unl"));
   ASSERT_TRUE(state.has_value()) << state.error().message;
   EXPECT_EQ(state->rounds, 2u);
 }

@@ -97,7 +97,7 @@ TEST(KittiObjectsCli, BrokenFoldersAndFilesAreNamed) {
 }
 
 TEST(KittiFiles, LabelBoxesHoldTheirCentreAndNotWhatIsBesideThem) {
-  KittiObject car;
+  formats::KittiObject car;
   car.height = 1.5;
   car.width = 1.8;
   car.length = 4.0;

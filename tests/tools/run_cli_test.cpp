@@ -492,12 +492,12 @@ TEST(ProcessDds, EveryScanOfTheTracksFileIsPublishedInOrderWithItsTracks) {
 TEST(RunCli, SighupSwapsInTheModelFileAndHealthSaysWhichModelIsInUse) {
   const auto dir = fresh_dir("reload");
   const auto file = dir / "model.stacmodel";
-  auto a = read_model_file(std::filesystem::path(STAC_SOURCE_DIR) /
-                           "config/models/stac_default.stacmodel");
+  auto a = formats::read_model_file(std::filesystem::path(STAC_SOURCE_DIR) /
+                                    "config/models/stac_default.stacmodel");
   ASSERT_TRUE(a.has_value()) << a.error().message;
   classification::TrackClassifierModel b = *a;
   b.adbf.alpha[0] += 0.25f;  // another model of the same classes
-  ASSERT_TRUE(write_model_file(file, *a));
+  ASSERT_TRUE(formats::write_model_file(file, *a));
   const std::uint64_t hash_a = classification::model_hash(*a),
                       hash_b = classification::model_hash(b);
   ASSERT_NE(hash_a, hash_b);
@@ -541,7 +541,7 @@ TEST(RunCli, SighupSwapsInTheModelFileAndHealthSaysWhichModelIsInUse) {
   EXPECT_EQ(s.reloads, 0u);
   EXPECT_EQ(s.refused, 0u);
 
-  ASSERT_TRUE(write_model_file(file, b));
+  ASSERT_TRUE(formats::write_model_file(file, b));
   ASSERT_TRUE(run.signal(SIGHUP));
   s = wait_for([&](const Seen& x) { return x.hash == hash_b; });
   EXPECT_EQ(s.hash, hash_b) << run.output();

@@ -12,7 +12,7 @@ namespace {
 constexpr double kForbidden = 1e9;
 constexpr double kEps = 1e-9;
 constexpr double kMatchSimilarity = 0.5;  // CLEAR MOT: d <= zero_distance / 2
-constexpr double kBackgroundMargin_m = 0.5;
+constexpr double kBackgroundMarginM = 0.5;
 
 double alpha(int a) {
   return 0.05 * (a + 1);
@@ -180,9 +180,11 @@ EvalResult evaluate(const std::vector<TruthScanRecord>& truth_in,
 
   // Pair scans by time: each output scan with the nearest truth scan within the tolerance.
   std::vector<const TruthScanRecord*> truth;
+  truth.reserve(truth_in.size());
   for (const auto& t : truth_in) truth.push_back(&t);
   std::sort(truth.begin(), truth.end(), [](auto* a, auto* b) { return a->stamp_ns < b->stamp_ns; });
   std::vector<const TracksScan*> outputs;
+  outputs.reserve(tracks_in.size());
   for (const auto& o : tracks_in) outputs.push_back(&o);
   std::stable_sort(outputs.begin(), outputs.end(),
                    [](auto* a, auto* b) { return a->stamp_ns < b->stamp_ns; });
@@ -263,7 +265,7 @@ EvalResult evaluate(const std::vector<TruthScanRecord>& truth_in,
       }
       bool ignore = range_of(t.x, t.y, ts->ego) > c.max_range_m;
       for (const TruthObjectRecord& o : ts->objects) {
-        if (!is_tracked_class(c, o.cls) && inside_box_xy(o, t.x, t.y, kBackgroundMargin_m))
+        if (!is_tracked_class(c, o.cls) && inside_box_xy(o, t.x, t.y, kBackgroundMarginM))
           ignore = true;
       }
       if (const auto s = segment_by_id.find(static_cast<std::uint32_t>(t.segment));

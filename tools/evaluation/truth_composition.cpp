@@ -5,6 +5,8 @@
 
 namespace stac::tools {
 
+using namespace stac::settings;
+
 pipeline::PipelineConfig offline_pipeline_config(
     const PipelineSettings& settings,
     std::shared_ptr<const classification::TrackClassifierModel> model, bool describe) {

@@ -18,7 +18,7 @@ namespace stac::tools {
 // The per-scan pipeline of the settings, timed by thread CPU time (offline, deterministic).
 // `model` null: no classification (unless `describe`: the classify stage runs for an observer).
 pipeline::PipelineConfig offline_pipeline_config(
-    const PipelineSettings& settings,
+    const settings::PipelineSettings& settings,
     std::shared_ptr<const classification::TrackClassifierModel> model = nullptr,
     bool describe = false);
 

@@ -110,7 +110,7 @@ void BirdsEye::add_legend(const std::string& line) {
               cv::Scalar(230, 230, 230), 1, cv::LINE_AA);
 }
 
-rt::Result<bool> BirdsEye::save(const std::filesystem::path& png) const {
+rt::Status BirdsEye::save(const std::filesystem::path& png) const {
   std::vector<std::uint8_t> copy = image_;
   cv::Mat out = canvas(copy, options_.size_px);
   if (options_.height_bar) {  // height colour bar, bottom left

@@ -38,7 +38,7 @@ class BirdsEye {
   void add_label(float x, float y, const std::string& text, Bgr colour);
   // A text line in the legend (top left).
   void add_legend(const std::string& line);
-  rt::Result<bool> save(const std::filesystem::path& png) const;
+  rt::Status save(const std::filesystem::path& png) const;
 
  private:
   BirdsEyeOptions options_;

@@ -27,7 +27,7 @@ std::string label(double v) {
 
 }  // namespace
 
-rt::Result<bool> save_chart(const Chart& chart, const std::filesystem::path& png) {
+rt::Status save_chart(const Chart& chart, const std::filesystem::path& png) {
   const cv::Scalar colours[] = {
       {200, 120, 40}, {40, 110, 230}, {60, 170, 60}, {150, 60, 160}};  // BGR
   cv::Mat img(chart.height_px, chart.width_px, CV_8UC3, cv::Scalar(255, 255, 255));
@@ -89,7 +89,7 @@ rt::Result<bool> save_chart(const Chart& chart, const std::filesystem::path& png
   } catch (const cv::Exception& e) {
     return rt::make_error(png.string() + ": cannot write the chart: " + e.what());
   }
-  return true;
+  return {};
 }
 
 }  // namespace stac::tools

@@ -23,6 +23,6 @@ struct Chart {
 };
 
 // Writes the chart; fails naming the file when it cannot be written.
-rt::Result<bool> save_chart(const Chart& chart, const std::filesystem::path& png);
+rt::Status save_chart(const Chart& chart, const std::filesystem::path& png);
 
 }  // namespace stac::tools

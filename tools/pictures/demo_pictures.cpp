@@ -45,8 +45,7 @@ std::vector<PointM> in_vehicle(const std::vector<PointM>& world, const ToVehicle
 
 }  // namespace
 
-rt::Result<bool> draw_drive(const DriveView& v, DrivePicture picture,
-                            const std::filesystem::path& png) {
+rt::Status draw_drive(const DriveView& v, DrivePicture picture, const std::filesystem::path& png) {
   const ToVehicle to(v);
   BirdsEyeOptions o;
   o.height_bar = false;

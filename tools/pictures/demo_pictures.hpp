@@ -45,7 +45,7 @@ enum class DrivePicture {
   kWholeDrive,  // the whole drive's extent: the vehicle's path and every confirmed track's path
 };
 
-rt::Result<bool> draw_drive(const DriveView& view, DrivePicture picture,
-                            const std::filesystem::path& png);
+rt::Status draw_drive(const DriveView& view, DrivePicture picture,
+                      const std::filesystem::path& png);
 
 }  // namespace stac::tools

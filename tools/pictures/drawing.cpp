@@ -11,8 +11,8 @@
 
 namespace stac::tools {
 
-rt::Result<bool> write_png(const std::filesystem::path& png, const cv::Mat& img,
-                           const std::vector<int>& params) {
+rt::Status write_png(const std::filesystem::path& png, const cv::Mat& img,
+                     const std::vector<int>& params) {
   try {
     if (!cv::imwrite(png.string(), img, params)) {
       return rt::make_error(png.string() + ": cannot write the picture (is the folder there?)");
@@ -20,6 +20,10 @@ rt::Result<bool> write_png(const std::filesystem::path& png, const cv::Mat& img,
   } catch (const cv::Exception& e) {
     return rt::make_error(png.string() + ": cannot write the picture: " + e.what());
   }
+  return {};
+}
+
+bool pictures_built() noexcept {
   return true;
 }
 
@@ -31,10 +35,10 @@ Bgr segment_colour(std::size_t i) {
   return {c[0], c[1], c[2]};
 }
 
-rt::Result<bool> save_bar_chart(const std::filesystem::path& png, const std::string& title,
-                                const std::vector<std::string>& groups,
-                                const std::vector<std::string>& series,
-                                const std::vector<std::vector<double>>& values, double lo) {
+rt::Status save_bar_chart(const std::filesystem::path& png, const std::string& title,
+                          const std::vector<std::string>& groups,
+                          const std::vector<std::string>& series,
+                          const std::vector<std::vector<double>>& values, double lo) {
   const int w = 900, h = 480, left = 60, right = 20, top = 50, bottom = 70;
   cv::Mat img(h, w, CV_8UC3, cv::Scalar(255, 255, 255));
   const cv::Scalar palette[] = {
@@ -76,9 +80,9 @@ rt::Result<bool> save_bar_chart(const std::filesystem::path& png, const std::str
   return write_png(png, img);
 }
 
-rt::Result<bool> save_confusion_matrix(const std::filesystem::path& png, const std::string& title,
-                                       const std::vector<std::string>& names,
-                                       const std::vector<std::vector<std::uint64_t>>& counts) {
+rt::Status save_confusion_matrix(const std::filesystem::path& png, const std::string& title,
+                                 const std::vector<std::string>& names,
+                                 const std::vector<std::vector<std::uint64_t>>& counts) {
   constexpr int kCell = 90, kLeft = 120, kTop = 70;
   const int n = static_cast<int>(names.size());
   cv::Mat img(kTop + kCell * n + 40, kLeft + kCell * n + 20, CV_8UC3, cv::Scalar(255, 255, 255));
@@ -110,9 +114,8 @@ rt::Result<bool> save_confusion_matrix(const std::filesystem::path& png, const s
   return write_png(png, img);
 }
 
-rt::Result<bool> save_side_by_side(const std::filesystem::path& left,
-                                   const std::filesystem::path& right,
-                                   const std::filesystem::path& png) {
+rt::Status save_side_by_side(const std::filesystem::path& left, const std::filesystem::path& right,
+                             const std::filesystem::path& png) {
   const cv::Mat a = cv::imread(left.string()), b = cv::imread(right.string());
   if (a.empty() || b.empty() || a.rows != b.rows) {
     return rt::make_error(png.string() + ": cannot put " + left.string() + " and " +

@@ -10,7 +10,7 @@
 namespace stac::tools {
 
 // Fails naming the file: unwritable (is the folder there?), or OpenCV's own error.
-rt::Result<bool> write_png(const std::filesystem::path& png, const cv::Mat& img,
-                           const std::vector<int>& params = {});
+rt::Status write_png(const std::filesystem::path& png, const cv::Mat& img,
+                     const std::vector<int>& params = {});
 
 }  // namespace stac::tools

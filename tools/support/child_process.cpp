@@ -28,6 +28,7 @@ rt::Result<ChildProcess> ChildProcess::start_program(const std::filesystem::path
   std::vector<std::string> words{program.string()};
   words.insert(words.end(), args.begin(), args.end());
   std::vector<char*> argv;
+  argv.reserve(words.size() + 1);
   for (std::string& w : words) argv.push_back(w.data());
   argv.push_back(nullptr);
   posix_spawn_file_actions_t fa;
