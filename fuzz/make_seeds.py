@@ -45,6 +45,19 @@ grp = b"".join(payloads(f"{SHARED}/applanix/clearpath_basic_data_smoke.pcap"))
 for i in range(4):
     put("applanix_stream_fuzz", f"capture_{i}", grp[i * 3000:(i + 1) * 3000])
 
+# Capture files: the head of the real Applanix capture (TCP), and the sample Velodyne packet in
+# a one-record capture (Ethernet, IPv4, UDP to port 2368) that a truncation corrupts.
+capture = open(f"{SHARED}/applanix/clearpath_basic_data_smoke.pcap", "rb").read()
+put("pcap_file_fuzz", "applanix_head", capture[:6000])
+udp = struct.pack(">HHHH", 2368, 2368, 8 + len(packet), 0) + packet
+ip = struct.pack(">BBHHHBBH4s4s", 0x45, 0, 20 + len(udp), 0, 0, 64, 17, 0,
+                 bytes([192, 168, 3, 43]), bytes([255, 255, 255, 255]))
+frame = b"\xff" * 6 + b"\x60\x76\x88\x00\x00\x00" + b"\x08\x00" + ip + udp
+velodyne_pcap = (struct.pack("<IHHiIII", 0xA1B2C3D4, 2, 4, 0, 0, 65535, 1) +
+                 struct.pack("<IIII", 1700000000, 0, len(frame), len(frame)) + frame)
+put("pcap_file_fuzz", "velodyne_packet", velodyne_pcap)
+put("pcap_file_fuzz", "velodyne_packet_cut", velodyne_pcap[:-300])
+
 put("can_text_fuzz", "vehicle.dbc", open("config/can/vehicle.dbc", "rb").read())
 put("can_text_fuzz", "candump.log",
     b"(1700000000.000000) can0 123#DEADBEEF00112233\n(1700000000.010000) can0 1F0#0102\n"
