@@ -8,6 +8,7 @@
 
 #include "runtime/component.hpp"
 #include "settings/settings.hpp"
+#include "stac_version.hpp"
 
 int main(int argc, char** argv) try {
   CLI::App app{
@@ -21,7 +22,7 @@ int main(int argc, char** argv) try {
                  "configuration file (default: $STAC_CONFIG or the shipped config/stac.yaml)");
   app.add_option("--seconds", seconds, "stop after this many seconds (default: run until stopped)")
       ->check(CLI::Range(0.0, 1e9));
-  app.set_version_flag("--version", std::string("stac-node ") + STAC_VERSION);
+  app.set_version_flag("--version", std::string("stac-node ") + STAC_VERSION_LINE);
   CLI11_PARSE(app, argc, argv);
   auto settings = stac::runtime::load_component_settings(stac::settings::config_path(config));
   if (!settings) {

@@ -5,6 +5,7 @@
 #include <exception>
 #include <new>
 
+#include "stac_version.hpp"
 #include "tools/commands.hpp"
 #include "tools/pictures/drawing.hpp"
 #include "tools/support/cli_checks.hpp"
@@ -33,6 +34,8 @@ int main(int argc, char** argv) try {
       "Decodes sensor packets (live UDP or pcap) into calibrated, timed 360-degree scans.\n"
       "Configuration: config/stac.yaml (or --config / $STAC_CONFIG).",
       "stac"};
+  app.set_version_flag("--version", std::string("stac ") + STAC_VERSION_LINE,
+                       "print the version and the git commit it was built from, and exit");
   app.require_subcommand(1);
   app.footer(
       "Examples:\n"

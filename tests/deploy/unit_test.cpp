@@ -153,3 +153,37 @@ TEST(UdevRule, GivesTheServiceGroupThePmQosDeviceTheRunHolds) {
 }
 
 }  // namespace
+
+namespace {
+
+// "<name> <version> (git <commit>)" of `<exe> --version`: the commit, or empty when the line
+// is not of that form.
+std::string commit_of(const std::string& exe, const std::string& name) {
+  const auto r = stac::testing::run_shell(exe + " --version");
+  EXPECT_EQ(r.code, 0) << r.output;
+  std::smatch m;
+  const std::regex line(name + " [0-9]+\\.[0-9]+\\.[0-9]+ \\(git ([^)]*)\\)\n");
+  if (!std::regex_match(r.output, m, line)) {
+    ADD_FAILURE() << exe << " --version printed: " << r.output;
+    return "";
+  }
+  return m[1];
+}
+
+}  // namespace
+
+TEST(Version, StacAndStacNodeNameTheVersionAndTheCommitTheyWereBuiltFrom) {
+  const std::string of_stac = commit_of(STAC_CLI, "stac");
+  const std::string of_node = commit_of(STAC_NODE, "stac-node");
+  EXPECT_EQ(of_stac, of_node);
+  const std::string git = "git -C " + std::string(STAC_SOURCE_DIR);
+  if (stac::testing::run_shell(git + " rev-parse --git-dir").code != 0) {
+    EXPECT_EQ(of_stac.rfind("unknown", 0), 0u) << of_stac;
+    GTEST_SKIP() << "not a git checkout: the commit is unknown, as printed";
+  }
+  // A commit of this repository (12 hex digits), "+changes" when tracked files differed.
+  std::smatch m;
+  ASSERT_TRUE(std::regex_match(of_stac, m, std::regex("([0-9a-f]{12})(\\+changes)?"))) << of_stac;
+  EXPECT_EQ(stac::testing::run_shell(git + " cat-file -e " + m[1].str() + "^{commit}").code, 0)
+      << m[1] << " is not a commit of " << STAC_SOURCE_DIR;
+}
