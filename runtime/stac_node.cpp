@@ -40,9 +40,7 @@ int main(int argc, char** argv) try {
   stac::runtime::print_summary((*component)->summary(), settings->name, stderr);
   return 0;
 } catch (const std::bad_alloc&) {
-  std::fprintf(stderr,
-               "stac-node: out of memory while allocating what the configuration asks for; lower "
-               "the capacities (max_* keys, classification.accumulated_points) or free memory\n");
+  std::fprintf(stderr, "stac-node: %s\n", stac::settings::kOutOfMemoryAtStartUp);
   return 1;
 } catch (const std::exception& e) {
   std::fprintf(stderr, "stac-node: %s\n", e.what());

@@ -19,6 +19,12 @@
 
 namespace stac::settings {
 
+// What `stac` and `stac-node` say when start-up cannot allocate every capacity the configuration
+// asks for (a std::bad_alloc escaping a command), after "<program>: ".
+inline constexpr const char* kOutOfMemoryAtStartUp =
+    "out of memory while allocating what the configuration asks for; lower the capacities (max_* "
+    "keys, classification.accumulated_points) or free memory";
+
 struct VelodyneSettings {
   velodyne::ScanAssemblerConfig assembler;
   std::filesystem::path calibration;  // empty: from the status stream

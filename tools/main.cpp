@@ -5,6 +5,7 @@
 #include <exception>
 #include <new>
 
+#include "settings/settings.hpp"
 #include "stac_version.hpp"
 #include "tools/commands.hpp"
 #include "tools/pictures/drawing.hpp"
@@ -98,9 +99,7 @@ int main(int argc, char** argv) try {
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   } catch (const std::bad_alloc&) {
-    std::fprintf(stderr,
-                 "stac: out of memory while allocating what the configuration asks for; lower the "
-                 "capacities (max_* keys, classification.accumulated_points) or free memory\n");
+    std::fprintf(stderr, "stac: %s\n", stac::settings::kOutOfMemoryAtStartUp);
     return 1;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "stac: %s\n", e.what());
