@@ -15,7 +15,12 @@ packages=(
   openssl  # deploy/dds-security.sh: the DDS Security CAs, certificates and signed documents
   clang-format clang-tidy  # .ci/check-style (STYLE.md rule 14)
   clang-14 libclang-rt-14-dev  # fuzz/: libFuzzer harnesses with ASan + UBSan (fuzz/run.sh)
+  libcpp-httplib-dev  # stac label: the local web page of group induction
+  chromium  # tests/web: stac label's page tested in a real headless browser
 )
+# node and npm run the browser tests (tests/web, puppeteer-core from npm); Debian's nodejs unless
+# a node is already installed (e.g. from NodeSource, whose package holds npm too).
+if ! command -v node >/dev/null || ! command -v npm >/dev/null; then packages+=(nodejs npm); fi
 
 missing=()
 for p in "${packages[@]}"; do
@@ -24,13 +29,21 @@ done
 
 if ((${#missing[@]} == 0)); then
   echo "install-deps: all ${#packages[@]} packages present"
-  exit 0
+else
+  sudo=""
+  if [[ $(id -u) -ne 0 ]]; then sudo="sudo"; fi
+  echo "install-deps: installing ${missing[*]}"
+  export DEBIAN_FRONTEND=noninteractive
+  $sudo apt-get update -qq
+  $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+  echo "install-deps: done"
 fi
 
-sudo=""
-if [[ $(id -u) -ne 0 ]]; then sudo="sudo"; fi
-echo "install-deps: installing ${missing[*]}"
-export DEBIAN_FRONTEND=noninteractive
-$sudo apt-get update -qq
-$sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
-echo "install-deps: done"
+# The browser tests' npm packages, at the versions tests/web/package-lock.json pins (skipped when
+# they are there already).
+web="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)/tests/web"
+if ! (cd "$web" && node -e 'const want = require("./package.json").dependencies["puppeteer-core"];
+      process.exit(require("puppeteer-core/package.json").version === want ? 0 : 1)' 2>/dev/null); then
+  echo "install-deps: npm packages for tests/web"
+  (cd "$web" && npm ci --no-audit --no-fund --loglevel=error >/dev/null)
+fi

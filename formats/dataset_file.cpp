@@ -21,7 +21,10 @@ constexpr std::size_t kHeaderBytes = 8 + 4 * 4 + 8 * 3;
 using classification::ClassIndex;
 constexpr std::uint32_t kVersion2 = 2;  // the default classes, labels 0..3 (3: background)
 constexpr std::uint32_t kVersion2Background = 3;
-constexpr std::uint32_t kVersion3 = 3;  // class names, always labelled
+constexpr std::uint32_t kVersion3 = 3;           // class names, always labelled
+constexpr std::uint32_t kVersion4 = 4;           // labelled or not; no paths or snapshots
+constexpr std::size_t kMaxStoredSnapshots = 16;  // what a reader accepts
+constexpr std::size_t kMaxStoredSnapshotPoints = 4096;
 
 std::size_t segment_dims() {
   return descriptors::kDimensions;
@@ -106,6 +109,14 @@ rt::Status write_dataset(const std::filesystem::path& dir, const Dataset& data) 
     put(b, t.off_label_segments);
     put_floats(b, t.segment_rows);
     put_floats(b, t.holistic_rows);
+    put(b, static_cast<std::uint32_t>(t.path.size() / 2));
+    put_floats(b, t.path);
+    put(b, static_cast<std::uint32_t>(t.snapshots.size()));
+    for (const TrackSnapshot& snap : t.snapshots) {
+      put(b, snap.segment);
+      put(b, static_cast<std::uint32_t>(snap.points.size() / 4));
+      put_floats(b, snap.points);
+    }
     const char* name = classification::class_name(data.classes, t.label);
     classes[name] = classes[name].get<std::uint64_t>() + 1;
     if (!consistent(t)) inconsistent[name] = inconsistent[name].get<std::uint64_t>() + 1;
@@ -164,7 +175,8 @@ rt::Result<Dataset> read_dataset(const std::filesystem::path& dir) {
   std::uint32_t version = 0, sd = 0, hd = 0, nsources = 0;
   std::uint64_t sh = 0, hh = 0, ntracks = 0;
   r.get(version);
-  if (version != kDatasetFormatVersion && version != kVersion2 && version != kVersion3) {
+  if (version != kDatasetFormatVersion && version != kVersion2 && version != kVersion3 &&
+      version != kVersion4) {
     return bad("format version " + std::to_string(version) + ", this build reads " +
                std::to_string(kVersion2) + " to " + std::to_string(kDatasetFormatVersion));
   }
@@ -195,7 +207,7 @@ rt::Result<Dataset> read_dataset(const std::filesystem::path& dir) {
     if (const std::string wrong = classification::check_class_names(d.classes); !wrong.empty())
       return bad("bad classes: " + wrong);
   }
-  if (version == kDatasetFormatVersion) {
+  if (version >= kVersion4) {
     std::uint8_t labelled = 0;
     if (!r.get(labelled) || labelled > 1) return bad("truncated or bad header");
     d.labelled = labelled == 1;
@@ -217,6 +229,21 @@ rt::Result<Dataset> read_dataset(const std::filesystem::path& dir) {
     if (!r.get_floats(t.segment_rows, std::size_t{t.segments} * sd) ||
         !r.get_floats(t.holistic_rows, std::size_t{t.segments} * hd)) {
       return bad("truncated track descriptors");
+    }
+    if (version >= kDatasetFormatVersion) {
+      std::uint32_t path_points = 0, snapshots = 0;
+      if (!r.get(path_points) || (path_points != 0 && path_points != t.segments) ||
+          !r.get_floats(t.path, std::size_t{path_points} * 2) || !r.get(snapshots) ||
+          snapshots > kMaxStoredSnapshots)
+        return bad("truncated or bad track path");
+      t.snapshots.resize(snapshots);
+      for (TrackSnapshot& snap : t.snapshots) {
+        std::uint32_t points = 0;
+        if (!r.get(snap.segment) || snap.segment >= t.segments || !r.get(points) ||
+            points > kMaxStoredSnapshotPoints ||
+            !r.get_floats(snap.points, std::size_t{points} * 4))
+          return bad("truncated or bad track snapshot");
+      }
     }
     d.tracks.push_back(std::move(t));
   }

@@ -17,6 +17,15 @@ namespace stac::formats {
 
 // One labelled track: per segment it was updated with (in time order), the segment's
 // descriptors and the track's holistic descriptor after that segment.
+// One segment of a track as a person sees it (`stac label`): a sample of its points relative to
+// the segment's centroid, x, y, z, intensity per point (m, sensor axes: x forward, z up).
+struct TrackSnapshot {
+  std::uint32_t segment = 0;  // which of the track's segments, 0-based
+  std::vector<float> points;  // 4 floats per point
+};
+inline constexpr std::size_t kMaxSnapshots = 4;         // per track, spread over its segments
+inline constexpr std::size_t kMaxSnapshotPoints = 400;  // per snapshot, an even sample
+
 struct DatasetTrack {
   std::uint64_t id = 0;      // tracker id (unique within one source)
   std::uint32_t source = 0;  // index into Dataset::sources
@@ -27,6 +36,10 @@ struct DatasetTrack {
   std::uint32_t off_label_segments = 0;
   std::vector<float> segment_rows;   // segments * segment dimensions, row-major
   std::vector<float> holistic_rows;  // segments * holistic dimensions, row-major
+  // Version 5 (empty in older datasets): the segments' centroids in the world frame of the run
+  // (x, y per segment, m), and up to kMaxSnapshots segments' points.
+  std::vector<float> path;
+  std::vector<TrackSnapshot> snapshots;
 };
 
 struct Dataset {
@@ -38,9 +51,10 @@ struct Dataset {
   std::vector<DatasetTrack> tracks;
 };
 
-// Version 4 says whether the tracks are labelled; version 3 stores the class names (version 2: the
-// default three, background label 3). Versions 2 and 3 still read (labelled).
-inline constexpr std::uint32_t kDatasetFormatVersion = 4;
+// Version 5 adds each track's path and point snapshots; version 4 says whether the tracks are
+// labelled; version 3 stores the class names (version 2: the default three, background label 3).
+// Versions 2 to 4 still read (without paths and snapshots; 2 and 3 labelled).
+inline constexpr std::uint32_t kDatasetFormatVersion = 5;
 
 // The thesis's rule (ch. 1, the Stanford Track Collection): a track in which more than 10% of
 // the segments are tracking or under-segmentation errors is inconsistent, and is left out of

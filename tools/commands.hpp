@@ -24,6 +24,7 @@ void add_run_command(CLI::App& app);
 void add_dataset_command(CLI::App& app);
 void add_train_command(CLI::App& app);
 void add_induct_command(CLI::App& app);
+void add_label_command(CLI::App& app);
 void add_kitti_objects_command(CLI::App& app);
 
 // Marks an option that asks for a picture (--png): in a build without pictures

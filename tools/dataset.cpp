@@ -80,7 +80,25 @@ struct TrackBuild {
   // Truth points per class, the last entry background.
   std::array<std::uint64_t, classification::kMaxClasses + 1> class_points{};
   std::vector<SegmentTruth> segment_truth;  // per segment, in order (consistency rule)
+  std::vector<TrackSnapshot> samples;       // every segment's point sample; a few are kept
 };
+
+// Up to kMaxSnapshotPoints of a segment's points, evenly spread over its indices, relative to
+// its centroid (what `stac label` draws).
+TrackSnapshot snapshot_of(const velodyne::Scan& scan, const segmentation::Segments& segments,
+                          const segmentation::Segment& segment, std::uint32_t index) {
+  TrackSnapshot snap;
+  snap.segment = index;
+  const auto indices = segments.indices(segment);
+  const std::size_t n = std::min(indices.size(), kMaxSnapshotPoints);
+  snap.points.reserve(4 * n);
+  for (std::size_t k = 0; k < n; ++k) {
+    const velodyne::Point& p = scan.points[indices[k * indices.size() / n]];
+    snap.points.insert(snap.points.end(), {p.x - segment.centroid[0], p.y - segment.centroid[1],
+                                           p.z - segment.centroid[2], p.intensity});
+  }
+  return snap;
+}
 
 struct RunCounts {
   std::uint64_t scans = 0, tracks = 0, kept = 0, truth_matched = 0, inconsistent = 0;
@@ -189,7 +207,15 @@ class Builder : public classification::TrackClassifier::Observer {
       if (track.segment < 0 || updated_.count(track.id) == 0) continue;
       const auto si = static_cast<std::size_t>(track.segment);
       TrackBuild& b = live_.at(track.id);
-      b.largest = std::max(b.largest, result.segments.segments[si].count);
+      const segmentation::Segment& segment = result.segments.segments[si];
+      b.largest = std::max(b.largest, segment.count);
+      const Eigen::Vector3d at =
+          result.world_T_sensor *
+          Eigen::Vector3d(segment.centroid[0], segment.centroid[1], segment.centroid[2]);
+      b.track.path.insert(b.track.path.end(),
+                          {static_cast<float>(at.x()), static_cast<float>(at.y())});
+      b.samples.push_back(snapshot_of(scan, result.segments, segment,
+                                      static_cast<std::uint32_t>(b.samples.size())));
       std::uint64_t total = 0, most = 0;
       std::int64_t object = -1;
       ClassIndex object_class = kBackground;
@@ -234,6 +260,14 @@ class Builder : public classification::TrackClassifier::Observer {
     b.track.label = best == background ? kBackground : static_cast<ClassIndex>(best);
     b.track.off_label_segments = off_label_segments(b.track.label, b.segment_truth);
     b.track.source = source_;
+    // The snapshots: kMaxSnapshots segments spread from the first to the last.
+    const std::size_t n = b.samples.size();
+    const std::size_t keep = std::min(n, kMaxSnapshots);
+    for (std::size_t k = 0; k < keep; ++k) {
+      TrackSnapshot& snap = b.samples[keep == 1 ? 0 : k * (n - 1) / (keep - 1)];
+      if (snap.segment < b.track.segments) b.track.snapshots.push_back(std::move(snap));
+    }
+    if (b.track.path.size() != 2 * std::size_t{b.track.segments}) b.track.path.clear();
     if (!consistent(b.track)) ++counts_.inconsistent;
     out_.tracks.push_back(std::move(b.track));
     ++counts_.kept;

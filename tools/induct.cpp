@@ -52,6 +52,7 @@ struct InductOptions {
   std::size_t rounds = 0;            // extra rounds on the buffer after the chunks
   std::size_t ask = 5;               // questions per class and kind after a round
   bool oracle = false;
+  bool requery = false;  // after the rounds: new questions over every unlabeled dataset
   bool dual = false;
   double eps = 0.0;
   std::size_t group_size = 10, buffer = 20'000;
@@ -94,7 +95,7 @@ class Inductor {
   rt::Status seed_labels();
   rt::Status apply_answers();
   rt::Status round(std::uint32_t chunk, std::vector<learning::Group> groups);
-  rt::Status ask(std::uint32_t chunk);
+  rt::Status ask(const std::vector<std::uint32_t>& chunks);
   rt::Status save(const std::string& what);
   rt::Status chart();
   rt::Status export_labels();
@@ -527,15 +528,23 @@ rt::Status Inductor::round(std::uint32_t chunk, std::vector<learning::Group> gro
   return save("round " + std::to_string(s_.rounds));
 }
 
-// Questions about the chunk's tracks: written to queries.jsonl; with --oracle answered from the
-// dataset's truth labels (an inconsistent track is skipped, as a person would).
-rt::Status Inductor::ask(std::uint32_t chunk) {
-  auto d = dataset(s_.sources[chunk].path);
-  if (!d) return rt::make_error(d.error().message);
-  std::vector<learning::QueryCandidate> candidates((*d)->tracks.size());
-  for (std::size_t k = 0; k < candidates.size(); ++k) {
-    candidates[k].log_odds = track_log_odds(s_.model, (*d)->tracks[k]);
-    candidates[k].seen = seen(chunk, k);
+// Questions about the tracks of `chunks` (one chunk after its round; every unlabeled chunk with
+// --requery): written to queries.jsonl; with --oracle answered from the datasets' truth labels
+// (an inconsistent track is skipped, as a person would).
+rt::Status Inductor::ask(const std::vector<std::uint32_t>& chunks) {
+  struct Asked {
+    std::uint32_t chunk;
+    std::size_t track;
+  };
+  std::vector<learning::QueryCandidate> candidates;
+  std::vector<Asked> where;
+  for (const std::uint32_t chunk : chunks) {
+    auto d = dataset(s_.sources[chunk].path);
+    if (!d) return rt::make_error(d.error().message);
+    for (std::size_t k = 0; k < (*d)->tracks.size(); ++k) {
+      candidates.push_back({track_log_odds(s_.model, (*d)->tracks[k]), seen(chunk, k)});
+      where.push_back({chunk, k});
+    }
   }
   const auto chosen = learning::choose_queries(candidates, s_.classes.size(), o_.ask);
   std::string text;
@@ -544,12 +553,13 @@ rt::Status Inductor::ask(std::uint32_t chunk) {
     for (std::size_t c = 0; c < s_.classes.size(); ++c)
       lo[s_.classes[c]] = candidates[k].log_odds[c];
     text +=
-        nlohmann::json{{"source", s_.sources[chunk].path},
-                       {"track", k},
+        nlohmann::json{{"source", s_.sources[where[k].chunk].path},
+                       {"track", where[k].track},
                        {"predicted", classification::class_name(
                                          s_.classes, classification::predict(candidates[k].log_odds,
                                                                              s_.classes.size()))},
-                       {"log_odds", lo}}
+                       {"log_odds", lo},
+                       {"round", s_.rounds}}
             .dump() +
         "\n";
   }
@@ -558,13 +568,15 @@ rt::Status Inductor::ask(std::uint32_t chunk) {
           std::span(reinterpret_cast<const std::uint8_t*>(text.data()), text.size()));
       !w)
     return w;
-  s_.sources[chunk].stage = ChunkStage::kAsked;
+  for (const std::uint32_t chunk : chunks)
+    if (s_.sources[chunk].stage == ChunkStage::kTrained)
+      s_.sources[chunk].stage = ChunkStage::kAsked;
   if (!o_.oracle) return save("questions");
   for (const std::size_t k : chosen) {
-    const DatasetTrack& t = (*d)->tracks[k];
+    const DatasetTrack& t = (*dataset(s_.sources[where[k].chunk].path))->tracks[where[k].track];
     const char* label = consistent(t) ? classification::class_name(s_.classes, t.label) : "skip";
     const nlohmann::json answer = {
-        {"source", s_.sources[chunk].path}, {"track", k}, {"label", label}};
+        {"source", s_.sources[where[k].chunk].path}, {"track", where[k].track}, {"label", label}};
     if (auto a = append_line_durably(dir_ / "labels.jsonl", answer.dump()); !a) return a;
   }
   if (auto a = apply_answers(); !a) return a;
@@ -689,7 +701,7 @@ int Inductor::run() {
       continue;
     }
     if (s_.sources[chunk].stage == ChunkStage::kTrained) {  // killed before its questions
-      if (auto r = ask(chunk); !r) return fail(r.error().message);
+      if (auto r = ask({chunk}); !r) return fail(r.error().message);
       progress.update(static_cast<double>(++done));
       continue;
     }
@@ -704,7 +716,7 @@ int Inductor::run() {
         groups.push_back(std::move(g));
     }
     if (auto r = round(chunk, std::move(groups)); !r) return fail(r.error().message);
-    if (auto r = ask(chunk); !r) return fail(r.error().message);
+    if (auto r = ask({chunk}); !r) return fail(r.error().message);
     progress.update(static_cast<double>(++done));
   }
   for (std::size_t r = 0; r < o_.rounds; ++r) {
@@ -713,6 +725,16 @@ int Inductor::run() {
     progress.update(static_cast<double>(++done));
   }
   progress.finish();
+  if (o_.requery) {
+    std::vector<std::uint32_t> unlabeled;
+    for (std::uint32_t i = 0; i < s_.sources.size(); ++i)
+      if (s_.sources[i].role == SourceRole::kUnlabeled) unlabeled.push_back(i);
+    if (unlabeled.empty())
+      return fail("--requery: the state has no unlabeled dataset to ask about");
+    if (!s_.has_model)
+      return fail("--requery: no round has run yet, so there is no model to ask with");
+    if (auto r = ask(unlabeled); !r) return fail(r.error().message);
+  }
   if (auto r = chart(); !r) return fail(r.error().message);
   if (!o_.export_dir.empty()) {
     if (auto r = export_labels(); !r) return fail(r.error().message);
@@ -769,6 +791,9 @@ void add_induct_command(CLI::App& app) {
   cmd->add_option("--ask", o->ask, "questions per class and kind after each chunk")
       ->capture_default_str()
       ->check(CLI::Range(std::size_t{0}, std::size_t{10'000}));
+  cmd->add_flag("--requery", o->requery,
+                "after the rounds, write new questions about the tracks of every unlabeled dataset "
+                "of the state (what `stac label` runs after each batch of answers)");
   cmd->add_flag("--oracle", o->oracle,
                 "a simulated user: answer the questions from the chunks' truth labels");
   cmd->add_option("--eval", o->eval,

@@ -57,6 +57,7 @@ int main(int argc, char** argv) try {
       "  stac train --data data/ --out model.stac  # track classifier\n"
       "  stac induct --state teach/ --classes car,pedestrian,bicyclist --labels data/ \\\n"
       "      --labels-per-class 5 --background empty/ --unlabeled drive1/  # group induction\n"
+      "  stac label --state teach/                   # answer its questions on a web page\n"
       "  stac eval --classes --data test/ --model model.stac --report cls/  # Table 1.2\n"
       "  stac run --seconds 60                       # live: sensor UDP -> perception -> DDS\n"
       "Run 'stac <command> --help' for the options of each command.");
@@ -76,6 +77,7 @@ int main(int argc, char** argv) try {
   stac::tools::add_dataset_command(app);
   stac::tools::add_train_command(app);
   stac::tools::add_induct_command(app);
+  stac::tools::add_label_command(app);
   stac::tools::add_kitti_objects_command(app);
   stac::tools::refuse_bad_numbers(app);
   // `stac nosuch --help` would print the main help and exit 0: an unknown command is named first.

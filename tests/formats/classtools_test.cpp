@@ -177,6 +177,40 @@ TEST(DatasetFile, RoundTripsAppendsAndRefusesMissingTruncatedAndCorrupt) {
   }
 }
 
+// Version 5 keeps what a person looks at when asked about a track (`stac label`): its path and a
+// few segments' points; a path that is not one point per segment, or a snapshot of a segment the
+// track does not have, is refused.
+TEST(DatasetFile, PathsAndSnapshotsRoundTrip) {
+  const auto dir = fresh_dir("stac_dataset_snapshots");
+  Dataset d = synthetic_dataset(3);
+  d.tracks[1].path = {1.0f, 2.0f, 1.5f, 2.25f, 2.0f, 2.5f};
+  d.tracks[1].snapshots = {{0, {0.1f, 0.2f, 0.3f, 40.0f}},
+                           {2,
+                            {-0.5f, 0.0f, 1.2f, 7.0f,  //
+                             0.5f, 0.1f, 0.2f, 9.0f}}};
+  ASSERT_TRUE(write_dataset(dir / "ok", d));
+  auto r = read_dataset(dir / "ok");
+  ASSERT_TRUE(r) << r.error().message;
+  EXPECT_EQ(r->tracks[1].path, d.tracks[1].path);
+  ASSERT_EQ(r->tracks[1].snapshots.size(), 2u);
+  EXPECT_EQ(r->tracks[1].snapshots[1].segment, 2u);
+  EXPECT_EQ(r->tracks[1].snapshots[1].points, d.tracks[1].snapshots[1].points);
+  EXPECT_TRUE(r->tracks[0].snapshots.empty());
+
+  Dataset short_path = d;
+  short_path.tracks[1].path.resize(4);  // two points for three segments
+  ASSERT_TRUE(write_dataset(dir / "short", short_path));
+  Dataset past = d;
+  past.tracks[1].snapshots[1].segment = 3;  // the track has segments 0..2
+  ASSERT_TRUE(write_dataset(dir / "past", past));
+  for (const char* name : {"short", "past"}) {
+    auto refused = read_dataset(dir / name);
+    ASSERT_FALSE(refused) << name;
+    EXPECT_NE(refused.error().message.find("bad track"), std::string::npos)
+        << refused.error().message;
+  }
+}
+
 // Version 3 stores the class names, so a dataset can hold a class beyond the default three;
 // a version 2 file (no class list: the default three, label 3 background) still reads.
 TEST(DatasetFile, ClassNamesRoundTripAndVersion2StillReads) {
@@ -210,6 +244,32 @@ TEST(DatasetFile, ClassNamesRoundTripAndVersion2StillReads) {
     const std::uint64_t sum = classification::fnv1a64(bytes);
     for (int i = 0; i < 8; ++i) bytes.push_back(static_cast<std::uint8_t>(sum >> (8 * i)));
   };
+  // `bytes` as DATASET/tracks.bin under `name`, read back.
+  const auto read_bytes_as = [&dir](const char* name, const std::vector<std::uint8_t>& bytes) {
+    std::filesystem::create_directories(dir / name);
+    write_bytes(dir / name / "tracks.bin", bytes);
+    return read_dataset(dir / name);
+  };
+  // Version 4: the same without each track's path and snapshot counts (two zero u32s, as these
+  // tracks have neither).
+  {
+    std::size_t at = kHeader + kClassList + 1 + 4 + std::string("synthetic").size();
+    for (const DatasetTrack& t : v3.tracks) {
+      at += 8 + 4 * 4 + 4 * (t.segment_rows.size() + t.holistic_rows.size());
+      ASSERT_EQ(std::vector<std::uint8_t>(b.begin() + static_cast<std::ptrdiff_t>(at),
+                                          b.begin() + static_cast<std::ptrdiff_t>(at + 8)),
+                std::vector<std::uint8_t>(8, 0));
+      b.erase(b.begin() + static_cast<std::ptrdiff_t>(at),
+              b.begin() + static_cast<std::ptrdiff_t>(at + 8));
+    }
+    b[8] = 4;
+    reseal(b);
+    auto r4 = read_bytes_as("v4bytes", b);
+    ASSERT_TRUE(r4) << r4.error().message;
+    ASSERT_EQ(r4->tracks.size(), v3.tracks.size());
+    EXPECT_EQ(r4->tracks[7].segment_rows, v3.tracks[7].segment_rows);
+    EXPECT_TRUE(r4->tracks[7].path.empty());
+  }
   // Version 3: the class list, no labelled flag (version 4's byte after it): labelled.
   {
     std::vector<std::uint8_t> b3 = b;
@@ -217,9 +277,7 @@ TEST(DatasetFile, ClassNamesRoundTripAndVersion2StillReads) {
     b3.erase(b3.begin() + static_cast<std::ptrdiff_t>(kHeader + kClassList));
     b3[8] = 3;
     reseal(b3);
-    std::filesystem::create_directories(dir / "v3bytes");
-    write_bytes(dir / "v3bytes" / "tracks.bin", b3);
-    auto r3 = read_dataset(dir / "v3bytes");
+    auto r3 = read_bytes_as("v3bytes", b3);
     ASSERT_TRUE(r3) << r3.error().message;
     EXPECT_TRUE(r3->labelled);
     EXPECT_EQ(r3->tracks.size(), v3.tracks.size());

@@ -175,6 +175,22 @@ TEST_F(ClassifyCli, DatasetTrainEvalBeatsThePriorOnAHeldOutDrive) {
     }
   }
   EXPECT_DOUBLE_EQ(static_cast<double>(agree_consistent) / static_cast<double>(consistent), adbf);
+  // Every track keeps its path (a point per segment) and its snapshots for `stac label`: the
+  // first and last segments among them, each a sample of a few hundred points at most, around
+  // the segment's centroid.
+  for (const stac::formats::DatasetTrack& t : test_set->tracks) {
+    ASSERT_EQ(t.path.size(), 2u * t.segments) << t.id;
+    ASSERT_EQ(t.snapshots.size(), stac::formats::kMaxSnapshots) << t.id;  // >= 10 segments
+    EXPECT_EQ(t.snapshots.front().segment, 0u);
+    EXPECT_EQ(t.snapshots.back().segment, t.segments - 1);
+    for (const auto& snap : t.snapshots) {
+      ASSERT_FALSE(snap.points.empty());
+      ASSERT_LE(snap.points.size(), 4 * stac::formats::kMaxSnapshotPoints);
+      double mean_x = 0;
+      for (std::size_t k = 0; k < snap.points.size(); k += 4) mean_x += snap.points[k];
+      EXPECT_NEAR(mean_x / static_cast<double>(snap.points.size() / 4), 0.0, 1.0) << t.id;
+    }
+  }
   EXPECT_DOUBLE_EQ(static_cast<double>(agree) / static_cast<double>(test_set->tracks.size()),
                    m["all_tracks.track_accuracy"].get<double>());
   EXPECT_GT(classes["car"], 0);

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "formats/induction_state.hpp"
+#include "json_lines.hpp"
 #include "stac_cli.hpp"
 
 namespace {
@@ -22,14 +23,6 @@ namespace {
 using stac::testing::CliResult;
 using stac::testing::stac;
 namespace fs = std::filesystem;
-
-std::vector<nlohmann::json> read_lines(const fs::path& p) {
-  std::vector<nlohmann::json> out;
-  std::ifstream in(p);
-  for (std::string line; std::getline(in, line);)
-    if (!line.empty()) out.push_back(nlohmann::json::parse(line));
-  return out;
-}
 
 std::string read_text(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
@@ -80,7 +73,7 @@ TEST_F(InductCli, OracleRoundsTeachAModelThatEvalAndProcessTake) {
   EXPECT_NE(r.output.find("retrospection"), std::string::npos) << r.output;
 
   std::vector<nlohmann::json> rounds, retrospections;
-  for (const auto& j : read_lines(at("state") + "/history.jsonl"))
+  for (const auto& j : stac::testing::read_json_lines(at("state") + "/history.jsonl"))
     (j["event"] == "round" ? rounds : retrospections).push_back(j);
   ASSERT_EQ(rounds.size(), 2u);
   EXPECT_FALSE(retrospections.empty());
@@ -96,13 +89,13 @@ TEST_F(InductCli, OracleRoundsTeachAModelThatEvalAndProcessTake) {
   EXPECT_GE(last["inducted_right"].get<double>(), 0.8 * last["inducted_checked"].get<double>())
       << last.dump();
   // 3 seed labels per class (as many as the drive holds) and of background, then the answers.
-  const auto answers = read_lines(at("state") + "/labels.jsonl");
+  const auto answers = stac::testing::read_json_lines(at("state") + "/labels.jsonl");
   std::map<std::string, int> per;
   for (const auto& a : answers) ++per[a["label"].get<std::string>()];
   EXPECT_GE(per["car"], 3);
   EXPECT_GE(per["background"], 3);
   EXPECT_GT(answers.size(), 12u);
-  EXPECT_FALSE(read_lines(at("state") + "/queries.jsonl").empty());
+  EXPECT_FALSE(stac::testing::read_json_lines(at("state") + "/queries.jsonl").empty());
   for (const char* f : {"/model.stacmodel", "/models/round-0001.stacmodel",
                         "/models/round-0002.stacmodel", "/state.bin"})
     EXPECT_TRUE(fs::is_regular_file(at("state") + f)) << f;
@@ -158,7 +151,7 @@ TEST_F(InductCli, AKillAtAnyMomentLosesAtMostTheRoundInProgress) {
     }
   }
   // Every answer written is a whole line, and every one is in the state.
-  const auto answers = read_lines(at("killed") + "/labels.jsonl");
+  const auto answers = stac::testing::read_json_lines(at("killed") + "/labels.jsonl");
   EXPECT_EQ(s->answers_applied, answers.size());
   std::set<std::pair<std::string, std::uint64_t>> answered;
   for (const auto& a : answers)
@@ -196,7 +189,7 @@ TEST_F(InductCli, UnlabeledDrivesAreChunksAndBackgroundButNeverLabels) {
   r = stac(start + "--unlabeled " + at("chunk1_unl"));
   ASSERT_EQ(r.code, 0) << r.output;
   EXPECT_NE(r.output.find("round 1:"), std::string::npos) << r.output;
-  const auto questions = read_lines(at("unl") + "/queries.jsonl");
+  const auto questions = stac::testing::read_json_lines(at("unl") + "/queries.jsonl");
   ASSERT_FALSE(questions.empty());
   for (const auto& q : questions) {
     EXPECT_EQ(q["source"], at("chunk1_unl"));

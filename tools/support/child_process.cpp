@@ -35,8 +35,17 @@ rt::Result<ChildProcess> ChildProcess::start_program(const std::filesystem::path
   posix_spawn_file_actions_init(&fa);
   posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
   posix_spawn_file_actions_adddup2(&fa, 1, 2);
+  // The child starts with no signal blocked, whatever this thread blocks (`stac label` blocks
+  // SIGINT and SIGTERM for its sigwait thread).
+  posix_spawnattr_t attr{};
+  posix_spawnattr_init(&attr);
+  sigset_t none{};
+  sigemptyset(&none);
+  posix_spawnattr_setsigmask(&attr, &none);
+  posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETSIGMASK);
   pid_t pid = -1;
-  const int rc = posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), environ);
+  const int rc = posix_spawn(&pid, argv[0], &fa, &attr, argv.data(), environ);
+  posix_spawnattr_destroy(&attr);
   posix_spawn_file_actions_destroy(&fa);
   if (rc != 0) {
     return rt::make_error("starting stac" + (args.empty() ? "" : " " + args.front()) + ": " +
