@@ -31,8 +31,8 @@ std::uint32_t to_us(std::int64_t ns) noexcept {
 
 void HealthAssembly::set_frame(const Frame& f) noexcept {
   const tracking::TrackerCounters& tc = f.result.tracked.counters;
-  frame_ = {f.incomplete,     f.packets_lost,        f.segment_overflow, f.without_pose,
-            tc.pool_overflow, tc.dropped_detections, f.classes_late};
+  frame_ = {f.segment_overflow, f.without_pose, tc.pool_overflow, tc.dropped_detections,
+            f.classes_late};
 }
 
 dds::HealthIn HealthAssembly::sample(std::int64_t stamp_ns, std::uint64_t index,
@@ -49,8 +49,10 @@ dds::HealthIn HealthAssembly::sample(std::int64_t stamp_ns, std::uint64_t index,
             {"velodyne.duplicates", n(Count::kDuplicates)},
             {"velodyne.late_firings", n(Count::kLateFirings)},
             {"velodyne.scan_slots_full", l.stream->scans_dropped()},
-            {"velodyne.incomplete_scan", frame_.incomplete},
-            {"velodyne.packets_lost", frame_.packets_lost},
+            // Scans not processed have no frame: these two are live, so that a health sample
+            // while none is published (lost bursts, a dropout) shows them (issue 31).
+            {"velodyne.incomplete_scan", n(Count::kIncomplete)},
+            {"velodyne.packets_lost", n(Count::kPacketsLost)},
             {"results.slots_full", l.results->dropped()},
             {"segmentation.overflow", frame_.segment_overflow},
             {"tracking.pool_full", frame_.pool_overflow},

@@ -15,7 +15,7 @@ namespace stac::runtime {
 
 // The counters of the last published scan's frame (health without a scan repeats them).
 struct FrameDrops {
-  std::uint64_t incomplete = 0, packets_lost = 0, segment_overflow = 0, without_pose = 0;
+  std::uint64_t segment_overflow = 0, without_pose = 0;
   std::uint64_t pool_overflow = 0, dropped_detections = 0, classes_late = 0;
 };
 

@@ -65,6 +65,7 @@ enum class Count : std::size_t {
   kInsDisconnects,  //   disconnects, stalls and streams without a message
   kScans,           // perception: complete scans processed
   kIncomplete,      // perception: scans not processed (incomplete)
+  kPacketsLost,     // perception: packets lost on the wire, of every scan taken (azimuth steps)
   kClassesCurrent,  // perception: published tracks classified before / after publication
   kClassesLate,
   kPublished,      // publisher: scans published
@@ -76,14 +77,12 @@ enum class Count : std::size_t {
 // One perception result in a slot of the perception -> publisher exchange.
 struct Frame {
   pipeline::ScanResult result;
-  std::int64_t last_firing_ns = 0;  // receive clock (CLOCK_REALTIME, kernel stamps)
-  std::int64_t started_ns = 0;      // perception took the scan
-  std::int64_t finished_ns = 0;     // perception pushed the result
-  std::uint64_t incomplete = 0;     // cumulative, as seen by perception at this scan
-  std::uint64_t packets_lost = 0;
-  std::uint64_t segment_overflow = 0;
-  std::uint64_t without_pose = 0;  // scans not deskewed (no pose at their time)
-  std::uint64_t classes_late = 0;  // published tracks classified after publication (budget)
+  std::int64_t last_firing_ns = 0;     // receive clock (CLOCK_REALTIME, kernel stamps)
+  std::int64_t started_ns = 0;         // perception took the scan
+  std::int64_t finished_ns = 0;        // perception pushed the result
+  std::uint64_t segment_overflow = 0;  // cumulative, as seen by perception at this scan
+  std::uint64_t without_pose = 0;      // scans not deskewed (no pose at their time)
+  std::uint64_t classes_late = 0;      // published tracks classified after publication (budget)
 };
 
 // Odometry updates in flight from the can thread to the pose thread, which drains them every

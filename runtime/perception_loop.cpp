@@ -38,6 +38,7 @@ void perception_loop(Component::Live& live) noexcept {
       if ((scan = stream.take()) == nullptr) break;
     }
     packets_lost += scan->header.packets_lost;
+    live.counts.set(Count::kPacketsLost, packets_lost);
     if (!scan->header.complete()) {  // the first scan after start-up or a gap, or points dropped
       live.counts.set(Count::kIncomplete, ++incomplete);
       stream.release();
@@ -52,8 +53,6 @@ void perception_loop(Component::Live& live) noexcept {
     classes_current += f.result.classes_current;
     const segmentation::SegmentCounters& c = f.result.segments.counters;
     overflow += c.ignored_over_capacity + c.dropped_cell_overflow + c.dropped_segment_overflow;
-    f.incomplete = incomplete;
-    f.packets_lost = packets_lost;
     f.segment_overflow = overflow;
     f.without_pose = pipeline.scans_without_pose();
     f.classes_late = classes_late;

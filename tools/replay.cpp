@@ -31,6 +31,7 @@ struct ReplayOptions {
   std::string tcp_listen = "127.0.0.1";
   bool no_tcp = false;
   bool wait_tcp = false;
+  std::string faults;  // --faults: tools/replay/faults.hpp
 };
 
 struct TcpServe {
@@ -88,6 +89,7 @@ void print_report(const ReplayOptions& o, const io::ReplayPlan& plan, io::Replay
                  static_cast<double>(r.error_p99_ns) * 1e-3,
                  static_cast<double>(r.error_max_ns) * 1e-3);
   }
+  if (r.faults) std::fprintf(stderr, "  %s\n", r.faults_summary.c_str());
   if (r.send_failures > 0) {
     std::fprintf(
         stderr,
@@ -209,6 +211,11 @@ int run_replay(const ReplayOptions& o) {
   c.fast = o.fast;
   c.loops = o.forever ? 0 : o.loops;
   c.allow_empty = !tcp.empty() && o.filter_port <= 0;  // a TCP-only capture
+  if (!o.faults.empty()) {
+    auto plan = io::parse_fault_plan(o.faults);
+    if (!plan) return fail(plan.error().message);
+    c.faults = *plan;
+  }
   auto replay = io::UdpReplay::open(o.in, c);
   if (!replay) return fail(replay.error().message);
   const io::ReplayPlan& plan = replay->plan();
@@ -261,6 +268,14 @@ int run_replay(const ReplayOptions& o) {
     clock.pass_period_ns = std::max(clock.pass_period_ns, first - clock.first_stamp_ns + period);
   }
   clock.start_ns = rt::monotonic_ns() + 2'000'000;
+  // The same moment on the wall clock, which receivers stamp packets with (SO_TIMESTAMPNS): a
+  // fault at capture second S reaches them at this time + S / rate.
+  std::fprintf(stderr,
+               "stac replay: the capture's first datagram is due at %.6f s (CLOCK_REALTIME)\n",
+               static_cast<double>(rt::realtime_ns() + clock.start_ns - rt::monotonic_ns() +
+                                   clock.offset_ns(0, plan.packets > 0 ? plan.first_stamp_ns
+                                                                       : clock.first_stamp_ns)) *
+                   1e-9);
 
   std::vector<rt::Result<io::TcpReplayReport>> tcp_reports(tcp.size(), rt::make_error("not run"));
   std::vector<std::thread> threads;
@@ -326,6 +341,12 @@ void add_replay_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("--no-tcp", o->no_tcp, "do not serve the capture's TCP streams")
       ->excludes(tcp_port);
+  cmd->add_option("--faults", o->faults,
+                  "faults injected into the UDP datagrams, seeded (issue 31): comma-separated "
+                  "loss=P, burst=P:N, reorder=P, duplicate=P, truncate=P, oversize=P, garbage=P, "
+                  "dropout=START+SECONDS, clock-jump=AT:SECONDS (Velodyne timestamps), "
+                  "window=START+SECONDS (the random ones only then), seed=N; times in capture "
+                  "seconds of each pass, e.g. --faults loss=0.01,garbage=0.01,window=2+3,seed=7");
   cmd->add_flag("--wait-tcp", o->wait_tcp,
                 "start the replay once a client is connected to every served TCP port");
   cmd->callback([o] {

@@ -3,12 +3,14 @@
 #include <array>
 #include <atomic>
 #include <cstdio>
+#include <cstring>
 #include <thread>
 #include <vector>
 
 #include "drivers/io/pcap_writer.hpp"
 #include "drivers/io/udp_receiver.hpp"
 #include "rt/clock.hpp"
+#include "tools/replay/faults.hpp"
 #include "tools/replay/udp_replay.hpp"
 
 namespace stac::io {
@@ -229,6 +231,101 @@ TEST(UdpReplay, RateMustBePositive) {
   ReplayConfig c;
   c.rate = 0.0;
   EXPECT_FALSE(UdpReplay::open(path, c));
+}
+
+// --faults (issue 31): the plan's grammar, refused with the item and what is wrong.
+TEST(ReplayFaults, PlansParseAndBadItemsAreNamed) {
+  auto p =
+      parse_fault_plan("loss=0.1,burst=0.01:20,dropout=2+1.5,clock-jump=3:-5,window=1+2,seed=9");
+  ASSERT_TRUE(p) << p.error().message;
+  EXPECT_DOUBLE_EQ(p->loss, 0.1);
+  EXPECT_EQ(p->burst_length, 20u);
+  EXPECT_DOUBLE_EQ(p->dropout->second, 1.5);
+  EXPECT_DOUBLE_EQ(p->clock_jump->second, -5.0);
+  EXPECT_EQ(p->seed, 9u);
+  for (const auto& [spec, what] : std::vector<std::pair<std::string, std::string>>{
+           {"loss=2", "loss=2: not a probability"},
+           {"burst=0.1", "burst=0.1: not PROBABILITY:DATAGRAMS"},
+           {"dropout=3", "dropout=3: not START+SECONDS"},
+           {"clock-jump=1:4000", "less than an hour"},
+           {"jitter=0.1", "jitter=0.1: unknown fault"},
+           {"loss", "loss: not NAME=VALUE"},
+           {"seed=-1", "not a whole number"},
+           {"window=1+1,seed=2", "names no fault"}}) {
+    auto bad = parse_fault_plan(spec);
+    ASSERT_FALSE(bad) << spec;
+    EXPECT_NE(bad.error().message.find(what), std::string::npos) << bad.error().message;
+  }
+}
+
+// 2000 Velodyne-sized datagrams, numbered, 1 ms of capture time apart, through the injector into
+// a real loopback socket: the same seed sends the same bytes; every datagram sent is one of the
+// capture's (whole, cut, grown, or twice) or garbage, in the numbers the counts say.
+std::vector<Bytes> faulted(const std::string& spec, FaultCounts* counts = nullptr) {
+  UdpReceiver rx = loopback_receiver();
+  auto tx = UdpSender::open("127.0.0.1", rx.port());
+  EXPECT_TRUE(tx);
+  auto plan = parse_fault_plan(spec);
+  EXPECT_TRUE(plan) << plan.error().message;
+  FaultInjector faults(*plan);
+  std::uint64_t refused = 0;
+  for (std::uint32_t i = 0; i < 2000; ++i) {
+    Bytes d(1206, static_cast<std::uint8_t>(i));
+    std::memcpy(d.data(), &i, 4);
+    const std::uint32_t stamp = 1'000'000 + i * 1000;  // us past the hour
+    std::memcpy(d.data() + 1200, &stamp, 4);
+    refused += faults.offer(d, (i + 0.5) * 1e-3, *tx);  // mid-millisecond: no edge rounding
+  }
+  refused += faults.flush();
+  EXPECT_EQ(refused, 0u);
+  const FaultCounts& c = faults.counts();
+  if (counts != nullptr) *counts = c;
+  const std::size_t expected =
+      2000 - c.lost - c.burst_lost - c.dropout_lost + c.duplicated + c.garbage;
+  std::vector<Bytes> got = drain(rx, expected);
+  EXPECT_EQ(got.size(), expected) << faults.summary();
+  return got;
+}
+
+TEST(ReplayFaults, SeededFaultsAreRepeatableAndCountedAsSent) {
+  const std::string spec =
+      "loss=0.05,burst=0.005:10,reorder=0.05,duplicate=0.05,truncate=0.05,oversize=0.05,"
+      "garbage=0.05,seed=";
+  FaultCounts c{};
+  const std::vector<Bytes> a = faulted(spec + "5", &c);
+  EXPECT_EQ(faulted(spec + "5"), a);
+  EXPECT_NE(faulted(spec + "6"), a);
+  for (const std::uint64_t n :
+       {c.lost, c.burst_lost, c.reordered, c.duplicated, c.truncated, c.oversized, c.garbage})
+    EXPECT_GT(n, 40u);  // about 100 of each in 2000
+  std::size_t cut = 0, grown = 0, whole = 0;
+  for (const Bytes& d : a) {
+    cut += d.size() < 1206 ? 1 : 0;
+    grown += d.size() > 1206 ? 1 : 0;
+    whole += d.size() == 1206 ? 1 : 0;
+  }
+  EXPECT_GE(cut, c.truncated);  // and garbage shorter than a packet
+  EXPECT_GE(grown, c.oversized);
+  EXPECT_GE(whole, 2000 - c.lost - c.burst_lost - c.truncated - c.oversized);
+}
+
+TEST(ReplayFaults, DropoutWindowAndClockJumpActAtTheirCaptureTimes) {
+  // Nothing from 0.2 s to 0.3 s; every datagram lost from 0.5 s to 0.6 s (the window); from
+  // 1.5 s on, the Velodyne timestamps 2 s earlier.
+  const std::vector<Bytes> got = faulted("dropout=0.2+0.1,loss=1,window=0.5+0.1,clock-jump=1.5:-2");
+  ASSERT_EQ(got.size(), 1800u);
+  std::uint32_t expect = 0;
+  for (const Bytes& d : got) {
+    if (expect == 200) expect = 300;
+    if (expect == 500) expect = 600;
+    std::uint32_t i = 0, stamp = 0;
+    std::memcpy(&i, d.data(), 4);
+    std::memcpy(&stamp, d.data() + 1200, 4);
+    ASSERT_EQ(i, expect);
+    const std::uint32_t recorded = 1'000'000 + i * 1000;
+    EXPECT_EQ(stamp, i >= 1500 ? recorded - 2'000'000 : recorded) << i;
+    ++expect;
+  }
 }
 
 }  // namespace

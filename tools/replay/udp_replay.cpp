@@ -78,6 +78,7 @@ rt::Result<UdpReplay> UdpReplay::open(const std::filesystem::path& capture,
       r.senders_.emplace_back(p, std::move(*s));
     }
   }
+  if (config.faults) r.faults_.emplace(*config.faults);
   return r;
 }
 
@@ -129,7 +130,12 @@ rt::Result<ReplayReport> UdpReplay::run(const std::atomic<bool>& stop, const Rep
         now = rt::monotonic_ns();
         pacing.add(std::abs(now - (clock.start_ns + last_scheduled)));
       }
-      if (sender->send(d.payload)) {
+      if (faults_) {
+        ++report.packets;
+        report.bytes += d.payload.size();
+        report.send_failures += faults_->offer(
+            d.payload, static_cast<double>(d.stamp_ns - plan_.first_stamp_ns) * 1e-9, *sender);
+      } else if (sender->send(d.payload)) {
         ++report.packets;
         report.bytes += d.payload.size();
       } else {
@@ -138,6 +144,7 @@ rt::Result<ReplayReport> UdpReplay::run(const std::atomic<bool>& stop, const Rep
       last_send = now;
     }
     if (!reader->error().empty()) return rt::make_error(reader->error());
+    if (faults_) report.send_failures += faults_->flush();
     if (!interrupted) ++report.passes;  // every datagram of the pass was sent
     if (stop.load(std::memory_order_relaxed)) {
       report.stopped = true;
@@ -149,6 +156,10 @@ rt::Result<ReplayReport> UdpReplay::run(const std::atomic<bool>& stop, const Rep
   report.error_median_ns = pacing.median_ns();
   report.error_p99_ns = pacing.p99_ns();
   report.error_max_ns = pacing.max_ns();
+  if (faults_) {
+    report.faults = faults_->counts();
+    report.faults_summary = faults_->summary();
+  }
   return report;
 }
 

@@ -17,6 +17,7 @@
 #include "drivers/io/pcap_reader.hpp"
 #include "drivers/io/udp_receiver.hpp"
 #include "rt/expected.hpp"
+#include "tools/replay/faults.hpp"
 #include "tools/replay/replay_pacing.hpp"
 
 namespace stac::io {
@@ -28,7 +29,8 @@ struct ReplayConfig {
   double rate = 1.0;                         // > 0: recorded time differences are divided by it
   bool fast = false;                         // no pacing: send as fast as the socket takes them
   std::uint64_t loops = 1;                   // passes over the capture; 0: until stopped
-  bool allow_empty = false;  // a capture without (matching) datagram is a plan of 0 packets
+  bool allow_empty = false;         // a capture without (matching) datagram is a plan of 0 packets
+  std::optional<FaultPlan> faults;  // faults injected into the datagrams (faults.hpp)
 };
 
 // What one pass over the capture holds (found by open()).
@@ -44,7 +46,8 @@ struct ReplayPlan {
 };
 
 struct ReplayReport {
-  std::uint64_t packets = 0;           // datagrams sent (whole datagram accepted by the socket)
+  std::uint64_t packets = 0;           // datagrams sent (whole datagram accepted by the socket);
+                                       // with faults: the capture's datagrams offered to them
   std::uint64_t bytes = 0;             // their payload bytes
   std::uint64_t send_failures = 0;     // send() refused or short: counted, not retried
   std::uint64_t passes = 0;            // passes whose every datagram was sent
@@ -56,6 +59,8 @@ struct ReplayReport {
   // |send time - scheduled time| over all datagrams sent, ns (median and p99 to 1 us, floor;
   // max exact). All -1 with fast.
   std::int64_t error_median_ns = -1, error_p99_ns = -1, error_max_ns = -1;
+  std::optional<FaultCounts> faults;  // what the faults did (with config.faults)
+  std::string faults_summary;
 };
 
 class UdpReplay {
@@ -84,6 +89,7 @@ class UdpReplay {
   ReplayConfig config_;
   ReplayPlan plan_;
   std::vector<std::pair<std::uint16_t, UdpSender>> senders_;  // by destination port
+  std::optional<FaultInjector> faults_;
 };
 
 }  // namespace stac::io

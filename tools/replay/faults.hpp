@@ -1,0 +1,88 @@
+// Faults injected into a replay's UDP datagrams (`stac replay --faults`, issue 31): what a
+// hostile or broken network does to a sensor's stream, seeded so a failing run repeats exactly.
+//
+//   loss=P            each datagram lost with probability P
+//   burst=P:N         with probability P a datagram starts a burst of N lost ones
+//   reorder=P         a datagram held back and sent after the next one
+//   duplicate=P       a datagram sent twice
+//   truncate=P        a datagram cut to a random shorter length (at least 1 byte)
+//   oversize=P        a datagram sent with 1 to 200 random bytes appended
+//   garbage=P         a datagram of random bytes (1 to 1500, or exactly the size of the
+//                     datagram after it) sent before a datagram
+//   dropout=S+L       nothing sent from S to S+L seconds of capture time (a sensor dropout)
+//   clock-jump=S:J    from S seconds of capture time on, the Velodyne timestamp of each data
+//                     packet (bytes 1200-1203, microseconds past the hour) shifted by J seconds
+//   window=S+L        the random faults above only from S to S+L seconds of capture time
+//   seed=N            the random draws' seed (default 1)
+//
+// Capture time counts from the first datagram of each pass. Everything is decided per datagram
+// from a SplitMix64 stream and written into buffers sized at start-up: no allocation per datagram.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string>
+
+#include "drivers/io/udp_receiver.hpp"
+#include "rt/expected.hpp"
+#include "rt/splitmix64.hpp"
+
+namespace stac::io {
+
+struct FaultPlan {
+  double loss = 0, burst = 0, reorder = 0, duplicate = 0, truncate = 0, oversize = 0, garbage = 0;
+  std::uint32_t burst_length = 0;
+  std::optional<std::pair<double, double>> dropout;     // start s, length s
+  std::optional<std::pair<double, double>> clock_jump;  // from s, jump s
+  std::optional<std::pair<double, double>> window;      // start s, length s
+  std::uint64_t seed = 1;
+
+  [[nodiscard]] bool any() const noexcept {
+    return loss > 0 || burst > 0 || reorder > 0 || duplicate > 0 || truncate > 0 || oversize > 0 ||
+           garbage > 0 || dropout || clock_jump;
+  }
+};
+
+// "loss=0.01,burst=0.001:20,..." (the list above); an error names the item and what is wrong.
+rt::Result<FaultPlan> parse_fault_plan(const std::string& spec);
+
+struct FaultCounts {
+  std::uint64_t lost = 0, burst_lost = 0, dropout_lost = 0, reordered = 0, duplicated = 0,
+                truncated = 0, oversized = 0, garbage = 0, clock_jumped = 0;
+};
+
+class FaultInjector {
+ public:
+  explicit FaultInjector(const FaultPlan& plan) : plan_(plan), rng_(plan.seed) {}
+
+  // One datagram at `capture_s` seconds into its pass: sends what the faults make of it (none,
+  // one or more datagrams) with `send`. Returns how many sends the socket refused.
+  std::uint64_t offer(std::span<const std::uint8_t> payload, double capture_s, UdpSender& send);
+  // The end of a pass: a datagram still held back for reordering is sent.
+  std::uint64_t flush();
+
+  [[nodiscard]] const FaultCounts& counts() const noexcept { return counts_; }
+  [[nodiscard]] std::string summary() const;  // "faults: 12 lost, 3 reordered, ..."
+
+ private:
+  static constexpr std::size_t kMaxDatagram = 2048;
+  bool chance(double p) noexcept;
+  std::uint64_t below(std::uint64_t n) noexcept { return rng_.next() % n; }
+
+  bool in_window(double capture_s) const noexcept;
+
+  FaultPlan plan_;
+  rt::SplitMix64 rng_;
+  UdpSender* held_by_ = nullptr;  // the sender of the held datagram
+  FaultCounts counts_;
+  std::uint32_t burst_left_ = 0;
+  std::array<std::uint8_t, kMaxDatagram + 256> work_{};  // a datagram being changed
+  std::array<std::uint8_t, kMaxDatagram> held_{};        // one held back for reordering
+  std::size_t held_size_ = 0;
+  bool holding_ = false;
+  std::array<std::uint8_t, 1500> junk_{};
+};
+
+}  // namespace stac::io
