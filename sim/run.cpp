@@ -3,6 +3,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include "rt/json_number.hpp"
+
 namespace stac::sim {
 namespace {
 
@@ -14,32 +16,38 @@ int forward(int from, int to) {
 
 std::string to_json(const TruthScan& s, const double* origin) {
   std::string out;
-  char buf[512];
+  char buf[1024];
   if (origin != nullptr) {
-    std::snprintf(buf, sizeof(buf), "{\"origin\":[%.10f,%.10f,%.4f],", origin[0], origin[1],
-                  origin[2]);
+    std::snprintf(buf, sizeof(buf), "{\"origin\":[%s,%s,%s],",
+                  rt::json_number(origin[0], 10).c_str(), rt::json_number(origin[1], 10).c_str(),
+                  rt::json_number(origin[2], 4).c_str());
     out += buf;
   }
+  const auto num = [](double v, int decimals) { return rt::json_number(v, decimals); };
   std::snprintf(buf, sizeof(buf),
                 "%s\"scan\":%llu,\"time\":%lld.%09lld,\"end_time\":%lld.%09lld,\"points\":%u,"
-                "\"ground_points\":%u,\"ego\":{\"x\":%.4f,\"y\":%.4f,\"z\":%.4f,\"roll\":%.6f,"
-                "\"pitch\":%.6f,\"yaw\":%.6f,\"speed\":%.4f,\"yaw_rate\":%.6f},\"objects\":[",
+                "\"ground_points\":%u,\"ego\":{\"x\":%s,\"y\":%s,\"z\":%s,\"roll\":%s,"
+                "\"pitch\":%s,\"yaw\":%s,\"speed\":%s,\"yaw_rate\":%s},\"objects\":[",
                 origin != nullptr ? "" : "{", static_cast<unsigned long long>(s.scan),
                 static_cast<long long>(s.start_ns / 1'000'000'000),
                 static_cast<long long>(s.start_ns % 1'000'000'000),
                 static_cast<long long>(s.end_ns / 1'000'000'000),
                 static_cast<long long>(s.end_ns % 1'000'000'000), s.points, s.ground_points,
-                s.ego.x, s.ego.y, s.ego.z, s.ego.roll, s.ego.pitch, s.ego.yaw, s.ego.speed,
-                s.ego.yaw_rate);
+                num(s.ego.x, 4).c_str(), num(s.ego.y, 4).c_str(), num(s.ego.z, 4).c_str(),
+                num(s.ego.roll, 6).c_str(), num(s.ego.pitch, 6).c_str(), num(s.ego.yaw, 6).c_str(),
+                num(s.ego.speed, 4).c_str(), num(s.ego.yaw_rate, 6).c_str());
   out += buf;
   for (std::size_t i = 0; i < s.objects.size(); ++i) {
     const TruthObject& o = s.objects[i];
     std::snprintf(buf, sizeof(buf),
-                  "%s{\"id\":%u,\"class\":\"%s\",\"box\":{\"x\":%.4f,\"y\":%.4f,\"z\":%.4f,"
-                  "\"length\":%.3f,\"width\":%.3f,\"height\":%.3f,\"yaw\":%.5f},"
-                  "\"velocity\":{\"x\":%.4f,\"y\":%.4f},\"points\":%u,\"time\":%.6f}",
-                  i == 0 ? "" : ",", o.id, std::string(class_name(o.cls)).c_str(), o.x, o.y, o.z,
-                  o.length, o.width, o.height, o.yaw, o.vx, o.vy, o.points, o.time_s);
+                  "%s{\"id\":%u,\"class\":\"%s\",\"box\":{\"x\":%s,\"y\":%s,\"z\":%s,"
+                  "\"length\":%s,\"width\":%s,\"height\":%s,\"yaw\":%s},"
+                  "\"velocity\":{\"x\":%s,\"y\":%s},\"points\":%u,\"time\":%s}",
+                  i == 0 ? "" : ",", o.id, std::string(class_name(o.cls)).c_str(),
+                  num(o.x, 4).c_str(), num(o.y, 4).c_str(), num(o.z, 4).c_str(),
+                  num(o.length, 3).c_str(), num(o.width, 3).c_str(), num(o.height, 3).c_str(),
+                  num(o.yaw, 5).c_str(), num(o.vx, 4).c_str(), num(o.vy, 4).c_str(), o.points,
+                  num(o.time_s, 6).c_str());
     out += buf;
   }
   out += "]}";

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <random>
 #include <string>
 #include <vector>
@@ -287,6 +288,44 @@ TEST(TracksJsonl, WrittenLinesReadBackAndTimeKeepsItsDigits) {
             (std::vector<std::pair<std::int64_t, std::uint32_t>>{{-1, 2}, {5, 30}}));
   EXPECT_DOUBLE_EQ(back->ego.yaw, 0.5);
   EXPECT_FALSE(back->tracks[0].classified);
+}
+
+// Issue 31: a number that is not finite is written as null, never as "nan" (not JSON), and the
+// reader refuses the line naming the field; the simulator's truth lines likewise. Huge finite
+// numbers stay numbers.
+TEST(TracksJsonl, NumbersThatAreNotFiniteAreWrittenAsNullAndRefusedByName) {
+  TracksScan s = output_scan(1, {track(3, 1, 2), track(4, 7, 8)});
+  s.tracks[1].vx = std::numeric_limits<double>::quiet_NaN();
+  s.tracks[0].classified = true;
+  s.tracks[0].cls = "car";
+  s.tracks[0].log_odds = {std::numeric_limits<double>::infinity(), 1.0, -1.0};
+  s.ego.x = 3e20;
+  std::string line;
+  append_json_line(s, line);
+  EXPECT_EQ(line.find("nan"), std::string::npos) << line;
+  EXPECT_EQ(line.find("inf"), std::string::npos) << line;
+  EXPECT_NE(line.find("\"vx\":null"), std::string::npos) << line;
+  EXPECT_NE(line.find("\"log_odds\":[null,1.0000,-1.0000]"), std::string::npos) << line;
+  EXPECT_NE(line.find("\"x\":3e+20,"), std::string::npos) << line;
+  auto back = parse_tracks_line(line);
+  ASSERT_FALSE(back);
+  EXPECT_NE(back.error().message.find("log_odds"), std::string::npos) << back.error().message;
+  s.tracks[0].log_odds = {2.0, 1.0, -1.0};
+  line.clear();
+  append_json_line(s, line);
+  back = parse_tracks_line(line);
+  ASSERT_FALSE(back);
+  EXPECT_NE(back.error().message.find("vx"), std::string::npos) << back.error().message;
+
+  sim::TruthScan truth;
+  truth.ego.yaw = std::numeric_limits<double>::quiet_NaN();
+  const std::string t = sim::to_json(truth, nullptr);
+  EXPECT_EQ(t.find("nan"), std::string::npos) << t;
+  EXPECT_NE(t.find("\"yaw\":null"), std::string::npos) << t;
+  auto truth_back = parse_truth_line(t);
+  ASSERT_FALSE(truth_back);
+  EXPECT_NE(truth_back.error().message.find("yaw"), std::string::npos)
+      << truth_back.error().message;
 }
 
 TEST(TracksJsonl, ClassifiedTracksCarryTheirClassAndLogOdds) {

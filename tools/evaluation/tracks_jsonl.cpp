@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "perception/classification/grid_classifier.hpp"
+#include "rt/json_number.hpp"
 
 namespace stac::tools {
 namespace {
@@ -145,21 +146,23 @@ TrackRecord track_record(const tracking::Track& t) {
 }
 
 void append_json_line(const TracksScan& s, std::string& out) {
-  char buf[512];
+  char buf[1024];
   std::snprintf(buf, sizeof(buf), "{\"scan\":%" PRIu64 ",\"time\":", s.scan);
   out += buf;
   append_time(s.stamp_ns, out);
-  std::snprintf(buf, sizeof(buf),
-                ",\"ego\":{\"x\":%.4f,\"y\":%.4f,\"z\":%.4f,\"yaw\":%.6f},\"segments\":[", s.ego.x,
-                s.ego.y, s.ego.z, s.ego.yaw);
+  std::snprintf(buf, sizeof(buf), ",\"ego\":{\"x\":%s,\"y\":%s,\"z\":%s,\"yaw\":%s},\"segments\":[",
+                rt::json_number(s.ego.x, 4).c_str(), rt::json_number(s.ego.y, 4).c_str(),
+                rt::json_number(s.ego.z, 4).c_str(), rt::json_number(s.ego.yaw, 6).c_str());
   out += buf;
   for (std::size_t i = 0; i < s.segments.size(); ++i) {
     const SegmentRecord& g = s.segments[i];
     std::snprintf(buf, sizeof(buf),
-                  "%s{\"id\":%u,\"points\":%u,\"x\":%.4f,\"y\":%.4f,\"z\":%.4f,\"length\":%.3f,"
-                  "\"width\":%.3f,\"height\":%.3f,\"yaw\":%.5f",
-                  i == 0 ? "" : ",", g.id, g.points, g.x, g.y, g.z, g.length, g.width, g.height,
-                  g.yaw);
+                  "%s{\"id\":%u,\"points\":%u,\"x\":%s,\"y\":%s,\"z\":%s,\"length\":%s,"
+                  "\"width\":%s,\"height\":%s,\"yaw\":%s",
+                  i == 0 ? "" : ",", g.id, g.points, rt::json_number(g.x, 4).c_str(),
+                  rt::json_number(g.y, 4).c_str(), rt::json_number(g.z, 4).c_str(),
+                  rt::json_number(g.length, 3).c_str(), rt::json_number(g.width, 3).c_str(),
+                  rt::json_number(g.height, 3).c_str(), rt::json_number(g.yaw, 5).c_str());
     out += buf;
     if (g.has_truth) {
       out += ",\"truth\":{";
@@ -177,16 +180,21 @@ void append_json_line(const TracksScan& s, std::string& out) {
     const TrackRecord& t = s.tracks[i];
     std::snprintf(buf, sizeof(buf),
                   "%s{\"id\":%" PRIu64
-                  ",\"state\":\"%s\",\"x\":%.4f,\"y\":%.4f,\"z\":%.4f,\"vx\":%.4f,"
-                  "\"vy\":%.4f,\"length\":%.3f,\"width\":%.3f,\"height\":%.3f,\"yaw\":%.5f,"
+                  ",\"state\":\"%s\",\"x\":%s,\"y\":%s,\"z\":%s,\"vx\":%s,"
+                  "\"vy\":%s,\"length\":%s,\"width\":%s,\"height\":%s,\"yaw\":%s,"
                   "\"points\":%u,\"age\":%u,\"segment\":%d",
-                  i == 0 ? "" : ",", t.id, t.state.c_str(), t.x, t.y, t.z, t.vx, t.vy, t.length,
-                  t.width, t.height, t.yaw, t.points, t.age, t.segment);
+                  i == 0 ? "" : ",", t.id, t.state.c_str(), rt::json_number(t.x, 4).c_str(),
+                  rt::json_number(t.y, 4).c_str(), rt::json_number(t.z, 4).c_str(),
+                  rt::json_number(t.vx, 4).c_str(), rt::json_number(t.vy, 4).c_str(),
+                  rt::json_number(t.length, 3).c_str(), rt::json_number(t.width, 3).c_str(),
+                  rt::json_number(t.height, 3).c_str(), rt::json_number(t.yaw, 5).c_str(), t.points,
+                  t.age, t.segment);
     out += buf;
     if (t.classified) {
       out += ",\"class\":\"" + t.cls + "\",\"log_odds\":[";
       for (std::size_t k = 0; k < t.log_odds.size(); ++k) {
-        std::snprintf(buf, sizeof(buf), "%s%.4f", k == 0 ? "" : ",", t.log_odds[k]);
+        std::snprintf(buf, sizeof(buf), "%s%s", k == 0 ? "" : ",",
+                      rt::json_number(t.log_odds[k], 4).c_str());
         out += buf;
       }
       out += ']';
