@@ -59,6 +59,8 @@ struct Reader {
   bool get_floats(std::vector<float>& v, std::size_t n) {
     if ((bytes.size() - at) / sizeof(float) < n) return false;
     v.resize(n);
+    // An empty vector's data() may be null, and memcpy to null is UB even for 0 bytes (fuzzing).
+    if (n == 0) return true;
     std::memcpy(v.data(), bytes.data() + at, n * sizeof(float));
     at += n * sizeof(float);
     return true;
@@ -163,6 +165,10 @@ rt::Result<Dataset> read_dataset(const std::filesystem::path& dir) {
   std::ifstream in(bin, std::ios::binary);
   const std::vector<std::uint8_t> bytes{std::istreambuf_iterator<char>(in),
                                         std::istreambuf_iterator<char>()};
+  return parse_dataset(bytes, name);
+}
+
+rt::Result<Dataset> parse_dataset(std::span<const std::uint8_t> bytes, const std::string& name) {
   const auto bad = [&](const std::string& what) {
     return rt::make_error(name + ": " + what + "; remake it with this build's `stac dataset`");
   };
@@ -212,6 +218,7 @@ rt::Result<Dataset> read_dataset(const std::filesystem::path& dir) {
     if (!r.get(labelled) || labelled > 1) return bad("truncated or bad header");
     d.labelled = labelled == 1;
   }
+  if (nsources > (r.bytes.size() - r.at) / 4) return bad("truncated source list");  // u32 each
   d.sources.resize(nsources);
   for (std::string& s : d.sources)
     if (!get_string(s)) return bad("truncated source list");

@@ -86,6 +86,8 @@ learning::TrackExample track_example(DatasetTrack t);
 rt::Status write_dataset(const std::filesystem::path& dir, const Dataset& data);
 // Errors name the file and what is wrong (missing, truncated, checksum, version, layout).
 rt::Result<Dataset> read_dataset(const std::filesystem::path& dir);
+// The bytes of a tracks.bin, `name` naming them in errors (read_dataset; the fuzzing harness).
+rt::Result<Dataset> parse_dataset(std::span<const std::uint8_t> bytes, const std::string& name);
 // read_dataset, refusing a dataset without labels with a message saying what `job` needs.
 rt::Result<Dataset> read_labelled_dataset(const std::filesystem::path& dir, const std::string& job);
 // Appends `more` to `into` (sources renumbered). Fails (nothing appended) when their classes

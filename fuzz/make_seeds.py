@@ -66,6 +66,25 @@ put("can_text_fuzz", "candump.log",
 model = open("config/models/stac_default.stacmodel", "rb").read()
 put("model_file_fuzz", "default_model_head", model[:4096])
 
+# A dataset (format 5) of one track of one segment with its path and a snapshot; the harness
+# writes this build's layout hashes and the checksum into inputs whose first byte is odd.
+def dataset(version=5):
+    names = [b"car", b"pedestrian", b"bicyclist"]
+    b = b"STACDSET" + struct.pack("<IIII", version, 931, 940, 1) + struct.pack("<QQQ", 0, 0, 1)
+    b += struct.pack("<I", len(names)) + b"".join(struct.pack("<I", len(n)) + n for n in names)
+    b += b"\x01" + struct.pack("<I", 9) + b"drive.pcap"[:9]
+    b += struct.pack("<QIIII", 7, 0, 0, 1, 0)
+    b += struct.pack("<1871f", *[0.25 * (k % 17) for k in range(1871)])
+    if version >= 5:
+        b += struct.pack("<I2f", 1, 10.0, -4.0)
+        b += struct.pack("<III8f", 1, 0, 2, 0.1, 0.2, 0.3, 40.0, -0.4, 0.0, 1.1, 9.0)
+    return b + bytes(8)
+
+
+put("dataset_file_fuzz", "one_track_v5", b"\x01" + dataset(5))
+put("dataset_file_fuzz", "one_track_v4", b"\x01" + dataset(4))
+put("dataset_file_fuzz", "raw_header", b"\x00" + dataset(5)[:200])
+
 # Lines of a real `stac process` tracks file and `stac sim` truth file (fuzz/seeds/, kept small).
 for name in ("tracks.jsonl", "truth.jsonl"):
     for k, line in enumerate(open(os.path.join("fuzz", "seeds", name), "rb").read().splitlines()):
@@ -102,3 +121,4 @@ put_dict("json_lines_fuzz", ['"scan"', '"time"', '"end_time"', '"ego"', '"segmen
                              '"objects"', '"box"', '"origin"', '"class"', '"log_odds"', '"state"',
                              '"truth"', '"id"', "null", "true", "false", "1e308", "-0"])
 put_dict("applanix_stream_fuzz", ["$GRP", "$MSG", "$#"])
+put_dict("dataset_file_fuzz", ["STACDSET", "car", "pedestrian", "bicyclist", "background"])

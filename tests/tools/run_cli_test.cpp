@@ -8,6 +8,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -72,6 +73,13 @@ class Child {
   int wait() { return child_ ? child_->wait_for(600).value_or(-1) : -1; }
   // Its exit code if it has ended, nullopt while it runs (never blocks).
   std::optional<int> poll() { return child_ ? child_->poll() : std::optional<int>(-1); }
+  // Its resident memory now (kB, /proc/PID/status VmRSS; 0 when unknown).
+  [[nodiscard]] std::uint64_t rss_kb() const {
+    std::ifstream status("/proc/" + std::to_string(child_ ? child_->pid() : 0) + "/status");
+    for (std::string line; std::getline(status, line);)
+      if (line.rfind("VmRSS:", 0) == 0) return std::stoull(line.substr(6));
+    return 0;
+  }
   [[nodiscard]] std::string output() const { return child_ ? child_->log() : ""; }
 
  private:
@@ -660,6 +668,20 @@ TEST(RunCli, BadOptionsAreNamed) {
 // Times are when samples arrive here, from when the replay's first datagram was due (both on
 // CLOCK_REALTIME): "within a scan" allows one more scan (100 ms) for publishing and delivery on a
 // loaded test machine.
+// A 5 s simulated urban drive, DIR/drive.pcap (the faults and 3x-rate tests).
+stac::testing::CliResult simulate_drive(const std::filesystem::path& dir, int seed) {
+  return stac::testing::stac("sim --scenario urban --seed " + std::to_string(seed) +
+                             " --duration 5 --out " + (dir / "drive.pcap").string() + " --truth " +
+                             (dir / "drive.jsonl").string());
+}
+
+// `stac run` on loopback UDP port `udp` without an INS, publishing on `domain`.
+Child live_run(std::uint32_t domain, std::uint16_t udp, const std::filesystem::path& dir) {
+  return Child("run --domain " + std::to_string(domain) + " --bind 127.0.0.1 --port " +
+                   std::to_string(udp) + " --ins none",
+               dir / "run.log");
+}
+
 struct FaultCase {
   std::string faults;
   std::vector<std::string> causes;  // health drops whose sum counts it (empty: none)
@@ -670,9 +692,7 @@ TEST(FaultsInTheLoop, EachFaultIsCountedByCauseWithinAScanAndOutputIsNormalAScan
   constexpr std::uint32_t kDomain = 147;
   const auto dir = fresh_dir("faults");
   const std::string drive = (dir / "drive.pcap").string();
-  const stac::testing::CliResult sim =
-      stac::testing::stac("sim --scenario urban --seed 21 --duration 5 --out " + drive +
-                          " --truth " + (dir / "drive.jsonl").string());
+  const stac::testing::CliResult sim = simulate_drive(dir, 21);
   ASSERT_EQ(sim.code, 0) << sim.output;
   const LoopbackDomain dds_domain(kDomain);
   ASSERT_TRUE(dds_domain.ok());
@@ -683,9 +703,7 @@ TEST(FaultsInTheLoop, EachFaultIsCountedByCauseWithinAScanAndOutputIsNormalAScan
   ASSERT_TRUE(tracked.ok() && health.ok());
   const std::uint16_t udp = free_port(SOCK_DGRAM);
   ASSERT_NE(udp, 0);
-  Child run("run --domain " + std::to_string(kDomain) + " --bind 127.0.0.1 --port " +
-                std::to_string(udp) + " --ins none",
-            dir / "run.log");
+  Child run = live_run(kDomain, udp, dir);
   ASSERT_TRUE(run.started());
   for (int i = 0; i < 2000 && !(health.matched() && tracked.matched()); ++i)
     dds_sleepfor(DDS_MSECS(10));
@@ -829,6 +847,70 @@ TEST(FaultsInTheLoop, EachFaultIsCountedByCauseWithinAScanAndOutputIsNormalAScan
     EXPECT_NE(replay_log.find("faults: "), std::string::npos) << replay_log;
   }
   EXPECT_EQ(run.stop(SIGINT), 0) << run.output();
+}
+
+// Issue 31: the sensor's stream at 3x its rate (a 5 s drive replayed three times at --rate 3).
+// Whatever the machine keeps up with, every datagram is accounted for (received or dropped by
+// the kernel, counted), every complete scan not published is counted as a drop, latency stays
+// bounded (queues are fixed: no sample older than a second) and memory does not grow over the
+// second and third passes (all of it allocated at start-up, resident once the first pass touched
+// it).
+TEST(RunCli, ThreeTimesTheSensorsRateKeepsLatencyAndMemoryBoundedAndCountsWhatItDrops) {
+  constexpr std::uint32_t kDomain = 148;
+  const auto dir = fresh_dir("rate3");
+  const std::string drive = (dir / "drive.pcap").string();
+  const stac::testing::CliResult sim = simulate_drive(dir, 22);
+  ASSERT_EQ(sim.code, 0) << sim.output;
+  const LoopbackDomain dds_domain(kDomain);
+  ASSERT_TRUE(dds_domain.ok());
+  Reader health(dds_domain.participant, Types::health(), "stac/health", dds::Topic::kHealth);
+  ASSERT_TRUE(health.ok());
+  const std::uint16_t udp = free_port(SOCK_DGRAM);
+  ASSERT_NE(udp, 0);
+  Child run = live_run(kDomain, udp, dir);
+  ASSERT_TRUE(run.started());
+  for (int i = 0; i < 2000 && !health.matched(); ++i) dds_sleepfor(DDS_MSECS(10));
+  ASSERT_TRUE(health.matched()) << run.output();
+
+  Child replay(
+      "replay --in " + drive + " --port " + std::to_string(udp) + " --no-tcp --rate 3 --loop 3",
+      dir / "replay.log");
+  ASSERT_TRUE(replay.started());
+  std::uint32_t worst_us = 0;
+  std::size_t scans = 0;
+  std::uint64_t rss_before = 0;  // once the first pass is through: every buffer touched once
+  while (!replay.poll()) {
+    (void)health.drain<Types::Health>([&](const Types::Health& s) {
+      if (s.stages._length == 0) return;  // health without a scan
+      ++scans;
+      worst_us = std::max(worst_us, s.end_to_end_latency_us);
+    });
+    if (rss_before == 0 && scans >= 45) rss_before = run.rss_kb();
+    dds_sleepfor(DDS_MSECS(5));
+  }
+  ASSERT_GT(rss_before, 0u) << scans << " scans";
+  ASSERT_EQ(replay.wait(), 0) << replay.output();
+  dds_sleepfor(DDS_MSECS(500));
+  const std::uint64_t rss_after = run.rss_kb();
+  ASSERT_EQ(run.stop(SIGINT), 0) << run.output();
+  const std::string out = run.output();
+  const std::uint64_t sent = summary_number(replay.output(), "sent +([0-9]+) packets");
+  const std::uint64_t received = summary_number(out, "packets +([0-9]+) received");
+  const std::uint64_t kernel = summary_number(out, "received, ([0-9]+) dropped by the kernel");
+  EXPECT_EQ(received + kernel, sent) << out;
+  const std::uint64_t complete = summary_number(out, "scans +([0-9]+) received \\(complete\\)");
+  const std::uint64_t published = summary_number(out, "complete\\), ([0-9]+) published");
+  const std::uint64_t scan_slots = summary_number(out, "scan slots full ([0-9]+)");
+  const std::uint64_t result_slots = summary_number(out, "result slots full ([0-9]+)");
+  ASSERT_NE(complete, ~0ull) << out;
+  EXPECT_GT(complete, 100u) << out;  // 3 passes of 5 s at 10 scans/s
+  EXPECT_GT(published, 0u) << out;
+  EXPECT_LE(published, complete);
+  EXPECT_LE(complete - published, scan_slots + result_slots) << out;
+  EXPECT_GT(scans, 0u);
+  EXPECT_LT(worst_us, 1'000'000u) << "a scan published over a second after its last packet";
+  EXPECT_LT(rss_after, rss_before + 8 * 1024)
+      << "memory grew under 3x the rate: " << rss_before << " kB -> " << rss_after << " kB";
 }
 
 }  // namespace

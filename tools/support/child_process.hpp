@@ -42,6 +42,7 @@ class ChildProcess {
   [[nodiscard]] std::string log_tail(int lines) const;
   [[nodiscard]] std::string log() const;
   [[nodiscard]] const std::filesystem::path& log_path() const noexcept { return log_; }
+  [[nodiscard]] pid_t pid() const noexcept { return pid_; }
 
  private:
   ChildProcess(pid_t pid, std::filesystem::path log) : pid_(pid), log_(std::move(log)) {}
