@@ -2,15 +2,19 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstdlib>
 #include <cstring>
 #include <sstream>
 
+#include "drivers/velodyne/packet.hpp"
+
 namespace stac::io {
 namespace {
 
-constexpr std::size_t kVelodyneDataBytes = 1206;
-constexpr std::size_t kVelodyneStampOffset = 1200;  // u32 little-endian, us past the hour
+// A Velodyne data packet's GPS trailer starts with the u32 microseconds past the hour.
+constexpr std::size_t kVelodyneStampOffset = offsetof(velodyne::RawPacket, trailer);
+static_assert(kVelodyneStampOffset == 1200);
 constexpr std::uint64_t kMicrosPerHour = 3'600'000'000ull;
 
 bool number(const std::string& text, double& out) {
@@ -77,10 +81,6 @@ rt::Result<FaultPlan> parse_fault_plan(const std::string& spec) {
   return plan;
 }
 
-bool FaultInjector::chance(double p) noexcept {
-  return p > 0 && rng_.uniform() < p;
-}
-
 bool FaultInjector::in_window(double capture_s) const noexcept {
   return !plan_.window || (capture_s >= plan_.window->first &&
                            capture_s < plan_.window->first + plan_.window->second);
@@ -139,7 +139,7 @@ std::uint64_t FaultInjector::offer(std::span<const std::uint8_t> payload, double
     return refused;
   }
   if (plan_.clock_jump && capture_s >= plan_.clock_jump->first &&
-      payload.size() == kVelodyneDataBytes) {
+      payload.size() == velodyne::kPacketSize) {
     changeable();
     std::uint32_t us = 0;
     std::memcpy(&us, work_.data() + kVelodyneStampOffset, 4);

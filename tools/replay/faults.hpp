@@ -68,8 +68,6 @@ class FaultInjector {
 
  private:
   static constexpr std::size_t kMaxDatagram = 2048;
-  bool chance(double p) noexcept;
-  std::uint64_t below(std::uint64_t n) noexcept { return rng_.next() % n; }
 
   bool in_window(double capture_s) const noexcept;
 
