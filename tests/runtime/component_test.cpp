@@ -99,7 +99,11 @@ TEST(Component, RunsAReplayedDriveInOneProcessAndPublishesEveryScan) {
   EXPECT_GE(s.scans + s.incomplete + s.scan_slots_full, 15u);
   EXPECT_EQ(s.published, s.scans);
   EXPECT_EQ(s.publish_errors, 0u);
-  EXPECT_EQ(s.received, sent->packets);
+  // The port was any free one: a datagram from elsewhere (such as a Cyclone peer still writing to
+  // a participant that had this port and exited) is received and refused as wrong size, not
+  // taken for a Velodyne packet.
+  EXPECT_EQ(s.received - s.wrong_size, sent->packets);
+  EXPECT_EQ(s.invalid_block, 0u);
   EXPECT_EQ(samples, s.published);
   EXPECT_EQ(s.deadline_scans, s.published);
   ASSERT_EQ(s.latencies.size(), 9u);
