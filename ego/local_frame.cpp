@@ -36,6 +36,12 @@ Eigen::Vector3d LocalFrame::to_local(const Geodetic& g) {
   return p;
 }
 
+Geodetic LocalFrame::to_geodetic(const Eigen::Vector3d& p) const {
+  Geodetic g;
+  frame_.Reverse(p.x(), p.y(), p.z(), g.lat_deg, g.lon_deg, g.alt_m);
+  return g;
+}
+
 Eigen::Quaterniond LocalFrame::attitude_enu(double roll_deg, double pitch_deg,
                                             double heading_deg) noexcept {
   const Eigen::Matrix3d ned_from_frd =

@@ -37,6 +37,8 @@ class LocalFrame {
   [[nodiscard]] Geodetic origin() const noexcept;
   // ENU coordinates (m) of a geodetic position; anchors at it when not anchored yet.
   Eigen::Vector3d to_local(const Geodetic& g);
+  // The geodetic position of local ENU coordinates (m); the frame must be anchored.
+  [[nodiscard]] Geodetic to_geodetic(const Eigen::Vector3d& p) const;
   // The vehicle pose of an INS fix; anchors at it when not anchored yet. No allocation.
   PoseSample pose(const InsFix& fix);
 

@@ -9,6 +9,7 @@
 #include "tools/commands.hpp"
 #include "tools/eval_classes.hpp"
 #include "tools/evaluation/evaluation.hpp"
+#include "tools/evaluation/frames.hpp"
 #include "tools/pictures/drawing.hpp"
 #include "tools/support/progress.hpp"
 
@@ -151,13 +152,15 @@ std::string summary_table(const EvalResult& r, const EvalConfig& c) {
 }
 
 int write_report(const std::filesystem::path& dir, const EvalResult& r, const EvalConfig& c,
-                 const EvalOptions& o) {
+                 const EvalOptions& o, const std::string& frames) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec) return fail(dir.string() + ": cannot create the report folder: " + ec.message());
   {
     std::ofstream m(dir / "metrics.json");
-    m << metrics_json(r, c).dump(2) << "\n";
+    nlohmann::json j = metrics_json(r, c);
+    j["frames"] = frames;
+    m << j.dump(2) << "\n";
     if (!m) return fail((dir / "metrics.json").string() + ": cannot write");
   }
   std::vector<std::string> bands;
@@ -195,6 +198,7 @@ int write_report(const std::filesystem::path& dir, const EvalResult& r, const Ev
      << "- truth: `" << o.truth << "` (" << r.truth_scans << " scans)\n"
      << "- tracks: `" << o.tracks << "` (" << r.output_scans << " scans, " << r.paired_scans
      << " paired by time)\n"
+     << "- " << frames << "\n"
      << "- evaluated: car, pedestrian, bicyclist within " << c.max_range_m
      << " m of the ego with at least " << c.min_points << " points; " << r.ignored_tracks
      << " track-scans ignored (on background, unevaluated truth, or out of range); outputs: "
@@ -247,6 +251,9 @@ int run_eval(const EvalOptions& o) {
   if (!tracks) return fail(tracks.error().message);
   progress.finish();
   if (truth->empty()) return fail(o.truth + ": no scans");
+  // The truth in the tracks' frame, or a refusal that says what to do.
+  auto frames = truth_in_tracks_frame(*truth, *tracks);
+  if (!frames) return fail(o.tracks + " against " + o.truth + ": " + frames.error().message);
   const EvalResult r = evaluate(*truth, *tracks, c);
   if (r.paired_scans == 0) {
     return fail("no scan of " + o.tracks + " matches a scan of " + o.truth +
@@ -256,9 +263,10 @@ int run_eval(const EvalOptions& o) {
               static_cast<unsigned long long>(r.paired_scans),
               static_cast<unsigned long long>(r.truth_scans),
               static_cast<unsigned long long>(r.output_scans));
+  std::printf("%s\n", frames->c_str());
   std::printf("%s", summary_table(r, c).c_str());
   if (!o.report.empty()) {
-    if (const int code = write_report(o.report, r, c, o); code != 0) return code;
+    if (const int code = write_report(o.report, r, c, o, *frames); code != 0) return code;
     std::printf("report: %s/report.md, metrics.json, range.png, classes.png\n", o.report.c_str());
   }
   return 0;

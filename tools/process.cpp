@@ -135,6 +135,15 @@ int run_process(const ProcessOptions& o) {
   std::ofstream out(o.tracks);
   if (!out) return fail(o.tracks + ": cannot create the tracks file");
 
+  // The frame the tracks are written in (recorded on every line, so stac eval can compare).
+  TracksFrame frame = TracksFrame::kVehicle;
+  std::array<double, 3> frame_origin{};
+  if (poses && poses->frame->anchored()) {
+    const ego::Geodetic g = poses->frame->origin();
+    frame = TracksFrame::kEnu;
+    frame_origin = {g.lat_deg, g.lon_deg, g.alt_m};
+  }
+
   // Everything the per-scan loop uses is allocated here.
   velodyne::ScanStream stream(*calibration, vs.assembler, 2);
   pipeline::PipelineConfig pc = offline_pipeline_config(*settings, *model);
@@ -204,6 +213,8 @@ int run_process(const ProcessOptions& o) {
     // The record (outside the timed stages).
     const Eigen::Isometry3d& start = result.world_T_vehicle_start;
     TracksScan rec;
+    rec.frame = frame;
+    rec.origin = frame_origin;
     rec.scan = result.sequence;
     rec.stamp_ns = result.stamp_ns;
     rec.ego = {start.translation().x(), start.translation().y(), start.translation().z(),

@@ -4,15 +4,18 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <numbers>
 #include <random>
 #include <string>
 #include <vector>
 
 #include "drivers/velodyne/calibration.hpp"
+#include "ego/local_frame.hpp"
 #include "perception/tracking/tracker.hpp"
 #include "shared_data.hpp"
 #include "sim/run.hpp"
 #include "tools/evaluation/evaluation.hpp"
+#include "tools/evaluation/frames.hpp"
 #include "tools/evaluation/tracks_jsonl.hpp"
 
 namespace stac::tools {
@@ -288,6 +291,151 @@ TEST(TracksJsonl, WrittenLinesReadBackAndTimeKeepsItsDigits) {
             (std::vector<std::pair<std::int64_t, std::uint32_t>>{{-1, 2}, {5, 30}}));
   EXPECT_DOUBLE_EQ(back->ego.yaw, 0.5);
   EXPECT_FALSE(back->tracks[0].classified);
+}
+
+// Issue 33: the frame a tracks file is written in goes on every line and reads back; what is not
+// a frame is refused by name.
+TEST(TracksJsonl, TheFrameIsRecordedAndReadBack) {
+  TracksScan s = output_scan(5, {track(3, 1, 2)});
+  s.frame = TracksFrame::kEnu;
+  s.origin = {48.1234567891, 11.5, 520.25};
+  std::string line;
+  append_json_line(s, line);
+  EXPECT_EQ(line.rfind("{\"frame\":\"enu\",\"origin\":[48.1234567891,11.5", 0), 0u) << line;
+  auto back = parse_tracks_line(line);
+  ASSERT_TRUE(back) << back.error().message;
+  EXPECT_EQ(back->frame, TracksFrame::kEnu);
+  EXPECT_EQ(back->origin, s.origin);
+  s.frame = TracksFrame::kVehicle;
+  line.clear();
+  append_json_line(s, line);
+  back = parse_tracks_line(line);
+  ASSERT_TRUE(back) << back.error().message;
+  EXPECT_EQ(back->frame, TracksFrame::kVehicle);
+  s.frame = TracksFrame::kUnknown;  // a file from before: no key at all
+  line.clear();
+  append_json_line(s, line);
+  EXPECT_EQ(line.find("frame"), std::string::npos) << line;
+  back = parse_tracks_line(line);
+  ASSERT_TRUE(back) << back.error().message;
+  EXPECT_EQ(back->frame, TracksFrame::kUnknown);
+
+  const std::string rest = line.substr(1);  // after '{'
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {R"({"frame":"ned",)", "expected enu or vehicle"},
+      {R"({"frame":7,)", "'frame' is not a string"},
+      {R"({"frame":"enu",)", "missing key 'origin'"},
+      {R"({"frame":"enu","origin":[1,2],)", "'origin' must be [lat, lon, alt]"},
+      {R"({"frame":"enu","origin":[95,2,0],)", "not a place on Earth"},
+      {R"({"frame":"enu","origin":[1,2,null],)", "'origin' must be [lat, lon, alt]"},
+      {R"({"frame":"vehicle","origin":[1,2,3],)", "with frame 'vehicle'"},
+      {R"({"origin":[1,2,3],)", "without 'frame'"}};
+  for (const auto& [head, message] : bad) {
+    auto r = parse_tracks_line(head + rest);
+    ASSERT_FALSE(r) << head;
+    EXPECT_NE(r.error().message.find(message), std::string::npos) << r.error().message;
+  }
+}
+
+std::vector<TracksScan> tracks_in(TracksFrame frame, std::array<double, 3> origin = {}) {
+  std::vector<TracksScan> tracks{output_scan(0, {}), output_scan(1, {})};
+  for (TracksScan& t : tracks) t.frame = frame, t.origin = origin;
+  return tracks;
+}
+
+// ENU at one origin into ENU at another, 2 km away: each box lands where the geodetic position
+// says, its heading still points along the same line on the ground, its velocity turned with it.
+TEST(EvalFrames, TruthInAnotherEnuFrameIsMovedThroughGeodeticCoordinates) {
+  const std::array<double, 3> truth_origin{48.0, 11.0, 500.0}, tracks_origin{48.01, 11.02, 505.0};
+  std::vector<TruthScanRecord> truth = two_objects();
+  for (TruthScanRecord& s : truth) s.origin = truth_origin;
+  truth[3].objects[0].yaw = 0.7;
+  truth[3].objects[0].vx = 3.0;
+  truth[3].objects[0].vy = 1.0;
+  const TruthObjectRecord before = truth[3].objects[0];
+  auto note = truth_in_tracks_frame(truth, tracks_in(TracksFrame::kEnu, tracks_origin));
+  ASSERT_TRUE(note) << note.error().message;
+  EXPECT_NE(note->find("the truth moved from ENU at 48.0000000, 11.0000000"), std::string::npos)
+      << *note;
+
+  const ego::LocalFrame from(ego::Geodetic{48.0, 11.0, 500.0});
+  ego::LocalFrame to(ego::Geodetic{48.01, 11.02, 505.0});
+  const auto moved = [&](double x, double y, double z) {
+    return to.to_local(from.to_geodetic(Eigen::Vector3d(x, y, z)));
+  };
+  const TruthObjectRecord& after = truth[3].objects[0];
+  const Eigen::Vector3d expected = moved(before.x, before.y, before.z);
+  EXPECT_NEAR(after.x, expected.x(), 1e-6);
+  EXPECT_NEAR(after.y, expected.y(), 1e-6);
+  EXPECT_NEAR(after.z, expected.z(), 1e-6);
+  EXPECT_GT(std::hypot(after.x - before.x, after.y - before.y), 1000.0);
+  // 20 m ahead along the old heading is 20 m ahead along the new one (within 2 mm).
+  const Eigen::Vector3d ahead =
+      moved(before.x + 20 * std::cos(before.yaw), before.y + 20 * std::sin(before.yaw), before.z);
+  EXPECT_NEAR(ahead.x(), after.x + 20 * std::cos(after.yaw), 2e-3);
+  EXPECT_NEAR(ahead.y(), after.y + 20 * std::sin(after.yaw), 2e-3);
+  EXPECT_NE(after.yaw, before.yaw);  // the frames' north differs by 0.015 deg here
+  EXPECT_NEAR(std::hypot(after.vx, after.vy), std::hypot(3.0, 1.0), 1e-9);
+  EXPECT_NEAR(std::atan2(after.vy, after.vx) - std::atan2(1.0, 3.0), after.yaw - before.yaw, 1e-12);
+  const Eigen::Vector3d ego = moved(0, 0, 0);
+  EXPECT_NEAR(truth[3].ego.x, ego.x(), 1e-6);
+
+  // The same origin: untouched.
+  std::vector<TruthScanRecord> same = two_objects();
+  for (TruthScanRecord& s : same) s.origin = truth_origin;
+  note = truth_in_tracks_frame(same, tracks_in(TracksFrame::kEnu, truth_origin));
+  ASSERT_TRUE(note);
+  EXPECT_NE(note->find("frames: the same"), std::string::npos) << *note;
+  EXPECT_EQ(same[3].objects[0].x, two_objects()[3].objects[0].x);
+
+  // Another continent: not the same drive.
+  note = truth_in_tracks_frame(same, tracks_in(TracksFrame::kEnu, {35.0, 139.0, 10.0}));
+  ASSERT_FALSE(note);
+  EXPECT_NE(note.error().message.find("km from the tracks'"), std::string::npos)
+      << note.error().message;
+}
+
+TEST(EvalFrames, VehicleFrameTracksTakeTheParkedTruthIntoItAndRefuseAMovingOne) {
+  std::vector<TruthScanRecord> truth = two_objects();
+  for (TruthScanRecord& s : truth) s.ego = {100.0, 50.0, 2.0, std::numbers::pi / 2};
+  truth[2].objects[0].vx = 4.0;  // moving east; the vehicle faces north
+  auto note = truth_in_tracks_frame(truth, tracks_in(TracksFrame::kVehicle));
+  ASSERT_TRUE(note) << note.error().message;
+  EXPECT_NE(note->find("vehicle frame of its first scan"), std::string::npos) << *note;
+  const TruthObjectRecord& car = truth[2].objects[0];  // was at (12, 5): 88 m west, 45 m south
+  EXPECT_NEAR(car.x, -45.0, 1e-9);                     // behind
+  EXPECT_NEAR(car.y, 88.0, 1e-9);                      // to the left
+  EXPECT_NEAR(car.z, 0.8 - 2.0, 1e-9);
+  EXPECT_NEAR(car.yaw, -std::numbers::pi / 2, 1e-9);
+  EXPECT_NEAR(car.vx, 0.0, 1e-9);
+  EXPECT_NEAR(car.vy, -4.0, 1e-9);  // east is to the right
+  EXPECT_NEAR(truth[5].ego.x, 0.0, 1e-9);
+
+  std::vector<TruthScanRecord> driving = two_objects();
+  for (int k = 0; k < 10; ++k) driving[static_cast<std::size_t>(k)].ego.x = 0.5 * k;
+  note = truth_in_tracks_frame(driving, tracks_in(TracksFrame::kVehicle));
+  ASSERT_FALSE(note);
+  EXPECT_NE(note.error().message.find("the ego moves in the truth (1.0 m by scan 2)"),
+            std::string::npos)
+      << note.error().message;
+}
+
+TEST(EvalFrames, AnUnrecordedFrameIsAssumedAndSaidAndAMixedFileIsRefused) {
+  std::vector<TruthScanRecord> truth = two_objects();
+  auto note = truth_in_tracks_frame(truth, tracks_in(TracksFrame::kUnknown));
+  ASSERT_TRUE(note);
+  EXPECT_NE(note->find("does not record its frame"), std::string::npos) << *note;
+  note = truth_in_tracks_frame(truth, tracks_in(TracksFrame::kEnu, {48, 11, 0}));
+  ASSERT_TRUE(note);
+  EXPECT_NE(note->find("the truth does not record its origin"), std::string::npos) << *note;
+  EXPECT_EQ(truth[3].objects[0].x, two_objects()[3].objects[0].x);
+
+  std::vector<TracksScan> mixed = tracks_in(TracksFrame::kEnu, {48, 11, 0});
+  mixed[1].frame = TracksFrame::kVehicle;
+  note = truth_in_tracks_frame(truth, mixed);
+  ASSERT_FALSE(note);
+  EXPECT_NE(note.error().message.find("changes its frame at scan 1"), std::string::npos)
+      << note.error().message;
 }
 
 // Issue 31: a number that is not finite is written as null, never as "nan" (not JSON), and the

@@ -3,6 +3,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "shared_data.hpp"
@@ -77,6 +78,85 @@ TEST(ProcessCli, SimulatedDriveGivesOneLinePerScanWithSegmentsTracksAndTruthThat
   auto parked_out = read_tracks_file(dir / "parked.jsonl");
   ASSERT_TRUE(parked_out);
   EXPECT_EQ(parked_out->size(), out->size());
+}
+
+double mota_of(const std::filesystem::path& report) {
+  std::ifstream in(report / "metrics.json");
+  return nlohmann::json::parse(in).at("mota").get<double>();
+}
+
+// Issue 33: a tracks file records its frame, and eval brings the truth into it or refuses. Before,
+// tracks anchored at the first pose were scored in the simulator's frame without a word.
+TEST(ProcessCli, TracksRecordTheirFrameAndEvalBringsTheTruthIntoItOrRefuses) {
+  STAC_REQUIRE_SHARED_DATA(kYaml);
+  const auto dir = fresh_dir("frames");
+  const auto at = [&](const char* name) { return (dir / name).string(); };
+  const std::string calib = stac::testing::shared_data(kYaml).string();
+  ASSERT_EQ(stac("sim --scenario urban --seed 7 --duration 4 --calib " + calib + " --out " +
+                 at("urban.pcap") + " --truth " + at("urban.jsonl"))
+                .code,
+            0);
+  auto truth = read_truth_file(at("urban.jsonl"));
+  ASSERT_TRUE(truth && !truth->empty() && truth->front().origin);
+
+  // With --truth: the truth's origin. Without: the first pose's, metres away from it.
+  CliResult p = stac("process " + at("urban.pcap") + " --truth " + at("urban.jsonl") +
+                     " --tracks " + at("same.jsonl"));
+  ASSERT_EQ(p.code, 0) << p.output;
+  p = stac("process " + at("urban.pcap") + " --tracks " + at("own.jsonl"));
+  ASSERT_EQ(p.code, 0) << p.output;
+  auto same = read_tracks_file(at("same.jsonl"));
+  auto own = read_tracks_file(at("own.jsonl"));
+  ASSERT_TRUE(same && own && !same->empty() && own->size() == same->size());
+  EXPECT_EQ(same->front().frame, TracksFrame::kEnu);
+  EXPECT_EQ(same->front().origin, *truth->front().origin);
+  EXPECT_EQ(own->front().frame, TracksFrame::kEnu);
+  EXPECT_NE(own->front().origin, *truth->front().origin);
+
+  CliResult e = stac("eval --truth " + at("urban.jsonl") + " --tracks " + at("same.jsonl") +
+                     " --report " + at("eval_same"));
+  ASSERT_EQ(e.code, 0) << e.output;
+  EXPECT_NE(e.output.find("frames: the same"), std::string::npos) << e.output;
+  e = stac("eval --truth " + at("urban.jsonl") + " --tracks " + at("own.jsonl") + " --report " +
+           at("eval_own"));
+  ASSERT_EQ(e.code, 0) << e.output;
+  EXPECT_NE(e.output.find("frames: the truth moved from ENU at"), std::string::npos) << e.output;
+  const double right = mota_of(at("eval_same")), moved = mota_of(at("eval_own"));
+  EXPECT_GT(right, 0.5);
+  EXPECT_NEAR(moved, right, 0.02);
+  std::ifstream report(dir / "eval_own" / "report.md");
+  const std::string md((std::istreambuf_iterator<char>(report)), {});
+  EXPECT_NE(md.find("frames: the truth moved"), std::string::npos) << md;
+
+  // No pose on a moving vehicle: refused, saying what to do.
+  p = stac("process " + at("urban.pcap") + " --no-deskew --tracks " + at("vehicle.jsonl"));
+  ASSERT_EQ(p.code, 0) << p.output;
+  auto vehicle = read_tracks_file(at("vehicle.jsonl"));
+  ASSERT_TRUE(vehicle && !vehicle->empty());
+  EXPECT_EQ(vehicle->front().frame, TracksFrame::kVehicle);
+  e = stac("eval --truth " + at("urban.jsonl") + " --tracks " + at("vehicle.jsonl"));
+  EXPECT_NE(e.code, 0);
+  EXPECT_NE(e.output.find("the ego moves in the truth"), std::string::npos) << e.output;
+  EXPECT_NE(e.output.find("INS stream"), std::string::npos) << e.output;
+
+  // A parked ego without a pose: the truth in its vehicle frame, scored as with the INS.
+  ASSERT_EQ(stac("sim --scenario intersection --seed 3 --duration 4 --calib " + calib + " --out " +
+                 at("parked.pcap") + " --truth " + at("parked.jsonl"))
+                .code,
+            0);
+  p = stac("process " + at("parked.pcap") + " --tracks " + at("ins.jsonl"));
+  ASSERT_EQ(p.code, 0) << p.output;
+  p = stac("process " + at("parked.pcap") + " --no-deskew --tracks " + at("none.jsonl"));
+  ASSERT_EQ(p.code, 0) << p.output;
+  e = stac("eval --truth " + at("parked.jsonl") + " --tracks " + at("ins.jsonl") + " --report " +
+           at("eval_ins"));
+  ASSERT_EQ(e.code, 0) << e.output;
+  e = stac("eval --truth " + at("parked.jsonl") + " --tracks " + at("none.jsonl") + " --report " +
+           at("eval_none"));
+  ASSERT_EQ(e.code, 0) << e.output;
+  EXPECT_NE(e.output.find("vehicle frame of its first scan"), std::string::npos) << e.output;
+  EXPECT_GT(mota_of(at("eval_ins")), 0.5);
+  EXPECT_NEAR(mota_of(at("eval_none")), mota_of(at("eval_ins")), 0.03);
 }
 
 // Issue 31: Applanix messages dropped for a bad checksum are reported, not silently lost.

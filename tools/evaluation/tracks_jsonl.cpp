@@ -66,6 +66,22 @@ std::int64_t stamp(const json& j) {
   return std::llround(number(j, "time") * 1e9);
 }
 
+// "origin": [lat, lon, alt] (deg, deg, m), a place on Earth.
+std::array<double, 3> origin(const json& j) {
+  const json& o = field(j, "origin", "");
+  const auto finite = [&](std::size_t i) {
+    return o[i].is_number() && std::isfinite(o[i].get<double>());
+  };
+  if (!o.is_array() || o.size() != 3 || !finite(0) || !finite(1) || !finite(2))
+    throw FieldError{"'origin' must be [lat, lon, alt]"};
+  const std::array<double, 3> g{o[0].get<double>(), o[1].get<double>(), o[2].get<double>()};
+  if (std::abs(g[0]) > 90 || std::abs(g[1]) > 180 || std::abs(g[2]) > 100'000)
+    throw FieldError{
+        "'origin' is not a place on Earth (lat -90..90, lon -180..180, alt within "
+        "100 km)"};
+  return g;
+}
+
 EgoRecord ego(const json& j) {
   const json& e = field(j, "ego", "");
   return {number(e, "x", "ego."), number(e, "y", "ego."), number(e, "z", "ego."),
@@ -147,7 +163,17 @@ TrackRecord track_record(const tracking::Track& t) {
 
 void append_json_line(const TracksScan& s, std::string& out) {
   char buf[1024];
-  std::snprintf(buf, sizeof(buf), "{\"scan\":%" PRIu64 ",\"time\":", s.scan);
+  out += '{';
+  if (s.frame == TracksFrame::kEnu) {
+    std::snprintf(buf, sizeof(buf), "\"frame\":\"enu\",\"origin\":[%s,%s,%s],",
+                  rt::json_number(s.origin[0], 10).c_str(),
+                  rt::json_number(s.origin[1], 10).c_str(),
+                  rt::json_number(s.origin[2], 4).c_str());
+    out += buf;
+  } else if (s.frame == TracksFrame::kVehicle) {
+    out += "\"frame\":\"vehicle\",";
+  }
+  std::snprintf(buf, sizeof(buf), "\"scan\":%" PRIu64 ",\"time\":", s.scan);
   out += buf;
   append_time(s.stamp_ns, out);
   std::snprintf(buf, sizeof(buf), ",\"ego\":{\"x\":%s,\"y\":%s,\"z\":%s,\"yaw\":%s},\"segments\":[",
@@ -213,6 +239,20 @@ static void sizes(double length, double width, double height, const char* what) 
 
 rt::Result<TracksScan> parse_tracks_line(std::string_view line) {
   return parse<TracksScan>(line, [](const json& j, TracksScan& s) {
+    if (j.is_object() && j.contains("frame")) {
+      const std::string f = text(j, "frame");
+      if (f == "enu") {
+        s.frame = TracksFrame::kEnu;
+        s.origin = origin(j);
+      } else if (f == "vehicle") {
+        s.frame = TracksFrame::kVehicle;
+        if (j.contains("origin")) throw FieldError{"'origin' is given with frame 'vehicle'"};
+      } else {
+        throw FieldError{"'frame' is '" + f + "'; expected enu or vehicle"};
+      }
+    } else if (j.is_object() && j.contains("origin")) {
+      throw FieldError{"'origin' is given without 'frame'"};
+    }
     s.scan = integer<std::uint64_t>(j, "scan");
     s.stamp_ns = stamp(j);
     s.ego = ego(j);
@@ -306,14 +346,7 @@ rt::Result<TracksScan> parse_tracks_line(std::string_view line) {
 
 rt::Result<TruthScanRecord> parse_truth_line(std::string_view line) {
   return parse<TruthScanRecord>(line, [](const json& j, TruthScanRecord& s) {
-    if (const auto o = j.find("origin"); o != j.end()) {
-      if (!o->is_array() || o->size() != 3 || !(*o)[0].is_number() || !(*o)[1].is_number() ||
-          !(*o)[2].is_number()) {
-        throw FieldError{"'origin' must be [lat, lon, alt]"};
-      }
-      s.origin = std::array<double, 3>{(*o)[0].get<double>(), (*o)[1].get<double>(),
-                                       (*o)[2].get<double>()};
-    }
+    if (j.is_object() && j.contains("origin")) s.origin = origin(j);
     s.scan = integer<std::uint64_t>(j, "scan");
     s.stamp_ns = stamp(j);
     s.ego = ego(j);

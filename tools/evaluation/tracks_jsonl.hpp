@@ -45,7 +45,16 @@ struct TrackRecord {
   std::vector<double> log_odds;  // one per model class (docs/classification.md)
 };
 
+// The world frame a tracks file is written in (`frame`, with `origin` for kEnu).
+enum class TracksFrame {
+  kUnknown,  // a file from before the frame was recorded
+  kEnu,      // ENU on the tangent plane of `origin` (the INS's local frame)
+  kVehicle,  // no pose (no INS stream, or --no-deskew): world = the vehicle frame of each scan
+};
+
 struct TracksScan {
+  TracksFrame frame = TracksFrame::kUnknown;
+  std::array<double, 3> origin{};  // kEnu: lat, lon (deg), alt (m, WGS84 ellipsoid)
   std::uint64_t scan = 0;
   std::int64_t stamp_ns = 0;
   EgoRecord ego;
