@@ -143,7 +143,14 @@ void ScanPipeline::process(velodyne::Scan& scan, const ego::PoseHistory* poses, 
   {
     const StageTimer timer(config_.clock, out.stage_ns[kTrack]);
     const Eigen::Vector2f sensor_xy = out.world_T_sensor.translation().head<2>().cast<float>();
-    detect_in_world(out, sensor_xy);
+    // The world is the INS's frame once a pose came: a scan without one (the INS silent, or its
+    // messages refused) cannot be placed in it, so its segments update no track (tracks coast,
+    // as in a scan that misses them) rather than land in the vehicle's frame.
+    if (out.has_pose || poses == nullptr || poses->pushed() == 0) {
+      detect_in_world(out, sensor_xy);
+    } else {
+      detections_.clear();
+    }
     tracker_.update(out.stamp_ns,
                     std::span<const tracking::Detection>(detections_.data(), detections_.size()),
                     out.tracked, &sensor_xy);
