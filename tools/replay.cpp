@@ -89,7 +89,7 @@ void print_report(const ReplayOptions& o, const io::ReplayPlan& plan, io::Replay
                  static_cast<double>(r.error_p99_ns) * 1e-3,
                  static_cast<double>(r.error_max_ns) * 1e-3);
   }
-  if (r.faults) std::fprintf(stderr, "  %s\n", r.faults_summary.c_str());
+  if (r.faults) std::fprintf(stderr, "  %s\n", io::summary(*r.faults).c_str());
   if (r.send_failures > 0) {
     std::fprintf(
         stderr,
@@ -137,6 +137,7 @@ void print_tcp_report(const ReplayOptions& o, const io::TcpReplay& t, io::TcpRep
                  static_cast<double>(r.error_p99_ns) * 1e-3,
                  static_cast<double>(r.error_max_ns) * 1e-3);
   }
+  if (r.faults) std::fprintf(stderr, "  %s\n", io::summary(*r.faults).c_str());
 }
 
 // --tcp-port values: "P" or "P:L" (serve captured port P on listen port L, 0: any free one).
@@ -211,14 +212,27 @@ int run_replay(const ReplayOptions& o) {
   c.fast = o.fast;
   c.loops = o.forever ? 0 : o.loops;
   c.allow_empty = !tcp.empty() && o.filter_port <= 0;  // a TCP-only capture
+  std::optional<io::StreamFaultPlan> stream_faults;
   if (!o.faults.empty()) {
     auto plan = io::parse_fault_plan(o.faults);
     if (!plan) return fail(plan.error().message);
-    c.faults = *plan;
+    if (plan->any()) c.faults = *plan;
+    if (plan->ins.any()) {
+      if (tcp.empty()) {
+        return fail("--faults " + o.faults +
+                    ": ins-... faults act on the replayed TCP streams, and none is served "
+                    "(--no-tcp, or no TCP stream in the capture)");
+      }
+      stream_faults = plan->ins;
+    }
   }
   auto replay = io::UdpReplay::open(o.in, c);
   if (!replay) return fail(replay.error().message);
   const io::ReplayPlan& plan = replay->plan();
+  if (stream_faults) {  // in the same capture time as the datagrams' faults
+    for (auto& t : tcp)
+      t.inject(*stream_faults, plan.packets > 0 ? plan.first_stamp_ns : t.plan().first_stamp_ns);
+  }
   if (plan.packets == 0)
     std::fprintf(stderr, "stac replay: warning: %s; the TCP streams only\n",
                  plan.why_empty.c_str());
@@ -345,8 +359,11 @@ void add_replay_command(CLI::App& app) {
                   "faults injected into the UDP datagrams, seeded (issue 31): comma-separated "
                   "loss=P, burst=P:N, reorder=P, duplicate=P, truncate=P, oversize=P, garbage=P, "
                   "dropout=START+SECONDS, clock-jump=AT:SECONDS (Velodyne timestamps), "
-                  "window=START+SECONDS (the random ones only then), seed=N; times in capture "
-                  "seconds of each pass, e.g. --faults loss=0.01,garbage=0.01,window=2+3,seed=7");
+                  "window=START+SECONDS (the random ones only then), seed=N; into the TCP "
+                  "streams (the INS): ins-dropout=START+SECONDS, ins-garbage=START+SECONDS, "
+                  "ins-checksum=START+SECONDS (Applanix checksums broken), ins-disconnect=AT; "
+                  "times in capture seconds of each pass, e.g. --faults "
+                  "loss=0.01,garbage=0.01,window=2+3,seed=7");
   cmd->add_flag("--wait-tcp", o->wait_tcp,
                 "start the replay once a client is connected to every served TCP port");
   cmd->callback([o] {

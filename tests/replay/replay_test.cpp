@@ -283,7 +283,7 @@ std::vector<Bytes> faulted(const std::string& spec, FaultCounts* counts = nullpt
   const std::size_t expected =
       2000 - c.lost - c.burst_lost - c.dropout_lost + c.duplicated + c.garbage;
   std::vector<Bytes> got = drain(rx, expected);
-  EXPECT_EQ(got.size(), expected) << faults.summary();
+  EXPECT_EQ(got.size(), expected) << summary(faults.counts());
   return got;
 }
 

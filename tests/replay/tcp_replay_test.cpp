@@ -8,6 +8,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <cstring>
 #include <thread>
 #include <type_traits>
 #include <vector>
@@ -159,6 +160,86 @@ TEST(TcpReplay, ClientReceivesTheExactReassembledStream) {
   EXPECT_GE(report->error_median_ns, 0);
   EXPECT_LE(report->error_median_ns, report->error_p99_ns);
   EXPECT_LE(report->error_p99_ns, report->error_max_ns);
+}
+
+// Issue 31: the INS stream's faults, chunk by chunk.
+TEST(StreamFaults, EachActsInItsWindowAndCountsWhatItDid) {
+  auto plan = parse_fault_plan(
+      "ins-checksum=1+1,ins-garbage=2+1,ins-dropout=3+1,ins-disconnect=3.5,seed=4");
+  ASSERT_TRUE(plan) << plan.error().message;
+  EXPECT_FALSE(plan->any());  // nothing for the datagrams
+  ASSERT_TRUE(plan->ins.any());
+  StreamFaultInjector f(plan->ins);
+  Bytes chunk(200);
+  for (std::size_t i = 0; i < chunk.size(); ++i) chunk[i] = static_cast<std::uint8_t>(i);
+  for (const std::size_t at : {0, 100}) std::memcpy(chunk.data() + at, "$GRP", 4);
+  bool disconnect = true;
+  auto out = f.apply(chunk, 0.5, disconnect);  // before every window: the bytes as they are
+  EXPECT_FALSE(disconnect);
+  EXPECT_EQ(Bytes(out.begin(), out.end()), chunk);
+  out = f.apply(chunk, 1.5, disconnect);  // one body byte of each message
+  ASSERT_EQ(out.size(), chunk.size());
+  std::vector<std::size_t> changed;
+  for (std::size_t i = 0; i < out.size(); ++i)
+    if (out[i] != chunk[i]) changed.push_back(i);
+  EXPECT_EQ(changed, (std::vector<std::size_t>{12, 112}));
+  EXPECT_EQ(f.counts().checksums_broken, 2u);
+  out = f.apply(chunk, 2.5, disconnect);  // random bytes, as many
+  ASSERT_EQ(out.size(), chunk.size());
+  EXPECT_NE(Bytes(out.begin(), out.end()), chunk);
+  EXPECT_EQ(f.counts().garbage_bytes, 200u);
+  EXPECT_TRUE(f.apply(chunk, 3.2, disconnect).empty());  // the dropout
+  EXPECT_FALSE(disconnect);
+  EXPECT_TRUE(f.apply(chunk, 3.6, disconnect).empty());
+  EXPECT_TRUE(disconnect);  // once per pass
+  (void)f.apply(chunk, 3.7, disconnect);
+  EXPECT_FALSE(disconnect);
+  EXPECT_EQ(f.counts().dropout_bytes, 600u);
+  f.new_pass();
+  (void)f.apply(chunk, 3.6, disconnect);
+  EXPECT_TRUE(disconnect);
+  EXPECT_EQ(f.counts().disconnects, 2u);
+  EXPECT_EQ(summary(f.counts()),
+            "ins faults: 800 bytes held back in the dropout, 200 bytes of garbage instead of the "
+            "stream, 2 messages with a broken checksum, 2 disconnects");
+
+  for (const auto& [spec, what] : std::vector<std::pair<std::string, std::string>>{
+           {"ins-dropout=3", "ins-dropout=3: not START+SECONDS"},
+           {"ins-checksum=1+0", "not START+SECONDS"},
+           {"ins-disconnect=-1", "ins-disconnect=-1: not AT"},
+           {"ins-jam=1", "unknown fault"}}) {
+    auto bad = parse_fault_plan(spec);
+    ASSERT_FALSE(bad) << spec;
+    EXPECT_NE(bad.error().message.find(what), std::string::npos) << bad.error().message;
+  }
+}
+
+// Over a real loopback connection: the dropout's segments never arrive, and the disconnect ends
+// the client's stream at its capture time.
+TEST(TcpReplay, InjectedDropoutAndDisconnectActAtTheirCaptureTimes) {
+  const auto path = temp("faults.pcap");
+  const Capture cap = write_capture(path, 40, 1'000'000);
+  TcpReplay replay = open_replay(path);
+  auto plan = parse_fault_plan("ins-dropout=0.0095+0.010,ins-disconnect=0.0295");
+  ASSERT_TRUE(plan) << plan.error().message;
+  replay.inject(plan->ins, replay.plan().first_stamp_ns);
+  Bytes got;
+  std::thread client([&] { got = read_all(connect_to(replay.listen_port())); });
+  const std::atomic<bool> never{false};
+  ASSERT_TRUE(replay.wait_for_client(never));
+  auto report = replay.run(never);
+  client.join();
+  ASSERT_TRUE(report) << report.error().message;
+  // Segments 0-9, then 20-29: 10-19 held back, the connection closed before 30.
+  Bytes expected(cap.stream.begin(), cap.stream.begin() + static_cast<long>(cap.offsets[10]));
+  expected.insert(expected.end(), cap.stream.begin() + static_cast<long>(cap.offsets[20]),
+                  cap.stream.begin() + static_cast<long>(cap.offsets[30]));
+  EXPECT_EQ(got, expected);
+  ASSERT_TRUE(report->faults.has_value());
+  EXPECT_EQ(report->faults->dropout_bytes, cap.offsets[20] - cap.offsets[10]);
+  EXPECT_EQ(report->faults->disconnects, 1u);
+  EXPECT_EQ(report->disconnects, 1u);
+  EXPECT_EQ(report->unserved_bytes, cap.stream.size() - cap.offsets[30]);
 }
 
 TEST(TcpReplay, RateDividesTheScheduleAndLoopsRepeatTheStream) {

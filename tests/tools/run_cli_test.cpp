@@ -16,6 +16,7 @@
 #include <map>
 #include <optional>
 #include <regex>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -845,6 +846,152 @@ TEST(FaultsInTheLoop, EachFaultIsCountedByCauseWithinAScanAndOutputIsNormalAScan
       EXPECT_EQ(at_end, base_count);
     }
     EXPECT_NE(replay_log.find("faults: "), std::string::npos) << replay_log;
+  }
+  EXPECT_EQ(run.stop(SIGINT), 0) << run.output();
+}
+
+struct InsFaultCase {
+  std::string faults;
+  double start, end;                // capture seconds
+  std::vector<std::string> causes;  // health drops whose sum counts it (empty: none)
+  bool outage = true;               // no valid fix from start to end: the INS goes stale
+};
+
+// Issue 31: faults in the INS's TCP stream (replayed, into `stac run --ins tcp`): each counted by
+// cause on health within a scan, the INS stale through an outage and ok again after it, no track
+// born while no pose places the scans in the world (before issue 31 such scans were tracked in
+// the vehicle's frame), and complete scans with tracks published throughout.
+TEST(FaultsInTheLoop, InsFaultsAreCountedTheInsIsStaleNoTrackIsMisplacedAndItRecovers) {
+  constexpr std::uint32_t kDomain = 150;
+  const auto dir = fresh_dir("ins_faults");
+  const std::string drive = (dir / "drive.pcap").string();
+  const stac::testing::CliResult sim = simulate_drive(dir, 23);
+  ASSERT_EQ(sim.code, 0) << sim.output;
+  const LoopbackDomain dds_domain(kDomain);
+  ASSERT_TRUE(dds_domain.ok());
+  Reader tracked(dds_domain.participant, Types::tracked_objects(), "stac/tracked_objects",
+                 dds::Topic::kTrackedObjects);
+  Reader health(dds_domain.participant, Types::health(), "stac/health", dds::Topic::kHealth);
+  ASSERT_TRUE(tracked.ok() && health.ok());
+  const std::uint16_t udp = free_port(SOCK_DGRAM), ins = free_port(SOCK_STREAM);
+  ASSERT_TRUE(udp != 0 && ins != 0);
+  Child run("run --domain " + std::to_string(kDomain) + " --bind 127.0.0.1 --port " +
+                std::to_string(udp) + " --ins tcp --ins-address 127.0.0.1 --ins-port " +
+                std::to_string(ins),
+            dir / "run.log");
+  ASSERT_TRUE(run.started());
+  for (int i = 0; i < 2000 && !(health.matched() && tracked.matched()); ++i)
+    dds_sleepfor(DDS_MSECS(10));
+  ASSERT_TRUE(health.matched() && tracked.matched()) << run.output();
+
+  const std::vector<InsFaultCase> cases = {
+      {"ins-checksum=2+1", 2, 3, {"ins.bad_checksum"}},
+      {"ins-garbage=2+1", 2, 3, {"ins.garbage_bytes", "ins.bad_framing", "ins.malformed"}},
+      {"ins-dropout=2+1", 2, 3, {}},
+      {"ins-disconnect=2", 2, 2, {"ins.disconnects"}, false},
+  };
+  constexpr double kScan = 0.1 + 0.1;  // a scan, and delivery
+  constexpr double kStale = 0.1;       // ego.ins_timeout_s
+  constexpr double kReconnect = 0.1;   // the INS client's first backoff
+  for (std::size_t k = 0; k < cases.size(); ++k) {
+    const InsFaultCase& c = cases[k];
+    SCOPED_TRACE(c.faults);
+    // --wait-tcp: the drive starts once stac run's INS client is connected.
+    Child replay("replay --in " + drive + " --port " + std::to_string(udp) +
+                     " --tcp-port 5602:" + std::to_string(ins) + " --wait-tcp --faults " +
+                     c.faults + ",seed=" + std::to_string(k + 1),
+                 dir / ("replay" + std::to_string(k) + ".log"));
+    ASSERT_TRUE(replay.started());
+    struct Sample {
+      double t;
+      std::uint64_t count;
+      bool ins_ok;
+    };
+    std::vector<Sample> samples;
+    std::vector<std::pair<double, std::vector<std::uint64_t>>> scans;  // arrival, object ids
+    const auto now_s = [] {
+      return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch())
+          .count();
+    };
+    const auto drain = [&] {
+      (void)health.drain<Types::Health>([&](const Types::Health& s) {
+        std::uint64_t n = 0;
+        bool ok = false;
+        for (std::uint32_t i = 0; i < s.drops._length; ++i)
+          for (const std::string& cause : c.causes)
+            n += cause == s.drops._buffer[i].cause ? s.drops._buffer[i].count : 0;
+        for (std::uint32_t i = 0; i < s.sensors._length; ++i)
+          if (std::string(s.sensors._buffer[i].name) == "ins")
+            ok = s.sensors._buffer[i].status == 0;
+        samples.push_back({now_s(), n, ok});
+      });
+      (void)tracked.drain<Types::TrackedObjects>([&](const Types::TrackedObjects& s) {
+        std::vector<std::uint64_t> ids;
+        for (std::uint32_t i = 0; i < s.objects._length; ++i)
+          ids.push_back(s.objects._buffer[i].object_id);
+        scans.emplace_back(now_s(), std::move(ids));
+      });
+    };
+    drain();
+    samples.clear();
+    scans.clear();
+    std::optional<double> ended;
+    while (!ended || now_s() < *ended + 0.3) {
+      drain();
+      if (!ended && replay.poll()) ended = now_s();
+      dds_sleepfor(DDS_MSECS(2));
+    }
+    ASSERT_EQ(replay.wait(), 0) << replay.output();
+    const std::string log = replay.output();
+    EXPECT_NE(log.find("ins faults: "), std::string::npos) << log;
+    EXPECT_EQ(log.find("ins faults: none happened"), std::string::npos) << log;
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(log, m, std::regex("first datagram is due at ([0-9.]+) s")))
+        << log;
+    const double t0 = std::stod(m[1].str());
+    for (Sample& s : samples) s.t -= t0;
+    for (auto& s : scans) s.first -= t0;
+    ASSERT_GT(samples.size(), 30u) << run.output();
+
+    // Before the fault: the INS ok, nothing counted.
+    std::uint64_t base = ~0ull, at_end = ~0ull;
+    bool seen = c.causes.empty();
+    for (const Sample& s : samples) {
+      if (s.t >= 0.5 && s.t < c.start) {
+        EXPECT_TRUE(s.ins_ok) << "before the fault, at " << s.t << " s";
+        if (base == ~0ull) base = s.count;
+        EXPECT_EQ(s.count, base) << "before the fault, at " << s.t << " s";
+      }
+      if (!seen && s.t >= c.start + kScan && s.t < std::max(c.end, c.start + 2 * kScan)) {
+        EXPECT_GT(s.count, base) << "not on health in the first scan after the fault began";
+        seen = true;
+      }
+      if (c.outage && s.t >= c.start + kStale + kScan && s.t < c.end) {
+        EXPECT_FALSE(s.ins_ok) << "at " << s.t << " s, in the outage";
+      }
+      if (s.t >= c.end + kReconnect + kScan && s.t < 5.0) {
+        EXPECT_TRUE(s.ins_ok) << "at " << s.t << " s, after the fault";
+        if (at_end == ~0ull) at_end = s.count;
+        EXPECT_EQ(s.count, at_end) << "still growing at " << s.t << " s";
+      }
+    }
+    EXPECT_TRUE(seen);
+
+    // No track born while no pose placed the scans; scans with tracks before and after.
+    std::set<std::uint64_t> known;
+    std::size_t before = 0, after = 0;
+    for (const auto& [t, ids] : scans) {
+      if (t < c.start + kStale) {
+        known.insert(ids.begin(), ids.end());
+        before += t < c.start && !ids.empty() ? 1 : 0;
+      } else if (c.outage && t >= c.start + kStale + kScan && t < c.end) {
+        for (const std::uint64_t id : ids)
+          EXPECT_TRUE(known.count(id) != 0) << "track " << id << " born at " << t << " s";
+      }
+      after += t >= c.end + kReconnect + kScan && t < 5.0 && !ids.empty() ? 1 : 0;
+    }
+    EXPECT_GE(before, 15u);
+    EXPECT_GE(after, 10u);
   }
   EXPECT_EQ(run.stop(SIGINT), 0) << run.output();
 }

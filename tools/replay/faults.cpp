@@ -38,7 +38,9 @@ rt::Result<FaultPlan> parse_fault_plan(const std::string& spec) {
     return rt::make_error("--faults " + item + ": " + what +
                           " (items: loss=P, burst=P:N, reorder=P, duplicate=P, truncate=P, "
                           "oversize=P, garbage=P, dropout=START+SECONDS, clock-jump=AT:SECONDS, "
-                          "window=START+SECONDS, seed=N; P a probability in [0, 1])");
+                          "window=START+SECONDS, seed=N, ins-dropout=START+SECONDS, "
+                          "ins-garbage=START+SECONDS, ins-checksum=START+SECONDS, "
+                          "ins-disconnect=AT; P a probability in [0, 1])");
   };
   for (std::string item; std::getline(items, item, ',');) {
     if (item.empty()) continue;
@@ -64,6 +66,15 @@ rt::Result<FaultPlan> parse_fault_plan(const std::string& spec) {
       if (!pair_of(value, '+', a, b) || a < 0 || b <= 0)
         return bad(item, "not START+SECONDS (start >= 0, seconds > 0, capture time)");
       (name == "dropout" ? plan.dropout : plan.window) = std::pair{a, b};
+    } else if (name == "ins-dropout" || name == "ins-garbage" || name == "ins-checksum") {
+      if (!pair_of(value, '+', a, b) || a < 0 || b <= 0)
+        return bad(item, "not START+SECONDS (start >= 0, seconds > 0, capture time)");
+      (name == "ins-dropout"   ? plan.ins.dropout
+       : name == "ins-garbage" ? plan.ins.garbage
+                               : plan.ins.checksum) = std::pair{a, b};
+    } else if (name == "ins-disconnect") {
+      if (!number(value, a) || a < 0) return bad(item, "not AT (seconds >= 0, capture time)");
+      plan.ins.disconnect = a;
     } else if (name == "clock-jump") {
       if (!pair_of(value, ':', a, b) || a < 0 || b == 0 || std::abs(b) >= 3600)
         return bad(item, "not AT:SECONDS (at >= 0; a jump of less than an hour, not 0)");
@@ -76,7 +87,8 @@ rt::Result<FaultPlan> parse_fault_plan(const std::string& spec) {
       return bad(item, "unknown fault");
     }
   }
-  if (!plan.any() && !spec.empty())
+  plan.ins.seed = plan.seed;
+  if (!plan.any() && !plan.ins.any() && !spec.empty())
     return rt::make_error("--faults " + spec + ": names no fault (only window or seed)");
   return plan;
 }
@@ -188,24 +200,79 @@ std::uint64_t FaultInjector::flush() {
   return held_by_->send(std::span(held_.data(), held_size_)) ? 0 : 1;
 }
 
-std::string FaultInjector::summary() const {
-  const FaultCounts& c = counts_;
+namespace {
+
+void add(std::string& s, std::uint64_t n, const char* what) {
+  if (n == 0) return;
+  s += (s.back() == ':' ? " " : ", ") + std::to_string(n) + " " + what;
+}
+
+bool within(const TimeSpan& span, double t) {
+  return span && t >= span->first && t < span->first + span->second;
+}
+
+}  // namespace
+
+std::string summary(const FaultCounts& c) {
   std::string s = "faults:";
-  const auto add = [&s](std::uint64_t n, const char* what) {
-    if (n == 0) return;
-    s += (s.back() == ':' ? " " : ", ") + std::to_string(n) + " " + what;
-  };
-  add(c.lost, "lost");
-  add(c.burst_lost, "lost in bursts");
-  add(c.dropout_lost, "lost in the dropout");
-  add(c.reordered, "reordered");
-  add(c.duplicated, "duplicated");
-  add(c.truncated, "truncated");
-  add(c.oversized, "oversized");
-  add(c.garbage, "garbage datagrams");
-  add(c.clock_jumped, "with the clock jumped");
+  add(s, c.lost, "lost");
+  add(s, c.burst_lost, "lost in bursts");
+  add(s, c.dropout_lost, "lost in the dropout");
+  add(s, c.reordered, "reordered");
+  add(s, c.duplicated, "duplicated");
+  add(s, c.truncated, "truncated");
+  add(s, c.oversized, "oversized");
+  add(s, c.garbage, "garbage datagrams");
+  add(s, c.clock_jumped, "with the clock jumped");
   if (s.back() == ':') s += " none happened";
   return s;
+}
+
+std::string summary(const StreamFaultCounts& c) {
+  std::string s = "ins faults:";
+  add(s, c.dropout_bytes, "bytes held back in the dropout");
+  add(s, c.garbage_bytes, "bytes of garbage instead of the stream");
+  add(s, c.checksums_broken, "messages with a broken checksum");
+  add(s, c.disconnects, "disconnects");
+  if (s.back() == ':') s += " none happened";
+  return s;
+}
+
+std::span<const std::uint8_t> StreamFaultInjector::apply(std::span<const std::uint8_t> chunk,
+                                                         double capture_s,
+                                                         bool& disconnect) noexcept {
+  disconnect = false;
+  if (plan_.disconnect && !disconnected_ && capture_s >= *plan_.disconnect) {
+    disconnected_ = true;
+    disconnect = true;
+    ++counts_.disconnects;
+  }
+  if (within(plan_.dropout, capture_s)) {
+    counts_.dropout_bytes += chunk.size();
+    return {};
+  }
+  const std::size_t n = std::min(chunk.size(), work_.size());
+  if (within(plan_.garbage, capture_s)) {
+    for (std::size_t i = 0; i < n; i += 8) {
+      const std::uint64_t r = rng_.next();
+      std::memcpy(work_.data() + i, &r, std::min<std::size_t>(8, n - i));
+    }
+    counts_.garbage_bytes += n;
+    return {work_.data(), n};
+  }
+  if (within(plan_.checksum, capture_s)) {
+    std::memcpy(work_.data(), chunk.data(), n);
+    // "$GRP" + u16 group + u16 byte count, then the body: its 5th byte (in the first time field).
+    constexpr std::size_t kBodyByte = 12;
+    for (std::size_t at = 0; at + kBodyByte < n; ++at) {
+      if (std::memcmp(work_.data() + at, "$GRP", 4) != 0) continue;
+      work_[at + kBodyByte] ^= 0x5a;
+      ++counts_.checksums_broken;
+      at += kBodyByte;
+    }
+    return {work_.data(), n};
+  }
+  return chunk.first(n);
 }
 
 }  // namespace stac::io

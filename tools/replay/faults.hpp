@@ -14,9 +14,17 @@
 //                     packet (bytes 1200-1203, microseconds past the hour) shifted by J seconds
 //   window=S+L        the random faults above only from S to S+L seconds of capture time
 //   seed=N            the random draws' seed (default 1)
+// and into the replayed TCP streams (the INS, Applanix port 5602):
+//   ins-dropout=S+L   nothing of the stream sent from S to S+L s (the connection stays up)
+//   ins-garbage=S+L   the stream's bytes replaced by random ones from S to S+L s
+//   ins-checksum=S+L  a body byte of every Applanix message ("$GRP") flipped from S to S+L s, so
+//                     its checksum fails
+//   ins-disconnect=S  the connection closed at S s of each pass (the client connects again and
+//                     gets the stream from then on)
 //
-// Capture time counts from the first datagram of each pass. Everything is decided per datagram
-// from a SplitMix64 stream and written into buffers sized at start-up: no allocation per datagram.
+// Capture time counts from the first datagram of each pass (a TCP-only capture: from the first
+// stream byte). Everything is decided per datagram or chunk from a SplitMix64 stream and written
+// into buffers sized at start-up: no allocation per datagram.
 #pragma once
 
 #include <array>
@@ -24,12 +32,23 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <vector>
 
 #include "drivers/io/udp_receiver.hpp"
 #include "rt/expected.hpp"
 #include "rt/splitmix64.hpp"
 
 namespace stac::io {
+
+using TimeSpan = std::optional<std::pair<double, double>>;  // start s, length s
+
+struct StreamFaultPlan {
+  TimeSpan dropout, garbage, checksum;
+  std::optional<double> disconnect;  // at s
+  std::uint64_t seed = 1;
+
+  [[nodiscard]] bool any() const noexcept { return dropout || garbage || checksum || disconnect; }
+};
 
 struct FaultPlan {
   double loss = 0, burst = 0, reorder = 0, duplicate = 0, truncate = 0, oversize = 0, garbage = 0;
@@ -38,7 +57,9 @@ struct FaultPlan {
   std::optional<std::pair<double, double>> clock_jump;  // from s, jump s
   std::optional<std::pair<double, double>> window;      // start s, length s
   std::uint64_t seed = 1;
+  StreamFaultPlan ins;  // the TCP streams' (ins-...)
 
+  // A fault in the UDP datagrams.
   [[nodiscard]] bool any() const noexcept {
     return loss > 0 || burst > 0 || reorder > 0 || duplicate > 0 || truncate > 0 || oversize > 0 ||
            garbage > 0 || dropout || clock_jump;
@@ -53,6 +74,9 @@ struct FaultCounts {
                 truncated = 0, oversized = 0, garbage = 0, clock_jumped = 0;
 };
 
+// "faults: 12 lost, 3 reordered, ..." (or "faults: none happened").
+std::string summary(const FaultCounts& counts);
+
 class FaultInjector {
  public:
   explicit FaultInjector(const FaultPlan& plan) : plan_(plan), rng_(plan.seed) {}
@@ -64,7 +88,6 @@ class FaultInjector {
   std::uint64_t flush();
 
   [[nodiscard]] const FaultCounts& counts() const noexcept { return counts_; }
-  [[nodiscard]] std::string summary() const;  // "faults: 12 lost, 3 reordered, ..."
 
  private:
   static constexpr std::size_t kMaxDatagram = 2048;
@@ -81,6 +104,36 @@ class FaultInjector {
   std::size_t held_size_ = 0;
   bool holding_ = false;
   std::array<std::uint8_t, 1500> junk_{};
+};
+
+struct StreamFaultCounts {
+  std::uint64_t dropout_bytes = 0, garbage_bytes = 0, checksums_broken = 0, disconnects = 0;
+};
+
+std::string summary(const StreamFaultCounts& counts);  // "ins faults: ..."
+
+// The faults of a StreamFaultPlan on one stream's chunks, in order.
+class StreamFaultInjector {
+ public:
+  static constexpr std::size_t kMaxChunk = 64 * 1024;  // longer chunks are offered in pieces
+
+  explicit StreamFaultInjector(const StreamFaultPlan& plan) : plan_(plan), rng_(plan.seed) {}
+
+  // A new pass over the stream (the disconnect happens once per pass).
+  void new_pass() noexcept { disconnected_ = false; }
+  // A chunk (at most kMaxChunk bytes) due at `capture_s`: sets `disconnect` when the connection
+  // must be closed before it is sent, and returns the bytes to send (empty: none).
+  std::span<const std::uint8_t> apply(std::span<const std::uint8_t> chunk, double capture_s,
+                                      bool& disconnect) noexcept;
+
+  [[nodiscard]] const StreamFaultCounts& counts() const noexcept { return counts_; }
+
+ private:
+  StreamFaultPlan plan_;
+  rt::SplitMix64 rng_;
+  StreamFaultCounts counts_;
+  bool disconnected_ = false;
+  std::vector<std::uint8_t> work_ = std::vector<std::uint8_t>(kMaxChunk);
 };
 
 }  // namespace stac::io

@@ -152,6 +152,11 @@ rt::Result<TcpReplay> TcpReplay::open(const std::filesystem::path& capture,
   return r;
 }
 
+void TcpReplay::inject(const StreamFaultPlan& plan, std::int64_t zero_stamp_ns) {
+  faults_.emplace(plan);
+  faults_zero_ns_ = zero_stamp_ns;
+}
+
 void TcpReplay::accept_pending() noexcept {
   if (client_fd_) return;
   rt::UniqueFd fd(::accept4(listen_fd_.get(), nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC));
@@ -257,9 +262,29 @@ rt::Result<TcpReplayReport> TcpReplay::run(const std::atomic<bool>& stop,
       }
       if (error_ns >= 0) pacing.add(error_ns);
       last_write = rt::monotonic_ns();
-      if (write_all(chunk, stop, report)) ++report.segments;
+      if (!faults_) {
+        if (write_all(chunk, stop, report)) ++report.segments;
+        return true;
+      }
+      const double capture_s = static_cast<double>(stamp - faults_zero_ns_) * 1e-9;
+      bool sent = false;
+      for (std::size_t at = 0; at < chunk.size() && client_fd_;
+           at += StreamFaultInjector::kMaxChunk) {
+        bool disconnect = false;
+        const auto piece = faults_->apply(
+            chunk.subspan(at, std::min(StreamFaultInjector::kMaxChunk, chunk.size() - at)),
+            capture_s, disconnect);
+        if (disconnect) {  // the rest is due with no client connected
+          drop_client(report);
+          report.unserved_bytes += chunk.size() - at;
+          break;
+        }
+        if (!piece.empty()) sent = write_all(piece, stop, report) || sent;
+      }
+      report.segments += sent ? 1 : 0;
       return true;
     };
+    if (faults_) faults_->new_pass();
     if (!read_stream(capture_, config_.server_port, serve, error)) return rt::make_error(error);
     if (!interrupted) ++report.passes;
     if (stop.load(std::memory_order_relaxed)) {
@@ -277,6 +302,7 @@ rt::Result<TcpReplayReport> TcpReplay::run(const std::atomic<bool>& stop,
   report.error_median_ns = pacing.median_ns();
   report.error_p99_ns = pacing.p99_ns();
   report.error_max_ns = pacing.max_ns();
+  if (faults_) report.faults = faults_->counts();
   return report;
 }
 

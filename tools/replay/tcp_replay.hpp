@@ -22,6 +22,7 @@
 
 #include "rt/expected.hpp"
 #include "rt/unique_fd.hpp"
+#include "tools/replay/faults.hpp"
 #include "tools/replay/replay_pacing.hpp"
 
 namespace stac::io {
@@ -60,6 +61,7 @@ struct TcpReplayReport {
   // |write time - scheduled time| of the chunks written (median and p99 to 1 us, floor; max
   // exact); -1 with fast or when none was written.
   std::int64_t error_median_ns = -1, error_p99_ns = -1, error_max_ns = -1;
+  std::optional<StreamFaultCounts> faults;  // what the faults did (after inject())
 };
 
 class TcpReplay {
@@ -76,6 +78,10 @@ class TcpReplay {
 
   const TcpReplayPlan& plan() const noexcept { return plan_; }
   std::uint16_t listen_port() const noexcept { return listen_port_; }  // the bound one
+
+  // Faults for the stream (faults.hpp), their capture time counted from `zero_stamp_ns` in
+  // each pass.
+  void inject(const StreamFaultPlan& plan, std::int64_t zero_stamp_ns);
 
   // Blocks until a client is connected (true) or `stop` is set (false).
   bool wait_for_client(const std::atomic<bool>& stop) noexcept;
@@ -101,6 +107,8 @@ class TcpReplay {
   rt::UniqueFd client_fd_;
   std::uint16_t listen_port_ = 0;
   std::uint64_t accepted_ = 0;  // connections accepted since open()
+  std::optional<StreamFaultInjector> faults_;
+  std::int64_t faults_zero_ns_ = 0;
 };
 
 }  // namespace stac::io

@@ -158,7 +158,6 @@ rt::Result<ReplayReport> UdpReplay::run(const std::atomic<bool>& stop, const Rep
   report.error_max_ns = pacing.max_ns();
   if (faults_) {
     report.faults = faults_->counts();
-    report.faults_summary = faults_->summary();
   }
   return report;
 }

@@ -60,7 +60,6 @@ struct ReplayReport {
   // max exact). All -1 with fast.
   std::int64_t error_median_ns = -1, error_p99_ns = -1, error_max_ns = -1;
   std::optional<FaultCounts> faults;  // what the faults did (with config.faults)
-  std::string faults_summary;
 };
 
 class UdpReplay {
