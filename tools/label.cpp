@@ -191,8 +191,8 @@ class LabelServer {
     return &datasets_.emplace(path, std::move(d).value()).first->second;
   }
 
-  bool asked(const std::string& source, std::uint64_t track) const {
-    const auto qs = questions();
+  static bool asked(const std::vector<Question>& qs, const std::string& source,
+                    std::uint64_t track) {
     return std::any_of(qs.begin(), qs.end(),
                        [&](const Question& q) { return q.source == source && q.track == track; });
   }
@@ -200,7 +200,7 @@ class LabelServer {
   rt::Result<nlohmann::json> track_json(const std::string& source, const std::string& track_text) {
     char* end = nullptr;
     const unsigned long long track = std::strtoull(track_text.c_str(), &end, 10);
-    if (track_text.empty() || end == nullptr || *end != '\0' || !asked(source, track))
+    if (track_text.empty() || end == nullptr || *end != '\0' || !asked(questions(), source, track))
       return rt::make_error("no question about track " + track_text + " of " + source);
     auto d = dataset(source);
     if (!d) return rt::make_error(d.error().message);
@@ -245,9 +245,12 @@ class LabelServer {
         std::find(classes_.begin(), classes_.end(), label) == classes_.end())
       return rt::make_error("label " + label + " is none of " + classification::joined(classes_) +
                             ", background, skip");
-    if (!asked(source, track))
+    // Each file read once per answer.
+    const std::vector<Question> qs = questions();
+    if (!asked(qs, source, track))
       return rt::make_error("no question about track " + std::to_string(track) + " of " + source);
-    if (answers().count({source, track}) != 0)
+    auto answered = answers();
+    if (answered.count({source, track}) != 0)
       return rt::make_error("track " + std::to_string(track) + " of " + source +
                             " is answered already (the first answer holds)");
     const nlohmann::json line = {{"source", source}, {"track", track}, {"label", label}};
@@ -255,10 +258,10 @@ class LabelServer {
       return rt::make_error(a.error().message);
     std::fprintf(stderr, "stac label: %s track %llu: %s\n", source.c_str(),
                  static_cast<unsigned long long>(track), label.c_str());
+    answered.emplace(std::pair{source, track}, label);
     nlohmann::json out = {{"saved", true}};
-    const auto answered = answers();
     std::size_t open = 0;
-    for (const Question& q : questions()) open += answered.count({q.source, q.track}) == 0 ? 1 : 0;
+    for (const Question& q : qs) open += answered.count({q.source, q.track}) == 0 ? 1 : 0;
     out["open"] = open;
     if (open == 0) {
       auto r = start_round();
