@@ -96,6 +96,38 @@ put("config_files_fuzz", "calibration.yaml",
 put("config_files_fuzz", "db.xml",
     open(f"{SHARED}/velodyne/calib/rosdrivers_64e_s2.1-sztaki_db.xml", "rb").read())
 
+# gs_usb bulk-IN transfers: a received frame (20 bytes, no timestamp), a 24-byte one with a
+# timestamp, an echo, and a CAN FD one; each behind its 1-byte length. Then the candleLight's
+# BT_CONST (fclk 48 MHz, tseg1 1-16, tseg2 1-8, sjw 4, brp 1-1024, inc 1) at the head.
+bt_const = struct.pack("<10I", 0, 48_000_000, 1, 16, 1, 8, 4, 1, 1024, 1)
+received = struct.pack("<IIBBBB8s", 0xFFFFFFFF, 0x123, 8, 0, 0, 0, bytes(range(8)))
+echo = struct.pack("<IIBBBB8s", 7, 0x1F0, 2, 0, 0, 0, b"\x01\x02" + bytes(6))
+fd = struct.pack("<IIBBBB8s", 0xFFFFFFFF, 0x321, 8, 0, 0x02, 0, bytes(8))
+put("gs_usb_frame_fuzz", "frames", b"\x00" + bt_const + b"".join(
+    bytes([len(f)]) + f for f in (received, echo, fd)))
+put("gs_usb_frame_fuzz", "frames_ts", b"\x01" + bt_const + bytes([24]) + received +
+    struct.pack("<I", 123456))
+put("candump_file_fuzz", "candump.log",
+    b"(1700000000.000000) can0 123#DEADBEEF00112233\n(1700000000.010000) can0 1F0#0102\n"
+    b"(1700000000.020000) can0 7FF#R\n(1700000000.030000) can0 12345678#00\n")
+
+# The status cycle: the trailers' (type, value) bytes of a simulated S2.1 drive of 3.7 s, which
+# carries the calibration dump twice (an S2.1 dump is used once the next one confirms it; the
+# simulator sends the real S2.1 calibration); written
+# when a built stac is found (build/tools/stac), model byte 1 (S2.1) first.
+stac = "build/tools/stac"
+if os.path.exists(stac):
+    import subprocess
+    import tempfile
+    with tempfile.TemporaryDirectory() as tmp:
+        subprocess.run([stac, "sim", "--scenario", "highway", "--seed", "1", "--duration", "3.7",
+                        "--out", f"{tmp}/s.pcap", "--truth", f"{tmp}/s.jsonl", "--calib",
+                        f"{SHARED}/velodyne/calib/rosdrivers_64e_s2.1-sztaki.yaml"],
+                       check=True, capture_output=True)
+        trailers = b"".join(p[1204:1206] for p in payloads(f"{tmp}/s.pcap") if len(p) == 1206)
+    put("velodyne_status_fuzz", "sim_s21_cycle", b"\x01" + trailers)
+    put("velodyne_status_fuzz", "sim_s21_cycle_as_s3", b"\x02" + trailers[:2000])
+
 
 def put_dict(target, words):
     d = os.path.join("fuzz", "dict")
