@@ -1,6 +1,7 @@
-// stac process: a capture through the whole per-scan pipeline, offline, as fast as possible and
-// deterministic: decode -> (INS poses) deskew -> segment -> track -> a tracks file, with
-// per-stage CPU time statistics at the end.
+// stac process: a capture (or a KITTI raw drive folder) through the whole per-scan pipeline,
+// offline, as fast as possible and deterministic: decode -> (INS poses) deskew -> segment ->
+// track -> a tracks file, with per-stage CPU time statistics at the end, and with --pictures a
+// bird's-eye picture of each scan.
 #include <time.h>
 
 #include <algorithm>
@@ -18,6 +19,7 @@
 #include "drivers/velodyne/scan_stream.hpp"
 #include "formats/capture_input.hpp"
 #include "formats/capture_poses.hpp"
+#include "formats/kitti_raw.hpp"
 #include "formats/model_file.hpp"
 #include "pipeline/scan_pipeline.hpp"
 #include "settings/dds_settings.hpp"
@@ -25,6 +27,7 @@
 #include "tools/commands.hpp"
 #include "tools/evaluation/tracks_jsonl.hpp"
 #include "tools/evaluation/truth_composition.hpp"
+#include "tools/pictures/birds_eye.hpp"
 #include "tools/status.hpp"
 #include "tools/support/progress.hpp"
 
@@ -35,7 +38,7 @@ using namespace stac::formats;
 namespace {
 
 struct ProcessOptions {
-  std::string in, tracks, truth, config, calib, origin, model, dds_config;
+  std::string in, tracks, truth, config, calib, origin, model, dds_config, pictures;
   bool no_deskew = false;
   bool dds = false;
   int domain = -1;
@@ -91,16 +94,77 @@ void print_stats(const std::vector<Stage>& stages) {
   }
 }
 
+// One scan from above in its vehicle frame at the scan's start: the points by height, the
+// segments (grey), the confirmed tracks (orange, with id and class) and the coasting ones (blue).
+rt::Status save_scan_picture(const std::filesystem::path& png, const velodyne::Scan& scan,
+                             const pipeline::ScanResult& r,
+                             const classification::ClassNames& classes, const std::string& legend) {
+  BirdsEye view(BirdsEyeOptions{});
+  const Eigen::Isometry3d vehicle_T_world = r.world_T_vehicle_start.inverse();
+  const Eigen::Isometry3d vehicle_T_sensor = vehicle_T_world * r.world_T_sensor;
+  const double yaw0 = pipeline::yaw_of(r.world_T_vehicle_start.linear());
+  for (const velodyne::Point& p : scan.points) {
+    const Eigen::Vector3d v = vehicle_T_sensor * Eigen::Vector3d(p.x, p.y, p.z);
+    view.add_point(static_cast<float>(v.x()), static_cast<float>(v.y()),
+                   static_cast<float>(v.z() - vehicle_T_sensor.translation().z()));
+  }
+  const auto box = [&](double x, double y, double length, double width, double yaw, Bgr colour) {
+    const Eigen::Vector3d c = vehicle_T_world * Eigen::Vector3d(x, y, 0);
+    view.add_box(static_cast<float>(c.x()), static_cast<float>(c.y()), static_cast<float>(length),
+                 static_cast<float>(width), static_cast<float>(yaw - yaw0), colour);
+    return c;
+  };
+  for (std::size_t i = 0; i < r.segments.segments.size(); ++i) {
+    const pipeline::WorldBox b = r.world_box(i);
+    (void)box(b.x, b.y, b.length, b.width, b.yaw, Bgr{150, 150, 150});
+  }
+  for (std::size_t i = 0; i < r.tracked.tracks.size(); ++i) {
+    const tracking::Track& t = r.tracked.tracks[i];
+    if (t.state == tracking::TrackState::kTentative) continue;
+    const bool confirmed = t.state == tracking::TrackState::kConfirmed;
+    const Bgr colour = confirmed ? Bgr{0, 140, 255} : Bgr{255, 120, 0};
+    const Eigen::Vector3d c = box(t.position.x(), t.position.y(), t.length, t.width, t.yaw, colour);
+    // Named when the class is one of the model's (background tracks only boxed: a street holds
+    // many).
+    const bool classified = i < r.classes.size() && r.classes[i].classified;
+    const std::string name =
+        classified ? classification::class_name(classes, r.classes[i].label) : "";
+    if (classified && name == "background") continue;
+    view.add_label(static_cast<float>(c.x()), static_cast<float>(c.y()),
+                   "#" + std::to_string(t.id) + (name.empty() ? "" : " " + name), colour);
+  }
+  view.add_legend(legend);
+  view.add_legend("segments grey, confirmed tracks orange, coasting blue");
+  return view.save(png);
+}
+
 int run_process(const ProcessOptions& o) {
   const std::filesystem::path config = config_path(o.config);
   auto settings = load_pipeline_settings(config);
   if (!settings) return fail(settings.error().message);
   VelodyneSettings& vs = settings->velodyne;
   EgoSettings& ego_settings = settings->ego;
+  // A KITTI raw drive folder, or a capture.
+  std::optional<KittiRawDrive> drive;
+  if (is_kitti_raw_drive(o.in)) {
+    auto d = open_kitti_raw_drive(o.in);
+    if (!d) return fail(d.error().message);
+    if (d->has_oxts && !o.no_deskew) {
+      return fail(o.in +
+                  " has oxts/ (the drive's GPS/IMU), which stac process does not read yet: "
+                  "give --no-deskew to process it as a parked sensor (no pose; tracks in the "
+                  "vehicle frame)");
+    }
+    drive = std::move(*d);
+  }
   if (!o.calib.empty())
     vs.calibration = o.calib == "stream" ? std::filesystem::path{} : std::filesystem::path(o.calib);
-  auto calibration = capture_calibration(vs.calibration, o.in, vs.port, vs.assembler.decoder.model);
-  if (!calibration) return fail(calibration.error().message);
+  std::optional<velodyne::Calibration> calibration;
+  if (!drive) {
+    auto c = capture_calibration(vs.calibration, o.in, vs.port, vs.assembler.decoder.model);
+    if (!c) return fail(c.error().message);
+    calibration = std::move(*c);
+  }
 
   // The truth (for segmentation metrics) and the frame it is written in.
   std::vector<TruthScanRecord> truth;
@@ -119,15 +183,24 @@ int run_process(const ProcessOptions& o) {
     ego_settings.origin = *g;
   }
   std::optional<CapturePoses> poses;
-  if (!o.no_deskew) {
+  if (!o.no_deskew && !drive) {
     auto p = load_capture_poses(o.in, ego_settings);
     if (!p) return fail(p.error().message);
     poses = std::move(*p);
   }
 
-  auto reader =
-      io::PcapReader::open(o.in, io::PcapFilter{.udp_dst_port = vs.port, .udp_src_port = {}});
-  if (!reader) return fail(reader.error().message);
+  std::optional<io::PcapReader> reader;
+  if (!drive) {
+    auto r =
+        io::PcapReader::open(o.in, io::PcapFilter{.udp_dst_port = vs.port, .udp_src_port = {}});
+    if (!r) return fail(r.error().message);
+    reader.emplace(std::move(*r));
+  }
+  if (!o.pictures.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(o.pictures, ec);
+    if (ec) return fail(o.pictures + ": cannot create the pictures folder: " + ec.message());
+  }
   auto model = job_model(o.model, settings->classification.model);
   if (!model) return fail(model.error().message);
   const classification::ClassNames model_classes =
@@ -145,7 +218,8 @@ int run_process(const ProcessOptions& o) {
   }
 
   // Everything the per-scan loop uses is allocated here.
-  velodyne::ScanStream stream(*calibration, vs.assembler, 2);
+  std::optional<velodyne::ScanStream> stream;
+  if (calibration) stream.emplace(*calibration, vs.assembler, 2);
   pipeline::PipelineConfig pc = offline_pipeline_config(*settings, *model);
   // The classification in stac run's two steps, one right after the other (the same classes as
   // in one): the tracks it publishes, then the others and the accumulated clouds.
@@ -184,6 +258,7 @@ int run_process(const ProcessOptions& o) {
   std::size_t truth_next = 0;
   std::string line;
   std::int64_t decode_ns = 0;
+  std::string picture_error;
 
   auto handle = [&](velodyne::Scan& scan) {
     pipeline.process(scan, poses ? poses->history.get() : nullptr, result);
@@ -253,6 +328,18 @@ int run_process(const ProcessOptions& o) {
     line.clear();
     append_json_line(rec, line);
     out << line;
+    if (!o.pictures.empty() && picture_error.empty()) {
+      char name[32];
+      std::snprintf(name, sizeof(name), "scan_%06llu.png", static_cast<unsigned long long>(scans));
+      const std::string legend = "scan " + std::to_string(scans) + ", " +
+                                 std::to_string(result.segments.segments.size()) + " segments, " +
+                                 std::to_string(result.tracked.tracks.size()) + " tracks" +
+                                 (result.has_pose ? "" : " (no pose: vehicle frame)");
+      if (auto saved = save_scan_picture(std::filesystem::path(o.pictures) / name, scan, result,
+                                         model_classes, legend);
+          !saved)
+        picture_error = saved.error().message;
+    }
     if (dds_out) {
       auto st = dds_out->scans->publish(
           result, scans, result.has_pose ? ego::EgoSource::kIns : ego::EgoSource::kNone);
@@ -265,31 +352,59 @@ int run_process(const ProcessOptions& o) {
     ++scans;
   };
 
-  Progress progress("process", static_cast<double>(std::filesystem::file_size(o.in)));
-  io::Datagram d;
-  while (reader->next(d)) {
-    const std::int64_t c0 = cpu_ns();
-    const bool closed = stream.add_packet(d.payload, d.stamp_ns);
-    decode_ns += cpu_ns() - c0;
-    if (closed) {
-      while (velodyne::Scan* scan = stream.take()) {
-        if (scan->header.complete()) handle(*scan);
-        stream.release();
-      }
+  KittiScanCounts kitti_points;
+  if (drive) {
+    velodyne::Scan kitti_scan(drive->max_points);  // the one scan, reused
+    Progress progress("process", static_cast<double>(drive->scans.size()));
+    for (std::size_t i = 0; i < drive->scans.size(); ++i) {
+      const std::int64_t c0 = cpu_ns();
+      auto c = load_kitti_raw_scan(drive->scans[i], i, drive->stamps_ns[i], kitti_scan);
+      if (!c) return fail(c.error().message);
+      decode_ns += cpu_ns() - c0;
+      kitti_points.points += c->points;
+      kitti_points.refused += c->refused;
+      handle(kitti_scan);
+      progress.update(static_cast<double>(i + 1));
     }
-    progress.update(static_cast<double>(reader->bytes_read()));
+    progress.finish();
+  } else {
+    Progress progress("process", static_cast<double>(std::filesystem::file_size(o.in)));
+    io::Datagram d;
+    while (reader->next(d)) {
+      const std::int64_t c0 = cpu_ns();
+      const bool closed = stream->add_packet(d.payload, d.stamp_ns);
+      decode_ns += cpu_ns() - c0;
+      if (closed) {
+        while (velodyne::Scan* scan = stream->take()) {
+          if (scan->header.complete()) handle(*scan);
+          stream->release();
+        }
+      }
+      progress.update(static_cast<double>(reader->bytes_read()));
+    }
+    progress.finish();
   }
-  progress.finish();
   out.close();
   if (!out) return fail(o.tracks + ": write failed");
-  const std::string capture_error = reader->error();
+  const std::string capture_error = reader ? reader->error() : std::string();
 
   std::fprintf(stderr, "stac process: %s -> %s: %llu complete scans\n", o.in.c_str(),
                o.tracks.c_str(), static_cast<unsigned long long>(scans));
-  const velodyne::AssemblerCounters& ac = stream.assembler().counters();
-  std::fprintf(stderr, "  capture     %s\n  dropped     %s\n",
-               capture_frames_summary(reader->counters(), ac.packets, vs.port).c_str(),
-               packet_drops_summary(ac).c_str());
+  if (drive) {
+    std::fprintf(stderr,
+                 "  input       KITTI raw drive: %zu scans (velodyne_points/data), times %s; %llu "
+                 "points, %llu left out (not finite, or beyond 1 km)\n",
+                 drive->scans.size(),
+                 drive->stamps_from_file ? "from velodyne_points/timestamps.txt"
+                                         : "100 ms apart (no velodyne_points/timestamps.txt)",
+                 static_cast<unsigned long long>(kitti_points.points),
+                 static_cast<unsigned long long>(kitti_points.refused));
+  } else {
+    const velodyne::AssemblerCounters& ac = stream->assembler().counters();
+    std::fprintf(stderr, "  capture     %s\n  dropped     %s\n",
+                 capture_frames_summary(reader->counters(), ac.packets, vs.port).c_str(),
+                 packet_drops_summary(ac).c_str());
+  }
   if (poses) {
     std::fprintf(stderr,
                  "  ego         %llu INS fixes (%llu skipped before a GPS week, %llu not aligned, "
@@ -312,8 +427,9 @@ int run_process(const ProcessOptions& o) {
                  static_cast<unsigned long long>(poses->parser.garbage_bytes));
   } else {
     std::fprintf(stderr, "  ego         %s: parked sensor, world = vehicle frame\n",
-                 o.no_deskew
-                     ? "--no-deskew"
+                 o.no_deskew ? "--no-deskew"
+                 : drive
+                     ? "no oxts/ in the drive"
                      : ("no INS stream on port " + std::to_string(ego_settings.ins_port)).c_str());
   }
   const auto& tc = pipeline.tracker().counters();
@@ -338,8 +454,16 @@ int run_process(const ProcessOptions& o) {
         static_cast<unsigned long long>(dds_errors));
   }
   print_stats(stages);
+  if (!o.pictures.empty()) {
+    if (!picture_error.empty()) return fail("--pictures: " + picture_error);
+    std::fprintf(stderr, "  pictures    %llu in %s (scan_NNNNNN.png)\n",
+                 static_cast<unsigned long long>(scans), o.pictures.c_str());
+  }
   if (!capture_error.empty()) return fail(capture_breaks_off(capture_error));
-  if (scans == 0) return fail(nothing_decoded_reason(o.in, reader->counters(), ac, vs.port));
+  if (scans == 0 && reader) {
+    return fail(
+        nothing_decoded_reason(o.in, reader->counters(), stream->assembler().counters(), vs.port));
+  }
   return 0;
 }
 
@@ -355,10 +479,14 @@ void add_process_command(CLI::App& app) {
       "track -> classify (with a model), and writes one JSON line per scan (segments and tracks in "
       "the world frame,\n"
       "docs/evaluation.md). With --truth (a `stac sim` truth file) each segment also says which\n"
-      "truth objects its points fall in, for `stac eval`. Prints CPU time per stage at the end.");
-  cmd->add_option("capture", o->in, "pcap capture (HDL-64E UDP, optionally the POS LV stream)")
+      "truth objects its points fall in, for `stac eval`. Prints CPU time per stage at the end.\n"
+      "The input may also be a KITTI raw drive folder (velodyne_points/data/*.bin, with\n"
+      "velodyne_points/timestamps.txt when it has one), processed without a pose (parked).");
+  cmd->add_option("capture", o->in,
+                  "pcap capture (HDL-64E UDP, optionally the POS LV stream), or a KITTI raw drive "
+                  "folder")
       ->required()
-      ->check(CLI::ExistingFile);
+      ->check(CLI::ExistingPath);
   cmd->add_option("--tracks", o->tracks, "output: the tracks file (JSON lines)")->required();
   cmd->add_option("--truth", o->truth, "truth file of a simulated drive (adds segment composition)")
       ->check(CLI::ExistingFile);
@@ -368,6 +496,9 @@ void add_process_command(CLI::App& app) {
   cmd->add_option(
       "--origin", o->origin,
       "LAT,LON,ALT of the world frame (default: the truth's, else the config's ego.origin)");
+  needs_pictures(cmd->add_option("--pictures", o->pictures,
+                                 "write a bird's-eye picture of each scan into this folder "
+                                 "(scan_NNNNNN.png: points, segments, tracks)"));
   cmd->add_flag("--no-deskew", o->no_deskew,
                 "ignore the INS stream: no deskew, sensor frame = world");
   cmd->add_option("--model", o->model,

@@ -12,6 +12,7 @@
 #include "drivers/io/pcap_reader.hpp"
 #include "drivers/velodyne/scan_stream.hpp"
 #include "formats/capture_input.hpp"
+#include "formats/kitti_raw.hpp"
 #include "settings/settings.hpp"
 #include "tools/commands.hpp"
 #include "tools/pictures/birds_eye.hpp"
@@ -193,7 +194,10 @@ rt::Result<std::vector<std::filesystem::path>> kitti_files(const std::filesystem
   if (std::filesystem::is_regular_file(where)) {
     files.push_back(where);
   } else if (std::filesystem::is_directory(where)) {
-    for (const auto& e : std::filesystem::directory_iterator(where)) {
+    // A KITTI raw drive folder: its scans.
+    const std::filesystem::path folder =
+        formats::is_kitti_raw_drive(where) ? where / "velodyne_points" / "data" : where;
+    for (const auto& e : std::filesystem::directory_iterator(folder)) {
       if (e.path().extension() == ".bin") files.push_back(e.path());
     }
     std::sort(files.begin(), files.end());
@@ -481,7 +485,8 @@ void add_sim_compare_command(CLI::App& app) {
   cmd->add_option("--sim", o->sim, "pcap written by `stac sim`")
       ->required()
       ->check(CLI::ExistingFile);
-  cmd->add_option("--kitti", o->kitti, "a KITTI .bin scan, or a folder of them")
+  cmd->add_option("--kitti", o->kitti,
+                  "a KITTI .bin scan, a folder of them, or a KITTI raw drive folder")
       ->default_str(std::string(STAC_SOURCE_DIR) + "/../shared/data/kitti");
   o->kitti = std::string(STAC_SOURCE_DIR) + "/../shared/data/kitti";
   cmd->add_option("--report", o->report, "folder to write the report into")->required();

@@ -159,6 +159,85 @@ TEST(ProcessCli, TracksRecordTheirFrameAndEvalBringsTheTruthIntoItOrRefuses) {
   EXPECT_NEAR(mota_of(at("eval_none")), mota_of(at("eval_ins")), 0.03);
 }
 
+// Issue 33: a KITTI raw drive folder as the input. The 40 real scans of kitti-raw-seq (no OXTS,
+// no timestamps) run parked, said so, with a picture of each scan; a drive's timestamps.txt
+// gives the scans their times; an oxts/ folder is refused until --no-deskew; sim-compare reads
+// the same folder.
+TEST(ProcessCli, KittiRawDriveRunsParkedWithAPictureOfEachScan) {
+  constexpr const char* kSeq = "kitti-raw-seq/velodyne_points/data/0000000000.bin";
+  STAC_REQUIRE_SHARED_DATA(kSeq);
+  const std::filesystem::path seq = stac::testing::shared_data("kitti-raw-seq");
+  const auto dir = fresh_dir("kitti_raw");
+  CliResult p = stac("process " + seq.string() + " --tracks " + (dir / "t.jsonl").string() +
+                     " --pictures " + (dir / "pictures").string());
+  ASSERT_EQ(p.code, 0) << p.output;
+  for (const char* said :
+       {"KITTI raw drive: 40 scans", "100 ms apart (no velodyne_points", "0 left out",
+        "no oxts/ in the drive: parked sensor", "40 complete scans", "pictures    40 in"}) {
+    EXPECT_NE(p.output.find(said), std::string::npos) << said << " missing from\n" << p.output;
+  }
+  auto tracks = read_tracks_file(dir / "t.jsonl");
+  ASSERT_TRUE(tracks) << tracks.error().message;
+  ASSERT_EQ(tracks->size(), 40u);
+  std::size_t confirmed = 0, segments = 0;
+  for (std::size_t k = 0; k < tracks->size(); ++k) {
+    const TracksScan& t = (*tracks)[k];
+    EXPECT_EQ(t.frame, TracksFrame::kVehicle);
+    EXPECT_EQ(t.stamp_ns, 1'000'000'000 + static_cast<std::int64_t>(k) * 100'000'000);
+    segments += t.segments.size();
+    for (const TrackRecord& r : t.tracks) confirmed += r.state == "confirmed" ? 1 : 0;
+  }
+  EXPECT_GT(segments, 40u * 30u);  // a dense street: dozens of segments a scan
+  EXPECT_GT(confirmed, 40u * 10u);
+  for (int k = 0; k < 40; ++k) {
+    char name[32];
+    std::snprintf(name, sizeof(name), "scan_%06d.png", k);
+    std::error_code ec;
+    EXPECT_GT(std::filesystem::file_size(dir / "pictures" / name, ec), 10'000u) << name;
+  }
+
+  // A drive of three of the scans, with its times.
+  const auto drive = dir / "2011_09_26_drive";
+  std::filesystem::create_directories(drive / "velodyne_points" / "data");
+  for (int k = 0; k < 3; ++k) {
+    const std::string name = "000000000" + std::to_string(k) + ".bin";
+    std::filesystem::create_symlink(seq / "velodyne_points" / "data" / name,
+                                    drive / "velodyne_points" / "data" / name);
+  }
+  std::ofstream(drive / "velodyne_points" / "timestamps.txt")
+      << "2011-09-26 13:02:25.964389445\n2011-09-26 13:02:26.066013922\n";
+  p = stac("process " + drive.string() + " --tracks " + (dir / "d.jsonl").string());
+  EXPECT_NE(p.code, 0);
+  EXPECT_NE(p.output.find("timestamps.txt has 2 times for 3 scans"), std::string::npos) << p.output;
+  std::ofstream(drive / "velodyne_points" / "timestamps.txt", std::ios::app)
+      << "2011-09-26 13:02:26.167672432\n";
+  p = stac("process " + drive.string() + " --tracks " + (dir / "d.jsonl").string());
+  ASSERT_EQ(p.code, 0) << p.output;
+  EXPECT_NE(p.output.find("times from velodyne_points/timestamps.txt"), std::string::npos)
+      << p.output;
+  auto timed = read_tracks_file(dir / "d.jsonl");
+  ASSERT_TRUE(timed && timed->size() == 3u);
+  EXPECT_NEAR(static_cast<double>(timed->front().stamp_ns - 1'317'042'145'964'389'445), 0.0,
+              1000.0);
+  std::filesystem::create_directories(drive / "oxts" / "data");
+  p = stac("process " + drive.string() + " --tracks " + (dir / "d.jsonl").string());
+  EXPECT_NE(p.code, 0);
+  EXPECT_NE(p.output.find("--no-deskew"), std::string::npos) << p.output;
+  p = stac("process " + drive.string() + " --no-deskew --tracks " + (dir / "d.jsonl").string());
+  EXPECT_EQ(p.code, 0) << p.output;
+
+  // sim-compare reports the real scans of the same folder.
+  const std::string pcap = (dir / "sim.pcap").string();
+  ASSERT_EQ(stac("sim --scenario urban --seed 3 --duration 0.5 --out " + pcap + " --truth " +
+                 (dir / "sim.jsonl").string())
+                .code,
+            0);
+  p = stac("sim-compare --sim " + pcap + " --kitti " + seq.string() + " --report " +
+           (dir / "realism").string());
+  ASSERT_EQ(p.code, 0) << p.output;
+  EXPECT_NE(p.output.find("vs 40 KITTI scans"), std::string::npos) << p.output;
+}
+
 // Issue 31: Applanix messages dropped for a bad checksum are reported, not silently lost.
 TEST(ProcessCli, InsMessagesWithBadChecksumsAreCountedInTheSummary) {
   STAC_REQUIRE_SHARED_DATA(kYaml);
