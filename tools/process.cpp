@@ -109,7 +109,7 @@ rt::Status save_scan_picture(const std::filesystem::path& png, const velodyne::S
                    static_cast<float>(v.z() - vehicle_T_sensor.translation().z()));
   }
   const auto box = [&](double x, double y, double length, double width, double yaw, Bgr colour) {
-    const Eigen::Vector3d c = vehicle_T_world * Eigen::Vector3d(x, y, 0);
+    Eigen::Vector3d c = vehicle_T_world * Eigen::Vector3d(x, y, 0);
     view.add_box(static_cast<float>(c.x()), static_cast<float>(c.y()), static_cast<float>(length),
                  static_cast<float>(width), static_cast<float>(yaw - yaw0), colour);
     return c;

@@ -61,8 +61,11 @@ bool compute_bit_timing(const BtConst& c, std::uint32_t bitrate_bps, BitTiming& 
   const std::uint32_t inc = c.brp_inc == 0 ? 1 : c.brp_inc;
   double best_error = 1.0;
   bool found = false;
-  for (std::uint32_t brp = c.brp_min; brp <= c.brp_max; brp += inc) {
-    const std::uint64_t per_bit = static_cast<std::uint64_t>(brp) * bitrate_bps;
+  // 64-bit: a prescaler step never wraps around (the adapter's limits are its word, unchecked);
+  // past fclk / bitrate no prescaler leaves a whole quantum per bit.
+  for (std::uint64_t brp = c.brp_min; brp <= c.brp_max; brp += inc) {
+    const std::uint64_t per_bit = brp * bitrate_bps;
+    if (per_bit > c.fclk_can) break;
     if (c.fclk_can % per_bit != 0) continue;
     const std::uint64_t tq = c.fclk_can / per_bit;  // time quanta per bit = 1 + tseg1 + tseg2
     for (std::uint64_t tseg2 = c.tseg2_min; tseg2 <= c.tseg2_max; ++tseg2) {
@@ -74,7 +77,7 @@ bool compute_bit_timing(const BtConst& c, std::uint32_t bitrate_bps, BitTiming& 
       if (error < best_error - 1e-12) {
         best_error = error;
         found = true;
-        out.brp = brp;
+        out.brp = static_cast<std::uint32_t>(brp);
         out.prop_seg = 1;
         out.phase_seg1 = static_cast<std::uint32_t>(tseg1 - 1);
         out.phase_seg2 = static_cast<std::uint32_t>(tseg2);
@@ -82,7 +85,6 @@ bool compute_bit_timing(const BtConst& c, std::uint32_t bitrate_bps, BitTiming& 
         if (out.sjw == 0) out.sjw = 1;
       }
     }
-    if (brp > c.brp_max - inc) break;  // no wrap-around at the top of the range
   }
   return found;
 }

@@ -109,6 +109,24 @@ TEST(GsUsbBitTiming, CandleLightClockGivesAnEightySevenPointFivePercentSamplePoi
   EXPECT_FALSE(compute_bit_timing(c, 0, t));
 }
 
+// Issue 31 (gs_usb_frame_fuzz): limits an adapter reports are not checked by anyone else. A
+// prescaler range near 2^32 whose step skipped the wrap-around check (a divisor that did not fit
+// went on with `continue`) wrapped to 0 and divided by zero; now no step wraps, and the search
+// ends where no prescaler leaves a whole quantum per bit.
+TEST(GsUsbBitTiming, LimitsNearTheTopOfTheRangeEndTheSearchWithoutWrapping) {
+  const BtConst fuzzed{0x3A000000, 282'853'376, 364,         67'109'376,    16'777'216,
+                       0,          16'777'220,  335'544'320, 4'294'967'295, 291};
+  BitTiming t{};
+  EXPECT_FALSE(compute_bit_timing(fuzzed, 500'000, t));
+  // The whole 32-bit range with a large step: still the exact divider of a real clock.
+  const BtConst wide{0, 48'000'000, 1, 16, 1, 8, 4, 1, 4'294'967'295, 1};
+  ASSERT_TRUE(compute_bit_timing(wide, 500'000, t));
+  EXPECT_EQ(t.brp, 6u);
+  const BtConst step{0, 48'000'000, 1, 16, 1, 8, 4, 3, 4'294'967'295, 4'000'000'000};
+  ASSERT_TRUE(compute_bit_timing(step, 1'000'000, t));
+  EXPECT_EQ(t.brp, 3u);
+}
+
 TEST(GsUsbDevice, OpeningWithoutAnAdapterFailsWithAClearMessage) {
   const auto d = GsUsbDevice::open({});
   if (d)

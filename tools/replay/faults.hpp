@@ -115,7 +115,8 @@ std::string summary(const StreamFaultCounts& counts);  // "ins faults: ..."
 // The faults of a StreamFaultPlan on one stream's chunks, in order.
 class StreamFaultInjector {
  public:
-  static constexpr std::size_t kMaxChunk = 64 * 1024;  // longer chunks are offered in pieces
+  static constexpr std::size_t kMaxChunk =
+      std::size_t{64} * 1024;  // longer chunks are offered in pieces
 
   explicit StreamFaultInjector(const StreamFaultPlan& plan) : plan_(plan), rng_(plan.seed) {}
 
