@@ -32,8 +32,12 @@ print(u.getsockname()[1], t.getsockname()[1])
 EOF
 )
 
-"$STAC" sim --scenario urban --seed 5 --duration 20 --out "$dir/drive.pcap" \
-  --truth "$dir/drive.jsonl" > "$dir/sim.log" 2>&1
+if ! "$STAC" sim --scenario urban --seed 5 --duration 20 --out "$dir/drive.pcap" \
+  --truth "$dir/drive.jsonl" > "$dir/sim.log" 2>&1; then
+  echo "soak: stac sim failed:" >&2
+  tail -n 3 "$dir/sim.log" >&2
+  exit 1
+fi
 dds=(--dds-config "$here/config/dds/loopback.xml" --domain "$domain")
 pids=()
 cleanup() { for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done; }
