@@ -8,7 +8,7 @@
 
 namespace stac::formats {
 
-rt::Result<std::vector<float>> load_kitti_scan(const std::string& path) {
+rt::Result<std::size_t> kitti_scan_points(const std::string& path) {
   std::error_code ec;
   const auto bytes = std::filesystem::file_size(path, ec);
   if (ec) return rt::make_error(path + ": cannot read: " + ec.message());
@@ -17,6 +17,24 @@ rt::Result<std::vector<float>> load_kitti_scan(const std::string& path) {
         path + ": " + std::to_string(bytes) +
         " bytes is not a KITTI scan (float32 x,y,z,reflectance: a multiple of 16 bytes)");
   }
+  return static_cast<std::size_t>(bytes / 16);
+}
+
+rt::Result<std::vector<std::filesystem::path>> kitti_scans_in(const std::filesystem::path& folder) {
+  std::vector<std::filesystem::path> scans;
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator(folder, ec)) {
+    if (entry.path().extension() == ".bin") scans.push_back(entry.path());
+  }
+  if (ec) return rt::make_error(folder.string() + ": cannot list: " + ec.message());
+  std::sort(scans.begin(), scans.end());
+  return scans;
+}
+
+rt::Result<std::vector<float>> load_kitti_scan(const std::string& path) {
+  const auto points = kitti_scan_points(path);
+  if (!points) return rt::Unexpected<rt::Error>{points.error()};
+  const std::size_t bytes = *points * 16;
   std::vector<float> v(bytes / sizeof(float));
   std::ifstream f(path, std::ios::binary);
   if (!f.read(reinterpret_cast<char*>(v.data()), static_cast<std::streamsize>(bytes))) {

@@ -3,6 +3,8 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <cstddef>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -12,6 +14,11 @@ namespace stac::formats {
 
 // float32 x, y, z, reflectance per point (velodyne frame, m; reflectance 0..1).
 rt::Result<std::vector<float>> load_kitti_scan(const std::string& path);
+// The points of a KITTI scan file from its size; an error when it cannot be read or its size is
+// not a whole number of points (16 bytes each).
+rt::Result<std::size_t> kitti_scan_points(const std::string& path);
+// The .bin files of a folder, in name order (empty when it holds none).
+rt::Result<std::vector<std::filesystem::path>> kitti_scans_in(const std::filesystem::path& folder);
 
 // The velodyne -> rectified camera 0 transform: R0_rect * Tr_velo_to_cam.
 rt::Result<Eigen::Isometry3d> load_kitti_rect_T_velo(const std::string& calib_path);

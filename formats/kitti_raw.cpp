@@ -7,6 +7,8 @@
 #include <fstream>
 #include <numbers>
 
+#include "formats/kitti_files.hpp"
+
 namespace stac::formats {
 namespace fs = std::filesystem;
 
@@ -38,25 +40,17 @@ bool parse_kitti_time(const std::string& line, std::int64_t& ns) {
 
 rt::Result<KittiRawDrive> open_kitti_raw_drive(const fs::path& path) {
   KittiRawDrive drive;
-  drive.folder = path;
   const fs::path data = path / "velodyne_points" / "data";
-  std::error_code ec;
-  for (const auto& entry : fs::directory_iterator(data, ec)) {
-    if (entry.path().extension() == ".bin") drive.scans.push_back(entry.path());
-  }
-  if (ec) return rt::make_error(data.string() + ": cannot list: " + ec.message());
-  if (drive.scans.empty()) return rt::make_error(data.string() + ": no .bin scan in it");
-  std::sort(drive.scans.begin(), drive.scans.end());
+  auto scans = kitti_scans_in(data);
+  if (!scans) return rt::Unexpected<rt::Error>{scans.error()};
+  if (scans->empty()) return rt::make_error(data.string() + ": no .bin scan in it");
+  drive.scans = std::move(*scans);
   for (const fs::path& scan : drive.scans) {
-    const auto bytes = fs::file_size(scan, ec);
-    if (ec || bytes == 0 || bytes % 16 != 0)
-      return rt::make_error(scan.string() + ": " +
-                            (ec ? ec.message()
-                                : std::to_string(bytes) +
-                                      " bytes is not a KITTI scan (float32 x,y,z,reflectance: a "
-                                      "multiple of 16 bytes)"));
-    drive.max_points = std::max<std::size_t>(drive.max_points, bytes / 16);
+    const auto points = kitti_scan_points(scan.string());
+    if (!points) return rt::Unexpected<rt::Error>{points.error()};
+    drive.max_points = std::max(drive.max_points, *points);
   }
+  std::error_code ec;
   const fs::path times = path / "velodyne_points" / "timestamps.txt";
   if (fs::exists(times, ec)) {
     std::ifstream in(times);

@@ -15,7 +15,6 @@
 namespace stac::formats {
 
 struct KittiRawDrive {
-  std::filesystem::path folder;
   std::vector<std::filesystem::path> scans;  // in name order
   std::vector<std::int64_t> stamps_ns;       // one per scan: UTC ns
   bool stamps_from_file = false;             // else 100 ms apart (10 Hz) from 1 s

@@ -12,6 +12,7 @@
 #include "drivers/io/pcap_reader.hpp"
 #include "drivers/velodyne/scan_stream.hpp"
 #include "formats/capture_input.hpp"
+#include "formats/kitti_files.hpp"
 #include "formats/kitti_raw.hpp"
 #include "settings/settings.hpp"
 #include "tools/commands.hpp"
@@ -195,12 +196,10 @@ rt::Result<std::vector<std::filesystem::path>> kitti_files(const std::filesystem
     files.push_back(where);
   } else if (std::filesystem::is_directory(where)) {
     // A KITTI raw drive folder: its scans.
-    const std::filesystem::path folder =
-        formats::is_kitti_raw_drive(where) ? where / "velodyne_points" / "data" : where;
-    for (const auto& e : std::filesystem::directory_iterator(folder)) {
-      if (e.path().extension() == ".bin") files.push_back(e.path());
-    }
-    std::sort(files.begin(), files.end());
+    auto scans = formats::kitti_scans_in(
+        formats::is_kitti_raw_drive(where) ? where / "velodyne_points" / "data" : where);
+    if (!scans) return rt::Unexpected<rt::Error>{scans.error()};
+    files = std::move(*scans);
   }
   if (files.empty())
     return rt::make_error(where.string() +
