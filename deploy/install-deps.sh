@@ -17,6 +17,7 @@ packages=(
   clang-14 libclang-rt-14-dev  # fuzz/: libFuzzer harnesses with ASan + UBSan (fuzz/run.sh)
   libcpp-httplib-dev  # stac label: the local web page of group induction
   chromium  # tests/web: stac label's page tested in a real headless browser
+  slurm-wlm  # tests/deploy: deploy/slurm-dataset.sh on a one-node cluster the test starts
 )
 # node and npm run the browser tests (tests/web, puppeteer-core from npm); Debian's nodejs unless
 # a node is already installed (e.g. from NodeSource, whose package holds npm too).

@@ -7,6 +7,9 @@
 #include <thread>
 
 #include "dds/idl_types.hpp"
+#include "drivers/can/dbc.hpp"
+#include "drivers/can/odometry.hpp"
+#include "drivers/velodyne/calibration.hpp"
 #include "formats/model_file.hpp"
 #include "rt/clock.hpp"
 #include "rt/scheduling.hpp"
@@ -146,6 +149,45 @@ rt::Result<ComponentSettings> load_component_settings(const std::filesystem::pat
   return s;
 }
 
+namespace {
+
+// The unit's calibration file (the live component needs one: it does not wait for the stream's).
+rt::Result<velodyne::Calibration> unit_calibration(const ComponentSettings& s) {
+  const std::filesystem::path& file = s.pipeline.velodyne.calibration;
+  if (file.empty()) {
+    return rt::make_error("'velodyne.calibration': " + s.name +
+                          " needs the unit's calibration file");
+  }
+  return velodyne::load_calibration(file);
+}
+
+}  // namespace
+
+rt::Result<std::string> check_component_files(const ComponentSettings& s) {
+  const settings::VelodyneSettings& vs = s.pipeline.velodyne;
+  auto calibration = unit_calibration(s);
+  if (!calibration) return rt::Unexpected<rt::Error>{calibration.error()};
+  auto model = formats::job_model(s.model, s.pipeline.classification.model);
+  if (!model) return rt::Unexpected<rt::Error>{model.error()};
+  std::string line = "calibration " + vs.calibration.string() + " (" +
+                     std::to_string(calibration->num_lasers) + " lasers), ";
+  line += *model != nullptr ? "model " + s.pipeline.classification.model.string()
+                            : std::string("no model (tracks stay unclassified)");
+  line += ", DDS domain " + std::to_string(s.dds.domain_id) + " with " +
+          (s.dds.config_uri.empty() ? std::string("Cyclone's defaults") : s.dds.config_uri);
+  if (s.run.can && s.can) {
+    auto db = can::load_dbc(s.can->dbc);
+    if (!db) return rt::Unexpected<rt::Error>{db.error()};
+    // The signals the config names must be in it, as at start-up.
+    auto decoder = can::OdometryDecoder::create(*db, s.can->signals);
+    if (!decoder) return rt::Unexpected<rt::Error>{decoder.error()};
+    line += ", CAN signals from " + s.can->dbc.string();
+  } else {
+    line += ", CAN off";
+  }
+  return line;
+}
+
 Component::Component(std::unique_ptr<Live> live) : live_(std::move(live)) {}
 Component::~Component() = default;
 
@@ -157,11 +199,7 @@ rt::Result<std::unique_ptr<Component>> Component::create(const ComponentSettings
   settings::VelodyneSettings& vs = s.pipeline.velodyne;
   settings::EgoSettings& es = s.pipeline.ego;
   const settings::RunSettings& rs = s.run;
-  if (vs.calibration.empty()) {
-    return rt::make_error("'velodyne.calibration': " + s.name +
-                          " needs the unit's calibration file");
-  }
-  auto calibration = velodyne::load_calibration(vs.calibration);
+  auto calibration = unit_calibration(s);
   if (!calibration) return rt::Unexpected<rt::Error>{calibration.error()};
   l.calibration = std::move(*calibration);
 

@@ -18,10 +18,14 @@ int main(int argc, char** argv) try {
       "stac-node"};
   std::string config;
   double seconds = 0;
-  app.add_option("--config", config,
-                 "configuration file (default: $STAC_CONFIG or the shipped config/stac.yaml)");
+  app.add_option("--config", config, stac::settings::kConfigOptionHelp);
   app.add_option("--seconds", seconds, "stop after this many seconds (default: run until stopped)")
       ->check(CLI::Range(0.0, 1e9));
+  bool check = false;
+  app.add_flag(
+      "--check", check,
+      "load the configuration and every file it names (calibration, model, DBC, DDS XML),\n"
+      "say what was loaded and exit: 0 when the service can start with it");
   app.set_version_flag("--version", std::string("stac-node ") + STAC_VERSION_LINE);
   CLI11_PARSE(app, argc, argv);
   auto settings = stac::runtime::load_component_settings(stac::settings::config_path(config));
@@ -30,6 +34,16 @@ int main(int argc, char** argv) try {
     return 1;
   }
   settings->name = "stac-node";
+  if (check) {
+    auto files = stac::runtime::check_component_files(*settings);
+    if (!files) {
+      std::fprintf(stderr, "stac-node: %s\n", files.error().message.c_str());
+      return 1;
+    }
+    std::printf("stac-node: %s is complete: %s\n",
+                stac::settings::config_path(config).string().c_str(), files->c_str());
+    return 0;
+  }
   settings->stop_after_s = seconds;
   auto component = stac::runtime::Component::create(*settings);
   if (!component) {

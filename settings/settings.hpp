@@ -78,7 +78,14 @@ struct PipelineSettings {
 };
 rt::Result<PipelineSettings> load_pipeline_settings(const std::filesystem::path& config_file);
 
-// The default config file: $STAC_CONFIG, else config/stac.yaml of the source tree.
+// Where the Debian package puts the configuration (deploy/CMakeLists.txt).
+inline constexpr const char* kInstalledConfigPath = "/etc/stac/stac.yaml";
+// The --config option's help, as every command says it.
+inline constexpr const char* kConfigOptionHelp =
+    "configuration file (default: $STAC_CONFIG, else config/stac.yaml of the source tree, or\n"
+    "/etc/stac/stac.yaml when installed from the package)";
+// The default config file: $STAC_CONFIG; else, for an executable run from its build folder,
+// config/stac.yaml of the source tree; else (installed) kInstalledConfigPath.
 std::filesystem::path default_config_path();
 // The --config option's value, or the default when it is empty.
 std::filesystem::path config_path(const std::string& option);

@@ -113,8 +113,7 @@ void add_candump_command(CLI::App& app) {
   cmd->add_option("--in", o->in, "candump log to read")->required()->check(CLI::ExistingFile);
   cmd->add_option("--out", o->out, "csv file to write")->required();
   cmd->add_option("--dbc", o->dbc, "DBC file (default: the config's can.dbc)");
-  cmd->add_option("--config", o->config,
-                  "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
+  cmd->add_option("--config", o->config, stac::settings::kConfigOptionHelp);
   cmd->callback([o] {
     if (const int code = run_candump(*o); code != 0) throw CLI::RuntimeError(code);
   });

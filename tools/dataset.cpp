@@ -40,6 +40,7 @@ constexpr std::uint32_t kMinLargestSegment = 75;  // points; at least one segmen
 
 struct DatasetOptions {
   std::vector<std::string> in, truth;
+  std::vector<std::string> merge;  // --merge: datasets to join instead of captures to run
   std::string out, config, calib;
   std::vector<std::string> extra_classes;  // --class: simulator kinds labelled as their own class
   bool no_deskew = false;
@@ -283,7 +284,51 @@ class Builder : public classification::TrackClassifier::Observer {
   std::set<std::uint64_t> updated_, current_;  // updated this scan; reported this scan
 };
 
+// Writes `data` to `out` and prints a line of counts per class.
+int write_and_summarize(const std::string& out, const Dataset& data) {
+  if (auto w = write_dataset(out, data); !w) return fail(w.error().message);
+  const std::size_t classes_n = data.classes.size();
+  std::vector<std::size_t> per(classes_n + 1, 0);  // per class, then background
+  std::size_t inconsistent = 0;
+  for (const DatasetTrack& t : data.tracks) {
+    ++per[t.label == kBackground ? classes_n : t.label];
+    inconsistent += consistent(t) ? 0 : 1;
+  }
+  std::string listed;
+  for (std::size_t c = 0; c < classes_n; ++c)
+    listed += data.classes[c] + " " + std::to_string(per[c]) + ", ";
+  if (!data.labelled) {
+    std::printf("%s: %zu unlabeled tracks\n", out.c_str(), data.tracks.size());
+    return 0;
+  }
+  std::printf("%s: %zu tracks (%sbackground %zu; %zu inconsistent)\n", out.c_str(),
+              data.tracks.size(), listed.c_str(), per[classes_n], inconsistent);
+  return 0;
+}
+
+// --merge: the datasets one after the other (their sources renumbered) in one, as the Slurm
+// job array's last step does with one dataset per capture (deploy/slurm-dataset.sh).
+int run_merge(const DatasetOptions& o) {
+  if (!o.in.empty() || !o.truth.empty())
+    return fail("--merge joins datasets: give no --in or --truth");
+  Dataset data;
+  for (std::size_t k = 0; k < o.merge.size(); ++k) {
+    auto part = read_dataset(o.merge[k]);
+    if (!part) return fail(part.error().message);
+    if (k == 0) {
+      data = std::move(*part);
+    } else if (auto a = append_dataset(data, std::move(*part), o.merge[k]); !a) {
+      return fail(a.error().message);
+    }
+  }
+  std::fprintf(stderr, "stac dataset: merged %zu datasets (%zu sources)\n", o.merge.size(),
+               data.sources.size());
+  return write_and_summarize(o.out, data);
+}
+
 int run_dataset(const DatasetOptions& o) {
+  if (!o.merge.empty()) return run_merge(o);
+  if (o.in.empty()) return fail("give the captures (--in), or the datasets to join (--merge)");
   if (!o.truth.empty() && o.in.size() != o.truth.size()) {
     return fail("give one --truth per --in (" + std::to_string(o.in.size()) + " --in, " +
                 std::to_string(o.truth.size()) + " --truth), or none for unlabeled tracks");
@@ -306,24 +351,7 @@ int run_dataset(const DatasetOptions& o) {
                  static_cast<unsigned long long>(r->kept), kMinSegments, kMinLargestSegment,
                  static_cast<unsigned long long>(r->inconsistent));
   }
-  if (auto w = write_dataset(o.out, data); !w) return fail(w.error().message);
-  const std::size_t classes_n = data.classes.size();
-  std::vector<std::size_t> per(classes_n + 1, 0);  // per class, then background
-  std::size_t inconsistent = 0;
-  for (const DatasetTrack& t : data.tracks) {
-    ++per[t.label == kBackground ? classes_n : t.label];
-    inconsistent += consistent(t) ? 0 : 1;
-  }
-  std::string listed;
-  for (std::size_t c = 0; c < classes_n; ++c)
-    listed += data.classes[c] + " " + std::to_string(per[c]) + ", ";
-  if (!data.labelled) {
-    std::printf("%s: %zu unlabeled tracks\n", o.out.c_str(), data.tracks.size());
-    return 0;
-  }
-  std::printf("%s: %zu tracks (%sbackground %zu; %zu inconsistent)\n", o.out.c_str(),
-              data.tracks.size(), listed.c_str(), per[classes_n], inconsistent);
-  return 0;
+  return write_and_summarize(o.out, data);
 }
 
 }  // namespace
@@ -342,18 +370,22 @@ void add_dataset_command(CLI::App& app) {
       "(over 10%: inconsistent, left out by `stac train` and `stac eval --classes`, as in the\n"
       "thesis), and writes DIR/tracks.bin and DIR/manifest.json (docs/classification.md).\n"
       "Without --truth (any capture, a real drive too) the tracks are unlabeled: data for\n"
-      "`stac induct --unlabeled` (or --background for drives without the taught classes).");
+      "`stac induct --unlabeled` (or --background for drives without the taught classes).\n"
+      "--merge DIR... joins datasets made apart (one per capture, e.g. by the Slurm job\n"
+      "array deploy/slurm-dataset.sh) into one.");
   cmd->add_option("--in", o->in,
                   "pcap capture (repeatable): a `stac sim` drive, or any with no --truth")
-      ->required()
       ->check(CLI::ExistingFile);
   cmd->add_option("--truth", o->truth,
                   "its truth file (one per --in, same order); without: unlabeled tracks, for "
                   "`stac induct --unlabeled` or --background")
       ->check(CLI::ExistingFile);
+  cmd->add_option("--merge", o->merge,
+                  "instead of --in: datasets (folders) to join into one, in this order; their "
+                  "classes must match, all labelled or all not (repeatable)")
+      ->check(CLI::ExistingDirectory);
   cmd->add_option("--out", o->out, "output folder")->required();
-  cmd->add_option("--config", o->config,
-                  "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
+  cmd->add_option("--config", o->config, stac::settings::kConfigOptionHelp);
   cmd->add_option("--calib", o->calib, "calibration file or 'stream' (default: the config's)");
   cmd->add_option("--class", o->extra_classes,
                   "a simulator background kind (pole, sign, bin, tree, ...) labelled as a class "

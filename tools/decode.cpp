@@ -141,8 +141,7 @@ void add_decode_command(CLI::App& app) {
                   "calibration of the unit: Velodyne db.xml, ROS yaml, or 'stream' for the one an "
                   "S2.1/S3 sends in its status bytes. Default: the config's");
   cmd->add_option("--format", o->format, "csv or kitti")->check(CLI::IsMember({"csv", "kitti"}));
-  cmd->add_option("--config", o->config,
-                  "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
+  cmd->add_option("--config", o->config, stac::settings::kConfigOptionHelp);
   cmd->add_option("--model", o->model, "S2, S2.1 or S3 (default: the config's)");
   cmd->add_option("--port", o->port, "UDP data port in the capture (default: the config's, 2368)");
   cmd->add_option("--cut-angle", o->cut_angle_deg,

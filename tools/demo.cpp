@@ -418,8 +418,14 @@ int run_demo(const DemoOptions& o) {
 
   // Loopback only, whatever the config's dds.config_file, and a discovery tag of this demo's own
   // (unless one is set) so that demos and tests running at the same time never see each other.
-  const std::string loopback_xml = std::string(STAC_SOURCE_DIR) + "/config/dds/loopback.xml";
-  dds_config->config_uri = "file://" + loopback_xml;
+  // The loopback XML beside the config (config/dds/ or /etc/stac/dds/), else the default config's.
+  std::filesystem::path loopback_xml = config.parent_path() / "dds" / "loopback.xml";
+  if (!std::filesystem::exists(loopback_xml, ec))
+    loopback_xml = default_config_path().parent_path() / "dds" / "loopback.xml";
+  if (!std::filesystem::exists(loopback_xml, ec))
+    return fail(loopback_xml.string() +
+                ": the demo's loopback-only Cyclone DDS configuration is missing");
+  dds_config->config_uri = "file://" + loopback_xml.string();
   if (o.domain >= 0) dds_config->domain_id = static_cast<std::uint32_t>(o.domain);
   if (std::getenv("DDS_TEST_TAG") == nullptr || *std::getenv("DDS_TEST_TAG") == '\0')
     ::setenv("DDS_TEST_TAG", ("stac-demo-" + std::to_string(::getpid())).c_str(), 1);
@@ -483,8 +489,7 @@ void add_demo_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--domain", o->domain, "DDS domain (default: dds.domain_id)")
       ->check(CLI::Range(0, 230));
-  cmd->add_option("--config", o->config,
-                  "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
+  cmd->add_option("--config", o->config, stac::settings::kConfigOptionHelp);
   cmd->callback([o] {
     if (const int code = run_demo(*o); code != 0) throw CLI::RuntimeError(code);
   });

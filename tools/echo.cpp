@@ -206,8 +206,7 @@ void add_echo_command(CLI::App& app) {
       ->check(finite_range(0.001, 1e6));
   cmd->add_option("--domain", o->domain, "DDS domain id (default: dds.domain_id of the config)")
       ->check(CLI::Range(0, 230));
-  cmd->add_option("--config", o->config,
-                  "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
+  cmd->add_option("--config", o->config, stac::settings::kConfigOptionHelp);
   cmd->add_option("--dds-config", o->dds_config, "Cyclone DDS XML (default: dds.config_file)")
       ->check(CLI::ExistingFile);
   cmd->add_flag("--latency", o->latency,

@@ -303,8 +303,7 @@ void add_kitti_objects_command(CLI::App& app) {
   cmd->add_option("--dir", o->dir, "KITTI object folder")
       ->required()
       ->check(CLI::ExistingDirectory);
-  cmd->add_option("--config", o->config,
-                  "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
+  cmd->add_option("--config", o->config, stac::settings::kConfigOptionHelp);
   cmd->add_option("--model", o->model, "track classifier model (default: classification.model)");
   cmd->add_option("--max-range", o->max_range_m, "objects within this range of the sensor (m)")
       ->check(finite_range(0.1, 1000.0));

@@ -490,8 +490,7 @@ void add_process_command(CLI::App& app) {
   cmd->add_option("--tracks", o->tracks, "output: the tracks file (JSON lines)")->required();
   cmd->add_option("--truth", o->truth, "truth file of a simulated drive (adds segment composition)")
       ->check(CLI::ExistingFile);
-  cmd->add_option("--config", o->config,
-                  "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
+  cmd->add_option("--config", o->config, stac::settings::kConfigOptionHelp);
   cmd->add_option("--calib", o->calib, "calibration file or 'stream' (default: the config's)");
   cmd->add_option(
       "--origin", o->origin,

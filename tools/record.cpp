@@ -93,8 +93,7 @@ void add_record_command(CLI::App& app) {
   CLI::App* cmd =
       app.add_subcommand("record", "Record the sensor's live UDP packets to a pcap file");
   cmd->add_option("--out", o->out, "pcap file to write (nanosecond timestamps)")->required();
-  cmd->add_option("--config", o->config,
-                  "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
+  cmd->add_option("--config", o->config, stac::settings::kConfigOptionHelp);
   cmd->add_option("--bind", o->bind, "address to listen on (default: the config's bind_address)");
   cmd->add_option("--port", o->port, "UDP port (default: the config's, 2368)")
       ->check(CLI::Range(0, 65535));

@@ -68,8 +68,7 @@ void add_run_command(CLI::App& app) {
       "classified before and after publication, deadline misses, latencies (docs/run.md).\n"
       "SIGHUP reads the model file again and swaps it in between scans (same classes; health's\n"
       "model_hash says which model is in use; a bad file is refused and the model kept).");
-  cmd->add_option("--config", o->config,
-                  "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
+  cmd->add_option("--config", o->config, stac::settings::kConfigOptionHelp);
   cmd->add_option("--seconds", o->seconds, "stop after this many seconds")
       ->check(finite_range(0.001, 1e9));
   cmd->add_option("--scans", o->scans, "stop after this many scans are published")

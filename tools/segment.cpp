@@ -209,8 +209,7 @@ void add_segment_command(CLI::App& app) {
   cmd->add_option("--out", o->out, "write the segments as csv");
   needs_pictures(cmd->add_option("--png", o->png,
                                  "draw the scan from above with the segments coloured and boxed"));
-  cmd->add_option("--config", o->config,
-                  "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
+  cmd->add_option("--config", o->config, stac::settings::kConfigOptionHelp);
   cmd->add_option("--scan", o->scan, "pcap: which complete scan to segment, from 0 (default 0)");
   cmd->add_option("--calib", o->calib,
                   "pcap: calibration file or 'stream' (default: the config's)");

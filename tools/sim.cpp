@@ -281,8 +281,7 @@ void add_sim_command(CLI::App& app) {
   cmd->add_option("--truth", o->truth, "truth file to write (JSON lines, one per scan)")
       ->required();
   cmd->add_option("--calib", o->calib, "calibration of the virtual unit (default: the config's)");
-  cmd->add_option("--config", o->config,
-                  "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
+  cmd->add_option("--config", o->config, stac::settings::kConfigOptionHelp);
   cmd->add_flag("--dual-return", o->dual_return, "an S3 in dual-return mode (strongest and last)");
   cmd->add_option("--origin", o->origin,
                   "geodetic anchor of the sim world LAT,LON,ALT (deg, deg, m ellipsoidal; default "

@@ -490,8 +490,7 @@ void add_sim_compare_command(CLI::App& app) {
   o->kitti = std::string(STAC_SOURCE_DIR) + "/../shared/data/kitti";
   cmd->add_option("--report", o->report, "folder to write the report into")->required();
   cmd->add_option("--calib", o->calib, "calibration of the simulated unit (default: the config's)");
-  cmd->add_option("--config", o->config,
-                  "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
+  cmd->add_option("--config", o->config, stac::settings::kConfigOptionHelp);
   cmd->add_option("--mount-height", o->mount_height_m, "sensor height above the ground, m (both)")
       ->capture_default_str()
       ->check(finite_range(0.0, 10.0));

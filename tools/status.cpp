@@ -159,8 +159,7 @@ void add_status_command(CLI::App& app) {
   cmd->add_option("--calib-out", o->calib_out, "write the unit's calibration here (ROS yaml)");
   cmd->add_option("--model", o->model, "S2.1 or S3 (default: the config's)");
   cmd->add_option("--port", o->port, "UDP data port in the capture (default: the config's, 2368)");
-  cmd->add_option("--config", o->config,
-                  "configuration file (default: $STAC_CONFIG or config/stac.yaml)");
+  cmd->add_option("--config", o->config, stac::settings::kConfigOptionHelp);
   cmd->callback([o] {
     if (const int code = run_status(*o); code != 0) throw CLI::RuntimeError(code);
   });

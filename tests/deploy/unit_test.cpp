@@ -72,7 +72,7 @@ bool have_systemd_analyze() {
 
 TEST(SystemdUnit, RunsStacNodeWithTheVehicleConfigRestartsOnFailureAndAllowsRealTime) {
   const auto keys = parse_unit(read(kUnit));
-  EXPECT_EQ(keys.at("Service.ExecStart"), "/usr/local/bin/stac-node --config /etc/stac/stac.yaml");
+  EXPECT_EQ(keys.at("Service.ExecStart"), "/usr/bin/stac-node --config /etc/stac/stac.yaml");
   EXPECT_EQ(keys.at("Service.Type"), "simple");
   EXPECT_EQ(keys.at("Service.Restart"), "on-failure");
   EXPECT_EQ(keys.at("Service.LimitMEMLOCK"), "infinity");  // run.lock_memory: mlockall
@@ -94,7 +94,7 @@ TEST(SystemdUnit, RunsStacNodeWithTheVehicleConfigRestartsOnFailureAndAllowsReal
 TEST(SystemdUnit, SystemdAnalyzeVerifiesItAndWouldNameAnError) {
   if (!have_systemd_analyze()) GTEST_SKIP() << "systemd-analyze not installed (the parse test ran)";
   std::string text = read(kUnit);
-  text = std::regex_replace(text, std::regex("/usr/local/bin/stac-node"), std::string(STAC_NODE));
+  text = std::regex_replace(text, std::regex("/usr/bin/stac-node"), std::string(STAC_NODE));
   EXPECT_EQ(verify(text), "");
   // The check can fail: a restart policy systemd does not know is named.
   const std::string broken =
