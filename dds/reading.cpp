@@ -31,6 +31,9 @@ rt::Result<std::unique_ptr<TopicReaders>> TopicReaders::create(const dds::Publis
   dds_entity_t domain = 0;
   if (!c.config_uri.empty()) {
     domain = dds_create_domain(c.domain_id, c.config_uri.c_str());
+    // Made already in this process (`stac demo --view`: the viewer's readers, then the demo's):
+    // this participant joins it, and the first TopicReaders, which deletes it, must go last.
+    if (domain == DDS_RETCODE_PRECONDITION_NOT_MET) domain = 0;
     if (domain < 0)
       return dds::dds_error("the Cyclone DDS configuration " + c.config_uri +
                                 " cannot be used (not Cyclone XML, or an element Cyclone does not "

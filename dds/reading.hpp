@@ -12,6 +12,7 @@
 #include <memory>
 #include <string>
 
+#include "dds/idl_types.hpp"
 #include "dds/publisher.hpp"
 #include "dds/topics.hpp"
 #include "rt/expected.hpp"
@@ -20,7 +21,9 @@ namespace stac::dds {
 
 class TopicReaders {
  public:
-  // Creates the domain (with config.config_uri when given) and a participant on it.
+  // Creates the domain (with config.config_uri when given) and a participant on it. When this
+  // process made that domain already, the participant joins it (with the config it was made
+  // with), and the TopicReaders that made it must be destroyed last.
   static rt::Result<std::unique_ptr<TopicReaders>> create(const dds::PublisherConfig& config);
   // Deletes the participant and its readers (waits for running callbacks), and the domain when
   // create() made it: its threads must be gone before the process's exit handlers run (with DDS
@@ -73,6 +76,26 @@ void TopicReaders::take(dds_entity_t reader, F& f) {
     if (info.valid_data) f(*static_cast<const T*>(samples[0]), now, info);
     dds_return_loan(reader, samples, got);
   }
+}
+
+// A reader of topic `t` with the topic's sample type (dds::IdlTypes<Ros2>), each sample passed to
+// f as TopicReaders::listen does (`stac echo`, `stac view`).
+template <bool Ros2, class F>
+rt::Result<dds_entity_t> listen_topic(TopicReaders& readers, Topic t, int depth, F f) {
+  using T = IdlTypes<Ros2>;
+  switch (t) {  // NOLINT(bugprone-branch-clone): the branches differ in the sample type only
+    case Topic::kTrackedObjects:
+      return readers.listen<typename T::TrackedObjects>(t, depth, f);
+    case Topic::kSegments:
+      return readers.listen<typename T::ScanSegments>(t, depth, f);
+    case Topic::kEgoPose:
+      return readers.listen<typename T::EgoPose>(t, depth, f);
+    case Topic::kHealth:
+      return readers.listen<typename T::Health>(t, depth, f);
+    case Topic::kPointCloud:
+      return readers.listen<typename T::LabeledPointCloud>(t, depth, f);
+  }
+  return rt::make_error("unknown topic");
 }
 
 // How a tracked object's class is shown: the name of the first (most probable) entry of its

@@ -16,6 +16,7 @@ packages=(
   clang-format clang-tidy  # .ci/check-style (STYLE.md rule 14)
   clang-14 libclang-rt-14-dev  # fuzz/: libFuzzer harnesses with ASan + UBSan (fuzz/run.sh)
   libcpp-httplib-dev  # stac label: the local web page of group induction
+  libwebsocketpp-dev libasio-dev  # stac view: the Foxglove WebSocket server (tools/view)
   chromium  # tests/web: stac label's page tested in a real headless browser
   slurm-wlm  # tests/deploy: deploy/slurm-dataset.sh on a one-node cluster the test starts
 )
@@ -40,11 +41,15 @@ else
   echo "install-deps: done"
 fi
 
-# The browser tests' npm packages, at the versions tests/web/package-lock.json pins (skipped when
-# they are there already).
+# The web tests' npm packages (puppeteer-core for stac label's page; @foxglove/ws-protocol,
+# @foxglove/schemas and ws for stac view), at the versions tests/web/package-lock.json pins
+# (skipped when they are all there already).
 web="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)/tests/web"
-if ! (cd "$web" && node -e 'const want = require("./package.json").dependencies["puppeteer-core"];
-      process.exit(require("puppeteer-core/package.json").version === want ? 0 : 1)' 2>/dev/null); then
+if ! (cd "$web" && node -e 'const deps = require("./package.json").dependencies;
+      const ok = Object.entries(deps).every(([name, want]) => {
+        try { return require(`${name}/package.json`).version === want; } catch { return false; }
+      });
+      process.exit(ok ? 0 : 1)' 2>/dev/null); then
   echo "install-deps: npm packages for tests/web"
   (cd "$web" && npm ci --no-audit --no-fund --loglevel=error >/dev/null)
 fi

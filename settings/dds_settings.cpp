@@ -40,4 +40,10 @@ rt::Result<dds::PublisherConfig> load_dds_settings(const std::filesystem::path& 
   return c;
 }
 
+void override_dds(dds::PublisherConfig& c, int domain, const std::string& cyclone_xml) {
+  if (domain >= 0) c.domain_id = static_cast<std::uint32_t>(domain);
+  if (!cyclone_xml.empty())
+    c.config_uri = "file://" + std::filesystem::absolute(cyclone_xml).string();
+}
+
 }  // namespace stac::settings

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <filesystem>
+#include <string>
 
 #include "dds/publisher.hpp"
 #include "rt/expected.hpp"
@@ -10,5 +11,9 @@
 namespace stac::settings {
 
 rt::Result<dds::PublisherConfig> load_dds_settings(const std::filesystem::path& config_file);
+
+// The commands' --domain (< 0: the config's) and --dds-config (a Cyclone XML file; empty: the
+// config's) over `c`.
+void override_dds(dds::PublisherConfig& c, int domain, const std::string& cyclone_xml);
 
 }  // namespace stac::settings

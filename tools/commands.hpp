@@ -26,6 +26,7 @@ void add_train_command(CLI::App& app);
 void add_induct_command(CLI::App& app);
 void add_label_command(CLI::App& app);
 void add_kitti_objects_command(CLI::App& app);
+void add_view_command(CLI::App& app);
 
 // Marks an option that asks for a picture (--png): in a build without pictures
 // (-DSTAC_PICTURES=OFF) it is refused before any work, saying how to get them.

@@ -34,6 +34,7 @@
 #include "tools/pictures/demo_pictures.hpp"
 #include "tools/sim.hpp"
 #include "tools/support/child_process.hpp"
+#include "tools/view/view_bridge.hpp"
 
 namespace stac::tools {
 
@@ -48,6 +49,10 @@ struct DemoOptions {
   std::uint64_t seed = 2026;
   int port = 0, ins_port = 0;  // 0: any free port on 127.0.0.1
   int domain = -1;             // < 0: dds.domain_id
+  bool view = false;           // --view: a Foxglove WebSocket server beside the demo
+  std::string view_address = "127.0.0.1";
+  int view_port = 8765;
+  double view_wait_s = 60;  // --view: wait this long for a viewer before the drive (0: no wait)
 };
 
 constexpr double kMatchTimeoutS = 30;  // stac run up and its writers matched
@@ -442,6 +447,23 @@ int run_demo(const DemoOptions& o) {
   auto tcp = loopback_port(SOCK_STREAM, o.ins_port, "--ins-port");
   if (!tcp) return fail(tcp.error().message);
 
+  // With --view, the Foxglove server on the demo's DDS domain first: a viewer can connect while
+  // the drive is simulated, and is waited for before the drive is replayed.
+  std::unique_ptr<view::ViewBridge> viewer;
+  if (o.view) {
+    view::ServerOptions server;
+    server.address = o.view_address;
+    server.port = static_cast<std::uint16_t>(o.view_port);
+    auto bridge = view::ViewBridge::start(*dds_config, server);
+    if (!bridge) return fail("--view: " + bridge.error().message);
+    viewer = std::move(*bridge);
+    std::fprintf(
+        stderr,
+        "stac demo: view: in Foxglove or Lichtblick: Open connection -> Foxglove WebSocket "
+        "-> %s\n",
+        viewer->url().c_str());
+  }
+
   // 1. The drive: pcap (HDL-64E UDP + the Applanix TCP stream) and its truth.
   std::fprintf(stderr, "stac demo: 1/4 simulating a %.0f s urban drive (seed %llu)\n", o.seconds,
                static_cast<unsigned long long>(o.seed));
@@ -454,11 +476,23 @@ int run_demo(const DemoOptions& o) {
   sim.config = config.string();
   if (const int code = run_sim(sim); code != 0) return code;
 
-  return dds_config->ros2_names
-             ? watch_drive<dds::IdlTypes<true>>(o, dir, config.string(), loopback_xml, *dds_config,
-                                                sim.out, {*udp, *tcp})
-             : watch_drive<dds::IdlTypes<false>>(o, dir, config.string(), loopback_xml, *dds_config,
-                                                 sim.out, {*udp, *tcp});
+  if (viewer && o.view_wait_s > 0) {
+    std::fprintf(stderr, "stac demo: view: waiting up to %.0f s for a viewer (--view-wait)\n",
+                 o.view_wait_s);
+    const dds_time_t end = dds_time() + static_cast<dds_duration_t>(o.view_wait_s * 1e9);
+    while (!viewer->any_subscribed() && dds_time() < end && g_interrupted == 0)
+      dds_sleepfor(DDS_MSECS(50));
+    std::fprintf(stderr, "stac demo: view: %s\n",
+                 viewer->any_subscribed() ? "a viewer is subscribed" : "no viewer: going on");
+  }
+
+  const int code = dds_config->ros2_names
+                       ? watch_drive<dds::IdlTypes<true>>(o, dir, config.string(), loopback_xml,
+                                                          *dds_config, sim.out, {*udp, *tcp})
+                       : watch_drive<dds::IdlTypes<false>>(o, dir, config.string(), loopback_xml,
+                                                           *dds_config, sim.out, {*udp, *tcp});
+  if (viewer) std::printf("  view        %s", viewer->summary().c_str());
+  return code;
 }
 
 }  // namespace
@@ -477,6 +511,18 @@ void add_demo_command(CLI::App& app) {
       "misses, drops, end-to-end and DDS latency) and draws OUT/demo_last_scan.png and\n"
       "OUT/demo_tracks.png. Logs of the children: OUT/run.log, OUT/replay.log.");
   cmd->add_option("--out", o->out, "output folder")->capture_default_str();
+  cmd->add_flag("--view", o->view,
+                "serve the drive live to Foxglove or Lichtblick (as `stac view`), and wait for a "
+                "viewer before the drive starts");
+  cmd->add_option("--view-port", o->view_port, "--view: WebSocket port (0: any free one)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 65535));
+  cmd->add_option("--view-address", o->view_address, "--view: address to listen on")
+      ->capture_default_str();
+  cmd->add_option("--view-wait", o->view_wait_s,
+                  "--view: seconds to wait for a viewer to subscribe (0: start at once)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 3600.0));
   cmd->add_option("--seconds", o->seconds, "length of the drive")
       ->check(CLI::Range(1.0, 600.0))
       ->capture_default_str();

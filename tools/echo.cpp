@@ -112,34 +112,13 @@ void print_sample(const S& s) {
   }
 }
 
-// A reader of topic `t` with the topic's sample type, each sample passed to f.
-template <bool Ros2, class F>
-rt::Result<dds_entity_t> listen(dds::TopicReaders& readers, dds::Topic t, int depth, F f) {
-  using T = dds::IdlTypes<Ros2>;
-  switch (t) {  // NOLINT(bugprone-branch-clone): the branches differ in the sample type only
-    case dds::Topic::kTrackedObjects:
-      return readers.listen<typename T::TrackedObjects>(t, depth, f);
-    case dds::Topic::kSegments:
-      return readers.listen<typename T::ScanSegments>(t, depth, f);
-    case dds::Topic::kEgoPose:
-      return readers.listen<typename T::EgoPose>(t, depth, f);
-    case dds::Topic::kHealth:
-      return readers.listen<typename T::Health>(t, depth, f);
-    case dds::Topic::kPointCloud:
-      return readers.listen<typename T::LabeledPointCloud>(t, depth, f);
-  }
-  return rt::make_error("unknown topic");
-}
-
 int run_echo(const EchoOptions& o) {
   auto topic = dds::topic_from_suffix(o.topic);
   if (!topic) return fail(topic.error().message);
   auto settings = load_dds_settings(config_path(o.config));
   if (!settings) return fail(settings.error().message);
   dds::PublisherConfig c = *settings;
-  if (o.domain >= 0) c.domain_id = static_cast<std::uint32_t>(o.domain);
-  if (!o.dds_config.empty())
-    c.config_uri = "file://" + std::filesystem::absolute(o.dds_config).string();
+  override_dds(c, o.domain, o.dds_config);
   auto readers = dds::TopicReaders::create(c);
   if (!readers) return fail(readers.error().message);
   const std::string name = (*readers)->topic_name(*topic);
@@ -155,8 +134,8 @@ int run_echo(const EchoOptions& o) {
     received.fetch_add(1, std::memory_order_release);
   };
   // The topic's QoS with a deeper history: a diagnostic shows every sample, not only the latest.
-  auto reader = c.ros2_names ? listen<true>(**readers, *topic, 64, on_sample)
-                             : listen<false>(**readers, *topic, 64, on_sample);
+  auto reader = c.ros2_names ? dds::listen_topic<true>(**readers, *topic, 64, on_sample)
+                             : dds::listen_topic<false>(**readers, *topic, 64, on_sample);
   if (!reader) return fail(reader.error().message);
   std::fprintf(stderr, "stac echo: listening on %s (domain %u)\n", name.c_str(), c.domain_id);
   const dds_time_t end = dds_time() + static_cast<dds_duration_t>(o.timeout_s * 1e9);

@@ -53,6 +53,7 @@ int main(int argc, char** argv) try {
       "  stac segment --in scan.bin --out segments.csv --png bev.png  # obstacles of one scan\n"
       "  stac process run.pcap --truth run.truth.jsonl --tracks run.tracks.jsonl  # segment+track\n"
       "  stac echo tracked_objects --count 10        # print what arrives on a DDS topic\n"
+      "  stac view                                   # the DDS topics live in Foxglove\n"
       "  stac dataset --in run.pcap --truth run.truth.jsonl --out data/  # labelled tracks\n"
       "  stac train --data data/ --out model.stac  # track classifier\n"
       "  stac induct --state teach/ --classes car,pedestrian,bicyclist --labels data/ \\\n"
@@ -79,6 +80,7 @@ int main(int argc, char** argv) try {
   stac::tools::add_induct_command(app);
   stac::tools::add_label_command(app);
   stac::tools::add_kitti_objects_command(app);
+  stac::tools::add_view_command(app);
   stac::tools::refuse_bad_numbers(app);
   // `stac nosuch --help` would print the main help and exit 0: an unknown command is named first.
   if (argc > 1 && argv[1][0] != '-') {

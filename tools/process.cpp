@@ -228,9 +228,7 @@ int run_process(const ProcessOptions& o) {
   if (o.dds) {
     auto ds = load_dds_settings(config);
     if (!ds) return fail(ds.error().message);
-    if (o.domain >= 0) ds->domain_id = static_cast<std::uint32_t>(o.domain);
-    if (!o.dds_config.empty())
-      ds->config_uri = "file://" + std::filesystem::absolute(o.dds_config).string();
+    override_dds(*ds, o.domain, o.dds_config);
     if (o.point_cloud_stride >= 0)
       ds->point_cloud_stride = static_cast<std::uint32_t>(o.point_cloud_stride);
     dds_settings = std::move(*ds);

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "runtime/component.hpp"
+#include "settings/dds_settings.hpp"
 #include "tools/commands.hpp"
 #include "tools/support/cli_checks.hpp"
 
@@ -29,11 +30,9 @@ int run_live(const RunOptions& o) {
   if (!o.calib.empty()) vs.calibration = o.calib;
   if (o.port >= 0) vs.port = static_cast<std::uint16_t>(o.port);
   if (!o.bind.empty()) vs.bind_address = o.bind;
-  if (o.domain >= 0) s.dds.domain_id = static_cast<std::uint32_t>(o.domain);
+  stac::settings::override_dds(s.dds, o.domain, o.dds_config);
   if (o.point_cloud_stride >= 0)
     s.dds.point_cloud_stride = static_cast<std::uint32_t>(o.point_cloud_stride);
-  if (!o.dds_config.empty())
-    s.dds.config_uri = "file://" + std::filesystem::absolute(o.dds_config).string();
   if (!o.ins.empty()) {
     auto t = parse_ins_transport(o.ins);
     if (!t) return fail("--ins: " + t.error().message);

@@ -1,0 +1,117 @@
+#!/usr/bin/env bash
+# `stac view` with a real Foxglove client: stac view serves DDS domain D over WebSocket; the node
+# client (foxglove_view.mjs, @foxglove/ws-protocol) subscribes to every channel; `stac echo`
+# prints the same four topics; `stac demo` drives them (a simulated drive, live, with health).
+# Then every message the client got is checked against the official Foxglove schemas and, scan by
+# scan, against what stac echo printed; the reading client must have got every message built,
+# and the stalled one's must have been dropped and counted. Then `stac demo --view` (the server
+# inside the demo) waits for a client and serves it the whole drive. Last, clients that do not
+# speak the protocol are refused or answered with an error status, and counted.
+# Usage: foxglove_view_test.sh BUILD_DIR DOMAIN
+set -euo pipefail
+build=$(cd "$1" && pwd)
+domain=$2
+web=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
+stac=$build/tools/stac
+fail() { echo "foxglove_view_test: FAIL: $*" >&2; exit 1; }
+[[ -d $web/node_modules/@foxglove/ws-protocol ]] || fail "no $web/node_modules: run deploy/install-deps.sh"
+export DDS_TEST_TAG=stac-view-test-$$
+work=$(mktemp -d /tmp/stac-view-test.XXXXXX)
+pids=()
+cleanup() {
+  for pid in "${pids[@]}"; do kill "$pid" 2> /dev/null || true; done
+  rm -rf "$work"
+}
+trap cleanup EXIT
+# The ws:// URL a stac view (or demo --view) prints into FILE; fails if PID stops first.
+wait_for_url() {
+  local file=$1 pid=$2 url=""
+  for _ in $(seq 1 300); do
+    url=$(grep -o 'ws://[0-9.]*:[0-9]*' "$file" | head -1 || true)
+    [[ -n $url ]] && break
+    kill -0 "$pid" 2> /dev/null || { cat "$file" >&2; fail "it stopped before serving"; }
+    sleep 0.1
+  done
+  [[ -n $url ]] || { cat "$file" >&2; fail "no ws:// URL in $file"; }
+  echo "$url"
+}
+
+"$stac" view --port 0 --domain "$domain" --seconds 300 --client-buffer-mb 4 2> "$work/view.log" &
+view=$!
+pids+=("$view")
+url=$(wait_for_url "$work/view.log" "$view")
+node "$web/foxglove_view.mjs" listen "$url" "$work/client.json" > "$work/client.log" 2>&1 &
+client=$!
+pids+=("$client")
+for _ in $(seq 1 100); do
+  grep -q "subscribed 4" "$work/client.log" && break
+  sleep 0.1
+done
+grep -q "subscribed 4" "$work/client.log" || { cat "$work/client.log" >&2; fail "the client did not subscribe to 4 channels"; }
+node "$web/foxglove_view.mjs" stall "$url" > "$work/stall.log" 2>&1 &
+pids+=("$!")
+for _ in $(seq 1 100); do
+  grep -q "stalled" "$work/stall.log" && break
+  sleep 0.1
+done
+grep -q "stalled" "$work/stall.log" || { cat "$work/stall.log" >&2; fail "the stalling client did not subscribe"; }
+echo "foxglove_view_test: a client reads everything and one has stalled, on $url"
+echos=()
+for topic in tracked_objects point_cloud ego_pose health; do
+  "$stac" echo "$topic" --domain "$domain" --timeout 300 > "$work/echo_$topic.txt" 2> /dev/null &
+  echos+=("$!")
+  pids+=("$!")
+done
+sleep 2  # the echo readers matched before the drive starts
+"$stac" demo --domain "$domain" --seconds 6 --out "$work/demo" > "$work/demo.log" 2>&1 ||
+  { tail -20 "$work/demo.log" >&2; fail "stac demo"; }
+sleep 1
+kill "${echos[@]}" 2> /dev/null || true
+kill -TERM "$client"
+wait "$client" || { cat "$work/client.log" >&2; fail "the client"; }
+kill -INT "$view"
+wait "$view" || { cat "$work/view.log" >&2; fail "stac view's exit"; }
+cat "$work/view.log"
+MIN_MATCHED=20 node "$web/foxglove_view.mjs" compare "$work/client.json" "$work" | tee "$work/compare.log"
+# The reading client got every message stac view built, on every channel.
+built=$(sed -n 's/^ *\/stac\/[a-z_]* .* built \([0-9]*\),.*/\1/p' "$work/view.log" | tr '\n' ' ')
+received=$(sed -n 's/^received: //p' "$work/compare.log")
+[[ "$built" == "$received " ]] || fail "built per channel: $built; the reading client received: $received"
+grep -q 'clients 2 (refused 0, bad messages 0)' "$work/view.log" || fail "stac view's client count"
+# The stalled client's point clouds (the big messages) were dropped and counted; the reading
+# client still got every scan (the comparison above), and the demo published every scan.
+grep -E '/stac/point_cloud .* dropped [1-9][0-9]* \(slow client\)' "$work/view.log" > /dev/null ||
+  fail "stac view dropped nothing to the stalled client"
+grep -q 'dropped 0 (slow client) + 0 (backlog)' <(grep /stac/health "$work/view.log") || true
+
+# stac demo --view: the demo waits for the viewer, then serves it every scan, and closes.
+"$stac" demo --view --view-port 0 --domain "$domain" --seconds 4 --out "$work/demo2" > "$work/demo2.log" 2> "$work/demo2.err" &
+demo=$!
+pids+=("$demo")
+url=$(wait_for_url "$work/demo2.err" "$demo")
+node "$web/foxglove_view.mjs" listen "$url" "$work/demo2.json" > "$work/client2.log" 2>&1 &
+client=$!
+pids+=("$client")
+wait "$demo" || { tail -20 "$work/demo2.err" >&2; fail "stac demo --view"; }
+wait "$client" || { cat "$work/client2.log" >&2; fail "the client of stac demo --view"; }
+grep -q "a viewer is subscribed" "$work/demo2.err" || fail "stac demo --view did not wait for the viewer"
+built=$(sed -n 's/^ *\/stac\/[a-z_]* .* built \([0-9]*\),.*/\1/p' "$work/demo2.log" | tr '\n' ' ')
+received=$(node -e 'const j = require(process.argv[1]);
+  if (j.invalid.length) { console.error(j.invalid.join("\n")); process.exit(1); }
+  console.log([j.clouds, j.tracks, j.poses, j.health].map((a) => a.length).join(" "))' "$work/demo2.json")
+[[ "$built" == "$received " && $built != "0 "* ]] ||
+  fail "stac demo --view built per channel: $built; its client received: $received"
+echo "foxglove_view_test: stac demo --view served its viewer every message: $received"
+
+# Clients that misbehave.
+"$stac" view --port 0 --domain "$domain" --seconds 60 2> "$work/view3.log" &
+view=$!
+pids+=("$view")
+url=$(wait_for_url "$work/view3.log" "$view")
+node "$web/foxglove_view.mjs" misbehave "$url" || fail "the misbehaving clients"
+sleep 0.5
+kill -INT "$view"
+wait "$view" || fail "stac view's exit"
+grep -q 'clients 1 (refused 1, bad messages 3)' "$work/view3.log" ||
+  { cat "$work/view3.log" >&2; fail "stac view did not count the refused client and the bad messages"; }
+echo "foxglove_view_test: bad clients refused or answered, and counted"
