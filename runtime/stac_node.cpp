@@ -5,8 +5,11 @@
 #include <cstdio>
 #include <exception>
 #include <new>
+#include <set>
+#include <string>
 
 #include "runtime/component.hpp"
+#include "settings/run_settings.hpp"
 #include "settings/settings.hpp"
 #include "stac_version.hpp"
 
@@ -26,8 +29,26 @@ int main(int argc, char** argv) try {
       "--check", check,
       "load the configuration and every file it names (calibration, model, DBC, DDS XML),\n"
       "say what was loaded and exit: 0 when the service can start with it");
+  bool cpu_affinity = false;
+  app.add_flag("--cpu-affinity", cpu_affinity,
+               "print the CPUs the config pins threads to (run.<thread>_cpu), as systemd's\n"
+               "CPUAffinity= takes them, and exit (the stac-cpu-affinity systemd generator)");
   app.set_version_flag("--version", std::string("stac-node ") + STAC_VERSION_LINE);
   CLI11_PARSE(app, argc, argv);
+  if (cpu_affinity) {
+    auto run = stac::settings::load_run_settings(stac::settings::config_path(config));
+    if (!run) {
+      std::fprintf(stderr, "stac-node: %s\n", run.error().message.c_str());
+      return 1;
+    }
+    std::set<int> cpus;
+    for (const auto* t : {&run->receiver, &run->perception, &run->publisher, &run->pose})
+      if (t->cpu >= 0) cpus.insert(t->cpu);
+    std::string list;
+    for (const int c : cpus) list += (list.empty() ? "" : " ") + std::to_string(c);
+    if (!list.empty()) std::printf("%s\n", list.c_str());
+    return 0;
+  }
   auto settings = stac::runtime::load_component_settings(stac::settings::config_path(config));
   if (!settings) {
     std::fprintf(stderr, "stac-node: %s\n", settings.error().message.c_str());

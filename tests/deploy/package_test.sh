@@ -31,6 +31,7 @@ contents)
   expected=(/usr/bin/stac /usr/bin/stac-node /etc/stac/stac.yaml /etc/stac/can/vehicle.dbc
     /etc/stac/dds/vehicle.xml /etc/stac/dds/loopback.xml /lib/systemd/system/stac.service
     /lib/udev/rules.d/60-stac-gs-usb.rules /lib/udev/rules.d/60-stac-cpu-latency.rules
+    /lib/systemd/system-generators/stac-cpu-affinity
     /usr/share/stac/models/stac_default.stacmodel
     /usr/share/stac/calib/rosdrivers_64e_s2.1-sztaki.yaml /usr/share/doc/stac/deploy.md)
   for f in "${expected[@]}"; do
@@ -96,6 +97,13 @@ if command -v systemd-analyze > /dev/null; then
   [[ -z $out ]] || fail "systemd-analyze verify: $out"
   echo "package_test: systemd-analyze verify accepts the installed unit"
 fi
+# The generator gives the service the CPUs the config pins its threads to.
+sed -i 's/^  perception_cpu: -1/  perception_cpu: 1/' /etc/stac/stac.yaml
+/lib/systemd/system-generators/stac-cpu-affinity /run/systemd/generator /run/systemd/generator.early /run/systemd/generator.late
+grep -qx 'CPUAffinity=1' /run/systemd/generator/stac.service.d/50-cpu-affinity.conf ||
+  fail "the installed generator wrote no CPUAffinity=1"
+sed -i 's/^  perception_cpu: 1/  perception_cpu: -1/' /etc/stac/stac.yaml
+rm -r /run/systemd/generator/stac.service.d
 # An upgrade keeps a user's edit of a conffile (and asks nothing, leaves no .dpkg-* file).
 sed -i 's/^  domain_id: 0 /  domain_id: 7 /' /etc/stac/stac.yaml
 grep -q '^  domain_id: 7 ' /etc/stac/stac.yaml || fail "the test's edit did not apply"
