@@ -29,7 +29,8 @@ static_assert(sizeof(stac_msgs_msg_Health) == sizeof(stac_msgs_msg_dds__Health_)
 static_assert(sizeof(LabeledPointIn) == sizeof(stac_msgs_msg_LabeledPoint) &&
               offsetof(LabeledPointIn, intensity) ==
                   offsetof(stac_msgs_msg_LabeledPoint, intensity) &&
-              offsetof(LabeledPointIn, label) == offsetof(stac_msgs_msg_LabeledPoint, label));
+              offsetof(LabeledPointIn, label) == offsetof(stac_msgs_msg_LabeledPoint, label) &&
+              offsetof(LabeledPointIn, segment) == offsetof(stac_msgs_msg_LabeledPoint, segment));
 static_assert(sizeof(stac_msgs_msg_LabeledPoint) == sizeof(stac_msgs_msg_dds__LabeledPoint_));
 
 template <class Seq, class T>

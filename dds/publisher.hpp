@@ -67,12 +67,15 @@ struct SegmentIn {
   std::uint32_t point_count = 0;
 };
 
+// LabeledPointIn::segment of a point in no published segment.
+inline constexpr std::uint16_t kNoSegment = 0xFFFF;
 // One return of the compact labeled point cloud (idl/stac.idl LabeledPoint, the same layout).
 struct LabeledPointIn {
   std::int16_t x = 0, y = 0, z = 0;  // from the origin, in units of the resolution
   std::uint8_t intensity = 0;
   std::uint8_t label =
       0;  // 0 no object, 1 car, 2 pedestrian, 3 bicyclist, 4 background, 5 unclassified
+  std::uint16_t segment = kNoSegment;  // its segment's segment_id on the segments topic
 };
 struct PointCloudIn {
   ScanStamp scan;

@@ -131,8 +131,13 @@ rt::Result<bool> ScanPublishing::publish_cloud(const pipeline::ScanResult& r,
   const std::size_t n = std::min(r.cloud.size(), cloud_.size());
   for (std::size_t i = 0; i < n; ++i) {
     const pipeline::CloudPoint& c = r.cloud[i];
-    cloud_[i] = {c.x, c.y, c.z, c.intensity,
-                 c.segment < n_segments ? segment_labels_[c.segment] : std::uint8_t{0}};
+    const bool in_segment = c.segment < n_segments;
+    cloud_[i] = {c.x,
+                 c.y,
+                 c.z,
+                 c.intensity,
+                 in_segment ? segment_labels_[c.segment] : std::uint8_t{0},
+                 in_segment ? static_cast<std::uint16_t>(c.segment) : dds::kNoSegment};
   }
   const dds::PointCloudIn cloud{stamp,
                                 {r.cloud_origin.x(), r.cloud_origin.y(), r.cloud_origin.z()},

@@ -32,8 +32,8 @@ std::string strip_comments(std::string text) {
 // An IDL member as rosidl writes it: "type name".
 std::string msg_type(const std::string& idl_type, const std::set<std::string>& structs) {
   static const std::map<std::string, std::string> kBasic = {
-      {"int16", "int16"},   {"uint8", "uint8"},   {"int32", "int32"},   {"uint32", "uint32"},
-      {"uint64", "uint64"}, {"float", "float32"}, {"double", "float64"}};
+      {"int16", "int16"},   {"uint8", "uint8"},   {"uint16", "uint16"}, {"int32", "int32"},
+      {"uint32", "uint32"}, {"uint64", "uint64"}, {"float", "float32"}, {"double", "float64"}};
   std::smatch m;
   if (auto it = kBasic.find(idl_type); it != kBasic.end()) return it->second;
   if (std::regex_match(idl_type, m, std::regex(R"(string<(\d+)>)"))) return "string<=" + m[1].str();

@@ -1,6 +1,7 @@
 // The Foxglove messages of tools/view: base64, the point cloud's bytes, a track's entity, paths.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
 #include <string>
 #include <vector>
@@ -42,8 +43,9 @@ TEST(Base64, MatchesTheRfc4648Vectors) {
   EXPECT_EQ(decode64(base64(bytes)), bytes);
 }
 
-TEST(PointCloudMessage, EachPointIsItsPositionIntensityLabelAndClassColour) {
-  std::vector<Types::LabeledPoint> points = {{100, -200, 30, 7, 1}, {-5, 0, 0, 255, 0}};
+TEST(PointCloudMessage, EachPointIsItsPositionIntensityLabelSegmentAndSegmentColour) {
+  std::vector<Types::LabeledPoint> points = {{100, -200, 30, 7, 1, 4},
+                                             {-5, 0, 0, 255, 0, dds::kNoSegment}};
   Types::LabeledPointCloud cloud{};
   cloud.stamp = {12, 500};
   std::strcpy(cloud.frame_id, "map");
@@ -59,7 +61,10 @@ TEST(PointCloudMessage, EachPointIsItsPositionIntensityLabelAndClassColour) {
   EXPECT_EQ(j["scan_index"], 42);
   EXPECT_DOUBLE_EQ(j["pose"]["position"]["y"].get<double>(), 2.0);
   EXPECT_EQ(j["point_stride"], kPointStride);
-  ASSERT_EQ(j["fields"].size(), 9u);
+  ASSERT_EQ(j["fields"].size(), 10u);
+  EXPECT_EQ(j["fields"][9]["name"], "segment");
+  EXPECT_EQ(j["fields"][9]["offset"], 18);
+  EXPECT_EQ(j["fields"][9]["type"], 3);  // UINT16
   EXPECT_EQ(j["fields"][3]["name"], "intensity");
   EXPECT_EQ(j["fields"][3]["offset"], 12);
   EXPECT_EQ(j["fields"][3]["type"], 1);  // UINT8
@@ -70,11 +75,26 @@ TEST(PointCloudMessage, EachPointIsItsPositionIntensityLabelAndClassColour) {
   EXPECT_FLOAT_EQ(xyz[0], 1.0f);
   EXPECT_FLOAT_EQ(xyz[1], -2.0f);
   EXPECT_FLOAT_EQ(xyz[2], 0.3f);
-  EXPECT_EQ(static_cast<unsigned char>(data[12]), 7);    // intensity
-  EXPECT_EQ(static_cast<unsigned char>(data[13]), 1);    // label: car
-  EXPECT_EQ(static_cast<unsigned char>(data[16]), 255);  // cars are blue
+  EXPECT_EQ(static_cast<unsigned char>(data[12]), 7);  // intensity
+  EXPECT_EQ(static_cast<unsigned char>(data[13]), 1);  // label: car
+  std::uint16_t segment = 0;
+  std::memcpy(&segment, data.data() + 18, sizeof segment);
+  EXPECT_EQ(segment, 4);
+  const Rgba four = segment_color(4);
+  EXPECT_EQ(static_cast<unsigned char>(data[14]), std::lround(four.r * 255));
+  EXPECT_EQ(static_cast<unsigned char>(data[16]), std::lround(four.b * 255));
   EXPECT_EQ(static_cast<unsigned char>(data[kPointStride + 12]), 255);
   EXPECT_EQ(static_cast<unsigned char>(data[kPointStride + 13]), 0);
+  std::memcpy(&segment, data.data() + kPointStride + 18, sizeof segment);
+  EXPECT_EQ(segment, dds::kNoSegment);
+  EXPECT_EQ(static_cast<unsigned char>(data[kPointStride + 14]), 89);  // dark grey: no segment
+}
+
+TEST(SegmentColor, NeighbouringSegmentsDiffer) {
+  for (std::uint16_t s = 0; s < 2047; ++s) {
+    const Rgba a = segment_color(s), b = segment_color(static_cast<std::uint16_t>(s + 1));
+    EXPECT_FALSE(a.r == b.r && a.g == b.g && a.b == b.b) << s;
+  }
 }
 
 Types::TrackedObject object(std::uint64_t id, double x, double vx,

@@ -100,12 +100,20 @@ function listen(url, outFile) {
     if (ch.schemaName === "foxglove.PointCloud") {
       const bytes = Buffer.from(msg.data, "base64");
       const byLabel = {};
-      const colors = {};
+      const segmentColors = new Map(); // segment id -> its points' colours (one each, expected)
       for (let i = 0; i + msg.point_stride <= bytes.length; i += msg.point_stride) {
         const label = bytes[i + 13];
         byLabel[label] = (byLabel[label] ?? 0) + 1;
-        colors[label] = [bytes[i + 14], bytes[i + 15], bytes[i + 16], bytes[i + 17]];
+        const segment = bytes.readUInt16LE(i + 18);
+        const color = `${bytes[i + 14]},${bytes[i + 15]},${bytes[i + 16]},${bytes[i + 17]}`;
+        if (!segmentColors.has(segment)) segmentColors.set(segment, new Set());
+        segmentColors.get(segment).add(color);
+        if ((segment === 65535) !== (label === 0)) {
+          out.invalid.push(`scan ${msg.scan_index}: a point with label ${label} in segment ${segment}`);
+        }
       }
+      const colors = {};
+      for (const [segment, set] of segmentColors) colors[segment] = [...set];
       out.clouds.push({
         scan: msg.scan_index,
         points: bytes.length / msg.point_stride,
@@ -287,9 +295,18 @@ function compare(outFile, dir) {
     e.byLabel.forEach((n, label) => {
       if ((c.byLabel[label] ?? 0) !== n) fail(`cloud scan ${c.scan}: label ${label}: ${c.byLabel[label]}, echo ${n}`);
     });
-    if (c.colors[1] && JSON.stringify(c.colors[1]) !== JSON.stringify([64, 140, 255, 255])) {
-      fail(`car points coloured ${c.colors[1]}`);
+    // Coloured by segment: one colour per segment, dark grey outside segments, and segments of
+    // consecutive ids told apart.
+    for (const [segment, list] of Object.entries(c.colors)) {
+      if (list.length !== 1) fail(`cloud scan ${c.scan}: segment ${segment} has colours ${list}`);
     }
+    if (c.colors[65535] && c.colors[65535][0] !== "89,89,102,255") fail(`unsegmented points: ${c.colors[65535]}`);
+    for (const segment of Object.keys(c.colors).map(Number)) {
+      if (segment !== 65535 && c.colors[segment + 1] && c.colors[segment + 1][0] === c.colors[segment][0]) {
+        fail(`cloud scan ${c.scan}: segments ${segment} and ${segment + 1} look the same`);
+      }
+    }
+    if (!c.fields.includes("segment")) fail(`cloud fields ${c.fields}`);
     cloudsCompared++;
   }
   report.push(`point_cloud: ${cloudsCompared} scans equal`);

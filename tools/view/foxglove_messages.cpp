@@ -104,23 +104,13 @@ Rgba class_color(std::string_view name) noexcept {
   return {1.0, 0.85, 0.2, 1.0};
 }
 
-Rgba label_color(unsigned label) noexcept {
-  switch (label) {
-    case 0:
-      return {0.35, 0.35, 0.4, 1.0};  // no object: ground, or in no kept segment
-    case 1:
-      return class_color("car");
-    case 2:
-      return class_color("pedestrian");
-    case 3:
-      return class_color("bicyclist");
-    case 4:
-      return class_color("background");
-    case 5:
-      return class_color("unknown");
-    default:
-      return class_color("");
-  }
+Rgba segment_color(std::uint16_t segment) noexcept {
+  if (segment == dds::kNoSegment) return {0.35, 0.35, 0.4, 1.0};  // ground, or in no kept segment
+  static constexpr Rgba kPalette[12] = {
+      {0.90, 0.30, 0.30, 1}, {0.30, 0.70, 0.95, 1}, {0.95, 0.75, 0.20, 1}, {0.45, 0.85, 0.40, 1},
+      {0.80, 0.45, 0.90, 1}, {0.95, 0.55, 0.25, 1}, {0.30, 0.85, 0.75, 1}, {0.95, 0.45, 0.70, 1},
+      {0.60, 0.60, 0.95, 1}, {0.75, 0.90, 0.30, 1}, {0.55, 0.40, 0.30, 1}, {0.85, 0.85, 0.85, 1}};
+  return kPalette[(segment * 5U) % 12U];
 }
 
 }  // namespace stac::view

@@ -16,6 +16,7 @@
 #include <string>
 #include <string_view>
 
+#include "dds/publisher.hpp"
 #include "dds/reading.hpp"
 
 namespace stac::view {
@@ -35,11 +36,12 @@ struct Rgba {
 // The colour of a class name: car blue, pedestrian red, bicyclist green, background grey,
 // unknown white, any other class of a taught model yellow.
 Rgba class_color(std::string_view name) noexcept;
-// The colour of a point cloud label (0 none; with the default model 1 car, 2 pedestrian,
-// 3 bicyclist, 4 background, 5 unclassified).
-Rgba label_color(unsigned label) noexcept;
+// The colour of a point's segment (its segment_id; dds::kNoSegment: in none, dark grey): one of
+// twelve distinct colours, consecutive ids five apart, so that neighbouring segments differ.
+Rgba segment_color(std::uint16_t segment) noexcept;
 
-// One point of the PointCloud's data: 20 bytes.
+// One point of the PointCloud's data: 20 bytes (x y z float32, intensity, label, red, green, blue,
+// alpha uint8, segment uint16).
 inline constexpr std::uint32_t kPointStride = 20;
 
 template <class Time>
@@ -76,7 +78,7 @@ nlohmann::json point_cloud_message(const Cloud& c) {
                         static_cast<float>(p.y) * c.resolution,
                         static_cast<float>(p.z) * c.resolution};
     std::memcpy(out, v, sizeof v);
-    const Rgba k = label_color(p.label);
+    const Rgba k = segment_color(p.segment);
     const std::uint8_t tail[6] = {p.intensity,
                                   p.label,
                                   static_cast<std::uint8_t>(std::lround(k.r * 255)),
@@ -84,8 +86,10 @@ nlohmann::json point_cloud_message(const Cloud& c) {
                                   static_cast<std::uint8_t>(std::lround(k.b * 255)),
                                   255};
     std::memcpy(out + 12, tail, sizeof tail);
+    const std::uint16_t segment = p.segment;
+    std::memcpy(out + 18, &segment, sizeof segment);
   }
-  // PackedElementField types: 1 UINT8, 7 FLOAT32.
+  // PackedElementField types: 1 UINT8, 3 UINT16, 7 FLOAT32.
   const auto field = [](const char* name, int offset, int type) {
     return nlohmann::json{{"name", name}, {"offset", offset}, {"type", type}};
   };
@@ -96,7 +100,7 @@ nlohmann::json point_cloud_message(const Cloud& c) {
           {"fields",
            {field("x", 0, 7), field("y", 4, 7), field("z", 8, 7), field("intensity", 12, 1),
             field("label", 13, 1), field("red", 14, 1), field("green", 15, 1), field("blue", 16, 1),
-            field("alpha", 17, 1)}},
+            field("alpha", 17, 1), field("segment", 18, 3)}},
           {"data", base64(data)},
           {"scan_index", c.scan_index}};
 }
