@@ -5,7 +5,8 @@
 # Then every message the client got is checked against the official Foxglove schemas and, scan by
 # scan, against what stac echo printed; the reading client must have got every message built,
 # and the stalled one's must have been dropped and counted. Then `stac demo --view` (the server
-# inside the demo) waits for a client and serves it the whole drive. Last, clients that do not
+# inside the demo) waits for a client and serves it the whole drive; a `stac process --dds` of a
+# capture reaches it too. Last, clients that do not
 # speak the protocol are refused or answered with an error status, and counted.
 # Usage: foxglove_view_test.sh BUILD_DIR DOMAIN
 set -euo pipefail
@@ -102,6 +103,34 @@ received=$(node -e 'const j = require(process.argv[1]);
 [[ "$built" == "$received " && $built != "0 "* ]] ||
   fail "stac demo --view built per channel: $built; its client received: $received"
 echo "foxglove_view_test: stac demo --view served its viewer every message: $received"
+
+# stac process --dds of a capture (the first demo's drive), as fast as it goes: the viewer gets
+# the newest samples of each topic, all of them valid.
+"$stac" view --port 0 --domain "$domain" --seconds 120 2> "$work/view4.log" &
+view=$!
+pids+=("$view")
+url=$(wait_for_url "$work/view4.log" "$view")
+node "$web/foxglove_view.mjs" listen "$url" "$work/process.json" > "$work/client4.log" 2>&1 &
+client=$!
+pids+=("$client")
+for _ in $(seq 1 100); do
+  grep -q "subscribed 4" "$work/client4.log" && break
+  sleep 0.1
+done
+"$stac" process "$work/demo/drive.pcap" --tracks "$work/process.jsonl" --dds --domain "$domain" \
+  --dds-wait 10 > "$work/process.log" 2>&1 || { tail -20 "$work/process.log" >&2; fail "stac process --dds"; }
+sleep 1
+kill -TERM "$client"
+wait "$client" || { cat "$work/client4.log" >&2; fail "the client of stac process --dds"; }
+kill -INT "$view"
+wait "$view" || fail "stac view's exit"
+received=$(node -e 'const j = require(process.argv[1]);
+  if (j.invalid.length) { console.error(j.invalid.join("\n")); process.exit(1); }
+  console.log([j.clouds, j.tracks, j.poses].map((a) => a.length).join(" "))' "$work/process.json") ||
+  fail "invalid messages from stac process --dds"
+read -r clouds tracks poses <<< "$received"
+((clouds > 0 && tracks > 0 && poses > 0)) || fail "from stac process --dds the viewer got $received"
+echo "foxglove_view_test: stac process --dds reached the viewer: $clouds clouds, $tracks track updates, $poses poses"
 
 # Clients that misbehave.
 "$stac" view --port 0 --domain "$domain" --seconds 60 2> "$work/view3.log" &
