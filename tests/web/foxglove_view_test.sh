@@ -36,6 +36,23 @@ wait_for_url() {
   [[ -n $url ]] || { cat "$file" >&2; fail "no ws:// URL in $file"; }
   echo "$url"
 }
+# Waits (10 s at most) until FILE holds TEXT; else fails saying WHAT did not happen.
+wait_for_line() {
+  local file=$1 text=$2 what=$3
+  for _ in $(seq 1 100); do
+    grep -q "$text" "$file" && return 0
+    sleep 0.1
+  done
+  cat "$file" >&2
+  fail "$what"
+}
+# The messages a `listen` client wrote to FILE per kind: clouds, tracks, poses, health; fails
+# when any message did not fit its schema.
+received_counts() {
+  node -e 'const j = require(process.argv[1]);
+    if (j.invalid.length) { console.error(j.invalid.join("\n")); process.exit(1); }
+    console.log([j.clouds, j.tracks, j.poses, j.health].map((a) => a.length).join(" "))' "$1"
+}
 
 "$stac" view --port 0 --domain "$domain" --seconds 300 --client-buffer-mb 4 2> "$work/view.log" &
 view=$!
@@ -44,18 +61,10 @@ url=$(wait_for_url "$work/view.log" "$view")
 node "$web/foxglove_view.mjs" listen "$url" "$work/client.json" > "$work/client.log" 2>&1 &
 client=$!
 pids+=("$client")
-for _ in $(seq 1 100); do
-  grep -q "subscribed 4" "$work/client.log" && break
-  sleep 0.1
-done
-grep -q "subscribed 4" "$work/client.log" || { cat "$work/client.log" >&2; fail "the client did not subscribe to 4 channels"; }
+wait_for_line "$work/client.log" "subscribed 4" "the client did not subscribe to 4 channels"
 node "$web/foxglove_view.mjs" stall "$url" > "$work/stall.log" 2>&1 &
 pids+=("$!")
-for _ in $(seq 1 100); do
-  grep -q "stalled" "$work/stall.log" && break
-  sleep 0.1
-done
-grep -q "stalled" "$work/stall.log" || { cat "$work/stall.log" >&2; fail "the stalling client did not subscribe"; }
+wait_for_line "$work/stall.log" "stalled" "the stalling client did not subscribe"
 echo "foxglove_view_test: a client reads everything and one has stalled, on $url"
 echos=()
 for topic in tracked_objects point_cloud ego_pose health; do
@@ -97,9 +106,7 @@ wait "$demo" || { tail -20 "$work/demo2.err" >&2; fail "stac demo --view"; }
 wait "$client" || { cat "$work/client2.log" >&2; fail "the client of stac demo --view"; }
 grep -q "a viewer is subscribed" "$work/demo2.err" || fail "stac demo --view did not wait for the viewer"
 built=$(sed -n 's/^ *\/stac\/[a-z_]* .* built \([0-9]*\),.*/\1/p' "$work/demo2.log" | tr '\n' ' ')
-received=$(node -e 'const j = require(process.argv[1]);
-  if (j.invalid.length) { console.error(j.invalid.join("\n")); process.exit(1); }
-  console.log([j.clouds, j.tracks, j.poses, j.health].map((a) => a.length).join(" "))' "$work/demo2.json")
+received=$(received_counts "$work/demo2.json")
 [[ "$built" == "$received " && $built != "0 "* ]] ||
   fail "stac demo --view built per channel: $built; its client received: $received"
 echo "foxglove_view_test: stac demo --view served its viewer every message: $received"
@@ -113,10 +120,7 @@ url=$(wait_for_url "$work/view4.log" "$view")
 node "$web/foxglove_view.mjs" listen "$url" "$work/process.json" > "$work/client4.log" 2>&1 &
 client=$!
 pids+=("$client")
-for _ in $(seq 1 100); do
-  grep -q "subscribed 4" "$work/client4.log" && break
-  sleep 0.1
-done
+wait_for_line "$work/client4.log" "subscribed 4" "the client did not subscribe to 4 channels"
 "$stac" process "$work/demo/drive.pcap" --tracks "$work/process.jsonl" --dds --domain "$domain" \
   --dds-wait 10 > "$work/process.log" 2>&1 || { tail -20 "$work/process.log" >&2; fail "stac process --dds"; }
 sleep 1
@@ -124,11 +128,8 @@ kill -TERM "$client"
 wait "$client" || { cat "$work/client4.log" >&2; fail "the client of stac process --dds"; }
 kill -INT "$view"
 wait "$view" || fail "stac view's exit"
-received=$(node -e 'const j = require(process.argv[1]);
-  if (j.invalid.length) { console.error(j.invalid.join("\n")); process.exit(1); }
-  console.log([j.clouds, j.tracks, j.poses].map((a) => a.length).join(" "))' "$work/process.json") ||
-  fail "invalid messages from stac process --dds"
-read -r clouds tracks poses <<< "$received"
+received=$(received_counts "$work/process.json") || fail "invalid messages from stac process --dds"
+read -r clouds tracks poses _ <<< "$received"
 ((clouds > 0 && tracks > 0 && poses > 0)) || fail "from stac process --dds the viewer got $received"
 echo "foxglove_view_test: stac process --dds reached the viewer: $clouds clouds, $tracks track updates, $poses poses"
 

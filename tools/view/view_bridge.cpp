@@ -1,7 +1,6 @@
 #include "tools/view/view_bridge.hpp"
 
 #include <cstdio>
-#include <mutex>
 
 #include "dds/reading.hpp"
 #include "tools/view/foxglove_messages.hpp"
