@@ -8,6 +8,9 @@
 
 namespace stac::settings {
 
+namespace {
+
+// Whether this executable lies under the build folder it was built in (else it is installed).
 bool running_from_build_tree() {
   std::error_code error;
   const auto exe = std::filesystem::read_symlink("/proc/self/exe", error);
@@ -17,6 +20,8 @@ bool running_from_build_tree() {
   return path.size() > build.size() && path.compare(0, build.size(), build) == 0 &&
          path[build.size()] == '/';
 }
+
+}  // namespace
 
 std::filesystem::path default_config_path() {
   if (const char* env = std::getenv("STAC_CONFIG"); env != nullptr && *env != '\0') return env;
