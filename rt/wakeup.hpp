@@ -20,8 +20,9 @@ class Wakeup {
     return generation_.load(std::memory_order_seq_cst);
   }
   // Consumer: sleeps until a notify() after generation() returned `seen`, or for timeout_ns
-  // (> 0). Returns at once when one came already. True when a notify() came, false on the
-  // timeout (or a signal); either way, look for data again.
+  // (> 0, measured on CLOCK_MONOTONIC). Returns at once when one came already. True when a
+  // notify() came, false at the timeout only (a signal or a late wake-up of an earlier notify()
+  // does not end the wait); either way, look for data again.
   bool wait(std::uint32_t seen, std::int64_t timeout_ns) noexcept;
   // Producer: wakes the consumer.
   void notify() noexcept;

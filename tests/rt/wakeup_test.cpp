@@ -2,8 +2,11 @@
 #include "rt/wakeup.hpp"
 
 #include <gtest/gtest.h>
+#include <pthread.h>
 
 #include <atomic>
+#include <chrono>
+#include <csignal>
 #include <thread>
 
 #include "rt/counters.hpp"
@@ -25,6 +28,71 @@ TEST(Wakeup, ANotifyBeforeTheWaitIsNotLost) {
 TEST(Wakeup, AWaitWithoutNotifyEndsAtItsTimeoutAndSaysSo) {
   Wakeup w;
   EXPECT_FALSE(w.wait(w.generation(), 1'000'000));
+}
+
+// A signal (handled, without SA_RESTART, so the futex returns EINTR) does not end a wait: it goes
+// on until the notify() that comes after it. (The same path takes a FUTEX_WAKE of an earlier
+// notify() that reaches the kernel only after a new wait has begun.)
+extern "C" void ignore_signal(int) {}
+
+TEST(Wakeup, ASignalDuringTheWaitDoesNotEndIt) {
+  struct sigaction action {};
+  action.sa_handler = ignore_signal;  // no SA_RESTART
+  struct sigaction previous {};
+  ASSERT_EQ(sigaction(SIGUSR1, &action, &previous), 0);
+  Wakeup w;
+  const std::uint32_t seen = w.generation();
+  std::atomic<bool> waiting{false}, done{false}, woken{false};
+  std::atomic<std::int64_t> waited_ns{0};
+  std::thread waiter([&] {
+    waiting = true;
+    const auto start = std::chrono::steady_clock::now();
+    woken = w.wait(seen, 10'000'000'000);
+    waited_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(
+                    std::chrono::steady_clock::now() - start)
+                    .count();
+    done = true;
+  });
+  while (!waiting) std::this_thread::yield();
+  for (int i = 0; i < 10; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    pthread_kill(waiter.native_handle(), SIGUSR1);
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  EXPECT_FALSE(done) << "the wait ended at a signal, without a notify";
+  w.notify();
+  waiter.join();
+  sigaction(SIGUSR1, &previous, nullptr);
+  EXPECT_TRUE(woken);
+  EXPECT_GE(waited_ns.load(), 200'000'000);
+}
+
+// A wait without a notify lasts its whole timeout, whatever interrupts it.
+TEST(Wakeup, AWaitEndsAtItsDeadlineEvenWhenInterrupted) {
+  struct sigaction action {};
+  action.sa_handler = ignore_signal;
+  struct sigaction previous {};
+  ASSERT_EQ(sigaction(SIGUSR1, &action, &previous), 0);
+  Wakeup w;
+  std::atomic<bool> done{false};
+  bool woken = true;
+  std::int64_t waited_ns = 0;
+  std::thread waiter([&] {
+    const auto start = std::chrono::steady_clock::now();
+    woken = w.wait(w.generation(), 300'000'000);
+    waited_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(
+                    std::chrono::steady_clock::now() - start)
+                    .count();
+    done = true;
+  });
+  while (!done) {
+    pthread_kill(waiter.native_handle(), SIGUSR1);
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  waiter.join();
+  sigaction(SIGUSR1, &previous, nullptr);
+  EXPECT_FALSE(woken);
+  EXPECT_GE(waited_ns, 300'000'000);
 }
 
 // Producer and consumer through a ring, the consumer asleep whenever the ring is empty: every
