@@ -27,9 +27,11 @@ inline constexpr std::uint32_t kSocketCanRtrFlag = 0x40000000u;
 inline constexpr std::uint32_t kSocketCanErrFlag = 0x20000000u;
 
 // Frame id and flags <-> a SocketCAN can_id word.
+// An error frame's id is its error class bits (up to 29), whether or not the EFF flag is set.
 constexpr std::uint32_t to_socketcan_id(const Frame& f) noexcept {
-  return (f.extended ? (f.id & kExtendedIdMask) | kSocketCanEffFlag : f.id & kStandardIdMask) |
-         (f.remote ? kSocketCanRtrFlag : 0u) | (f.error ? kSocketCanErrFlag : 0u);
+  return (f.extended || f.error ? f.id & kExtendedIdMask : f.id & kStandardIdMask) |
+         (f.extended ? kSocketCanEffFlag : 0u) | (f.remote ? kSocketCanRtrFlag : 0u) |
+         (f.error ? kSocketCanErrFlag : 0u);
 }
 constexpr void from_socketcan_id(std::uint32_t can_id, Frame& f) noexcept {
   f.extended = (can_id & kSocketCanEffFlag) != 0;

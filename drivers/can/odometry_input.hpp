@@ -1,14 +1,17 @@
 // One CAN transport read through the DBC signal map: frames -> odometry updates, the same read
-// step for a SocketCAN raw socket and a gs_usb adapter. What differs between the transports is a
-// trait: which read result means the bus is gone, and how their drop counters map to one set of
-// causes. SocketCAN's kernel filter passes only the mapped ids; a gs_usb adapter delivers the
-// whole bus, and the decoder drops and counts every frame outside the map (`not_mapped`).
+// step for a SocketCAN raw socket, a gs_usb adapter and cannelloni datagrams (CAN over UDP). What
+// differs between the transports is a trait: which read result means the bus is gone, and how their
+// drop counters map to one set of causes. SocketCAN's kernel filter passes only the mapped ids; a
+// gs_usb adapter delivers the whole bus (so does a cannelloni gateway), and the decoder drops and
+// counts every frame outside the map (`not_mapped`).
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <utility>
 #include <vector>
 
+#include "drivers/can/cannelloni.hpp"
 #include "drivers/can/gs_usb_device.hpp"
 #include "drivers/can/odometry.hpp"
 #include "drivers/can/socketcan.hpp"
@@ -20,10 +23,12 @@ struct CanInputCounters {
   std::uint64_t frames = 0;         // classic frames the transport returned
   std::uint64_t updates = 0;        // of those, frames carrying speed or yaw rate
   std::uint64_t not_mapped = 0;     // ids outside the signal map: dropped in user space
-  std::uint64_t kernel_drops = 0;   // SocketCAN: the kernel's receive queue was full
+  std::uint64_t kernel_drops = 0;   // SocketCAN, cannelloni: the kernel's receive queue was full
   std::uint64_t overflows = 0;      // gs_usb: frames the adapter flagged as following a loss
   std::uint64_t can_fd = 0;         // CAN FD frames: dropped
-  std::uint64_t malformed = 0;      // SocketCAN records of another size, gs_usb short transfers
+  std::uint64_t malformed = 0;      // SocketCAN records of another size, gs_usb short transfers,
+                                    // cannelloni datagrams of another version or cut short
+  std::uint64_t lost = 0;           // cannelloni: datagrams missing from the sequence numbers
   std::uint64_t other_channel = 0;  // gs_usb: frames of another adapter channel, dropped
   std::uint64_t read_errors = 0;    // failed reads that did not end the input (retried)
   bool operator==(const CanInputCounters&) const = default;
@@ -63,6 +68,21 @@ struct TransportTraits<GsUsbDevice> {
     out.can_fd = c.can_fd;
     out.malformed = c.truncated;
     out.other_channel = c.other_channel;
+  }
+};
+
+template <>
+struct TransportTraits<CannelloniReader> {
+  static constexpr const char* kName = "cannelloni";
+  static constexpr const char* kGoneText = "the cannelloni UDP socket failed";
+  // No read returns it: a bound UDP socket does not go away (a socket error, kError, is retried).
+  static constexpr int kGone = std::numeric_limits<int>::min();
+  static void count(const CannelloniCounters& c, CanInputCounters& out) noexcept {
+    out.frames = c.frames;
+    out.kernel_drops = c.kernel_drops;
+    out.can_fd = c.can_fd;
+    out.malformed = c.malformed;
+    out.lost = c.lost;
   }
 };
 
