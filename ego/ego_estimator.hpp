@@ -61,6 +61,10 @@ class EgoEstimator {
   // What the poses come from at `now_ns` (pose clock), for health.
   [[nodiscard]] EgoSource source(std::int64_t now_ns) const noexcept;
   const EgoCounters& counters() const noexcept { return counters_; }
+  // The stamp of the newest fix that became a pose (pose clock, UTC ns); 0 before the first.
+  [[nodiscard]] std::int64_t last_fix_ns() const noexcept {
+    return have_ins_ ? last_ins_.stamp_ns : 0;
+  }
 
  private:
   EgoEstimatorConfig config_;

@@ -73,6 +73,7 @@ dds::HealthIn HealthAssembly::sample(std::int64_t stamp_ns, std::uint64_t index,
             {"can.fd", cc.can_fd},
             {"can.malformed", cc.malformed},
             {"can.other_channel", cc.other_channel},
+            {"can.lost", cc.lost},
             {"model.reload_refused", n(Count::kModelRefused)}};
   for (std::size_t i = 0; i < sensors_.size(); ++i) {
     const rt::InputStatus st = l.watchdog.status(i, now);

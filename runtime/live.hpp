@@ -94,14 +94,15 @@ inline constexpr std::size_t kOdometryRing = 1024;
 struct PoseInputs {
   std::optional<applanix::TcpClient> tcp;
   std::optional<applanix::UdpListener> udp;
-  // can.transport: socketcan, polled by the pose thread between its INS reads.
+  // can.transport: socketcan or cannelloni, polled by the pose thread between its INS reads.
   std::optional<can::OdometryInput<can::SocketCanReader>> socketcan;
+  std::optional<can::OdometryInput<can::CannelloniReader>> cannelloni;
   // can.transport: gs_usb, read by the can thread into `odometry`, which the pose thread drains.
   std::optional<can::OdometryInput<can::GsUsbDevice>> gs_usb;
   std::optional<rt::SpscRing<can::OdometryUpdate>> odometry;
   std::atomic<bool> can_done{false};  // the can thread ended (stopped, or the adapter is gone)
   [[nodiscard]] bool ins() const { return tcp || udp; }
-  [[nodiscard]] bool can() const { return socketcan || gs_usb; }
+  [[nodiscard]] bool can() const { return socketcan || cannelloni || gs_usb; }
   [[nodiscard]] can::CanInputCounters can_counters() const;  // once the readers ended
   void stop();
 };

@@ -1,6 +1,6 @@
-// The pose thread: the Applanix INS (TCP client or UDP) and the vehicle's odometry (SocketCAN
-// read here between INS reads, or the can thread's ring for gs_usb) into the ego estimator and
-// the pose history perception reads. Also the CAN input's opening.
+// The pose thread: the Applanix INS (TCP client or UDP) and the vehicle's odometry (SocketCAN or
+// cannelloni read here between INS reads, or the can thread's ring for gs_usb) into the ego
+// estimator and the pose history perception reads. Also the CAN input's opening.
 #include <chrono>
 #include <thread>
 #include <vector>
@@ -12,13 +12,16 @@
 namespace stac::runtime {
 
 can::CanInputCounters PoseInputs::can_counters() const {
-  return socketcan ? socketcan->counters() : gs_usb ? gs_usb->counters() : can::CanInputCounters{};
+  if (socketcan) return socketcan->counters();
+  if (cannelloni) return cannelloni->counters();
+  return gs_usb ? gs_usb->counters() : can::CanInputCounters{};
 }
 
 void PoseInputs::stop() {
   if (tcp) tcp->stop();
   if (udp) udp->stop();
   if (socketcan) socketcan->stop();
+  if (cannelloni) cannelloni->stop();
   if (gs_usb) gs_usb->stop();
 }
 
@@ -31,12 +34,26 @@ void pose_loop(Component::Live& live) noexcept {
   bool can_closed = false;
   applanix::Parsed m;
   const int timeout_ms = in.can() ? 5 : 50;  // the INS and CAN handled in turn when CAN is read
-  const auto add_odometry = [&](const can::OdometryUpdate& u) { estimator.add_odometry(u); };
+  // CAN frames carry the host's receive time, poses the INS's (UTC). On a vehicle whose host
+  // follows UTC the two agree; in a replay of an earlier drive, or with a host clock that is off,
+  // they do not, and dead-reckoned poses stamped in the host's time would sit months away from
+  // the INS's (the history would then refuse every later fix). So odometry is moved onto the pose
+  // clock by the offset the newest fix shows on arrival (its stamp minus its receive time: the
+  // clocks' difference less the INS's few milliseconds of latency); 0 until the first fix.
+  std::int64_t receive_to_pose_ns = 0;
+  const auto add_odometry = [&](const can::OdometryUpdate& u) {
+    can::OdometryUpdate on_pose_clock = u;
+    on_pose_clock.stamp_ns += receive_to_pose_ns;
+    estimator.add_odometry(on_pose_clock);
+  };
   const auto take = [&](const applanix::StreamParser& p) {
     const std::uint64_t fixes = estimator.counters().ins_fixes;
     estimator.add_ins(m, p);
     // Only a fix that became a pose shows the INS alive (not a rejected or unusable one).
-    if (estimator.counters().ins_fixes != fixes) live.watchdog.beat(kIns, rt::monotonic_ns());
+    if (estimator.counters().ins_fixes != fixes) {
+      live.watchdog.beat(kIns, rt::monotonic_ns());
+      receive_to_pose_ns = estimator.last_fix_ns() - rt::realtime_ns();
+    }
   };
   const auto publish_counters = [&](const applanix::ParserCounters& pc) {
     live.counts.set(Count::kInsBadChecksum, pc.bad_checksum);
@@ -73,9 +90,11 @@ void pose_loop(Component::Live& live) noexcept {
       while (n > 0 && in.udp->next(m)) take(in.udp->parser());
       publish_counters(in.udp->parser().counters());
     }
-    if (in.socketcan && !can_closed) {
+    if ((in.socketcan || in.cannelloni) && !can_closed) {
+      const int wait_ms = in.ins() ? 0 : timeout_ms;
       const can::InputEvent e =
-          read_can(*in.socketcan, in.ins() ? 0 : timeout_ms, add_odometry, *live.can_report);
+          in.socketcan ? read_can(*in.socketcan, wait_ms, add_odometry, *live.can_report)
+                       : read_can(*in.cannelloni, wait_ms, add_odometry, *live.can_report);
       if (e == can::InputEvent::kStopped) stopped = true;
       if (e == can::InputEvent::kGone) {  // marked lost; the INS goes on
         can_closed = true;
@@ -98,13 +117,18 @@ void pose_loop(Component::Live& live) noexcept {
 
 std::string can_description(const can::CanConfig& c) {
   if (c.transport == can::Transport::kSocketCan) return c.socketcan.interface;
+  if (c.transport == can::Transport::kCannelloni) {
+    return "cannelloni on udp://" + c.cannelloni.bind_address + ":" +
+           std::to_string(c.cannelloni.port);
+  }
   return "gs_usb channel " + std::to_string(c.gs_usb.channel) + " at " +
          std::to_string(c.gs_usb.bitrate_bps) + " bit/s" +
          (c.gs_usb.listen_only ? " (listen-only)" : "");
 }
 
 // The DBC signal map's decoder over the configured transport. SocketCAN gets the mapped ids as
-// its kernel filter; a gs_usb adapter delivers the whole bus and the decoder drops the rest.
+// its kernel filter; a gs_usb adapter and a cannelloni gateway deliver the whole bus and the
+// decoder drops the rest.
 rt::Status open_can(can::CanConfig& c, PoseInputs& inputs) {
   auto db = can::load_dbc(c.dbc);
   if (!db) return rt::Unexpected<rt::Error>{db.error()};
@@ -115,6 +139,11 @@ rt::Status open_can(can::CanConfig& c, PoseInputs& inputs) {
     auto reader = can::SocketCanReader::open(c.socketcan);
     if (!reader) return rt::Unexpected<rt::Error>{reader.error()};
     inputs.socketcan.emplace(std::move(*reader), std::move(*decoder));
+  } else if (c.transport == can::Transport::kCannelloni) {
+    auto reader = can::CannelloniReader::open(c.cannelloni);
+    if (!reader) return rt::Unexpected<rt::Error>{reader.error()};
+    c.cannelloni.port = reader->port();  // port 0: the one bound
+    inputs.cannelloni.emplace(std::move(*reader), std::move(*decoder));
   } else {
     auto device = can::GsUsbDevice::open(c.gs_usb);
     if (!device) return rt::Unexpected<rt::Error>{device.error()};

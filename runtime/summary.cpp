@@ -57,10 +57,10 @@ void print_summary(const Summary& s, const std::string& name, std::FILE* out) {
     std::fprintf(out,
                  "  can         %s: %llu frames, %llu with odometry, %llu not in the signal map; "
                  "drops: kernel %llu, adapter overflows %llu, ring full %llu, CAN FD %llu, "
-                 "malformed %llu, other channel %llu; read errors %llu\n",
+                 "malformed %llu, other channel %llu, lost on the network %llu; read errors %llu\n",
                  s.can_description.c_str(), u(cc.frames), u(cc.updates), u(cc.not_mapped),
                  u(cc.kernel_drops), u(cc.overflows), u(s.can_ring_full), u(cc.can_fd),
-                 u(cc.malformed), u(cc.other_channel), u(cc.read_errors));
+                 u(cc.malformed), u(cc.other_channel), u(cc.lost), u(cc.read_errors));
   }
   std::fprintf(out, "  inputs     ");
   for (const Summary::Input& i : s.inputs)

@@ -1,6 +1,7 @@
 // The `can:` section of config/stac.yaml (see settings/settings.hpp).
 #include <cmath>
 
+#include "drivers/io/datagram.hpp"
 #include "settings/config_section.hpp"
 #include "settings/settings.hpp"
 
@@ -17,13 +18,15 @@ rt::Result<can::CanConfig> load_can_settings(const std::filesystem::path& config
 #define STAC_GET(type, key, dst) STAC_CONFIG_GET(c, type, key, dst)
   std::string transport, dbc;
   long long bitrate = 0;
-  int channel = 0;
+  int channel = 0, cannelloni_port = 0;
   double stale_s = 0;
   STAC_GET(std::string, "transport", transport);
   STAC_GET(std::string, "interface", cfg.socketcan.interface);
   STAC_GET(long long, "bitrate_bps", bitrate);
   STAC_GET(int, "gs_usb_channel", channel);
   STAC_GET(bool, "gs_usb_listen_only", cfg.gs_usb.listen_only);
+  STAC_GET(std::string, "cannelloni_address", cfg.cannelloni.bind_address);
+  STAC_GET(int, "cannelloni_port", cannelloni_port);
   STAC_GET(std::string, "dbc", dbc);
   STAC_GET(std::string, "speed_message", cfg.signals.speed_message);
   STAC_GET(std::string, "speed_signal", cfg.signals.speed_signal);
@@ -37,10 +40,19 @@ rt::Result<can::CanConfig> load_can_settings(const std::filesystem::path& config
     cfg.transport = Transport::kSocketCan;
   } else if (transport == "gs_usb") {
     cfg.transport = Transport::kGsUsb;
+  } else if (transport == "cannelloni") {
+    cfg.transport = Transport::kCannelloni;
   } else {
     return rt::make_error(file + ": 'can.transport' is '" + transport +
-                          "'; use socketcan or gs_usb");
+                          "'; use socketcan, gs_usb or cannelloni");
   }
+  if (std::uint32_t address = 0; !io::parse_ipv4(cfg.cannelloni.bind_address.c_str(), address)) {
+    return rt::make_error(file + ": 'can.cannelloni_address' is '" + cfg.cannelloni.bind_address +
+                          "'; give a dotted IPv4 address (0.0.0.0: every interface)");
+  }
+  if (cannelloni_port < 0 || cannelloni_port > 65535)
+    return rt::make_error(file + ": 'can.cannelloni_port' must be in 0..65535");
+  cfg.cannelloni.port = static_cast<std::uint16_t>(cannelloni_port);
   if (cfg.socketcan.interface.empty() || cfg.socketcan.interface.size() > 15) {
     return rt::make_error(file + ": 'can.interface' must have 1..15 characters");
   }

@@ -26,7 +26,7 @@ struct RunSettings {
   rt::ThreadSchedule receiver, perception, publisher, pose;
   InsTransport ins = InsTransport::kTcp;
   std::string ins_address;  // tcp: the POS computer (IPv4); port: ego.ins_port
-  bool can = false;         // read the vehicle CAN bus (section can:, socketcan or gs_usb)
+  bool can = false;  // read the vehicle CAN bus (section can:, socketcan, gs_usb or cannelloni)
   std::int64_t velodyne_timeout_ns = 200'000'000;  // watchdog: lidar silent this long = stale
 };
 

@@ -11,6 +11,7 @@
 
 #include "rt/clock.hpp"
 #include "tools/commands.hpp"
+#include "tools/replay/can_replay.hpp"
 #include "tools/replay/tcp_replay.hpp"
 #include "tools/replay/udp_replay.hpp"
 #include "tools/support/cli_checks.hpp"
@@ -31,7 +32,9 @@ struct ReplayOptions {
   std::string tcp_listen = "127.0.0.1";
   bool no_tcp = false;
   bool wait_tcp = false;
-  std::string faults;  // --faults: tools/replay/faults.hpp
+  std::string faults;   // --faults: tools/replay/faults.hpp
+  std::string can_log;  // --can: a candump log sent as cannelloni datagrams
+  int can_port = 20000;
 };
 
 struct TcpServe {
@@ -213,6 +216,7 @@ int run_replay(const ReplayOptions& o) {
   c.loops = o.forever ? 0 : o.loops;
   c.allow_empty = !tcp.empty() && o.filter_port <= 0;  // a TCP-only capture
   std::optional<io::StreamFaultPlan> stream_faults;
+  io::TimeSpan can_silence;
   if (!o.faults.empty()) {
     auto plan = io::parse_fault_plan(o.faults);
     if (!plan) return fail(plan.error().message);
@@ -225,6 +229,11 @@ int run_replay(const ReplayOptions& o) {
       }
       stream_faults = plan->ins;
     }
+    if (plan->can_silence && o.can_log.empty()) {
+      return fail("--faults " + o.faults +
+                  ": can-silence acts on the CAN frames of --can LOG, and none is given");
+    }
+    can_silence = plan->can_silence;
   }
   auto replay = io::UdpReplay::open(o.in, c);
   if (!replay) return fail(replay.error().message);
@@ -232,6 +241,29 @@ int run_replay(const ReplayOptions& o) {
   if (stream_faults) {  // in the same capture time as the datagrams' faults
     for (auto& t : tcp)
       t.inject(*stream_faults, plan.packets > 0 ? plan.first_stamp_ns : t.plan().first_stamp_ns);
+  }
+  std::optional<io::CanReplay> can;
+  if (!o.can_log.empty()) {
+    io::CanReplayConfig cc;
+    cc.address = o.to;
+    cc.port = static_cast<std::uint16_t>(o.can_port);
+    cc.fast = o.fast;
+    cc.loops = o.forever ? 0 : o.loops;
+    cc.silence = can_silence;
+    cc.origin_ns = plan.packets > 0 ? plan.first_stamp_ns : 0;
+    auto opened = io::CanReplay::open(o.can_log, cc);
+    if (!opened) return fail(opened.error().message);
+    can.emplace(std::move(*opened));
+    if (plan.packets == 0) {
+      return fail("--can " + o.can_log +
+                  ": CAN frames are sent beside the capture's UDP "
+                  "datagrams, and it has none");
+    }
+    std::fprintf(stderr,
+                 "stac replay: CAN: %llu frames of %s over %.3f s, as cannelloni datagrams to "
+                 "%s:%d\n",
+                 static_cast<unsigned long long>(can->plan().frames), o.can_log.c_str(),
+                 static_cast<double>(can->plan().span_ns) * 1e-9, o.to.c_str(), o.can_port);
   }
   if (plan.packets == 0)
     std::fprintf(stderr, "stac replay: warning: %s; the TCP streams only\n",
@@ -277,6 +309,7 @@ int run_replay(const ReplayOptions& o) {
   std::vector<std::pair<std::int64_t, std::int64_t>> firsts;  // (first stamp, pass period)
   if (plan.packets > 0) firsts.emplace_back(plan.first_stamp_ns, plan.pass_period_ns);
   for (const auto& t : tcp) firsts.emplace_back(t.plan().first_stamp_ns, t.plan().pass_period_ns);
+  if (can) firsts.emplace_back(can->plan().first_stamp_ns, can->plan().span_ns + 1'000'000);
   clock.first_stamp_ns = std::min_element(firsts.begin(), firsts.end())->first;
   for (const auto& [first, period] : firsts) {
     clock.pass_period_ns = std::max(clock.pass_period_ns, first - clock.first_stamp_ns + period);
@@ -296,6 +329,8 @@ int run_replay(const ReplayOptions& o) {
   for (std::size_t i = 0; i < tcp.size(); ++i) {
     threads.emplace_back([&, i] { tcp_reports[i] = tcp[i].run(g_stop, &clock); });
   }
+  io::CanReplayReport can_report;
+  if (can) threads.emplace_back([&] { can_report = can->run(g_stop, clock); });
   rt::Result<io::ReplayReport> report = io::ReplayReport{};
   if (plan.packets > 0) report = replay->run(g_stop, &clock);
   for (auto& t : threads) t.join();
@@ -310,6 +345,16 @@ int run_replay(const ReplayOptions& o) {
   for (std::size_t i = 0; i < tcp.size(); ++i) {
     print_tcp_report(o, tcp[i], *tcp_reports[i], tcp_port_of[i],
                      o.fast ? 0 : clock.offset_ns(0, tcp[i].plan().first_stamp_ns));
+  }
+  if (can) {
+    std::fprintf(stderr,
+                 "stac replay: CAN to %s:%d: %llu frames sent (%llu full passes%s), %llu "
+                 "silenced (can-silence), %llu send failures\n",
+                 o.to.c_str(), o.can_port, static_cast<unsigned long long>(can_report.frames),
+                 static_cast<unsigned long long>(can_report.passes),
+                 can_report.stopped ? ", stopped" : "",
+                 static_cast<unsigned long long>(can_report.silenced),
+                 static_cast<unsigned long long>(can_report.send_failures));
   }
   if (plan.packets > 0 && report->packets == 0 && !report->stopped) {
     return fail("no packet could be sent");
@@ -333,7 +378,10 @@ void add_replay_command(CLI::App& app) {
       "one clock with the UDP packets, by a TCP server on --tcp-listen at the captured server\n"
       "port: one client at a time; the stream runs on whether a client is connected or not (a\n"
       "client that connects gets it from then on); --wait-tcp holds the start until a client\n"
-      "is connected to every served port.");
+      "is connected to every served port.\n"
+      "CAN: --can LOG sends a candump log's frames (stamped in the capture's time, as `stac sim\n"
+      "--can` writes them) on the same clock as cannelloni datagrams (CAN over UDP) to\n"
+      "--can-port, for `stac run` with can.transport: cannelloni.");
   cmd->add_option("--in", o->in, "pcap capture to replay")->required();
   cmd->add_option("--to", o->to, "destination IPv4 address")->capture_default_str();
   cmd->add_option("--port", o->port, "destination UDP port (default: the captured one)")
@@ -362,8 +410,16 @@ void add_replay_command(CLI::App& app) {
                   "window=START+SECONDS (the random ones only then), seed=N; into the TCP "
                   "streams (the INS): ins-dropout=START+SECONDS, ins-garbage=START+SECONDS, "
                   "ins-checksum=START+SECONDS (Applanix checksums broken), ins-disconnect=AT; "
+                  "into the CAN frames of --can: can-silence=START+SECONDS; "
                   "times in capture seconds of each pass, e.g. --faults "
                   "loss=0.01,garbage=0.01,window=2+3,seed=7");
+  cmd->add_option("--can", o->can_log,
+                  "candump log whose frames are sent as cannelloni datagrams (CAN over UDP) on "
+                  "the capture's clock")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--can-port", o->can_port, "UDP port of the cannelloni datagrams")
+      ->check(CLI::Range(1, 65535))
+      ->capture_default_str();
   cmd->add_flag("--wait-tcp", o->wait_tcp,
                 "start the replay once a client is connected to every served TCP port");
   cmd->callback([o] {

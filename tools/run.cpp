@@ -58,8 +58,9 @@ void add_run_command(CLI::App& app) {
       app.add_subcommand("run", "The live component: sensor UDP -> perception -> DDS topics");
   cmd->description(
       "Receives the HDL-64E's UDP packets, the Applanix INS (TCP or UDP) and optionally the\n"
-      "vehicle CAN bus (SocketCAN or a gs_usb adapter: can.transport), runs every complete scan\n"
-      "through deskew -> segment -> track -> classify on its own thread and publishes\n"
+      "vehicle CAN bus (SocketCAN, a gs_usb adapter or a cannelloni gateway over UDP:\n"
+      "can.transport), runs every complete scan through deskew -> segment -> track -> classify\n"
+      "on its own thread and publishes\n"
       "tracked_objects, segments, ego_pose and health on DDS, watching the deadline\n"
       "(run.deadline_ms) and the inputs. The published tracks are classified before publication\n"
       "while the scan is younger than run.classify_budget_ms; the rest after it. Stops on\n"

@@ -39,6 +39,14 @@ std::filesystem::path variant(const std::string& key, const std::string& replace
   return out;
 }
 
+TEST(CanConfig, CannelloniIsATransportWithItsAddressAndPort) {
+  const auto c = settings::load_can_settings(variant("transport", "transport: cannelloni"));
+  ASSERT_TRUE(c) << c.error().message;
+  EXPECT_EQ(c->transport, Transport::kCannelloni);
+  EXPECT_EQ(c->cannelloni.bind_address, "0.0.0.0");
+  EXPECT_EQ(c->cannelloni.port, 20000);
+}
+
 TEST(CanConfig, EveryErrorNamesTheKey) {
   const std::pair<std::filesystem::path, std::string> cases[] = {
       {variant("stale_timeout_s", ""), "missing required key 'can.stale_timeout_s'"},
@@ -47,6 +55,10 @@ TEST(CanConfig, EveryErrorNamesTheKey) {
       {variant("bitrate_bps", "bitrate_bps: 5000000"), "'can.bitrate_bps' must be in"},
       {variant("yaw_rate_sign", "yaw_rate_sign: 2"), "'can.yaw_rate_sign' must be 1 or -1"},
       {variant("interface", "interface: a_very_long_interface"), "'can.interface' must have"},
+      {variant("cannelloni_address", "cannelloni_address: localhost"),
+       "'can.cannelloni_address' is 'localhost'; give a dotted IPv4 address"},
+      {variant("cannelloni_port", "cannelloni_port: 70000"),
+       "'can.cannelloni_port' must be in 0..65535"},
   };
   for (const auto& [file, expected] : cases) {
     const auto c = settings::load_can_settings(file);

@@ -4,12 +4,16 @@
 #include <atomic>
 #include <cstdio>
 #include <cstring>
+#include <fstream>
 #include <thread>
 #include <vector>
 
+#include "drivers/can/candump.hpp"
+#include "drivers/can/cannelloni.hpp"
 #include "drivers/io/pcap_writer.hpp"
 #include "drivers/io/udp_receiver.hpp"
 #include "rt/clock.hpp"
+#include "tools/replay/can_replay.hpp"
 #include "tools/replay/faults.hpp"
 #include "tools/replay/udp_replay.hpp"
 
@@ -243,6 +247,12 @@ TEST(ReplayFaults, PlansParseAndBadItemsAreNamed) {
   EXPECT_DOUBLE_EQ(p->dropout->second, 1.5);
   EXPECT_DOUBLE_EQ(p->clock_jump->second, -5.0);
   EXPECT_EQ(p->seed, 9u);
+  auto can = parse_fault_plan("can-silence=2+0.5");
+  ASSERT_TRUE(can) << can.error().message;
+  EXPECT_FALSE(can->any()) << "not a fault of the datagrams";
+  ASSERT_TRUE(can->can_silence);
+  EXPECT_DOUBLE_EQ(can->can_silence->first, 2.0);
+  EXPECT_DOUBLE_EQ(can->can_silence->second, 0.5);
   for (const auto& [spec, what] : std::vector<std::pair<std::string, std::string>>{
            {"loss=2", "loss=2: not a probability"},
            {"burst=0.1", "burst=0.1: not PROBABILITY:DATAGRAMS"},
@@ -251,7 +261,8 @@ TEST(ReplayFaults, PlansParseAndBadItemsAreNamed) {
            {"jitter=0.1", "jitter=0.1: unknown fault"},
            {"loss", "loss: not NAME=VALUE"},
            {"seed=-1", "not a whole number"},
-           {"window=1+1,seed=2", "names no fault"}}) {
+           {"window=1+1,seed=2", "names no fault"},
+           {"can-silence=1", "can-silence=1: not START+SECONDS"}}) {
     auto bad = parse_fault_plan(spec);
     ASSERT_FALSE(bad) << spec;
     EXPECT_NE(bad.error().message.find(what), std::string::npos) << bad.error().message;
@@ -326,6 +337,79 @@ TEST(ReplayFaults, DropoutWindowAndClockJumpActAtTheirCaptureTimes) {
     EXPECT_EQ(stamp, i >= 1500 ? recorded - 2'000'000 : recorded) << i;
     ++expect;
   }
+}
+
+// A candump log of 100 frames, 10 ms apart from capture time 0, replayed as cannelloni datagrams
+// into a real CannelloniReader at 10x: every frame arrives with its id and bytes, one datagram
+// each in sequence; a can-silence of 0.3 s sends none of the 30 frames in it, without a gap in
+// the sequence numbers.
+TEST(CanReplay, ALogIsSentAsCannelloniDatagramsOnTheClockAndASilenceSendsNothing) {
+  const auto log = temp("can.log");
+  constexpr std::int64_t kStart = 1'767'268'800'000'000'000;
+  {
+    auto w = can::CandumpWriter::open(log, "can0");
+    ASSERT_TRUE(w);
+    for (std::uint8_t i = 0; i < 100; ++i) {
+      can::Frame f;
+      f.stamp_ns = kStart + i * 10'000'000;
+      f.id = 0x1A0;
+      f.dlc = 2;
+      f.data = {i, static_cast<std::uint8_t>(i ^ 0xFF)};
+      ASSERT_TRUE(w->write(f));
+    }
+    ASSERT_TRUE(w->close());
+  }
+  auto reader = can::CannelloniReader::open({"127.0.0.1", 0});
+  ASSERT_TRUE(reader) << reader.error().message;
+  CanReplayConfig c;
+  c.port = reader->port();
+  c.silence = std::pair{0.2, 0.3};  // frames 20..49
+  c.origin_ns = kStart;
+  auto replay = CanReplay::open(log, c);
+  ASSERT_TRUE(replay) << replay.error().message;
+  EXPECT_EQ(replay->plan().frames, 100u);
+  EXPECT_EQ(replay->plan().span_ns, 990'000'000);
+  ReplayClock clock{rt::monotonic_ns(), kStart, 1'000'000'000, 10.0};
+  std::vector<can::Frame> got;
+  std::thread rx([&] {
+    std::vector<can::Frame> out(8);
+    for (int quiet = 0; quiet < 10 && got.size() < 70;) {
+      const int n = reader->read(out, 100);
+      quiet = n > 0 ? 0 : quiet + 1;
+      for (int i = 0; i < n; ++i) got.push_back(out[static_cast<std::size_t>(i)]);
+    }
+  });
+  const std::atomic<bool> never{false};
+  const std::int64_t start = rt::monotonic_ns();
+  const CanReplayReport r = replay->run(never, clock);
+  const std::int64_t took = rt::monotonic_ns() - start;
+  rx.join();
+  EXPECT_EQ(r.frames, 70u);
+  EXPECT_EQ(r.silenced, 30u);
+  EXPECT_EQ(r.send_failures, 0u);
+  EXPECT_EQ(r.passes, 1u);
+  EXPECT_GE(took, 90'000'000) << "paced: 0.99 s of log at 10x";
+  ASSERT_EQ(got.size(), 70u);
+  for (std::size_t k = 0; k < got.size(); ++k) {
+    const std::uint8_t i = static_cast<std::uint8_t>(k < 20 ? k : k + 30);
+    EXPECT_EQ(got[k].id, 0x1A0u);
+    EXPECT_EQ(got[k].dlc, 2);
+    EXPECT_EQ(got[k].data[0], i) << k;
+    EXPECT_EQ(got[k].data[1], static_cast<std::uint8_t>(i ^ 0xFF)) << k;
+  }
+  const can::CannelloniCounters counts = reader->counters();
+  EXPECT_EQ(counts.datagrams, 70u);
+  EXPECT_EQ(counts.lost, 0u);
+  EXPECT_EQ(counts.malformed, 0u);
+}
+
+TEST(CanReplay, AMalformedLogIsRefusedNamingItsLine) {
+  const auto log = temp("bad_can.log");
+  std::ofstream(log) << "(1.000000) can0 1A0#0102\n(1.010000) can0 1A0#XYZ\n";
+  auto replay = CanReplay::open(log, {});
+  ASSERT_FALSE(replay);
+  EXPECT_NE(replay.error().message.find(log.string() + ":2"), std::string::npos)
+      << replay.error().message;
 }
 
 }  // namespace

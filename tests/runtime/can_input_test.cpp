@@ -118,6 +118,7 @@ TEST(CanCounterCells, EveryFieldRoundTrips) {
                                 .overflows = 5,
                                 .can_fd = 6,
                                 .malformed = 7,
+                                .lost = 10,
                                 .other_channel = 8,
                                 .read_errors = 9};
   cells.store(c);

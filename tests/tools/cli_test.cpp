@@ -492,6 +492,17 @@ TEST(ReplayCli, MissingFileAndNoMatchingPacketsAreClearErrors) {
       << snapped.output;
   const CliResult both = stac("replay --in " + pcap.string() + " --fast --rate 2");
   EXPECT_NE(both.code, 0);  // --fast and --rate exclude each other
+  // A CAN fault without CAN frames to act on; a CAN log that is not one.
+  const CliResult silence = stac("replay --in " + pcap.string() + " --faults can-silence=1+1");
+  EXPECT_EQ(silence.code, 1);
+  EXPECT_NE(silence.output.find("can-silence acts on the CAN frames of --can LOG"),
+            std::string::npos)
+      << silence.output;
+  const auto not_a_log = dir / "not_a_log.txt";
+  std::ofstream(not_a_log) << "hello\n";
+  const CliResult garbage = stac("replay --in " + pcap.string() + " --can " + not_a_log.string());
+  EXPECT_EQ(garbage.code, 1);
+  EXPECT_NE(garbage.output.find(not_a_log.string() + ":1"), std::string::npos) << garbage.output;
 }
 
 TEST(SimCompareCli, WritesTheReportWithPlausibleFigures) {

@@ -40,7 +40,8 @@ rt::Result<FaultPlan> parse_fault_plan(const std::string& spec) {
                           "oversize=P, garbage=P, dropout=START+SECONDS, clock-jump=AT:SECONDS, "
                           "window=START+SECONDS, seed=N, ins-dropout=START+SECONDS, "
                           "ins-garbage=START+SECONDS, ins-checksum=START+SECONDS, "
-                          "ins-disconnect=AT; P a probability in [0, 1])");
+                          "ins-disconnect=AT, can-silence=START+SECONDS; P a probability in "
+                          "[0, 1])");
   };
   for (std::string item; std::getline(items, item, ',');) {
     if (item.empty()) continue;
@@ -66,6 +67,10 @@ rt::Result<FaultPlan> parse_fault_plan(const std::string& spec) {
       if (!pair_of(value, '+', a, b) || a < 0 || b <= 0)
         return bad(item, "not START+SECONDS (start >= 0, seconds > 0, capture time)");
       (name == "dropout" ? plan.dropout : plan.window) = std::pair{a, b};
+    } else if (name == "can-silence") {
+      if (!pair_of(value, '+', a, b) || a < 0 || b <= 0)
+        return bad(item, "not START+SECONDS (start >= 0, seconds > 0, capture time)");
+      plan.can_silence = std::pair{a, b};
     } else if (name == "ins-dropout" || name == "ins-garbage" || name == "ins-checksum") {
       if (!pair_of(value, '+', a, b) || a < 0 || b <= 0)
         return bad(item, "not START+SECONDS (start >= 0, seconds > 0, capture time)");
@@ -88,7 +93,7 @@ rt::Result<FaultPlan> parse_fault_plan(const std::string& spec) {
     }
   }
   plan.ins.seed = plan.seed;
-  if (!plan.any() && !plan.ins.any() && !spec.empty())
+  if (!plan.any() && !plan.ins.any() && !plan.can_silence && !spec.empty())
     return rt::make_error("--faults " + spec + ": names no fault (only window or seed)");
   return plan;
 }

@@ -21,6 +21,8 @@
 //                     its checksum fails
 //   ins-disconnect=S  the connection closed at S s of each pass (the client connects again and
 //                     gets the stream from then on)
+// and into the CAN frames of `--can LOG` (sent as cannelloni datagrams, can_replay.hpp):
+//   can-silence=S+L   no frame sent from S to S+L s (a silent bus, or a gateway that stopped)
 //
 // Capture time counts from the first datagram of each pass (a TCP-only capture: from the first
 // stream byte). Everything is decided per datagram or chunk from a SplitMix64 stream and written
@@ -57,7 +59,8 @@ struct FaultPlan {
   std::optional<std::pair<double, double>> clock_jump;  // from s, jump s
   std::optional<std::pair<double, double>> window;      // start s, length s
   std::uint64_t seed = 1;
-  StreamFaultPlan ins;  // the TCP streams' (ins-...)
+  StreamFaultPlan ins;   // the TCP streams' (ins-...)
+  TimeSpan can_silence;  // the CAN frames' (can-silence)
 
   // A fault in the UDP datagrams.
   [[nodiscard]] bool any() const noexcept {
