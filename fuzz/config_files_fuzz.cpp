@@ -1,20 +1,27 @@
-// Files read by path at start-up: the input as the YAML configuration (every section a run
-// reads), as a ROS yaml calibration and as an HDL-64E db.xml.
+// Files read at start-up: the input as the YAML configuration (every section a run reads, from
+// memory through a ConfigSnapshot: no file per input), as a ROS yaml calibration and as an
+// HDL-64E db.xml (from memory too).
 #include <cstddef>
 #include <cstdint>
+#include <filesystem>
+#include <string>
 
 #include "drivers/velodyne/calibration.hpp"
-#include "fuzz_common.hpp"
+#include "settings/config_section.hpp"
 #include "settings/run_settings.hpp"
 #include "settings/settings.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  const auto yaml = stac::fuzz::as_file(data, size, ".yaml");
-  (void)stac::settings::load_pipeline_settings(yaml);
-  (void)stac::settings::load_run_settings(yaml);
-  (void)stac::settings::load_can_settings(yaml);
-  (void)stac::velodyne::load_ros_yaml(yaml);
-  const auto xml = stac::fuzz::as_file(data, size, ".xml");
-  (void)stac::velodyne::load_db_xml(xml);
+  const std::string text(reinterpret_cast<const char*>(data), size);
+  // Relative paths in it (calibration, model, DBC) point into a folder that does not exist.
+  const std::filesystem::path config = "/nonexistent/stac_fuzz/stac.yaml";
+  {
+    const stac::settings::ConfigSnapshot snapshot(config, text);
+    (void)stac::settings::load_pipeline_settings(config);
+    (void)stac::settings::load_run_settings(config);
+    (void)stac::settings::load_can_settings(config);
+  }
+  (void)stac::velodyne::parse_ros_yaml(text, "fuzz.yaml");
+  (void)stac::velodyne::parse_db_xml(text, "fuzz.xml");
   return 0;
 }

@@ -90,25 +90,55 @@ rt::Status check_keys(const std::string& file, const YAML::Node& map, const YAML
 
 }  // namespace
 
+thread_local ConfigSnapshot* t_snapshots = nullptr;  // the newest; each links the one before
+
+ConfigSnapshot::ConfigSnapshot(const std::filesystem::path& file, const std::string& text)
+    : file_(file.string()), previous_(t_snapshots) {
+  try {
+    root_ = YAML::Load(text);
+  } catch (const std::exception& e) {
+    parse_error_ = e.what();
+  }
+  t_snapshots = this;
+}
+
+ConfigSnapshot::~ConfigSnapshot() {
+  for (ConfigSnapshot** at = &t_snapshots; *at != nullptr; at = &(*at)->previous_) {
+    if (*at == this) {
+      *at = previous_;
+      break;
+    }
+  }
+}
+
 rt::Result<ConfigSection> ConfigSection::open(const std::filesystem::path& file,
                                               const std::string& name) {
   ConfigSection s;
   s.file_ = file.string();
   s.name_ = name;
-  std::error_code ec;
-  if (std::filesystem::is_directory(file, ec)) {
-    return rt::make_error(s.file_ +
-                          " is a directory; give the configuration file (e.g. config/stac.yaml)");
-  }
-  if (!std::filesystem::exists(file, ec))
-    return rt::make_error(s.file_ + ": no such configuration file");
+  const ConfigSnapshot* snapshot = t_snapshots;
+  while (snapshot != nullptr && snapshot->file_ != s.file_) snapshot = snapshot->previous_;
   YAML::Node root;
-  try {
-    root = YAML::LoadFile(s.file_);
-  } catch (const YAML::Exception& e) {
-    return rt::make_error(s.file_ + ": cannot read the configuration: " + e.what());
-  } catch (const std::exception& e) {
-    return rt::make_error(s.file_ + ": cannot read the configuration: " + e.what());
+  if (snapshot != nullptr) {
+    if (!snapshot->parse_error_.empty()) {
+      return rt::make_error(s.file_ + ": cannot read the configuration: " + snapshot->parse_error_);
+    }
+    root = snapshot->root_;
+  } else {
+    std::error_code ec;
+    if (std::filesystem::is_directory(file, ec)) {
+      return rt::make_error(s.file_ +
+                            " is a directory; give the configuration file (e.g. config/stac.yaml)");
+    }
+    if (!std::filesystem::exists(file, ec))
+      return rt::make_error(s.file_ + ": no such configuration file");
+    try {
+      root = YAML::LoadFile(s.file_);
+    } catch (const YAML::Exception& e) {
+      return rt::make_error(s.file_ + ": cannot read the configuration: " + e.what());
+    } catch (const std::exception& e) {
+      return rt::make_error(s.file_ + ": cannot read the configuration: " + e.what());
+    }
   }
   if (!root.IsMap()) {
     return rt::make_error(

@@ -18,6 +18,26 @@
 
 namespace stac::settings {
 
+// A configuration held in memory: while one lives, ConfigSection::open of its file name on this
+// thread reads it instead of the disk (parsed once, at construction). The libFuzzer harness of
+// the configuration loads every section this way, without a file per input; `file` names it in
+// messages and anchors the relative paths it holds. Not copyable or movable (it registers its
+// own address); the newest one of a name wins.
+class ConfigSnapshot {
+ public:
+  ConfigSnapshot(const std::filesystem::path& file, const std::string& text);
+  ~ConfigSnapshot();
+  ConfigSnapshot(const ConfigSnapshot&) = delete;
+  ConfigSnapshot& operator=(const ConfigSnapshot&) = delete;
+
+ private:
+  friend class ConfigSection;
+  std::string file_;
+  YAML::Node root_;
+  std::string parse_error_;  // empty: root_ holds the parsed text
+  ConfigSnapshot* previous_;
+};
+
 class ConfigSection {
  public:
   static rt::Result<ConfigSection> open(const std::filesystem::path& file, const std::string& name);

@@ -147,6 +147,14 @@ rt::Result<std::vector<int>> xml_int_items(const tinyxml2::XMLElement* db, const
 
 }  // namespace
 
+namespace {
+
+rt::Result<Calibration> from_ros_yaml(const YAML::Node& root, const std::filesystem::path& path);
+rt::Result<Calibration> from_db_xml(const tinyxml2::XMLDocument& doc,
+                                    const std::filesystem::path& path);
+
+}  // namespace
+
 rt::Result<Calibration> load_ros_yaml(const std::filesystem::path& path) {
   YAML::Node root;
   try {
@@ -154,6 +162,38 @@ rt::Result<Calibration> load_ros_yaml(const std::filesystem::path& path) {
   } catch (const YAML::Exception& e) {
     return rt::make_error(path.string() + ": not readable as YAML: " + e.what());
   }
+  return from_ros_yaml(root, path);
+}
+
+rt::Result<Calibration> parse_ros_yaml(const std::string& text, const std::filesystem::path& name) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    return rt::make_error(name.string() + ": not readable as YAML: " + e.what());
+  }
+  return from_ros_yaml(root, name);
+}
+
+rt::Result<Calibration> load_db_xml(const std::filesystem::path& path) {
+  tinyxml2::XMLDocument doc;
+  if (doc.LoadFile(path.string().c_str()) != tinyxml2::XML_SUCCESS) {
+    return rt::make_error(path.string() + ": not readable as XML: " + doc.ErrorStr());
+  }
+  return from_db_xml(doc, path);
+}
+
+rt::Result<Calibration> parse_db_xml(const std::string& text, const std::filesystem::path& name) {
+  tinyxml2::XMLDocument doc;
+  if (doc.Parse(text.data(), text.size()) != tinyxml2::XML_SUCCESS) {
+    return rt::make_error(name.string() + ": not readable as XML: " + doc.ErrorStr());
+  }
+  return from_db_xml(doc, name);
+}
+
+namespace {
+
+rt::Result<Calibration> from_ros_yaml(const YAML::Node& root, const std::filesystem::path& path) {
   if (!root.IsMap() || !root["lasers"] || !root["lasers"].IsSequence()) {
     return rt::make_error(path.string() + ": missing the 'lasers' list of a ROS calibration");
   }
@@ -226,11 +266,8 @@ rt::Result<Calibration> load_ros_yaml(const std::filesystem::path& path) {
   return finish(path, lasers, resolution);
 }
 
-rt::Result<Calibration> load_db_xml(const std::filesystem::path& path) {
-  tinyxml2::XMLDocument doc;
-  if (doc.LoadFile(path.string().c_str()) != tinyxml2::XML_SUCCESS) {
-    return rt::make_error(path.string() + ": not readable as XML: " + doc.ErrorStr());
-  }
+rt::Result<Calibration> from_db_xml(const tinyxml2::XMLDocument& doc,
+                                    const std::filesystem::path& path) {
   const tinyxml2::XMLElement* root = doc.FirstChildElement("boost_serialization");
   const tinyxml2::XMLElement* db = root ? root->FirstChildElement("DB") : nullptr;
   if (db == nullptr) return rt::make_error(path.string() + ": missing <boost_serialization><DB>");
@@ -308,6 +345,8 @@ rt::Result<Calibration> load_db_xml(const std::filesystem::path& path) {
   }
   return finish(path, lasers, lsb_cm * kCmToM);
 }
+
+}  // namespace
 
 rt::Result<Calibration> load_calibration(const std::filesystem::path& path) {
   std::ifstream in(path);

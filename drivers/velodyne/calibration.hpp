@@ -42,6 +42,9 @@ struct Calibration {
 rt::Result<Calibration> load_calibration(const std::filesystem::path& path);
 rt::Result<Calibration> load_db_xml(const std::filesystem::path& path);
 rt::Result<Calibration> load_ros_yaml(const std::filesystem::path& path);
+// The same from text in memory; `name` stands for the file in messages.
+rt::Result<Calibration> parse_db_xml(const std::string& text, const std::filesystem::path& name);
+rt::Result<Calibration> parse_ros_yaml(const std::string& text, const std::filesystem::path& name);
 
 // Checks every correction against an HDL-64E's sanity limits; errors name `source`, the laser
 // and the field. The loaders call it; so does the status-stream calibration.

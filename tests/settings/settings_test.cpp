@@ -10,6 +10,8 @@
 #include <regex>
 #include <sstream>
 
+#include "settings/config_section.hpp"
+
 namespace stac::settings {
 namespace {
 
@@ -154,6 +156,48 @@ TEST(ConfigFile, TheShippedFileHasEveryKeyTheLoadersRead) {
 
 // classification.model's line (velodyne.model is another key of the same name).
 const char* const kModelLine = R"(model: \S+( +# track classifier))";
+
+// A configuration in memory reads as its file would: the same sections from a name no file has,
+// paths relative to that name, the same errors; gone with the snapshot, the name is a missing
+// file again.
+TEST(ConfigSnapshot, SectionsAreReadFromMemoryUnderTheFilesName) {
+  std::ifstream in(kShipped);
+  std::stringstream text;
+  text << in.rdbuf();
+  // Beside the shipped file, so that its relative paths (the calibration) lead where they do.
+  const std::filesystem::path name = kShipped.parent_path() / "no_such_file_in_memory.yaml";
+  {
+    const ConfigSnapshot snapshot(name, text.str());
+    auto pipeline = load_pipeline_settings(name);
+    ASSERT_TRUE(pipeline) << pipeline.error().message;
+    auto from_file = load_pipeline_settings(kShipped);
+    ASSERT_TRUE(from_file);
+    EXPECT_EQ(pipeline->ego.estimator.ins_timeout_ns, from_file->ego.estimator.ins_timeout_ns);
+    EXPECT_EQ(pipeline->velodyne.calibration, from_file->velodyne.calibration);
+    auto classification = load_classification_settings(name);
+    ASSERT_TRUE(classification);
+    EXPECT_EQ(classification->model, name.parent_path() / "models/stac_default.stacmodel");
+    {
+      const ConfigSnapshot newer(name, "velodyne: [1, 2]\n");  // the newest of a name wins
+      auto bad = load_ego_settings(name);
+      ASSERT_FALSE(bad);
+      EXPECT_NE(bad.error().message.find(name.string() + ": missing the 'ego:' section"),
+                std::string::npos)
+          << bad.error().message;
+    }
+    EXPECT_TRUE(load_ego_settings(name));
+    const ConfigSnapshot broken("/nonexistent/broken.yaml", "a: [1, 2\n");
+    auto unreadable = load_ego_settings("/nonexistent/broken.yaml");
+    ASSERT_FALSE(unreadable);
+    EXPECT_NE(unreadable.error().message.find("/nonexistent/broken.yaml: cannot read the "
+                                              "configuration"),
+              std::string::npos)
+        << unreadable.error().message;
+  }
+  auto gone = load_ego_settings(name);
+  ASSERT_FALSE(gone);
+  EXPECT_NE(gone.error().message.find("no such configuration file"), std::string::npos);
+}
 
 TEST(ClassificationSettings, TheShippedConfigLoadsAndPathsAreRelativeToTheFile) {
   auto s = load_classification_settings(kShipped);

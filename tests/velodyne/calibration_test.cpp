@@ -64,6 +64,34 @@ TEST(Calibration, DbXmlAndYamlOfSameUnitGiveSameCorrections) {
 // The real yaml was made by ROS's gen_calibration.py, which skips zero minIntensity entries
 // and so shifts the following ones to the wrong lasers. The db.xml is the truth; this test
 // pins the shift so the discrepancy stays documented (docs/velodyne.md).
+// The same loaders from text in memory (the fuzz harness reads them so): the same corrections,
+// and errors under the name given.
+TEST(Calibration, TextInMemoryGivesWhatTheFileGives) {
+  STAC_REQUIRE_SHARED_DATA(kSztakiXml);
+  STAC_REQUIRE_SHARED_DATA(kSztakiYaml);
+  const auto text = [](const char* relative) {
+    std::ifstream in(shared_data(relative));
+    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  };
+  auto xml = parse_db_xml(text(kSztakiXml), "memory.xml");
+  auto yaml = parse_ros_yaml(text(kSztakiYaml), "memory.yaml");
+  auto xml_file = load_db_xml(shared_data(kSztakiXml));
+  auto yaml_file = load_ros_yaml(shared_data(kSztakiYaml));
+  ASSERT_TRUE(xml && yaml && xml_file && yaml_file);
+  ASSERT_EQ(xml->lasers.size(), xml_file->lasers.size());
+  for (std::size_t i = 0; i < xml->lasers.size(); ++i) {
+    EXPECT_EQ(xml->lasers[i].vert_correction_rad, xml_file->lasers[i].vert_correction_rad);
+    EXPECT_EQ(yaml->lasers[i].rot_correction_rad, yaml_file->lasers[i].rot_correction_rad);
+  }
+  auto bad = parse_ros_yaml("lasers: 3\n", "memory.yaml");
+  ASSERT_FALSE(bad);
+  EXPECT_EQ(bad.error().message.rfind("memory.yaml: ", 0), 0u) << bad.error().message;
+  auto not_xml = parse_db_xml("<boost_serialization>", "memory.xml");
+  ASSERT_FALSE(not_xml);
+  EXPECT_EQ(not_xml.error().message.rfind("memory.xml: not readable as XML", 0), 0u)
+      << not_xml.error().message;
+}
+
 TEST(Calibration, RosYamlMinIntensityIsTheDbXmlListWithZerosSkipped) {
   STAC_REQUIRE_SHARED_DATA(kSztakiXml);
   auto xml = load_calibration(shared_data(kSztakiXml));
