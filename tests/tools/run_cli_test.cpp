@@ -13,6 +13,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <optional>
 #include <regex>
@@ -683,6 +684,31 @@ Child live_run(std::uint32_t domain, std::uint16_t udp, const std::filesystem::p
                dir / "run.log");
 }
 
+// Seconds on CLOCK_REALTIME (when a sample arrives here).
+double wall_s() {
+  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+}
+
+// Calls `drain` until `replay` has ended and `linger_s` more passed, and expects the replay to
+// exit 0. Returns when the capture's first datagram was due (CLOCK_REALTIME s), NaN with a
+// failure when the replay's log does not say.
+double follow_replay(Child& replay, const std::function<void()>& drain, double linger_s) {
+  std::optional<double> ended;
+  while (!ended || wall_s() < *ended + linger_s) {
+    drain();
+    if (!ended && replay.poll()) ended = wall_s();
+    dds_sleepfor(DDS_MSECS(2));
+  }
+  EXPECT_EQ(replay.wait(), 0) << replay.output();
+  std::smatch m;
+  const std::string log = replay.output();
+  if (!std::regex_search(log, m, std::regex("first datagram is due at ([0-9.]+) s"))) {
+    ADD_FAILURE() << log;
+    return std::nan("");
+  }
+  return std::stod(m[1].str());
+}
+
 struct FaultCase {
   std::string faults;
   std::vector<std::string> causes;  // health drops whose sum counts it (empty: none)
@@ -737,10 +763,6 @@ TEST(FaultsInTheLoop, EachFaultIsCountedByCauseWithinAScanAndOutputIsNormalAScan
       std::uint64_t count;
       bool lidar_ok;
     };
-    const auto now_s = [] {
-      return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch())
-          .count();
-    };
     std::vector<Sample> samples;
     std::vector<double> scans;  // tracked_objects arrivals (s, realtime)
     std::vector<Sample> raw;    // t: arrival (s, realtime)
@@ -756,10 +778,10 @@ TEST(FaultsInTheLoop, EachFaultIsCountedByCauseWithinAScanAndOutputIsNormalAScan
         for (std::uint32_t i = 0; i < s.sensors._length; ++i)
           if (std::string(s.sensors._buffer[i].name) == "lidar")
             lidar_ok = s.sensors._buffer[i].status == 0;
-        raw.push_back({now_s(), n, lidar_ok});
+        raw.push_back({wall_s(), n, lidar_ok});
       });
       (void)tracked.drain<Types::TrackedObjects>([&](const Types::TrackedObjects& s) {
-        scans.push_back(now_s());
+        scans.push_back(wall_s());
         for (std::uint32_t i = 0; i < s.objects._length; ++i) {
           const auto& p = s.objects._buffer[i].kinematics.position;
           if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z) &&
@@ -774,19 +796,9 @@ TEST(FaultsInTheLoop, EachFaultIsCountedByCauseWithinAScanAndOutputIsNormalAScan
     raw.clear();
     scans.clear();
     // While it runs, and half a second more: the last scans, and the lidar stale after them.
-    std::optional<double> ended;
-    while (!ended || now_s() < *ended + 0.5) {
-      drain();
-      if (!ended && replay.poll()) ended = now_s();
-      dds_sleepfor(DDS_MSECS(2));
-    }
-    ASSERT_EQ(replay.wait(), 0) << replay.output();
-    std::smatch m;
+    const double t0 = follow_replay(replay, drain, 0.5);
+    ASSERT_FALSE(std::isnan(t0));
     const std::string replay_log = replay.output();
-    ASSERT_TRUE(
-        std::regex_search(replay_log, m, std::regex("first datagram is due at ([0-9.]+) s")))
-        << replay_log;
-    const double t0 = std::stod(m[1].str());
     for (const Sample& r : raw) samples.push_back({r.t - t0, r.count, r.lidar_ok});
     for (double& s : scans) s -= t0;
     ASSERT_GT(samples.size(), 30u) << run.output();
@@ -909,10 +921,6 @@ TEST(FaultsInTheLoop, InsFaultsAreCountedTheInsIsStaleNoTrackIsMisplacedAndItRec
     };
     std::vector<Sample> samples;
     std::vector<std::pair<double, std::vector<std::uint64_t>>> scans;  // arrival, object ids
-    const auto now_s = [] {
-      return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch())
-          .count();
-    };
     const auto drain = [&] {
       (void)health.drain<Types::Health>([&](const Types::Health& s) {
         std::uint64_t n = 0;
@@ -923,32 +931,23 @@ TEST(FaultsInTheLoop, InsFaultsAreCountedTheInsIsStaleNoTrackIsMisplacedAndItRec
         for (std::uint32_t i = 0; i < s.sensors._length; ++i)
           if (std::string(s.sensors._buffer[i].name) == "ins")
             ok = s.sensors._buffer[i].status == 0;
-        samples.push_back({now_s(), n, ok});
+        samples.push_back({wall_s(), n, ok});
       });
       (void)tracked.drain<Types::TrackedObjects>([&](const Types::TrackedObjects& s) {
         std::vector<std::uint64_t> ids;
         for (std::uint32_t i = 0; i < s.objects._length; ++i)
           ids.push_back(s.objects._buffer[i].object_id);
-        scans.emplace_back(now_s(), std::move(ids));
+        scans.emplace_back(wall_s(), std::move(ids));
       });
     };
     drain();
     samples.clear();
     scans.clear();
-    std::optional<double> ended;
-    while (!ended || now_s() < *ended + 0.3) {
-      drain();
-      if (!ended && replay.poll()) ended = now_s();
-      dds_sleepfor(DDS_MSECS(2));
-    }
-    ASSERT_EQ(replay.wait(), 0) << replay.output();
+    const double t0 = follow_replay(replay, drain, 0.3);
+    ASSERT_FALSE(std::isnan(t0));
     const std::string log = replay.output();
     EXPECT_NE(log.find("ins faults: "), std::string::npos) << log;
     EXPECT_EQ(log.find("ins faults: none happened"), std::string::npos) << log;
-    std::smatch m;
-    ASSERT_TRUE(std::regex_search(log, m, std::regex("first datagram is due at ([0-9.]+) s")))
-        << log;
-    const double t0 = std::stod(m[1].str());
     for (Sample& s : samples) s.t -= t0;
     for (auto& s : scans) s.first -= t0;
     ASSERT_GT(samples.size(), 30u) << run.output();
@@ -1055,13 +1054,9 @@ TEST(FaultsInTheLoop, ACanSilenceIsStaleOnHealthAndCanDeadReckoningBridgesAnInsD
       std::uint64_t lost, without_pose;
     };
     std::vector<Sample> samples;
-    const auto now_s = [] {
-      return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch())
-          .count();
-    };
     const auto drain = [&] {
       (void)health.drain<Types::Health>([&](const Types::Health& s) {
-        Sample x{now_s(), false, 0, 0};
+        Sample x{wall_s(), false, 0, 0};
         for (std::uint32_t i = 0; i < s.drops._length; ++i) {
           const std::string cause = s.drops._buffer[i].cause;
           if (cause == "can.lost" || cause == "can.malformed") x.lost += s.drops._buffer[i].count;
@@ -1075,19 +1070,10 @@ TEST(FaultsInTheLoop, ACanSilenceIsStaleOnHealthAndCanDeadReckoningBridgesAnInsD
     };
     drain();
     samples.clear();
-    std::optional<double> ended;
-    while (!ended || now_s() < *ended + 0.3) {
-      drain();
-      if (!ended && replay.poll()) ended = now_s();
-      dds_sleepfor(DDS_MSECS(2));
-    }
-    ASSERT_EQ(replay.wait(), 0) << replay.output();
+    const double t0 = follow_replay(replay, drain, 0.3);
+    ASSERT_FALSE(std::isnan(t0));
     const std::string replay_log = replay.output();
     std::smatch m;
-    ASSERT_TRUE(
-        std::regex_search(replay_log, m, std::regex("first datagram is due at ([0-9.]+) s")))
-        << replay_log;
-    const double t0 = std::stod(m[1].str());
     ASSERT_TRUE(std::regex_search(replay_log, m,
                                   std::regex("CAN to [0-9.:]+: ([0-9]+) frames sent .*, ([0-9]+) "
                                              "silenced")))
