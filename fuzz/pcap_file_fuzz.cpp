@@ -1,14 +1,13 @@
-// Capture files: the input as a .pcap file, read as UDP datagrams (what `stac decode`, `process`
+// Capture files: the input as a capture in memory (the same libpcap reading over fmemopen, no
+// file per input), read as UDP datagrams (what `stac decode`, `process`
 // and `replay` read) and as TCP segments put back into a byte stream (the INS over TCP). libpcap
 // parses the file's records; the reader checks every link, IPv4, UDP and TCP header itself.
 #include <cstddef>
 #include <cstdint>
-#include <filesystem>
 #include <span>
 
 #include "drivers/io/pcap_reader.hpp"
 #include "drivers/io/tcp_stream.hpp"
-#include "fuzz_common.hpp"
 
 // Where touch() leaves its sums, so that the reads cannot be optimized away.
 volatile std::uint8_t pcap_fuzz_sink = 0;
@@ -25,12 +24,12 @@ void touch(std::span<const std::uint8_t> bytes) {
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  const std::filesystem::path file = stac::fuzz::as_file(data, size, ".pcap");
-  if (auto udp = stac::io::PcapReader::open(file)) {
+  const std::span<const std::uint8_t> bytes(data, size);
+  if (auto udp = stac::io::PcapReader::open_memory(bytes, "fuzz.pcap")) {
     stac::io::Datagram d;
     while (udp->next(d)) touch(d.payload);
   }
-  if (auto tcp = stac::io::PcapReader::open(file)) {
+  if (auto tcp = stac::io::PcapReader::open_memory(bytes, "fuzz.pcap")) {
     stac::io::TcpReassembler stream(4, 2048);
     stac::io::TcpSegment s;
     std::span<const std::uint8_t> chunk;

@@ -2,6 +2,8 @@
 
 #include <cinttypes>
 #include <cstdio>
+#include <memory>
+#include <sstream>
 
 namespace stac::can {
 namespace {
@@ -134,14 +136,22 @@ CandumpLine parse_candump_line(std::string_view line, Frame& frame) noexcept {
 
 rt::Result<CandumpReader> CandumpReader::open(const std::filesystem::path& file) {
   CandumpReader r;
-  r.in_.open(file, std::ios::binary);
-  if (!r.in_) return rt::make_error(file.string() + ": cannot open the candump log");
+  auto in = std::make_unique<std::ifstream>(file, std::ios::binary);
+  if (!*in) return rt::make_error(file.string() + ": cannot open the candump log");
+  r.in_ = std::move(in);
   r.file_ = file.string();
   return r;
 }
 
+CandumpReader CandumpReader::from_text(std::string text, const std::string& name) {
+  CandumpReader r;
+  r.in_ = std::make_unique<std::istringstream>(std::move(text));
+  r.file_ = name;
+  return r;
+}
+
 rt::Result<bool> CandumpReader::next(Frame& frame) {
-  while (std::getline(in_, line_)) {
+  while (std::getline(*in_, line_)) {
     ++counters_.lines;
     const CandumpLine l = parse_candump_line(line_, frame);
     switch (l.kind) {
@@ -158,7 +168,7 @@ rt::Result<bool> CandumpReader::next(Frame& frame) {
         return rt::make_error(file_ + ":" + std::to_string(counters_.lines) + ": " + l.reason);
     }
   }
-  if (in_.bad())
+  if (in_->bad())
     return rt::make_error(file_ + ": read error after line " + std::to_string(counters_.lines));
   return false;
 }

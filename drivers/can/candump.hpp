@@ -10,6 +10,8 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <istream>
+#include <memory>
 #include <string>
 #include <string_view>
 
@@ -39,12 +41,14 @@ struct CandumpCounters {
 class CandumpReader {
  public:
   static rt::Result<CandumpReader> open(const std::filesystem::path& file);
+  // The same over a log's text in memory; `name` stands for the file in messages.
+  static CandumpReader from_text(std::string text, const std::string& name);
   // True with the next frame, false at the end of the file, an error for a malformed line.
   rt::Result<bool> next(Frame& frame);
   const CandumpCounters& counters() const noexcept { return counters_; }
 
  private:
-  std::ifstream in_;
+  std::unique_ptr<std::istream> in_;  // the file, or the text
   std::string file_;
   std::string line_;
   CandumpCounters counters_;

@@ -3,6 +3,7 @@
 #include <arpa/inet.h>
 #include <pcap/pcap.h>
 
+#include <cstdio>
 #include <cstring>
 
 namespace stac::io {
@@ -48,6 +49,28 @@ rt::Result<PcapReader> PcapReader::open(const std::filesystem::path& path, const
   if (p == nullptr) {
     return rt::make_error(path.string() + ": cannot read as a pcap capture: " + errbuf);
   }
+  return adopt(p, path, filter, tcp_filter);
+}
+
+rt::Result<PcapReader> PcapReader::open_memory(std::span<const std::uint8_t> bytes,
+                                               const std::string& name, const PcapFilter& filter,
+                                               const TcpFilter& tcp_filter) {
+  if (bytes.empty()) return rt::make_error(name + ": cannot read as a pcap capture: empty");
+  // libpcap reads a FILE*; fmemopen gives one over the bytes (read only: the cast is safe), and
+  // pcap_close closes it.
+  FILE* f = fmemopen(const_cast<std::uint8_t*>(bytes.data()), bytes.size(), "rb");
+  if (f == nullptr) return rt::make_error(name + ": cannot read as a pcap capture: fmemopen");
+  char errbuf[PCAP_ERRBUF_SIZE] = {};
+  pcap* p = pcap_fopen_offline_with_tstamp_precision(f, PCAP_TSTAMP_PRECISION_NANO, errbuf);
+  if (p == nullptr) {
+    std::fclose(f);
+    return rt::make_error(name + ": cannot read as a pcap capture: " + errbuf);
+  }
+  return adopt(p, name, filter, tcp_filter);
+}
+
+rt::Result<PcapReader> PcapReader::adopt(pcap* p, const std::filesystem::path& path,
+                                         const PcapFilter& filter, const TcpFilter& tcp_filter) {
   PcapReader r;
   r.handle_.reset(p);
   r.path_ = path.string();

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 
 #include "drivers/io/datagram.hpp"
@@ -47,6 +48,11 @@ class PcapReader {
   static rt::Result<PcapReader> open(const std::filesystem::path& path,
                                      const PcapFilter& filter = {},
                                      const TcpFilter& tcp_filter = {});
+  // The same over bytes in memory (they must outlive the reader); `name` stands for the file in
+  // messages.
+  static rt::Result<PcapReader> open_memory(std::span<const std::uint8_t> bytes,
+                                            const std::string& name, const PcapFilter& filter = {},
+                                            const TcpFilter& tcp_filter = {});
 
   // The next datagram that passes the filter; false at the end of the file or on a damaged
   // record (error() then says which). No allocation.
@@ -67,6 +73,9 @@ class PcapReader {
     void operator()(pcap* p) const noexcept;
   };
   PcapReader() = default;
+  // Takes an opened handle: checks its link type.
+  static rt::Result<PcapReader> adopt(pcap* p, const std::filesystem::path& path,
+                                      const PcapFilter& filter, const TcpFilter& tcp_filter);
   bool parse(const std::uint8_t* frame, std::uint32_t caplen, Datagram& out) noexcept;
   bool parse_tcp(const std::uint8_t* frame, std::uint32_t caplen, TcpSegment& out) noexcept;
   // The IPv4 header of a frame (link layer, version, lengths checked) or nullptr (counted);

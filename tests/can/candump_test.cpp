@@ -84,6 +84,30 @@ TEST(CandumpLine, TheLatestTimeThatFitsIsRead) {
   EXPECT_EQ(f.stamp_ns, 9'223'372'035'999'999'000);
 }
 
+// A log's text in memory reads as its file (the fuzz harness reads logs so).
+TEST(CandumpReader, TextInMemoryReadsAsAFile) {
+  auto r = CandumpReader::from_text(
+      "(1.000000) can0 123#11\n\n(1.500000) can0 1A0#0E10\n(2.0) can0 XYZ#11\n", "memory.log");
+  Frame f;
+  auto first = r.next(f);
+  ASSERT_TRUE(first && *first);
+  EXPECT_EQ(f.id, 0x123u);
+  auto second = r.next(f);
+  ASSERT_TRUE(second && *second);
+  EXPECT_EQ(f.stamp_ns, 1'500'000'000);
+  EXPECT_EQ(f.dlc, 2);
+  const auto third = r.next(f);
+  ASSERT_FALSE(third);
+  EXPECT_NE(third.error().message.find("memory.log:4: the id is not hexadecimal"),
+            std::string::npos)
+      << third.error().message;
+  EXPECT_EQ(r.counters().blank, 1u);
+  auto empty = CandumpReader::from_text("", "empty.log");
+  const auto end = empty.next(f);
+  ASSERT_TRUE(end);
+  EXPECT_FALSE(*end);
+}
+
 TEST(CandumpReader, MalformedLineStopsWithFileAndLine) {
   const auto p = temp_file(
       "bad.log", "(1.000000) can0 123#11\n\n(1.000000) can0 123##0AA\n(1.1) can0 XYZ#11\n");

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
 #include <vector>
@@ -105,6 +106,38 @@ TEST(PcapReader, ReadsTheRealApplanixCapture) {
   EXPECT_TRUE(r->error().empty()) << r->error();
   EXPECT_EQ(n, 241);
   EXPECT_NEAR(static_cast<double>(last - first) * 1e-9, 80.0, 2.0);  // an 80 s capture
+}
+
+// The same capture from memory (fuzzing reads captures so): the same datagrams, byte for byte;
+// bytes that are not a capture, and no bytes, are named errors.
+TEST(PcapReader, ACaptureInMemoryReadsAsItsFile) {
+  STAC_REQUIRE_SHARED_DATA(kApplanix);
+  const auto path = stac::testing::shared_data(kApplanix);
+  std::ifstream in(path, std::ios::binary);
+  const std::vector<std::uint8_t> bytes{std::istreambuf_iterator<char>(in),
+                                        std::istreambuf_iterator<char>()};
+  auto file = PcapReader::open(path);
+  auto memory = PcapReader::open_memory(bytes, "memory.pcap");
+  ASSERT_TRUE(file && memory) << (memory ? "" : memory.error().message);
+  Datagram a, b;
+  int n = 0;
+  while (file->next(a)) {
+    ASSERT_TRUE(memory->next(b)) << n;
+    EXPECT_EQ(a.stamp_ns, b.stamp_ns);
+    EXPECT_TRUE(std::equal(a.payload.begin(), a.payload.end(), b.payload.begin(), b.payload.end()));
+    ++n;
+  }
+  EXPECT_FALSE(memory->next(b));
+  EXPECT_EQ(n, 241);
+  const std::string text = "this is not a capture, just some text that goes on for a while";
+  auto garbage = PcapReader::open_memory(
+      {reinterpret_cast<const std::uint8_t*>(text.data()), text.size()}, "memory.pcap");
+  ASSERT_FALSE(garbage);
+  EXPECT_EQ(garbage.error().message.rfind("memory.pcap: cannot read as a pcap capture", 0), 0u)
+      << garbage.error().message;
+  auto empty = PcapReader::open_memory({}, "empty.pcap");
+  ASSERT_FALSE(empty);
+  EXPECT_EQ(empty.error().message.rfind("empty.pcap: ", 0), 0u);
 }
 
 TEST(PcapReader, FiltersByPort) {
