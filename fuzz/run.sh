@@ -5,18 +5,35 @@
 #                              corpus beside the seeds; a per-target line: executions, coverage,
 #                              crashes
 #   fuzz/run.sh --regress      each harness once over its seed corpus (CI)
+#   fuzz/run.sh --campaign RUNS [TARGET...]
+#                              a long campaign, resumable: each harness (or those named) runs in
+#                              chunks of at most 1 M executions until its ledger,
+#                              build-fuzz/campaign/TARGET.tsv (a line per chunk: UTC end, runs,
+#                              seconds, coverage, crashes), adds up to RUNS; run it under `nice`
+#                              beside other work, stop it at any time (the chunk in progress is
+#                              lost, the corpus it grew is kept); an input's time limit is 120 s,
+#                              not 10, as a niced process waits behind the rest of the machine
 # A crash, a leak-free sanitizer report or a timeout leaves its input in build-fuzz/crashes/ and
 # makes the script fail. Environment: BUILD (build-fuzz), JOBS (nproc).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 mode=time
 seconds=60
-if [[ ${1:-} == --regress ]]; then mode=regress; elif [[ -n ${1:-} ]]; then seconds=$1; fi
+campaign_runs=0
+if [[ ${1:-} == --regress ]]; then
+  mode=regress
+elif [[ ${1:-} == --campaign ]]; then
+  mode=campaign
+  campaign_runs=${2:?"fuzz/run.sh --campaign RUNS [TARGET...]: how many executions per target"}
+  [[ $campaign_runs =~ ^[1-9][0-9]*$ ]] || { echo "fuzz/run.sh: RUNS must be a positive count, not '$campaign_runs'" >&2; exit 2; }
+elif [[ -n ${1:-} ]]; then
+  seconds=$1
+fi
 build=${BUILD:-build-fuzz}
 jobs=${JOBS:-$(nproc)}
 targets=(velodyne_stream_fuzz applanix_stream_fuzz can_text_fuzz model_file_fuzz json_lines_fuzz
          config_files_fuzz pcap_file_fuzz dataset_file_fuzz gs_usb_frame_fuzz candump_file_fuzz
-         velodyne_status_fuzz)
+         velodyne_status_fuzz cannelloni_fuzz)
 
 if [[ ! -d fuzz/corpus ]]; then python3 fuzz/make_seeds.py; fi
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
@@ -28,6 +45,39 @@ cmake --build "$build" -j "$jobs" --target "${targets[@]}"
 mkdir -p "$build/crashes"
 failed=0
 export ASAN_OPTIONS=detect_leaks=0:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1
+
+if [[ $mode == campaign ]]; then
+  chosen=("${@:3}")
+  [[ ${#chosen[@]} -gt 0 ]] || chosen=("${targets[@]}")
+  mkdir -p "$build/campaign"
+  printf '%-22s %12s %10s %8s %s\n' target executions seconds cov crashes
+  for t in "${chosen[@]}"; do
+    [[ " ${targets[*]} " == *" $t "* ]] || { echo "fuzz/run.sh: no harness '$t' (${targets[*]})" >&2; exit 2; }
+    ledger="$build/campaign/$t.tsv"
+    dict=()
+    [[ -f fuzz/dict/$t.dict ]] && dict=(-dict="fuzz/dict/$t.dict")
+    mkdir -p "$build/corpus/$t"
+    while :; do
+      done_runs=$(awk -F'\t' '{s += $2} END {print s + 0}' "$ledger" 2>/dev/null || echo 0)
+      ((done_runs < campaign_runs)) || break
+      chunk=$((campaign_runs - done_runs < 1000000 ? campaign_runs - done_runs : 1000000))
+      log="$build/campaign/$t.log"
+      start=$(date +%s)
+      crashes=0
+      "$build/fuzz/$t" "${dict[@]}" -artifact_prefix="$build/crashes/$t-" -print_final_stats=1 \
+        -runs="$chunk" -timeout=120 -rss_limit_mb=4096 "$build/corpus/$t" "fuzz/corpus/$t" \
+        >"$log" 2>&1 || crashes=1
+      runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
+      cov=$(grep -o 'cov: [0-9]*' "$log" | tail -1 | cut -d' ' -f2)
+      printf '%s\t%s\t%s\t%s\t%s\n' "$(date -u +%FT%TZ)" "${runs:-0}" "$(($(date +%s) - start))" \
+        "${cov:-0}" "$crashes" >>"$ledger"
+      if [[ $crashes != 0 ]]; then failed=1; cp "$log" "$build/crashes/$t-campaign.log"; break; fi
+    done
+    awk -F'\t' -v t="$t" '{r += $2; s += $3; c = $4; x += $5}
+      END {printf "%-22s %12d %10d %8d %s\n", t, r, s, c, x}' "$ledger"
+  done
+  exit $failed
+fi
 printf '%-22s %12s %10s %8s %s\n' target executions seconds cov crashes
 for t in "${targets[@]}"; do
   log="$build/$t.log"
