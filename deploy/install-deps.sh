@@ -5,6 +5,7 @@ set -euo pipefail
 
 packages=(
   build-essential cmake ninja-build pkg-config git
+  ccache  # keeps compilations across builds (CMakeLists.txt: STAC_CCACHE)
   libeigen3-dev libgeographiclib-dev libpcap-dev libyaml-cpp-dev libtinyxml2-dev libcli11-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libusb-1.0-0-dev  # gs_usb / candleLight USB-CAN adapters (drivers/can)

@@ -82,7 +82,7 @@ wait "$client" || { cat "$work/client.log" >&2; fail "the client"; }
 kill -INT "$view"
 wait "$view" || { cat "$work/view.log" >&2; fail "stac view's exit"; }
 cat "$work/view.log"
-MIN_MATCHED=20 node "$web/foxglove_view.mjs" compare "$work/client.json" "$work" | tee "$work/compare.log"
+MIN_MATCHED=${MIN_MATCHED:-20} node "$web/foxglove_view.mjs" compare "$work/client.json" "$work" | tee "$work/compare.log"
 # The reading client got every message stac view built, on every channel.
 built=$(sed -n 's/^ *\/stac\/[a-z_]* .* built \([0-9]*\),.*/\1/p' "$work/view.log" | tr '\n' ' ')
 received=$(sed -n 's/^received: //p' "$work/compare.log")
