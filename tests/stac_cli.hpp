@@ -67,7 +67,6 @@ inline constexpr double kSanitizerLagS = kSanitizerBuild ? 0.8 : 0.0;
 // applied (each a key of a section, as "  key: value", which must be there once) and its relative
 // paths (calibration, dbc, model, config_file) made absolute, since the copy lives elsewhere.
 // Returns its path, or an empty path (and why in `*error`) when an edit finds no such key.
-#ifdef STAC_SOURCE_DIR
 inline std::filesystem::path shipped_config_with(
     const std::filesystem::path& dir, const std::vector<std::pair<std::string, std::string>>& edits,
     std::string* error = nullptr) {
@@ -100,7 +99,5 @@ inline std::filesystem::path shipped_config_with(
   std::ofstream(file) << out;
   return file;
 }
-
-#endif
 
 }  // namespace stac::testing
