@@ -1,5 +1,6 @@
 #include "formats/dataset_file.hpp"
 
+#include <algorithm>
 #include <array>
 #include <bit>
 #include <cstring>
@@ -321,6 +322,28 @@ std::uint32_t off_label_segments(ClassIndex label, std::span<const SegmentTruth>
   }
   for (const SegmentTruth& s : segments) off += own < 0 || s.object != own ? 1u : 0u;
   return off;
+}
+
+rt::Status map_classes(Dataset& data, const classification::ClassNames& to,
+                       const std::string& name) {
+  if (!data.labelled || data.classes == to) {
+    data.classes = to;
+    return {};
+  }
+  std::vector<classification::ClassIndex> map(data.classes.size(), classification::kBackground);
+  for (std::size_t k = 0; k < to.size(); ++k) {
+    const auto it = std::find(data.classes.begin(), data.classes.end(), to[k]);
+    if (it == data.classes.end())
+      return rt::make_error(name + ": its classes (" + classification::joined(data.classes) +
+                            ") lack " + to[k] + "; make it with `stac dataset --class " + to[k] +
+                            "`");
+    map[static_cast<std::size_t>(it - data.classes.begin())] =
+        static_cast<classification::ClassIndex>(k);
+  }
+  for (DatasetTrack& t : data.tracks)
+    if (t.label != classification::kBackground && t.label < map.size()) t.label = map[t.label];
+  data.classes = to;
+  return {};
 }
 
 }  // namespace stac::formats

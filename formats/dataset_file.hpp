@@ -90,6 +90,12 @@ rt::Result<Dataset> read_dataset(const std::filesystem::path& dir);
 rt::Result<Dataset> parse_dataset(std::span<const std::uint8_t> bytes, const std::string& name);
 // read_dataset, refusing a dataset without labels with a message saying what `job` needs.
 rt::Result<Dataset> read_labelled_dataset(const std::filesystem::path& dir, const std::string& job);
+// A labelled dataset's labels onto the classes `to`, by name: each of `to` must be one of the
+// dataset's; its other classes become background (1-vs-all: none of `to`). Fails, changing
+// nothing and naming `name` and the missing class, when one of `to` is not the dataset's.
+rt::Status map_classes(Dataset& data, const classification::ClassNames& to,
+                       const std::string& name);
+
 // Appends `more` to `into` (sources renumbered). Fails (nothing appended) when their classes
 // differ or one is labelled and the other not; `more_name` names `more` in the message.
 rt::Status append_dataset(Dataset& into, Dataset&& more, const std::string& more_name);

@@ -96,6 +96,7 @@ rt::Status write_induction_state(const std::filesystem::path& dir, const Inducti
   w.put(static_cast<std::uint64_t>(s.induction.buffer_groups));
   w.put(s.rounds);
   w.put(static_cast<std::uint8_t>(s.reset_pending ? 1 : 0));
+  w.put(s.kept_classes);
   w.put(s.answers_applied);
   w.put(static_cast<std::uint64_t>(s.sources.size()));
   for (const InductionSource& src : s.sources) {
@@ -159,8 +160,8 @@ rt::Result<InductionState> read_induction_state(const std::filesystem::path& dir
   Reader r{body, sizeof(kMagic)};
   InductionState s;
   const auto version = r.get<std::uint32_t>();
-  if (version != kInductionStateVersion)
-    return bad("format version " + std::to_string(version) + ", this build reads " +
+  if (version != 1 && version != kInductionStateVersion)
+    return bad("format version " + std::to_string(version) + ", this build reads 1 to " +
                std::to_string(kInductionStateVersion));
   if (r.get<std::uint32_t>() != descriptors::kDimensions ||
       r.get<std::uint32_t>() != classification::kHolisticDimensions)
@@ -175,6 +176,7 @@ rt::Result<InductionState> read_induction_state(const std::filesystem::path& dir
   s.induction.buffer_groups = r.get<std::uint64_t>();
   s.rounds = r.get<std::uint32_t>();
   s.reset_pending = r.get<std::uint8_t>() != 0;
+  if (version >= 2) s.kept_classes = r.get<std::uint32_t>();
   s.answers_applied = r.get<std::uint64_t>();
   s.sources.resize(r.count());
   for (InductionSource& src : s.sources) {
@@ -218,6 +220,8 @@ rt::Result<InductionState> read_induction_state(const std::filesystem::path& dir
   if (!r.ok) return bad("truncated or inconsistent records");
   if (const std::string wrong = classification::check_class_names(s.classes); !wrong.empty())
     return bad("bad classes: " + wrong);
+  if (s.kept_classes >> s.classes.size() != 0 || s.kept_classes == (1u << s.classes.size()) - 1u)
+    return bad("bad kept classes (none may be past the classes, and one at least is taught)");
   if (const std::string wrong = learning::validate(s.induction); !wrong.empty())
     return bad("bad settings: " + wrong);
   if (s.has_model) {

@@ -42,8 +42,11 @@ struct LabelledTrack {
 struct InductionState {
   classification::ClassNames classes;
   learning::InductionConfig induction;
-  std::uint32_t rounds = 0;           // rounds done
-  bool reset_pending = true;          // the next training phase restarts H (retrospection)
+  std::uint32_t rounds = 0;   // rounds done
+  bool reset_pending = true;  // the next training phase restarts H (retrospection)
+  // Bit k: class k came with the model the state started from and is kept as it is (neither
+  // trained, reset nor asked about) while the added classes are taught (`--add-classes`).
+  std::uint32_t kept_classes = 0;
   std::uint64_t answers_applied = 0;  // lines of labels.jsonl taken into `labels`
   std::vector<InductionSource> sources;
   std::vector<LabelledTrack> labels;
@@ -54,7 +57,8 @@ struct InductionState {
   classification::TrackClassifierModel model;
 };
 
-inline constexpr std::uint32_t kInductionStateVersion = 1;
+// Version 2 added kept_classes; a version 1 state reads as keeping none.
+inline constexpr std::uint32_t kInductionStateVersion = 2;
 
 // DIR/state.bin. Errors name the file and say what to do.
 rt::Result<InductionState> read_induction_state(const std::filesystem::path& dir);

@@ -1,5 +1,6 @@
 #include "sim/run.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -62,6 +63,9 @@ rt::Result<std::unique_ptr<SimRun>> SimRun::create(const velodyne::Calibration& 
   }
   auto scenario = make_scenario(config.scenario, config.seed, config.duration_s);
   if (!scenario) return rt::Unexpected<rt::Error>{scenario.error()};
+  std::erase_if(scenario->actors, [&](const Actor& a) {
+    return std::find(config.without.begin(), config.without.end(), a.cls) != config.without.end();
+  });
   std::unique_ptr<SimRun> run(new SimRun());
   run->config_ = config;
   run->scenario_ = std::move(*scenario);

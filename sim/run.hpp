@@ -22,6 +22,9 @@ struct RunConfig {
   LidarConfig lidar;
   std::uint16_t cut_angle = 0;                        // 0.01 deg, as the driver's config
   std::int64_t start_ns = 1'767'268'800'000'000'000;  // 2026-01-01 12:00:00 UTC
+  // Kinds left out of the scenario (`stac sim --without pole`: a street known to hold none, the
+  // background set of a class being taught); the rest of the world is the same.
+  std::vector<ObjectClass> without;
 };
 
 struct TruthObject {

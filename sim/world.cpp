@@ -52,6 +52,16 @@ Hit hit_wheels(const Ray& r, double length, double width, double radius) {
 
 }  // namespace
 
+bool class_from_name(std::string_view name, ObjectClass& out) noexcept {
+  for (auto c = static_cast<int>(ObjectClass::kCar); c <= static_cast<int>(ObjectClass::kClutter);
+       ++c) {
+    if (class_name(static_cast<ObjectClass>(c)) != name) continue;
+    out = static_cast<ObjectClass>(c);
+    return true;
+  }
+  return false;
+}
+
 std::string_view class_name(ObjectClass c) noexcept {
   switch (c) {
     case ObjectClass::kCar:

@@ -28,6 +28,8 @@ enum class ObjectClass : std::uint8_t {
   kClutter,
 };
 std::string_view class_name(ObjectClass c) noexcept;
+// The kind named `name` (class_name's inverse); false when none is.
+bool class_from_name(std::string_view name, ObjectClass& out) noexcept;
 bool is_foreground(ObjectClass c) noexcept;  // car, pedestrian or bicyclist
 
 enum class Shape : std::uint8_t {

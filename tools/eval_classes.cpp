@@ -105,24 +105,21 @@ rt::Status save_confusion(const Tally& t, const ClassNames& names, const std::st
 int run_class_eval(const ClassEvalOptions& o) {
   auto model = read_model_file(o.model);
   if (!model) return fail(model.error().message);
-  Dataset data;
-  for (const std::string& dir : o.data) {
-    auto d = read_labelled_dataset(dir, "stac eval --classes");
-    if (!d) return fail(d.error().message);
-    if (auto a = append_dataset(data, std::move(*d), dir); !a) return fail(a.error().message);
-  }
-  if (data.tracks.empty()) return fail("the datasets hold no track: nothing to evaluate");
-
+  // Labels map by name onto the model's classes: each must be one of a dataset's, whose other
+  // classes count as background (a model without `pole` scored on drives labelled with poles).
   const classification::TrackClassifierModel& m = *model;
   const ClassNames& names = m.classes;
   const std::size_t classes = names.size();
-  if (data.classes != names) {
-    std::string d, k;
-    for (const std::string& n : data.classes) d += (d.empty() ? "" : ", ") + n;
-    for (const std::string& n : names) k += (k.empty() ? "" : ", ") + n;
-    return fail("the datasets' classes (" + d + ") are not the model's (" + k + ", " + o.model +
-                "): evaluate on datasets made with the --class options the model was trained on");
+  Dataset data;
+  data.classes = names;
+  for (const std::string& dir : o.data) {
+    auto d = read_labelled_dataset(dir, "stac eval --classes");
+    if (!d) return fail(d.error().message);
+    if (auto c = map_classes(*d, names, dir + " (for the classes of " + o.model + ")"); !c)
+      return fail(c.error().message);
+    if (auto a = append_dataset(data, std::move(*d), dir); !a) return fail(a.error().message);
   }
+  if (data.tracks.empty()) return fail("the datasets hold no track: nothing to evaluate");
   const LogOdds prior = m.holistic.model().prior;
   const auto predict = [classes](const LogOdds& l) { return classification::predict(l, classes); };
   // The tables count consistent tracks (kMaxOffLabelFraction, the thesis's protocol); every

@@ -45,8 +45,9 @@ constexpr std::size_t kHolDims = classification::kHolisticDimensions;
 
 struct InductOptions {
   std::string state;
-  std::string classes;  // comma-separated, for a new state
-  std::string model;    // a model to start a new state from
+  std::string classes;      // comma-separated, for a new state
+  std::string model;        // a model to start a new state from
+  std::string add_classes;  // comma-separated classes taught beside the model's, kept as they are
   std::vector<std::string> background, labels, unlabeled, eval;
   std::size_t labels_per_class = 0;  // 0: every track of the --labels datasets
   std::size_t rounds = 0;            // extra rounds on the buffer after the chunks
@@ -105,6 +106,17 @@ class Inductor {
     return seen_.count({source, track}) != 0;
   }
   [[nodiscard]] learning::TrainingPhaseConfig phase() const;
+  [[nodiscard]] bool kept(std::size_t k) const { return ((s_.kept_classes >> k) & 1u) != 0; }
+  // A fitted filter into `m`, but for the kept classes, which keep theirs.
+  void take_filter(classification::TrackClassifierModel& m,
+                   const classification::AdbfParams& fitted) const {
+    for (std::size_t k = 0; k < s_.classes.size(); ++k) {
+      if (kept(k)) continue;
+      m.adbf.alpha[k] = fitted.alpha[k];
+      m.adbf.beta[k] = fitted.beta[k];
+      m.adbf.gamma[k] = fitted.gamma[k];
+    }
+  }
 
   const InductOptions& o_;
   fs::path dir_;
@@ -122,6 +134,7 @@ learning::TrainingPhaseConfig Inductor::phase() const {
   c.reset_rounds = o_.reset_rounds;
   c.segment.seed = o_.seed + 2ull * s_.rounds;
   c.holistic.seed = o_.seed + 2ull * s_.rounds + 1;
+  c.kept = s_.kept_classes;
   return c;
 }
 
@@ -131,21 +144,8 @@ rt::Result<const Dataset*> Inductor::dataset(const std::string& path) {
   if (!d) return rt::make_error(d.error().message);
   // Labels map by name: every class of the state must be one of the dataset's; its other
   // classes are background here (1-vs-all: not any taught class). Unlabeled data has no classes.
-  if (d->labelled && d->classes != s_.classes) {
-    std::vector<ClassIndex> to(d->classes.size(), kBackground);
-    for (std::size_t k = 0; k < s_.classes.size(); ++k) {
-      const auto it = std::find(d->classes.begin(), d->classes.end(), s_.classes[k]);
-      if (it == d->classes.end())
-        return rt::make_error(path + ": its classes (" + classification::joined(d->classes) +
-                              ") lack " + s_.classes[k] +
-                              ", a class of the state; make it with `stac dataset --class " +
-                              s_.classes[k] + "`");
-      to[static_cast<std::size_t>(it - d->classes.begin())] = static_cast<ClassIndex>(k);
-    }
-    for (DatasetTrack& t : d->tracks)
-      if (t.label != kBackground) t.label = to[t.label];
-  }
-  d->classes = s_.classes;
+  if (auto m = map_classes(*d, s_.classes, path + " (for the state's classes)"); !m)
+    return rt::make_error(m.error().message);
   return &datasets_.emplace(path, std::move(d).value()).first->second;
 }
 
@@ -174,15 +174,15 @@ rt::Status Inductor::open_state() {
     std::stringstream list(o_.classes);
     for (std::string name; std::getline(list, name, ',');) asked.push_back(name);
     const bool same =
-        (o_.classes.empty() || asked == s->classes) && o_.model.empty() &&
+        (o_.classes.empty() || asked == s->classes) && o_.model.empty() && o_.add_classes.empty() &&
         (!o_.settings_given ||
          (o_.dual == s->induction.dual && o_.eps == s->induction.eps_max &&
           o_.group_size == s->induction.max_group_size && o_.buffer == s->induction.buffer_groups));
     if (!same)
       return rt::make_error(dir_.string() +
-                            ": the state exists with other settings; --classes, --model, --dual, "
-                            "--eps, --group-size and --buffer are set when it is created (start a "
-                            "new folder to change them)");
+                            ": the state exists with other settings; --classes, --model, "
+                            "--add-classes, --dual, --eps, --group-size and --buffer are set when "
+                            "it is created (start a new folder to change them)");
     s_ = std::move(s).value();
   } else {
     if (fs::exists(dir_, ec) && !fs::is_directory(dir_, ec))
@@ -191,13 +191,29 @@ rt::Status Inductor::open_state() {
       return rt::make_error(dir_.string() +
                             ": no state here yet; start one with --classes NAME,NAME,... or "
                             "--model FILE (one of them)");
+    if (!o_.add_classes.empty() && o_.model.empty())
+      return rt::make_error("--add-classes " + o_.add_classes +
+                            ": give the model they are added to with --model FILE");
     if (!o_.model.empty()) {
       auto m = read_model_file(o_.model);
       if (!m) return rt::make_error(m.error().message);
       s_.model = std::move(m).value();
       s_.has_model = true;
-      s_.classes = s_.model.classes;
       s_.reset_pending = false;  // warm start from the given model
+      if (!o_.add_classes.empty()) {
+        // The model's classes are kept as they are; the added ones start from zero (the first
+        // round resets them only, with priors from the data, and boosts them from there).
+        classification::ClassNames added;
+        std::stringstream list(o_.add_classes);
+        for (std::string name; std::getline(list, name, ',');) added.push_back(name);
+        auto wider = learning::with_added_classes(s_.model, added);
+        if (!wider)
+          return rt::make_error("--add-classes " + o_.add_classes + ": " + wider.error().message);
+        s_.kept_classes = (1u << s_.model.classes.size()) - 1u;
+        s_.model = std::move(wider).value();
+        s_.reset_pending = true;
+      }
+      s_.classes = s_.model.classes;
     } else {
       std::stringstream list(o_.classes);
       for (std::string name; std::getline(list, name, ',');) s_.classes.push_back(name);
@@ -247,7 +263,7 @@ rt::Status Inductor::seed_labels() {
       if (t.source == *i) ++taken[t.label == kBackground ? s_.classes.size() : t.label];
     for (const std::size_t k : order) {
       const DatasetTrack& t = (*d)->tracks[k];
-      if (!consistent(t) || seen(*i, k)) continue;
+      if (!consistent(t) || seen(*i, k) || (t.label != kBackground && kept(t.label))) continue;
       std::size_t& n = taken[t.label == kBackground ? s_.classes.size() : t.label];
       if (o_.labels_per_class != 0 && n >= o_.labels_per_class) continue;
       ++n;
@@ -450,7 +466,7 @@ rt::Status Inductor::round(std::uint32_t chunk, std::vector<learning::Group> gro
   if (!filter_tracks.empty()) {
     auto adbf = learning::fit_filter(s_.model, filter_tracks, kSegDims, learning::LogisticConfig{});
     if (!adbf) return rt::make_error("the filter's fit: " + adbf.error().message);
-    s_.model.adbf = *adbf;
+    take_filter(s_.model, *adbf);
   }
   ++s_.rounds;
 
@@ -511,7 +527,7 @@ rt::Status Inductor::round(std::uint32_t chunk, std::vector<learning::Group> gro
         auto adbf =
             learning::fit_filter(*alone, filter_tracks, kSegDims, learning::LogisticConfig{});
         if (!adbf) return rt::make_error("--baseline: the filter's fit: " + adbf.error().message);
-        alone->adbf = *adbf;
+        take_filter(*alone, *adbf);
       }
       const double b = accuracy(*alone);
       line["accuracy_labels_only"] = b;
@@ -546,7 +562,8 @@ rt::Status Inductor::ask(const std::vector<std::uint32_t>& chunks) {
       where.push_back({chunk, k});
     }
   }
-  const auto chosen = learning::choose_queries(candidates, s_.classes.size(), o_.ask);
+  const auto chosen =
+      learning::choose_queries(candidates, s_.classes.size(), o_.ask, s_.kept_classes);
   std::string text;
   for (const std::size_t k : chosen) {
     nlohmann::json lo = nlohmann::json::object();
@@ -775,6 +792,9 @@ void add_induct_command(CLI::App& app) {
                   "a new state's classes, comma-separated (e.g. car,pedestrian,bicyclist)");
   cmd->add_option("--model", o->model, "a new state starts from this model (warm start)")
       ->check(CLI::ExistingFile);
+  cmd->add_option("--add-classes", o->add_classes,
+                  "with --model: new classes, comma-separated (e.g. pole), taught beside the "
+                  "model's, which are kept as they are (not trained, reset or asked about)");
   cmd->add_option("--background", o->background,
                   "dataset of drives without the taught classes: B0, labelled background "
                   "automatically (repeatable)");

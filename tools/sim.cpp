@@ -142,6 +142,14 @@ int run_sim(const SimOptions& o) {
 
   sim::RunConfig rc;
   rc.scenario = o.scenario;
+  for (const std::string& kind : o.without) {
+    sim::ObjectClass c{};
+    if (!sim::class_from_name(kind, c))
+      return fail("--without " + kind +
+                  ": not a simulator kind (car, pedestrian, bicyclist, building, wall, fence, "
+                  "tree, bush, pole, sign, bin, clutter)");
+    rc.without.push_back(c);
+  }
   rc.seed = o.seed;
   rc.duration_s = o.duration_s;
   rc.cut_angle = settings->assembler.cut_angle;
@@ -286,6 +294,9 @@ void add_sim_command(CLI::App& app) {
   cmd->add_option("--origin", o->origin,
                   "geodetic anchor of the sim world LAT,LON,ALT (deg, deg, m ellipsoidal; default "
                   "44.2449408681,-76.5096210157,77)");
+  cmd->add_option("--without", o->without,
+                  "leave this kind out of the world (repeatable; e.g. pole: a street known to hold "
+                  "none, the background set when a new class is taught)");
   cmd->add_flag("--ins-udp", o->ins_udp,
                 "send the Applanix stream as UDP datagrams to port 5602 (default: TCP)");
   cmd->add_option("--can", o->can,

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace stac::tools {
 
@@ -19,7 +20,8 @@ struct SimOptions {
   bool dual_return = false;
   std::string origin;  // "LAT,LON,ALT"; empty: sim::InsConfig's default
   bool ins_udp = false;
-  std::string can;  // candump log to write; empty: none
+  std::string can;                   // candump log to write; empty: none
+  std::vector<std::string> without;  // kinds left out of the world (sim::RunConfig::without)
 };
 
 // Prints a summary on stderr; returns the process exit code (0 ok, 1 with a message printed).

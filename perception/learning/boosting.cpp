@@ -148,10 +148,16 @@ void BoostingTrainer::run(std::size_t rounds) {
 void BoostingTrainer::round() {
   const std::size_t n = data_.size(), grids = classifier_.grid_count();
   const std::size_t classes = classifier_.classes();
+  const auto taught = [this](std::size_t k) { return ((config_.frozen >> k) & 1u) == 0; };
   double total = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    for (std::size_t k = 0; k < classes; ++k) total += weights_[i * classes + k];
+    for (std::size_t k = 0; k < classes; ++k)
+      if (taught(k)) total += weights_[i * classes + k];
     cumulative_[i] = total;
+  }
+  if (!(total > 0)) {  // every class frozen: nothing to learn
+    ++rounds_;
+    return;
   }
   Candidate best;
   bool have = false;
@@ -173,6 +179,7 @@ void BoostingTrainer::round() {
             weights_[m * classes + k];
     }
     for (std::size_t k = 0; k < classes; ++k) {
+      if (!taught(k)) continue;  // response 0: its column and weights stay
       c.response[k] = newton_response(stats[k], config_.max_response);
       c.gain += loss_after(stats[k], c.response[k]) - (stats[k].positive + stats[k].negative);
     }

@@ -42,6 +42,10 @@ struct BoostingConfig {
   double range_widen = 0.01;       // ...widened by this fraction of the range on each side
   float max_response = 4.0f;       // |response| cap per weak classifier (log odds)
   std::uint64_t seed = 1;          // same seed, same data, same model
+  // Bit k set: class k is kept as it is (a model's classes while a user teaches new ones,
+  // docs/learning.md "A new class"): its responses, and so its weights, never change, and its
+  // weights neither draw candidates nor count in a candidate's gain.
+  std::uint32_t frozen = 0;
 };
 
 // Empty when the configuration is usable, else what is wrong.

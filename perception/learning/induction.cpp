@@ -166,14 +166,20 @@ RoundData round_data(std::span<const TrackExample> labels, std::span<const Track
   return r;
 }
 
-rt::Result<GridClassifier> reset_classifier(const GridClassifier& grids, const TrainingSet& data) {
+rt::Result<GridClassifier> reset_classifier(const GridClassifier& grids, const TrainingSet& data,
+                                            std::uint32_t kept) {
   if (data.size() == 0) return rt::make_error("no training example to take priors from");
   if (data.classes != grids.classes())
     return rt::make_error("the data has " + std::to_string(data.classes) +
                           " classes, the classifier " + std::to_string(grids.classes()));
   classification::GridModel m = grids.model();
-  std::fill(m.table.begin(), m.table.end(), 0.0f);
-  m.prior = prior_log_odds(data);
+  const std::size_t classes = m.classes;
+  const LogOdds prior = prior_log_odds(data);
+  for (std::size_t k = 0; k < classes; ++k) {
+    if (((kept >> k) & 1u) != 0) continue;
+    for (std::size_t i = k; i < m.table.size(); i += classes) m.table[i] = 0.0f;
+    m.prior[k] = prior[k];
+  }
   return GridClassifier::create(std::move(m));
 }
 
@@ -190,11 +196,13 @@ rt::Result<classification::TrackClassifierModel> training_phase(
                             " dimensions, the classifier " + std::to_string(now.dimensions()));
     GridClassifier start = now;
     if (reset) {
-      auto zeroed = reset_classifier(now, set);
+      auto zeroed = reset_classifier(now, set, config.kept);
       if (!zeroed) return rt::make_error(std::string(what) + ": " + zeroed.error().message);
       start = std::move(zeroed).value();
     }
-    BoostingTrainer trainer(set, std::move(start), boosting);
+    BoostingConfig kept_as_they_are = boosting;
+    kept_as_they_are.frozen = config.kept;
+    BoostingTrainer trainer(set, std::move(start), kept_as_they_are);
     trainer.run(reset ? config.reset_rounds : config.warm_rounds);
     return trainer.classifier();
   };
@@ -243,8 +251,43 @@ rt::Result<classification::TrackClassifierModel> initial_model(
   return m;
 }
 
+rt::Result<classification::TrackClassifierModel> with_added_classes(
+    const classification::TrackClassifierModel& model, const classification::ClassNames& added,
+    float added_prior) {
+  classification::ClassNames names = model.classes;
+  names.insert(names.end(), added.begin(), added.end());
+  if (const std::string bad = classification::check_class_names(names); !bad.empty())
+    return rt::make_error("the model's classes and the added ones (" +
+                          classification::joined(names) + "): " + bad);
+  const std::size_t before = model.classes.size(), after = names.size();
+  const auto widen = [&](const GridClassifier& c) {
+    classification::GridModel m = c.model();
+    std::vector<float> table(m.table.size() / before * after, 0.0f);
+    for (std::size_t cell = 0; cell < m.table.size() / before; ++cell)
+      std::copy_n(m.table.begin() + static_cast<std::ptrdiff_t>(cell * before), before,
+                  table.begin() + static_cast<std::ptrdiff_t>(cell * after));
+    m.table = std::move(table);
+    m.classes = after;
+    for (std::size_t k = before; k < after; ++k) m.prior[k] = added_prior;
+    return GridClassifier::create(std::move(m));
+  };
+  auto seg = widen(model.segment);
+  if (!seg) return rt::make_error("segment classifier: " + seg.error().message);
+  auto hol = widen(model.holistic);
+  if (!hol) return rt::make_error("holistic classifier: " + hol.error().message);
+  classification::TrackClassifierModel out;
+  out.classes = std::move(names);
+  out.segment = std::move(seg).value();
+  out.holistic = std::move(hol).value();
+  out.adbf = model.adbf;
+  for (std::size_t k = before; k < after; ++k)
+    out.adbf.alpha[k] = out.adbf.beta[k] = out.adbf.gamma[k] = 1.0f;
+  return out;
+}
+
 std::vector<std::size_t> choose_queries(std::span<const QueryCandidate> candidates,
-                                        std::size_t classes, std::size_t per_class) {
+                                        std::size_t classes, std::size_t per_class,
+                                        std::uint32_t kept) {
   std::vector<std::size_t> chosen;
   std::vector<bool> taken(candidates.size(), false);
   std::vector<std::size_t> order(candidates.size());
@@ -261,6 +304,7 @@ std::vector<std::size_t> choose_queries(std::span<const QueryCandidate> candidat
     }
   };
   for (std::size_t k = 0; k < classes; ++k) {
+    if (((kept >> k) & 1u) != 0) continue;
     pick(
         [&](std::size_t a, std::size_t b) {
           return std::fabs(candidates[a].log_odds[k]) < std::fabs(candidates[b].log_odds[k]);

@@ -107,17 +107,23 @@ RoundData round_data(std::span<const TrackExample> labels, std::span<const Track
                      std::size_t segment_dimensions, std::size_t holistic_dimensions);
 
 // `grids` with its table zeroed and its priors those of `data` (log((n_pos+1)/(n_neg+1))): the
-// reset H of retrospection, on the same grids.
-rt::Result<GridClassifier> reset_classifier(const GridClassifier& grids, const TrainingSet& data);
+// reset H of retrospection, on the same grids. The classes of `kept` (bit k: class k) keep their
+// responses and priors.
+rt::Result<GridClassifier> reset_classifier(const GridClassifier& grids, const TrainingSet& data,
+                                            std::uint32_t kept = 0);
 
 struct TrainingPhaseConfig {
   BoostingConfig segment, holistic;  // seeds, candidates, caps (their `rounds` are not used)
   std::size_t warm_rounds = 200;     // rounds added to the current classifiers
   std::size_t reset_rounds = 1000;   // rounds from a reset classifier
+  // Bit k: class k is kept as it is, neither reset nor boosted (a model's classes while new ones
+  // are taught, `stac induct --add-classes`); overrides the boosting configs' `frozen`.
+  std::uint32_t kept = 0;
 };
 
 // The training phase: both classifiers warm-started from `current` (or, with `reset`, restarted
-// on its grids) and boosted on `data`. The filter's parameters are `current`'s.
+// on its grids) and boosted on `data`; the kept classes stay as they are. The filter's parameters
+// are `current`'s.
 rt::Result<classification::TrackClassifierModel> training_phase(
     const classification::TrackClassifierModel& current, const RoundData& data, bool reset,
     const TrainingPhaseConfig& config);
@@ -128,6 +134,14 @@ rt::Result<classification::TrackClassifierModel> initial_model(
     const classification::ClassNames& classes, const RoundData& range, const RoundData& data,
     const classification::ExpectedLayouts& layouts, const TrainingPhaseConfig& config);
 
+// `model` with the classes `added` after its own: their responses 0, their priors
+// `added_prior`, their filter parameters 1; its own classes unchanged, so they classify as before.
+// Fails when the names together are not a model's classes (check_class_names: at most
+// kMaxClasses, unique).
+rt::Result<classification::TrackClassifierModel> with_added_classes(
+    const classification::TrackClassifierModel& model, const classification::ClassNames& added,
+    float added_prior = 0.0f);
+
 // Active learning: one track the user has not labelled, with the model's log odds for it.
 struct QueryCandidate {
   LogOdds log_odds{};
@@ -135,8 +149,10 @@ struct QueryCandidate {
 };
 // Up to `per_class` tracks per class of the least confident (smallest |log odds|), then up to
 // `per_class` of the most confident positives (largest log odds, predicted that class): indices
-// into `candidates`, never a seen one, none twice, in the order asked.
+// into `candidates`, never a seen one, none twice, in the order asked. Nothing is asked about
+// the classes of `kept` (bit k: class k; classes not being taught).
 std::vector<std::size_t> choose_queries(std::span<const QueryCandidate> candidates,
-                                        std::size_t classes, std::size_t per_class);
+                                        std::size_t classes, std::size_t per_class,
+                                        std::uint32_t kept = 0);
 
 }  // namespace stac::learning

@@ -175,6 +175,8 @@ TEST(Induction, QueriesAreTheLeastConfidentAndTheUnseenConfidentPositives) {
   const auto q = choose_queries(c, 2, 1);
   // Class 0: least confident 0, most confident unseen positive 2; class 1: 4, then 5.
   EXPECT_EQ(q, (std::vector<std::size_t>{0, 2, 4, 5}));
+  // Nothing is asked about a kept class (class 0 here): only class 1's questions.
+  EXPECT_EQ(choose_queries(c, 2, 1, 0b01u), (std::vector<std::size_t>{4, 5}));
   const auto two = choose_queries(c, 2, 2);
   EXPECT_EQ(std::count(two.begin(), two.end(), 3u), 0);
   std::vector<std::size_t> sorted = two;
@@ -315,6 +317,86 @@ TEST(Induction, TheTrainingPhaseIsDeterministicAndRefusesNothingToTrainOn) {
   EXPECT_EQ(data.user_tracks, 15u);
   EXPECT_EQ(data.background_tracks, 150u);
   EXPECT_FALSE(training_phase(*start, RoundData{}, false, phase_config()).has_value());
+}
+
+// A class added to a trained model (`stac induct --add-classes`): the model's own classes
+// classify as before, through with_added_classes and every training phase that keeps them, while
+// the new class is learned from zero.
+TEST(Induction, ANewClassIsTaughtBesideKeptClassesThatStayAsTheyAre) {
+  Pools p = pools();
+  const auto layouts = classification::testing::layouts();
+  // "The default model": classes 0 and 1 only (class 2's tracks are background to it).
+  const auto without_class_2 = [](std::vector<TrackExample> tracks) {
+    for (TrackExample& t : tracks)
+      if (t.label == 2) t.label = kBackground;
+    return tracks;
+  };
+  const RoundData two =
+      round_data(without_class_2(p.labels), without_class_2(p.background), {}, 2, 6, 2);
+  auto start = initial_model({"car", "pedestrian"}, two, two, layouts, phase_config());
+  ASSERT_TRUE(start.has_value()) << start.error().message;
+  auto old_model = training_phase(*start, two, true, phase_config());
+  ASSERT_TRUE(old_model.has_value()) << old_model.error().message;
+
+  auto wider = with_added_classes(*old_model, {"bicyclist"});
+  ASSERT_TRUE(wider.has_value()) << wider.error().message;
+  EXPECT_EQ(wider->classes, classification::default_class_names());
+  const auto same_for_kept = [&](const TrackClassifierModel& m) {
+    for (const TrackExample& t : p.test) {
+      LogOdds a{}, b{};
+      ASSERT_TRUE(old_model->segment.classify(std::span(t.segments).first(6), a));
+      ASSERT_TRUE(m.segment.classify(std::span(t.segments).first(6), b));
+      EXPECT_EQ(a[0], b[0]);
+      EXPECT_EQ(a[1], b[1]);
+      ASSERT_TRUE(old_model->holistic.classify(t.holistic, a));
+      ASSERT_TRUE(m.holistic.classify(t.holistic, b));
+      EXPECT_EQ(a[0], b[0]);
+      EXPECT_EQ(a[1], b[1]);
+    }
+    for (std::size_t k = 0; k < 2; ++k) {
+      EXPECT_EQ(m.adbf.alpha[k], old_model->adbf.alpha[k]);
+      EXPECT_EQ(m.adbf.gamma[k], old_model->adbf.gamma[k]);
+    }
+  };
+  same_for_kept(*wider);
+  LogOdds fresh{};
+  ASSERT_TRUE(wider->segment.classify(std::span(p.test[0].segments).first(6), fresh));
+  EXPECT_EQ(fresh[2], 0.0f);  // the new class: no response, prior 0
+
+  // Training with classes 0 and 1 kept: a reset and warm rounds leave them as they were.
+  TrainingPhaseConfig keep = phase_config();
+  keep.kept = 0b011u;
+  const RoundData three = round_data(p.labels, p.background, {}, 3, 6, 2);
+  auto taught = training_phase(*wider, three, true, keep);
+  ASSERT_TRUE(taught.has_value()) << taught.error().message;
+  auto more = training_phase(*taught, three, false, keep);
+  ASSERT_TRUE(more.has_value()) << more.error().message;
+  same_for_kept(*more);
+  // The new class is learned: its one-vs-all accuracy on held-out tracks beats its prior's.
+  std::size_t right = 0, by_prior = 0;
+  const float prior = more->segment.model().prior[2];
+  for (const TrackExample& t : p.test) {
+    LogOdds h{};
+    ASSERT_TRUE(more->segment.classify(std::span(t.segments).first(6), h));
+    right += (h[2] > 0) == (t.label == 2) ? 1 : 0;
+    by_prior += (prior > 0) == (t.label == 2) ? 1 : 0;
+  }
+  EXPECT_GT(right, by_prior + p.test.size() / 20) << right << " vs " << by_prior;
+  // Without keeping them, the same training changes the old classes.
+  auto unkept = training_phase(*wider, three, true, phase_config());
+  ASSERT_TRUE(unkept.has_value());
+  std::size_t changed = 0;
+  for (const TrackExample& t : p.test) {
+    LogOdds a{}, b{};
+    ASSERT_TRUE(old_model->segment.classify(std::span(t.segments).first(6), a));
+    ASSERT_TRUE(unkept->segment.classify(std::span(t.segments).first(6), b));
+    changed += a[0] != b[0] ? 1 : 0;
+  }
+  EXPECT_GT(changed, 0u);
+
+  // Names that clash or overflow are refused.
+  EXPECT_FALSE(with_added_classes(*old_model, {"car"}).has_value());
+  EXPECT_FALSE(with_added_classes(*old_model, {"a", "b", "c", "d", "e", "f", "g"}).has_value());
 }
 
 }  // namespace

@@ -271,6 +271,22 @@ TEST_F(ClassifyCli, ExtraClassesFromTheDatasetGoThroughTrainEvalAndProcess) {
       stac("eval --classes --data " + at("test3") + " --model " + at("model5.stac"));
   EXPECT_NE(other.code, 0);
   EXPECT_NE(other.output.find("--class"), std::string::npos) << other.output;
+  // A model without tree and pole scored on the 5-class drives: they are background for it.
+  const std::string three_class_model =
+      (std::filesystem::path(STAC_SOURCE_DIR) / "config/models/stac_default.stacmodel").string();
+  const CliResult fewer = stac("eval --classes --data " + at("test5") + " --model " +
+                               three_class_model + " --report " + at("report3on5"));
+  ASSERT_EQ(fewer.code, 0) << fewer.output;
+  const nlohmann::json m3 = read_json(at("report3on5") + "/metrics.json");
+  EXPECT_EQ(m3["classes"], nlohmann::json({"car", "pedestrian", "bicyclist"}));
+  EXPECT_EQ(m3["track_confusion_adbf"].size(), 4u);
+  std::uint64_t background = 0, background3 = 0;  // background + trees + poles, on both scores
+  for (std::size_t j = 0; j < 6; ++j)
+    for (const std::size_t i : {3u, 4u, 5u})
+      background += m["track_confusion_adbf"][i][j].get<std::uint64_t>();
+  for (std::size_t j = 0; j < 4; ++j)
+    background3 += m3["track_confusion_adbf"][3][j].get<std::uint64_t>();
+  EXPECT_EQ(background3, background) << fewer.output;
   const CliResult mixed = stac("train --data " + at("test3") + " --data " + at("test5") +
                                " --out " + at("mixed.stac") + " --rounds 5");
   EXPECT_NE(mixed.code, 0);

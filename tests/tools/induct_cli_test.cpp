@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "formats/induction_state.hpp"
+#include "formats/model_file.hpp"
 #include "json_lines.hpp"
 #include "stac_cli.hpp"
 
@@ -258,6 +259,102 @@ TEST_F(InductCli, BadInputsAreRefusedNamingTheFileAndNoAnswerIsLost) {
   EXPECT_NE(r.output.find("state.bin"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("damaged"), std::string::npos) << r.output;
   EXPECT_EQ(read_text(labels), before);
+}
+
+// A class the default model does not have (issue 29): trees, taught with --add-classes beside
+// the default model's three, which are kept as they are; B0 a street without trees
+// (`stac sim --without tree`).
+TEST(InductNewClass, ATreeClassIsTaughtBesideTheDefaultClassesWhichStayAsTheyAre) {
+  const fs::path dir =
+      stac::testing::fresh_dir("stac_induct_new_class_" + std::to_string(::getpid()));
+  const auto at = [&](const std::string& name) { return (dir / name).string(); };
+  for (const auto& [name, args] :
+       {std::pair<std::string, std::string>{"labels", "--scenario urban --seed 1 --duration 8"},
+        {"chunk", "--scenario urban --seed 4 --duration 6"},
+        {"test", "--scenario urban --seed 2 --duration 5"},
+        {"empty", "--scenario empty --seed 3 --duration 4 --without tree"}}) {
+    const std::string base = at(name);
+    const CliResult sim =
+        stac("sim " + args + " --out " + base + ".pcap --truth " + base + ".jsonl");
+    ASSERT_EQ(sim.code, 0) << sim.output;
+    const CliResult data = stac("dataset --class tree --in " + base + ".pcap --truth " + base +
+                                ".jsonl --out " + base + "_data");
+    ASSERT_EQ(data.code, 0) << data.output;
+    std::ifstream in(base + "_data/manifest.json");
+    const nlohmann::json manifest = nlohmann::json::parse(in);
+    if (name == "empty") {
+      EXPECT_EQ(manifest["tracks_per_class"]["tree"].get<int>(), 0) << manifest.dump();
+    } else if (name == "labels") {
+      EXPECT_GT(manifest["tracks_per_class"]["tree"].get<int>(), 0) << manifest.dump();
+    }
+  }
+  const std::string model =
+      (fs::path(STAC_SOURCE_DIR) / "config/models/stac_default.stacmodel").string();
+  const std::string command =
+      "induct --state " + at("state") + " --model " + model + " --add-classes tree --background " +
+      at("empty_data") + " --labels " + at("labels_data") + " --labels-per-class 3 --unlabeled " +
+      at("chunk_data") + " --oracle --ask 2 --warm-rounds 40 --reset-rounds 120 --eval " +
+      at("test_data");
+  const CliResult r = stac(command);
+  ASSERT_EQ(r.code, 0) << r.output;
+
+  auto before = stac::formats::read_model_file(model);
+  auto after = stac::formats::read_model_file(at("state") + "/model.stacmodel");
+  ASSERT_TRUE(before && after);
+  EXPECT_EQ(after->classes,
+            (stac::classification::ClassNames{"car", "pedestrian", "bicyclist", "tree"}));
+  // The default classes' responses, priors and filter weights are the default model's.
+  for (const auto& [old_c, new_c] : {std::pair{&before->segment, &after->segment},
+                                     std::pair{&before->holistic, &after->holistic}}) {
+    const auto& o = old_c->model();
+    const auto& n = new_c->model();
+    ASSERT_EQ(o.table.size() / 3, n.table.size() / 4);
+    for (std::size_t cell = 0; cell < o.table.size() / 3; ++cell)
+      for (std::size_t k = 0; k < 3; ++k)
+        ASSERT_EQ(o.table[cell * 3 + k], n.table[cell * 4 + k])
+            << "cell " << cell << " class " << k;
+    for (std::size_t k = 0; k < 3; ++k) EXPECT_EQ(o.prior[k], n.prior[k]);
+  }
+  for (std::size_t k = 0; k < 3; ++k) {
+    EXPECT_EQ(before->adbf.alpha[k], after->adbf.alpha[k]);
+    EXPECT_EQ(before->adbf.beta[k], after->adbf.beta[k]);
+    EXPECT_EQ(before->adbf.gamma[k], after->adbf.gamma[k]);
+  }
+  // The tree classifier learned something: it is no longer all zero.
+  std::size_t tree_cells = 0;
+  for (std::size_t cell = 0; cell < after->segment.model().table.size() / 4; ++cell)
+    tree_cells += after->segment.model().table[cell * 4 + 3] != 0.0f ? 1 : 0;
+  EXPECT_GT(tree_cells, 10u);
+  // The first labels are trees and background only: nothing is taught about the kept classes.
+  for (const auto& a : stac::testing::read_json_lines(at("state") + "/labels.jsonl")) {
+    if (a["source"] != at("labels_data")) continue;
+    const std::string label = a["label"].get<std::string>();
+    EXPECT_TRUE(label == "tree" || label == "background") << a.dump();
+  }
+  auto state = stac::formats::read_induction_state(at("state"));
+  ASSERT_TRUE(state.has_value()) << state.error().message;
+  EXPECT_EQ(state->kept_classes, 0b0111u);
+  // Scored on the tree-labelled drive: by the new model with four classes, by the default
+  // model with its three (trees are background to it).
+  for (const std::string& m : {at("state") + "/model.stacmodel", model}) {
+    const CliResult eval = stac("eval --classes --data " + at("test_data") + " --model " + m);
+    EXPECT_EQ(eval.code, 0) << eval.output;
+  }
+  // --add-classes needs the model it adds to, names that are new, and a new state.
+  CliResult bad = stac("induct --state " + at("bad1") + " --add-classes tree");
+  EXPECT_NE(bad.code, 0);
+  EXPECT_NE(bad.output.find("--model"), std::string::npos) << bad.output;
+  bad = stac("induct --state " + at("bad2") + " --model " + model + " --add-classes car");
+  EXPECT_NE(bad.code, 0);
+  EXPECT_NE(bad.output.find("--add-classes car"), std::string::npos) << bad.output;
+  bad = stac("induct --state " + at("state") + " --add-classes bin");
+  EXPECT_NE(bad.code, 0);
+  EXPECT_NE(bad.output.find("other settings"), std::string::npos) << bad.output;
+  bad = stac("sim --scenario empty --duration 1 --without dragon --out " + at("x.pcap") +
+             " --truth " + at("x.jsonl"));
+  EXPECT_NE(bad.code, 0);
+  EXPECT_NE(bad.output.find("--without dragon"), std::string::npos) << bad.output;
+  fs::remove_all(dir);
 }
 
 }  // namespace

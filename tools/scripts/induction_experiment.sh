@@ -27,23 +27,9 @@ STREAM=(urban:312 urban:313 urban:314 urban:315 urban:316 intersection:319 crowd
 TEST=(urban:317 urban:341 intersection:342 crowd:343 urban:344)
 
 source tools/scripts/simulated_drives.sh
-all=("${BACKGROUND[@]}" "${LABELS[@]}" "${STREAM[@]}" "${TEST[@]}")
-echo "$0: ${#all[@]} drives of ${DURATION} s in $WORK"
-make_drives "${all[@]}"
-
-args() {  # args FLAG DRIVE... -> FLAG WORK/DRIVE/data ...
-  local flag=$1
-  shift
-  for d in "$@"; do printf '%s\n' "$flag" "$WORK/$d/data"; done
-}
-mapfile -t bg < <(args --background "${BACKGROUND[@]}")
-mapfile -t labels < <(args --labels "${LABELS[@]}")
-mapfile -t stream < <(args --unlabeled "${STREAM[@]}")
-mapfile -t test < <(args --eval "${TEST[@]}")
-mapfile -t test_data < <(args --data "${TEST[@]}")
+induction_drives
 
 # (b) fully supervised: every label of the labels' and the stream's drives, and B0.
-mapfile -t everything < <(args --data "${BACKGROUND[@]}" "${LABELS[@]}" "${STREAM[@]}")
 "$STAC" train "${everything[@]}" --rounds "$ROUNDS" --out "$WORK/supervised_all.stacmodel"
 "$STAC" eval --classes "${test_data[@]}" --model "$WORK/supervised_all.stacmodel" \
   --report "$WORK/supervised_all"
