@@ -65,6 +65,10 @@ void EgoEstimator::add_ins(const applanix::Parsed& message,
   fix.heading_deg = g->heading_deg;
   fix.velocity_ned_mps = {g->north_velocity_mps, g->east_velocity_mps, g->down_velocity_mps};
   fix.angular_rate_frd_dps = {g->rate_longitudinal_dps, g->rate_transverse_dps, g->rate_down_dps};
+  add_fix(fix);
+}
+
+void EgoEstimator::add_fix(const InsFix& fix) noexcept {
   const PoseSample pose = frame_.pose(fix);
   // A fix over kTimeJumpNs after the last one, or before it, counts only when the next follows
   // it within kConfirmNs (the INS back after an outage, a replay looping, the clock corrected

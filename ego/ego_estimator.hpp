@@ -55,6 +55,9 @@ class EgoEstimator {
 
   // One parsed Applanix message; `parser` gives the GPS-UTC offset of its last Group 3.
   void add_ins(const applanix::Parsed& message, const applanix::StreamParser& parser) noexcept;
+  // One navigation solution already on the pose clock, from another INS (a KITTI raw drive's
+  // OXTS records); the same checks of time jumps as add_ins.
+  void add_fix(const InsFix& fix) noexcept;
   // One decoded CAN frame with speed and/or yaw rate.
   void add_odometry(const can::OdometryUpdate& update) noexcept;
 

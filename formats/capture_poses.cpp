@@ -1,8 +1,10 @@
 #include "formats/capture_poses.hpp"
 
+#include <algorithm>
 #include <variant>
 
 #include "drivers/applanix/capture_reader.hpp"
+#include "formats/kitti_raw.hpp"
 
 namespace stac::formats {
 
@@ -41,6 +43,25 @@ rt::Result<std::optional<CapturePoses>> load_capture_poses(const std::filesystem
   out.counters = estimator.counters();
   out.parser = reader->parser().counters();
   return std::optional<CapturePoses>{std::move(out)};
+}
+
+rt::Result<CapturePoses> load_kitti_raw_poses(const std::filesystem::path& drive,
+                                              const settings::EgoSettings& settings) {
+  auto records = read_kitti_oxts(drive);
+  if (!records) return rt::Unexpected<rt::Error>{records.error()};
+  CapturePoses out;
+  out.group1 = records->size();
+  out.frame = std::make_unique<ego::LocalFrame>(settings.origin);
+  ego::PoseHistoryConfig hc = settings.history;
+  hc.capacity = std::max<std::size_t>(hc.capacity, records->size() + 16);
+  // A synced drive has a record per scan, at 10 Hz (about 103 ms apart in KITTI's), not the
+  // Applanix's 200 Hz: interpolated across up to 2.5 periods.
+  hc.max_gap_ns = std::max<std::int64_t>(hc.max_gap_ns, 250'000'000);
+  out.history = std::make_unique<ego::PoseHistory>(hc);
+  ego::EgoEstimator estimator(settings.estimator, *out.frame, *out.history);
+  for (const OxtsRecord& r : *records) estimator.add_fix(oxts_fix(r));
+  out.counters = estimator.counters();
+  return out;
 }
 
 }  // namespace stac::formats

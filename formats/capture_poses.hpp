@@ -28,4 +28,9 @@ struct CapturePoses {
 rt::Result<std::optional<CapturePoses>> load_capture_poses(const std::filesystem::path& capture,
                                                            const settings::EgoSettings& settings);
 
+// The poses of a KITTI raw drive folder from its OXTS records (DIR/oxts; formats/kitti_raw.hpp),
+// through the same EgoEstimator (local frame, time jumps); `group1` counts the records.
+rt::Result<CapturePoses> load_kitti_raw_poses(const std::filesystem::path& drive,
+                                              const settings::EgoSettings& settings);
+
 }  // namespace stac::formats

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 
 namespace stac::formats {
@@ -43,38 +44,46 @@ rt::Result<std::vector<float>> load_kitti_scan(const std::string& path) {
   return v;
 }
 
+bool kitti_calib_values(const std::string& text, const std::string& key, std::size_t count,
+                        std::vector<double>& out) {
+  std::istringstream lines(text);
+  for (std::string line; std::getline(lines, line);) {
+    std::istringstream ss(line);
+    std::string word;
+    if (!(ss >> word) || word != key + ":") continue;
+    out.assign(count, 0.0);
+    for (double& v : out)
+      if (!(ss >> v) || !std::isfinite(v)) return false;
+    return true;
+  }
+  return false;
+}
+
+bool is_rotation(const Eigen::Matrix3d& m) noexcept {
+  return (m * m.transpose() - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() < 1e-3 &&
+         std::abs(m.determinant() - 1.0) < 1e-3;
+}
+
 rt::Result<Eigen::Isometry3d> load_kitti_rect_T_velo(const std::string& calib_path) {
   std::ifstream in(calib_path);
   if (!in) return rt::make_error(calib_path + ": cannot read the KITTI calibration");
-  Eigen::Matrix3d r0 = Eigen::Matrix3d::Zero();
-  Eigen::Matrix<double, 3, 4> tr = Eigen::Matrix<double, 3, 4>::Zero();
-  bool have_r0 = false, have_tr = false;
-  for (std::string line; std::getline(in, line);) {
-    std::istringstream ss(line);
-    std::string key;
-    ss >> key;
-    if (key == "R0_rect:") {
-      for (int i = 0; i < 9; ++i) ss >> r0(i / 3, i % 3);
-      have_r0 = static_cast<bool>(ss);
-    } else if (key == "Tr_velo_to_cam:") {
-      for (int i = 0; i < 12; ++i) ss >> tr(i / 4, i % 4);
-      have_tr = static_cast<bool>(ss);
-    }
-  }
-  if (!have_r0 || !have_tr) {
+  const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  std::vector<double> r0_values, tr_values;
+  if (!kitti_calib_values(text, "R0_rect", 9, r0_values) ||
+      !kitti_calib_values(text, "Tr_velo_to_cam", 12, tr_values)) {
     return rt::make_error(calib_path +
                           ": needs 'R0_rect:' (9 numbers) and 'Tr_velo_to_cam:' (12 numbers)");
   }
-  // Both rotations: orthonormal with determinant +1 (a file of zeros would put every point at
-  // the camera and every object at range 0).
-  const auto rotation = [](const Eigen::Matrix3d& m) {
-    return (m * m.transpose() - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() < 1e-3 &&
-           std::abs(m.determinant() - 1.0) < 1e-3;
-  };
-  if (!rotation(r0))
+  const Eigen::Matrix3d r0 =
+      Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(r0_values.data());
+  const Eigen::Matrix<double, 3, 4> tr =
+      Eigen::Map<const Eigen::Matrix<double, 3, 4, Eigen::RowMajor>>(tr_values.data());
+  // Both rotations (a file of zeros would put every point at the camera and every object at
+  // range 0).
+  if (!is_rotation(r0))
     return rt::make_error(calib_path +
                           ": 'R0_rect:' is not a rotation (orthonormal, determinant 1)");
-  if (!rotation(tr.leftCols<3>())) {
+  if (!is_rotation(tr.leftCols<3>())) {
     return rt::make_error(
         calib_path + ": the rotation of 'Tr_velo_to_cam:' is not one (orthonormal, determinant 1)");
   }

@@ -20,6 +20,15 @@ rt::Result<std::size_t> kitti_scan_points(const std::string& path);
 // The .bin files of a folder, in name order (empty when it holds none).
 rt::Result<std::vector<std::filesystem::path>> kitti_scans_in(const std::filesystem::path& folder);
 
+// The numbers of a "KEY: n n n ..." line of a KITTI calibration file (calib.txt,
+// calib_imu_to_velo.txt): exactly `count` of them, all finite; false when the key's line is
+// missing or holds fewer (or other words).
+bool kitti_calib_values(const std::string& text, const std::string& key, std::size_t count,
+                        std::vector<double>& out);
+// Orthonormal with determinant +1 (to 1e-3): what a calibration's rotation must be (a file of
+// zeros would put every point at the origin).
+bool is_rotation(const Eigen::Matrix3d& m) noexcept;
+
 // The velodyne -> rectified camera 0 transform: R0_rect * Tr_velo_to_cam.
 rt::Result<Eigen::Isometry3d> load_kitti_rect_T_velo(const std::string& calib_path);
 

@@ -5,7 +5,9 @@
 #include <cstdio>
 #include <ctime>
 #include <fstream>
+#include <iterator>
 #include <numbers>
+#include <sstream>
 
 #include "formats/kitti_files.hpp"
 
@@ -38,6 +40,31 @@ bool parse_kitti_time(const std::string& line, std::int64_t& ns) {
   return true;
 }
 
+namespace {
+
+// The times of a KITTI timestamps file, one a line, increasing (one per `what`).
+rt::Result<std::vector<std::int64_t>> read_kitti_times(const fs::path& file,
+                                                       const std::string& what) {
+  std::ifstream in(file);
+  if (!in) return rt::make_error(file.string() + ": missing (one time per " + what + ")");
+  std::vector<std::int64_t> out;
+  std::string line;
+  for (std::size_t n = 1; std::getline(in, line); ++n) {
+    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+    std::int64_t ns = 0;
+    if (!parse_kitti_time(line, ns))
+      return rt::make_error(file.string() + ":" + std::to_string(n) + ": '" + line +
+                            "' is not a time (YYYY-MM-DD HH:MM:SS.fffffffff)");
+    if (!out.empty() && ns <= out.back())
+      return rt::make_error(file.string() + ":" + std::to_string(n) +
+                            ": not after the line before (one " + what + " per line, in order)");
+    out.push_back(ns);
+  }
+  return out;
+}
+
+}  // namespace
+
 rt::Result<KittiRawDrive> open_kitti_raw_drive(const fs::path& path) {
   KittiRawDrive drive;
   const fs::path data = path / "velodyne_points" / "data";
@@ -53,19 +80,9 @@ rt::Result<KittiRawDrive> open_kitti_raw_drive(const fs::path& path) {
   std::error_code ec;
   const fs::path times = path / "velodyne_points" / "timestamps.txt";
   if (fs::exists(times, ec)) {
-    std::ifstream in(times);
-    std::string line;
-    for (std::size_t n = 1; std::getline(in, line); ++n) {
-      if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
-      std::int64_t ns = 0;
-      if (!parse_kitti_time(line, ns))
-        return rt::make_error(times.string() + ":" + std::to_string(n) + ": '" + line +
-                              "' is not a time (YYYY-MM-DD HH:MM:SS.fffffffff)");
-      if (!drive.stamps_ns.empty() && ns <= drive.stamps_ns.back())
-        return rt::make_error(times.string() + ":" + std::to_string(n) +
-                              ": not after the line before (one scan per line, in order)");
-      drive.stamps_ns.push_back(ns);
-    }
+    auto stamps = read_kitti_times(times, "scan");
+    if (!stamps) return rt::Unexpected<rt::Error>{stamps.error()};
+    drive.stamps_ns = std::move(*stamps);
     if (drive.stamps_ns.size() != drive.scans.size())
       return rt::make_error(times.string() + " has " + std::to_string(drive.stamps_ns.size()) +
                             " times for " + std::to_string(drive.scans.size()) + " scans");
@@ -113,9 +130,242 @@ rt::Result<KittiScanCounts> load_kitti_raw_scan(const fs::path& file, std::uint6
   if (in.bad()) return rt::make_error(file.string() + ": read error");
   out.header.sequence = sequence;
   out.header.stamp_ns = stamp_ns;
-  out.header.end_stamp_ns = stamp_ns + 100'000'000;
+  // No firing times: the whole scan is one instant, its time (KITTI's: when the sensor faced
+  // forward, mid-sweep), so with poses it is placed by the pose at that time.
+  out.header.end_stamp_ns = stamp_ns;
   out.header.starts_at_cut = out.header.ends_at_cut = true;
   return counts;
+}
+
+namespace {
+
+constexpr const char* kOxtsNames[30] = {
+    "lat",          "lon",     "alt",     "roll",    "pitch",   "yaw",    "vn", "ve",
+    "vf",           "vl",      "vu",      "ax",      "ay",      "az",     "af", "al",
+    "au",           "wx",      "wy",      "wz",      "wf",      "wl",     "wu", "pos_accuracy",
+    "vel_accuracy", "navstat", "numsats", "posmode", "velmode", "orimode"};
+
+}  // namespace
+
+rt::Result<OxtsRecord> parse_oxts_record(const std::string& text) {
+  std::istringstream in(text);
+  double v[30];
+  for (int i = 0; i < 30; ++i) {
+    std::string word;
+    if (!(in >> word))
+      return rt::make_error("has " + std::to_string(i) + " values, an OXTS record has 30 (" +
+                            kOxtsNames[i] + " missing)");
+    char* end = nullptr;
+    v[i] = std::strtod(word.c_str(), &end);
+    if (end == word.c_str() || *end != '\0' || !std::isfinite(v[i]))
+      return rt::make_error(std::string(kOxtsNames[i]) + " '" + word + "' is not a finite number");
+    if (i >= 25 && (v[i] != std::floor(v[i]) || std::abs(v[i]) > 1e6))
+      return rt::make_error(std::string(kOxtsNames[i]) + " '" + word + "' is not an integer");
+  }
+  if (std::string extra; in >> extra)
+    return rt::make_error("more than 30 values ('" + extra + "' after orimode)");
+  OxtsRecord r;
+  r.lat_deg = v[0], r.lon_deg = v[1], r.alt_m = v[2];
+  r.roll_rad = v[3], r.pitch_rad = v[4], r.yaw_rad = v[5];
+  r.vn = v[6], r.ve = v[7], r.vf = v[8], r.vl = v[9], r.vu = v[10];
+  r.ax = v[11], r.ay = v[12], r.az = v[13], r.af = v[14], r.al = v[15], r.au = v[16];
+  r.wx = v[17], r.wy = v[18], r.wz = v[19], r.wf = v[20], r.wl = v[21], r.wu = v[22];
+  r.pos_accuracy = v[23], r.vel_accuracy = v[24];
+  r.navstat = static_cast<int>(v[25]), r.numsats = static_cast<int>(v[26]);
+  r.posmode = static_cast<int>(v[27]), r.velmode = static_cast<int>(v[28]);
+  r.orimode = static_cast<int>(v[29]);
+  const double pi = std::numbers::pi;
+  if (std::abs(r.lat_deg) > 90 || std::abs(r.lon_deg) > 180)
+    return rt::make_error("lat/lon " + std::to_string(r.lat_deg) + ", " +
+                          std::to_string(r.lon_deg) + " are not a place on Earth");
+  if (r.alt_m < -1000 || r.alt_m > 20000)
+    return rt::make_error("alt " + std::to_string(r.alt_m) + " m is no road's altitude");
+  if (std::abs(r.roll_rad) > pi + 1e-6 || std::abs(r.yaw_rad) > pi + 1e-6 ||
+      std::abs(r.pitch_rad) > pi / 2 + 1e-6)
+    return rt::make_error("roll, pitch, yaw must be radians within +-pi, +-pi/2, +-pi");
+  if (std::hypot(r.vn, r.ve, r.vu) > 200)
+    return rt::make_error("a speed over 200 m/s is no vehicle's");
+  return r;
+}
+
+std::string format_oxts_record(const OxtsRecord& r) {
+  char line[1024];
+  std::snprintf(line, sizeof line,
+                "%.14f %.14f %.10f %.12f %.12f %.12f %.12f %.12f %.12f %.12f %.12f %.12f %.12f "
+                "%.12f %.12f %.12f %.12f %.12f %.12f %.12f %.12f %.12f %.12f %.12f %.12f %d %d %d "
+                "%d %d",
+                r.lat_deg, r.lon_deg, r.alt_m, r.roll_rad, r.pitch_rad, r.yaw_rad, r.vn, r.ve, r.vf,
+                r.vl, r.vu, r.ax, r.ay, r.az, r.af, r.al, r.au, r.wx, r.wy, r.wz, r.wf, r.wl, r.wu,
+                r.pos_accuracy, r.vel_accuracy, r.navstat, r.numsats, r.posmode, r.velmode,
+                r.orimode);
+  return line;
+}
+
+rt::Result<std::vector<OxtsRecord>> read_kitti_oxts(const fs::path& drive) {
+  const fs::path data = drive / "oxts" / "data";
+  std::error_code ec;
+  std::vector<fs::path> files;
+  for (const auto& e : fs::directory_iterator(data, ec))
+    if (e.path().extension() == ".txt") files.push_back(e.path());
+  if (ec) return rt::make_error(data.string() + ": cannot list (" + ec.message() + ")");
+  std::sort(files.begin(), files.end());
+  if (files.empty()) return rt::make_error(data.string() + ": no .txt record in it");
+  auto times = read_kitti_times(drive / "oxts" / "timestamps.txt", "record");
+  if (!times) return rt::Unexpected<rt::Error>{times.error()};
+  if (times->size() != files.size())
+    return rt::make_error((drive / "oxts" / "timestamps.txt").string() + " has " +
+                          std::to_string(times->size()) + " times for " +
+                          std::to_string(files.size()) + " records in " + data.string());
+  std::vector<OxtsRecord> out;
+  out.reserve(files.size());
+  for (std::size_t i = 0; i < files.size(); ++i) {
+    std::ifstream in(files[i]);
+    std::string text;
+    if (!in || !std::getline(in, text))
+      return rt::make_error(files[i].string() + ": cannot read (one line of 30 values)");
+    auto r = parse_oxts_record(text);
+    if (!r) return rt::make_error(files[i].string() + ": " + r.error().message);
+    r->stamp_ns = (*times)[i];
+    out.push_back(*r);
+  }
+  return out;
+}
+
+ego::InsFix oxts_fix(const OxtsRecord& r) {
+  constexpr double kDeg = 180.0 / std::numbers::pi;
+  ego::InsFix f;
+  f.stamp_ns = r.stamp_ns;
+  f.position = {r.lat_deg, r.lon_deg, r.alt_m};
+  f.roll_deg = r.roll_rad * kDeg;
+  f.pitch_deg = -r.pitch_rad * kDeg;
+  double heading = 90.0 - r.yaw_rad * kDeg;
+  if (heading >= 360.0) heading -= 360.0;
+  if (heading < 0.0) heading += 360.0;
+  f.heading_deg = heading;
+  f.velocity_ned_mps = {r.vn, r.ve, -r.vu};
+  f.angular_rate_frd_dps = {r.wf * kDeg, -r.wl * kDeg, -r.wu * kDeg};
+  return f;
+}
+
+rt::Result<Eigen::Isometry3d> read_kitti_imu_to_velo(const fs::path& file) {
+  std::ifstream in(file);
+  if (!in) return rt::make_error(file.string() + ": cannot read the IMU -> velodyne calibration");
+  const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  std::vector<double> r_values, t_values;
+  if (!kitti_calib_values(text, "R", 9, r_values) || !kitti_calib_values(text, "T", 3, t_values))
+    return rt::make_error(file.string() + ": needs 'R:' (9 numbers) and 'T:' (3 numbers)");
+  const Eigen::Matrix3d r =
+      Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(r_values.data());
+  const Eigen::Vector3d t(t_values[0], t_values[1], t_values[2]);
+  if (!is_rotation(r))
+    return rt::make_error(file.string() + ": 'R:' is not a rotation (orthonormal, determinant 1)");
+  if (t.norm() > 10.0)
+    return rt::make_error(file.string() + ": 'T:' puts the velodyne over 10 m from the IMU");
+  Eigen::Isometry3d velo_T_imu = Eigen::Isometry3d::Identity();
+  velo_T_imu.linear() = r;
+  velo_T_imu.translation() = t;
+  return velo_T_imu;
+}
+
+fs::path find_kitti_imu_to_velo(const fs::path& drive) {
+  std::error_code ec;
+  fs::path folder = fs::absolute(drive, ec).lexically_normal();
+  if (!folder.has_filename()) folder = folder.parent_path();  // "drive/" names the same folder
+  for (const fs::path& f :
+       {folder / "calib_imu_to_velo.txt", folder.parent_path() / "calib_imu_to_velo.txt"})
+    if (fs::is_regular_file(f, ec)) return f;
+  return {};
+}
+
+OxtsRecord oxts_record(const ego::InsFix& fix) {
+  constexpr double kRad = std::numbers::pi / 180.0;
+  OxtsRecord r;
+  r.stamp_ns = fix.stamp_ns;
+  r.lat_deg = fix.position.lat_deg, r.lon_deg = fix.position.lon_deg;
+  r.alt_m = fix.position.alt_m;
+  r.roll_rad = fix.roll_deg * kRad;
+  r.pitch_rad = -fix.pitch_deg * kRad;
+  r.yaw_rad = std::remainder((90.0 - fix.heading_deg) * kRad, 2.0 * std::numbers::pi);
+  r.vn = fix.velocity_ned_mps.x(), r.ve = fix.velocity_ned_mps.y();
+  r.vu = -fix.velocity_ned_mps.z();
+  const double h = fix.heading_deg * kRad;  // clockwise from north
+  r.vf = r.vn * std::cos(h) + r.ve * std::sin(h);
+  r.vl = r.vn * std::sin(h) - r.ve * std::cos(h);
+  r.az = r.au = 9.81;
+  r.wx = r.wf = fix.angular_rate_frd_dps.x() * kRad;
+  r.wy = r.wl = -fix.angular_rate_frd_dps.y() * kRad;
+  r.wz = r.wu = -fix.angular_rate_frd_dps.z() * kRad;
+  r.pos_accuracy = 0.02, r.vel_accuracy = 0.02;
+  r.navstat = 4, r.numsats = 10, r.posmode = 4, r.velmode = 4, r.orimode = 0;
+  return r;
+}
+
+std::string format_kitti_time(std::int64_t ns) {
+  const std::int64_t s = ns >= 0 ? ns / 1'000'000'000 : (ns - 999'999'999) / 1'000'000'000;
+  const auto frac = static_cast<long long>(ns - s * 1'000'000'000);
+  const auto whole = static_cast<std::time_t>(s);
+  std::tm t{};
+  gmtime_r(&whole, &t);
+  char text[64];
+  std::snprintf(text, sizeof text, "%04d-%02d-%02d %02d:%02d:%02d.%09lld", t.tm_year + 1900,
+                t.tm_mon + 1, t.tm_mday, t.tm_hour, t.tm_min, t.tm_sec, frac);
+  return text;
+}
+
+rt::Result<KittiRawWriter> KittiRawWriter::create(const fs::path& dir,
+                                                  const Eigen::Isometry3d& velo_T_imu) {
+  std::error_code ec;
+  for (const fs::path& sub : {dir / "velodyne_points" / "data", dir / "oxts" / "data"}) {
+    fs::remove_all(sub, ec);
+    fs::create_directories(sub, ec);
+    if (ec) return rt::make_error(sub.string() + ": cannot create (" + ec.message() + ")");
+  }
+  std::ofstream calib(dir / "calib_imu_to_velo.txt");
+  const Eigen::Matrix3d& r = velo_T_imu.linear();
+  const Eigen::Vector3d& t = velo_T_imu.translation();
+  char text[512];
+  std::snprintf(text, sizeof text,
+                "calib_time: written by stac sim\nR: %.9e %.9e %.9e %.9e %.9e %.9e %.9e %.9e %.9e\n"
+                "T: %.9e %.9e %.9e\n",
+                r(0, 0), r(0, 1), r(0, 2), r(1, 0), r(1, 1), r(1, 2), r(2, 0), r(2, 1), r(2, 2),
+                t.x(), t.y(), t.z());
+  calib << text;
+  if (!calib) return rt::make_error((dir / "calib_imu_to_velo.txt").string() + ": cannot write");
+  KittiRawWriter w;
+  w.dir_ = dir;
+  return w;
+}
+
+rt::Status KittiRawWriter::add(const velodyne::Scan& scan, std::int64_t stamp_ns,
+                               const OxtsRecord& record) {
+  char name[32];
+  std::snprintf(name, sizeof name, "%010zu", stamps_ns_.size());
+  const fs::path bin = dir_ / "velodyne_points" / "data" / (std::string(name) + ".bin");
+  std::ofstream out(bin, std::ios::binary);
+  std::vector<float> values;
+  values.reserve(scan.points.size() * 4);
+  for (const velodyne::Point& p : scan.points)
+    values.insert(values.end(), {p.x, p.y, p.z, std::clamp(p.intensity / 255.0f, 0.0f, 1.0f)});
+  out.write(reinterpret_cast<const char*>(values.data()),
+            static_cast<std::streamsize>(values.size() * sizeof(float)));
+  if (!out) return rt::make_error(bin.string() + ": cannot write");
+  const fs::path txt = dir_ / "oxts" / "data" / (std::string(name) + ".txt");
+  std::ofstream(txt) << format_oxts_record(record) << '\n';
+  if (!fs::exists(txt)) return rt::make_error(txt.string() + ": cannot write");
+  stamps_ns_.push_back(stamp_ns);
+  return {};
+}
+
+rt::Status KittiRawWriter::finish() {
+  std::string times;
+  for (const std::int64_t ns : stamps_ns_) times += format_kitti_time(ns) + "\n";
+  for (const fs::path& f :
+       {dir_ / "velodyne_points" / "timestamps.txt", dir_ / "oxts" / "timestamps.txt"}) {
+    std::ofstream out(f);
+    out << times;
+    if (!out) return rt::make_error(f.string() + ": cannot write");
+  }
+  return {};
 }
 
 }  // namespace stac::formats

@@ -1,15 +1,19 @@
 // A KITTI raw drive folder as an input of `stac process` (issue 33): its scans are
 // DIR/velodyne_points/data/NNNNNNNNNN.bin (float32 x, y, z, reflectance 0..1, sensor frame, one
 // revolution each, in name order), with DIR/velodyne_points/timestamps.txt (one UTC time per scan,
-// "YYYY-MM-DD HH:MM:SS.fffffffff") when the drive has it; DIR/oxts/ holds its GPS/IMU.
+// "YYYY-MM-DD HH:MM:SS.fffffffff") when the drive has it; DIR/oxts/ holds its GPS/IMU (one
+// record a file, DIR/oxts/data/NNNNNNNNNN.txt, and DIR/oxts/timestamps.txt), and
+// calib_imu_to_velo.txt (in DIR or, as KITTI ships it, in the date folder above) the mounting.
 #pragma once
 
+#include <Eigen/Geometry>
 #include <cstdint>
 #include <filesystem>
 #include <string>
 #include <vector>
 
 #include "drivers/velodyne/scan.hpp"
+#include "ego/local_frame.hpp"
 #include "rt/expected.hpp"
 
 namespace stac::formats {
@@ -38,10 +42,79 @@ struct KittiScanCounts {
 
 // One scan into `out` (capacity >= its points; sequence and stamp given): each point's x, y, z,
 // its reflectance as intensity 0..255, its range and azimuth; no firing times (time offset 0),
-// no laser or ring (0). The scan is complete (one revolution). Non-finite points, and points
+// no laser or ring (0). The scan is complete (one revolution) and one instant (its end stamp is
+// its stamp: placed in the world by the pose at its time). Non-finite points, and points
 // farther than 1 km, are left out and counted.
 rt::Result<KittiScanCounts> load_kitti_raw_scan(const std::filesystem::path& file,
                                                 std::uint64_t sequence, std::int64_t stamp_ns,
                                                 velodyne::Scan& out);
+
+// One OXTS record (the KITTI raw devkit's readme, 30 values a line): the unit's position, its
+// attitude (rad; roll positive left side up, pitch positive front down, yaw 0 east and positive
+// counter-clockwise), velocities (m/s: north, east; forward, left, up along the earth's surface),
+// accelerations, angular rates (rad/s about the forward, left, up axes), accuracies and the GPS
+// modes; its time from oxts/timestamps.txt. The unit's frame is x forward, y left, z up.
+struct OxtsRecord {
+  std::int64_t stamp_ns = 0;
+  double lat_deg = 0, lon_deg = 0, alt_m = 0;
+  double roll_rad = 0, pitch_rad = 0, yaw_rad = 0;
+  double vn = 0, ve = 0, vf = 0, vl = 0, vu = 0;
+  double ax = 0, ay = 0, az = 0, af = 0, al = 0, au = 0;
+  double wx = 0, wy = 0, wz = 0, wf = 0, wl = 0, wu = 0;
+  double pos_accuracy = 0, vel_accuracy = 0;
+  int navstat = 0, numsats = 0, posmode = 0, velmode = 0, orimode = 0;
+};
+
+// One record's text: 30 numbers, finite, the last five integers, the position and attitude
+// within what a vehicle can have (|lat| <= 90, |lon| <= 180, altitude -1..20 km, |roll|, |yaw|
+// <= pi, |pitch| <= pi/2, speeds under 200 m/s). An error says which value is wrong.
+rt::Result<OxtsRecord> parse_oxts_record(const std::string& text);
+// Writes a record as KITTI does (the same 30 values, the last five as integers).
+std::string format_oxts_record(const OxtsRecord& r);
+
+// DIR/oxts: every record with its time, in name order. Fails naming the file (and line): no
+// record, a record that does not parse, a timestamps file missing, or whose count or order does
+// not fit.
+rt::Result<std::vector<OxtsRecord>> read_kitti_oxts(const std::filesystem::path& drive);
+
+// The record as the INS fix STAC's ego path takes (ego::InsFix: Tate-Bryant angles of the
+// x-forward, y-right, z-down body in NED): heading = 90 deg - yaw, pitch = -pitch (nose up
+// positive), roll = roll; velocity (vn, ve, -vu); rates (wf, -wl, -wu) in deg/s.
+ego::InsFix oxts_fix(const OxtsRecord& r);
+
+// oxts_fix's inverse: the record of a fix (yaw wrapped to +-pi; forward and left velocity from the
+// heading; the unit's accelerations left 0, gravity 9.81 m/s^2 on its up axis; accuracies of an
+// RTK fix, navstat 4, 10 satellites, GPS modes 4).
+OxtsRecord oxts_record(const ego::InsFix& fix);
+
+// Writes a drive in KITTI raw's layout (`stac sim --kitti-raw DIR`): each scan's points as
+// velodyne_points/data/NNNNNNNNNN.bin (x, y, z, intensity / 255 as reflectance), a record per
+// scan as oxts/data/NNNNNNNNNN.txt, the times in velodyne_points/timestamps.txt and
+// oxts/timestamps.txt (KITTI's format, UTC), and calib_imu_to_velo.txt from the mounting.
+class KittiRawWriter {
+ public:
+  // Makes the folders (an existing drive's files are replaced) and writes the mounting.
+  static rt::Result<KittiRawWriter> create(const std::filesystem::path& dir,
+                                           const Eigen::Isometry3d& velo_T_imu);
+  // One scan, placed at `stamp_ns`, and the record of that time.
+  rt::Status add(const velodyne::Scan& scan, std::int64_t stamp_ns, const OxtsRecord& record);
+  // The timestamps files; the drive is complete after it.
+  rt::Status finish();
+  [[nodiscard]] std::size_t scans() const noexcept { return stamps_ns_.size(); }
+
+ private:
+  std::filesystem::path dir_;
+  std::vector<std::int64_t> stamps_ns_;
+};
+
+// "2011-09-26 13:02:25.964389445": a UTC time (ns) as KITTI writes it.
+std::string format_kitti_time(std::int64_t ns);
+
+// calib_imu_to_velo.txt: "R:" (9 numbers, row-major) and "T:" (3, m), which take a point from
+// the IMU's frame to the velodyne's: returns velo_T_imu. Refuses an R that is not a rotation.
+rt::Result<Eigen::Isometry3d> read_kitti_imu_to_velo(const std::filesystem::path& file);
+// The drive's calib_imu_to_velo.txt: in DIR, else in DIR/.. (KITTI's date folder); empty when
+// neither has one.
+std::filesystem::path find_kitti_imu_to_velo(const std::filesystem::path& drive);
 
 }  // namespace stac::formats

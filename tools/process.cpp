@@ -149,12 +149,6 @@ int run_process(const ProcessOptions& o) {
   if (is_kitti_raw_drive(o.in)) {
     auto d = open_kitti_raw_drive(o.in);
     if (!d) return fail(d.error().message);
-    if (d->has_oxts && !o.no_deskew) {
-      return fail(o.in +
-                  " has oxts/ (the drive's GPS/IMU), which stac process does not read yet: "
-                  "give --no-deskew to process it as a parked sensor (no pose; tracks in the "
-                  "vehicle frame)");
-    }
     drive = std::move(*d);
   }
   if (!o.calib.empty())
@@ -183,10 +177,25 @@ int run_process(const ProcessOptions& o) {
     ego_settings.origin = *g;
   }
   std::optional<CapturePoses> poses;
+  std::string mounting;  // a KITTI drive's: where its sensor mounting came from
   if (!o.no_deskew && !drive) {
     auto p = load_capture_poses(o.in, ego_settings);
     if (!p) return fail(p.error().message);
     poses = std::move(*p);
+  } else if (!o.no_deskew && drive->has_oxts) {
+    // The OXTS records are the INS; the IMU's frame (x forward, y left, z up) is the vehicle's,
+    // and calib_imu_to_velo.txt the sensor's mounting on it.
+    auto p = load_kitti_raw_poses(o.in, ego_settings);
+    if (!p) return fail(p.error().message);
+    poses = std::move(*p);
+    if (const std::filesystem::path calib = find_kitti_imu_to_velo(o.in); !calib.empty()) {
+      auto velo_T_imu = read_kitti_imu_to_velo(calib);
+      if (!velo_T_imu) return fail(velo_T_imu.error().message);
+      ego_settings.deskew.vehicle_T_sensor = velo_T_imu->inverse();
+      mounting = calib.string();
+    } else {
+      mounting = "the config's ego extrinsics (no calib_imu_to_velo.txt in the drive or above)";
+    }
   }
 
   std::optional<io::PcapReader> reader;
@@ -403,7 +412,17 @@ int run_process(const ProcessOptions& o) {
                  capture_frames_summary(reader->counters(), ac.packets, vs.port).c_str(),
                  packet_drops_summary(ac).c_str());
   }
-  if (poses) {
+  if (poses && drive) {
+    std::fprintf(stderr,
+                 "  ego         %llu OXTS records, %llu poses (%llu impossible, %llu time jumps, "
+                 "%llu jumps back); %llu scans without a pose; sensor mounting from %s\n",
+                 static_cast<unsigned long long>(poses->group1),
+                 static_cast<unsigned long long>(poses->counters.ins_fixes),
+                 static_cast<unsigned long long>(poses->counters.impossible),
+                 static_cast<unsigned long long>(poses->counters.time_jumps),
+                 static_cast<unsigned long long>(poses->counters.backward_jumps),
+                 static_cast<unsigned long long>(pipeline.scans_without_pose()), mounting.c_str());
+  } else if (poses) {
     std::fprintf(stderr,
                  "  ego         %llu INS fixes (%llu skipped before a GPS week, %llu not aligned, "
                  "%llu impossible, %llu time jumps, %llu jumps back); "
@@ -479,7 +498,9 @@ void add_process_command(CLI::App& app) {
       "docs/evaluation.md). With --truth (a `stac sim` truth file) each segment also says which\n"
       "truth objects its points fall in, for `stac eval`. Prints CPU time per stage at the end.\n"
       "The input may also be a KITTI raw drive folder (velodyne_points/data/*.bin, with\n"
-      "velodyne_points/timestamps.txt when it has one), processed without a pose (parked).");
+      "velodyne_points/timestamps.txt when it has one): its oxts/ records are the INS (tracks in\n"
+      "the world, real speeds; the mounting from calib_imu_to_velo.txt, in the folder or the one\n"
+      "above), or without oxts/ (or with --no-deskew) it is processed without a pose (parked).");
   cmd->add_option("capture", o->in,
                   "pcap capture (HDL-64E UDP, optionally the POS LV stream), or a KITTI raw drive "
                   "folder")

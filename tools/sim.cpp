@@ -11,7 +11,9 @@
 #include "drivers/can/config.hpp"
 #include "drivers/io/pcap_writer.hpp"
 #include "drivers/velodyne/decoder.hpp"
+#include "drivers/velodyne/scan_stream.hpp"
 #include "drivers/velodyne/status.hpp"
+#include "formats/kitti_raw.hpp"
 #include "settings/settings.hpp"
 #include "sim/ins.hpp"
 #include "sim/run.hpp"
@@ -171,8 +173,26 @@ int run_sim(const SimOptions& o) {
     if (!c) return fail(c.error().message);
     can_log.emplace(std::move(*c));
   }
-  auto pcap = io::PcapWriter::open(o.out);
-  if (!pcap) return fail(pcap.error().message);
+  if (o.out.empty() && o.kitti_raw.empty())
+    return fail("nothing to write: give --out RUN.pcap, --kitti-raw DIR, or both");
+  std::optional<io::PcapWriter> pcap;
+  if (!o.out.empty()) {
+    auto p = io::PcapWriter::open(o.out);
+    if (!p) return fail(p.error().message);
+    pcap.emplace(std::move(*p));
+  }
+  // --kitti-raw: the packets decoded as a driver would, each complete scan written with the OXTS
+  // record of its mid-sweep time (the sim's Group 1 there) and the sensor's mounting.
+  std::optional<formats::KittiRawWriter> kitti;
+  std::optional<velodyne::ScanStream> kitti_scans;
+  if (!o.kitti_raw.empty()) {
+    Eigen::Isometry3d velo_T_imu = Eigen::Isometry3d::Identity();
+    velo_T_imu.translation() = Eigen::Vector3d(0, 0, -rc.lidar.mount_height_m);
+    auto w = formats::KittiRawWriter::create(o.kitti_raw, velo_T_imu);
+    if (!w) return fail(w.error().message);
+    kitti.emplace(std::move(*w));
+    kitti_scans.emplace(*calibration, settings->assembler, 2);
+  }
   std::ofstream truth(o.truth);
   if (!truth) return fail(o.truth + ": cannot create the truth file");
 
@@ -212,12 +232,35 @@ int run_sim(const SimOptions& o) {
   Progress progress("sim " + o.scenario, n);
   const auto wall0 = std::chrono::steady_clock::now();
   sim::InsSim ins(ic, [r = run->get()](double t) { return r->ego(t); });
-  InsPcapStream ins_out(*pcap, o.ins_udp);
+  std::optional<InsPcapStream> ins_out;
+  if (pcap) ins_out.emplace(*pcap, o.ins_udp);
   std::uint64_t ins_messages = 0;
   auto write_ins_until = [&](std::int64_t stamp_ns) -> rt::Status {
-    while (ins.next_stamp_ns() <= stamp_ns) {
-      if (auto w = ins_out.write(ins.next()); !w) return w;
+    while (ins_out && ins.next_stamp_ns() <= stamp_ns) {
+      if (auto w = ins_out->write(ins.next()); !w) return w;
       ++ins_messages;
+    }
+    return {};
+  };
+  auto write_kitti_scans = [&]() -> rt::Status {
+    while (velodyne::Scan* scan = kitti_scans->take()) {
+      if (scan->header.complete()) {
+        const std::int64_t mid =
+            scan->header.stamp_ns + (scan->header.end_stamp_ns - scan->header.stamp_ns) / 2;
+        const applanix::Group1 g = ins.group1_at(static_cast<double>(mid - rc.start_ns) * 1e-9);
+        ego::InsFix fix;
+        fix.stamp_ns = mid;
+        fix.position = {g.latitude_deg, g.longitude_deg, g.altitude_m};
+        fix.roll_deg = g.roll_deg, fix.pitch_deg = g.pitch_deg, fix.heading_deg = g.heading_deg;
+        fix.velocity_ned_mps = {g.north_velocity_mps, g.east_velocity_mps, g.down_velocity_mps};
+        fix.angular_rate_frd_dps = {g.rate_longitudinal_dps, g.rate_transverse_dps,
+                                    g.rate_down_dps};
+        if (auto a = kitti->add(*scan, mid, formats::oxts_record(fix)); !a) {
+          kitti_scans->release();
+          return a;
+        }
+      }
+      kitti_scans->release();
     }
     return {};
   };
@@ -234,14 +277,24 @@ int run_sim(const SimOptions& o) {
     d.dst_ip = 0xFFFFFFFF;
     d.src_port = velodyne::kPortData;
     d.dst_port = velodyne::kPortData;
-    if (auto w = pcap->write_udp(d); !w) return fail(w.error().message);
+    if (pcap) {
+      if (auto w = pcap->write_udp(d); !w) return fail(w.error().message);
+    }
+    if (kitti_scans && kitti_scans->add_packet(d.payload, d.stamp_ns)) {
+      if (auto w = write_kitti_scans(); !w) return fail(w.error().message);
+    }
     progress.update(k);
   }
   (void)(*run)->finish(on_scan);
+  if (kitti) {
+    if (auto f = kitti->finish(); !f) return fail(f.error().message);
+  }
   if (auto w = write_ins_until(rc.start_ns + std::llround(rc.duration_s * 1e9)); !w)
     return fail(w.error().message);
   progress.finish();
-  if (auto c = pcap->close(); !c) return fail(c.error().message);
+  if (pcap) {
+    if (auto c = pcap->close(); !c) return fail(c.error().message);
+  }
   truth.close();
   if (!truth) return fail(o.truth + ": write failed");
   const double wall =
@@ -251,13 +304,19 @@ int run_sim(const SimOptions& o) {
                "  %zu objects in the world; simulated %.2fx real time (%.1f s)\n",
                o.scenario.c_str(), static_cast<unsigned long long>(o.seed), o.duration_s, n,
                static_cast<unsigned long long>(scans), static_cast<unsigned long long>(points),
-               o.out.c_str(), o.truth.c_str(), (*run)->world().actors().size(), o.duration_s / wall,
-               wall);
-  std::fprintf(stderr,
-               "  INS: %llu Applanix messages (Group 1 at 200 Hz, Groups 2 and 3 at 1 Hz), GPS "
-               "week %u, %s port %u\n",
-               static_cast<unsigned long long>(ins_messages), ins.gps_week(),
-               o.ins_udp ? "UDP" : "TCP", static_cast<unsigned>(InsPcapStream::kPort));
+               o.out.empty() ? "(no pcap)" : o.out.c_str(), o.truth.c_str(),
+               (*run)->world().actors().size(), o.duration_s / wall, wall);
+  if (pcap)
+    std::fprintf(stderr,
+                 "  INS: %llu Applanix messages (Group 1 at 200 Hz, Groups 2 and 3 at 1 Hz), GPS "
+                 "week %u, %s port %u\n",
+                 static_cast<unsigned long long>(ins_messages), ins.gps_week(),
+                 o.ins_udp ? "UDP" : "TCP", static_cast<unsigned>(InsPcapStream::kPort));
+  if (kitti)
+    std::fprintf(stderr,
+                 "  KITTI raw: %zu complete scans with their OXTS records in %s (velodyne_points, "
+                 "oxts, calib_imu_to_velo.txt)\n",
+                 kitti->scans(), o.kitti_raw.c_str());
   if (can_log) return write_can_log(*can_log, o.can, rc);
   return 0;
 }
@@ -285,7 +344,11 @@ void add_sim_command(CLI::App& app) {
   cmd->add_option("--duration", o->duration_s, "seconds to simulate")
       ->check(CLI::Range(0.1, 7200.0))
       ->capture_default_str();
-  cmd->add_option("--out", o->out, "pcap file to write")->required();
+  cmd->add_option("--out", o->out, "pcap file to write");
+  cmd->add_option("--kitti-raw", o->kitti_raw,
+                  "also (or, without --out, only) write the drive as a KITTI raw drive folder: "
+                  "velodyne_points (each complete scan's points, not deskewed), oxts (a record at "
+                  "each scan's mid-sweep time), calib_imu_to_velo.txt");
   cmd->add_option("--truth", o->truth, "truth file to write (JSON lines, one per scan)")
       ->required();
   cmd->add_option("--calib", o->calib, "calibration of the virtual unit (default: the config's)");

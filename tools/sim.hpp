@@ -22,6 +22,7 @@ struct SimOptions {
   bool ins_udp = false;
   std::string can;                   // candump log to write; empty: none
   std::vector<std::string> without;  // kinds left out of the world (sim::RunConfig::without)
+  std::string kitti_raw;  // also (or only, without `out`) the drive in KITTI raw's layout here
 };
 
 // Prints a summary on stderr; returns the process exit code (0 ok, 1 with a message printed).

@@ -3,7 +3,9 @@
 
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
+#include <numbers>
 #include <string>
 
 #include "shared_data.hpp"
@@ -161,9 +163,9 @@ TEST(ProcessCli, TracksRecordTheirFrameAndEvalBringsTheTruthIntoItOrRefuses) {
 
 // Issue 33: a KITTI raw drive folder as the input. The 40 real scans of kitti-raw-seq (no OXTS,
 // no timestamps) run parked, said so, with a picture of each scan; a drive's timestamps.txt
-// gives the scans their times; an oxts/ folder is refused until --no-deskew; sim-compare reads
-// the same folder.
-TEST(ProcessCli, KittiRawDriveRunsParkedWithAPictureOfEachScan) {
+// gives the scans their times; its oxts/ records are the INS (world frame, the mounting from
+// calib_imu_to_velo.txt); sim-compare reads the same folder.
+TEST(ProcessCli, KittiRawDriveRunsParkedWithAPictureOfEachScanOrPosedByItsOxts) {
   constexpr const char* kSeq = "kitti-raw-seq/velodyne_points/data/0000000000.bin";
   STAC_REQUIRE_SHARED_DATA(kSeq);
   const std::filesystem::path seq = stac::testing::shared_data("kitti-raw-seq");
@@ -219,12 +221,58 @@ TEST(ProcessCli, KittiRawDriveRunsParkedWithAPictureOfEachScan) {
   ASSERT_TRUE(timed && timed->size() == 3u);
   EXPECT_NEAR(static_cast<double>(timed->front().stamp_ns - 1'317'042'145'964'389'445), 0.0,
               1000.0);
+  // Its GPS/IMU: oxts/ records are the INS. An empty oxts/data is refused; --no-deskew parks.
   std::filesystem::create_directories(drive / "oxts" / "data");
   p = stac("process " + drive.string() + " --tracks " + (dir / "d.jsonl").string());
   EXPECT_NE(p.code, 0);
-  EXPECT_NE(p.output.find("--no-deskew"), std::string::npos) << p.output;
+  EXPECT_NE(p.output.find("no .txt record"), std::string::npos) << p.output;
   p = stac("process " + drive.string() + " --no-deskew --tracks " + (dir / "d.jsonl").string());
   EXPECT_EQ(p.code, 0) << p.output;
+  EXPECT_NE(p.output.find("--no-deskew: parked sensor"), std::string::npos) << p.output;
+  // Three records, facing north (yaw pi/2) and 1 m further north each; the mounting in the date
+  // folder above the drive, as KITTI ships it: the IMU 0.81 m behind, 0.32 m left of and 0.80 m
+  // below the velodyne.
+  std::filesystem::copy_file(drive / "velodyne_points" / "timestamps.txt",
+                             drive / "oxts" / "timestamps.txt");
+  for (int k = 0; k < 3; ++k) {
+    char line[256];
+    std::snprintf(line, sizeof(line),
+                  "%.12f 8.4 110 0 0 1.5707963267948966 10 0 10 0 0 0 0 9.81 0 0 9.81 0 0 0 0 0 "
+                  "0 0.05 0.02 4 10 4 4 0\n",
+                  49.0 + k / 111'200.0);
+    std::ofstream(drive / "oxts" / "data" / ("000000000" + std::to_string(k) + ".txt")) << line;
+  }
+  std::ofstream(dir / "calib_imu_to_velo.txt")
+      << "calib_time: 25-May-2012 16:47:16\nR: 1 0 0 0 1 0 0 0 1\nT: -0.81 0.32 -0.80\n";
+  p = stac("process " + drive.string() + " --tracks " + (dir / "posed.jsonl").string());
+  ASSERT_EQ(p.code, 0) << p.output;
+  for (const std::string& said :
+       {std::string("3 OXTS records, 3 poses"), std::string("0 scans without a pose"),
+        "sensor mounting from " + (dir / "calib_imu_to_velo.txt").string()}) {
+    EXPECT_NE(p.output.find(said), std::string::npos) << said << " missing from\n" << p.output;
+  }
+  auto posed = read_tracks_file(dir / "posed.jsonl");
+  auto parked = read_tracks_file(dir / "d.jsonl");
+  ASSERT_TRUE(posed && parked && posed->size() == 3u && parked->size() == 3u);
+  for (std::size_t k = 0; k < 3; ++k) {
+    const TracksScan& t = (*posed)[k];
+    EXPECT_EQ(t.frame, TracksFrame::kEnu);
+    EXPECT_NEAR(t.origin[0], 49.0, 1e-9);
+    EXPECT_NEAR(t.ego.x, 0.0, 0.01);
+    EXPECT_NEAR(t.ego.y, static_cast<double>(k), 0.01);  // 1 m north a scan
+    EXPECT_NEAR(t.ego.yaw, std::numbers::pi / 2, 1e-6);
+  }
+  // The first scan's segments: the vehicle's (parked with the config's mounting, the sensor
+  // 1.73 m up) turned to face north and moved by the drive's mounting.
+  const TracksScan& a = (*posed)[0];
+  const TracksScan& b = (*parked)[0];
+  ASSERT_EQ(a.segments.size(), b.segments.size());
+  ASSERT_FALSE(a.segments.empty());
+  for (std::size_t i = 0; i < a.segments.size(); i += 7) {
+    EXPECT_NEAR(a.segments[i].x, -b.segments[i].y + 0.32, 1e-3) << i;
+    EXPECT_NEAR(a.segments[i].y, b.segments[i].x + 0.81, 1e-3) << i;
+    EXPECT_NEAR(a.segments[i].z, b.segments[i].z - 1.73 + 0.80, 1e-3) << i;
+  }
 
   // sim-compare reports the real scans of the same folder.
   const std::string pcap = (dir / "sim.pcap").string();
@@ -236,6 +284,60 @@ TEST(ProcessCli, KittiRawDriveRunsParkedWithAPictureOfEachScan) {
            (dir / "realism").string());
   ASSERT_EQ(p.code, 0) << p.output;
   EXPECT_NE(p.output.find("vs 40 KITTI scans"), std::string::npos) << p.output;
+}
+
+// Issue 33: `stac sim --kitti-raw` writes a drive in KITTI raw's layout (scans not deskewed, an
+// OXTS record at each scan's mid-sweep time, the mounting), so the KITTI path runs with known
+// answers: the same simulated drive through its pcap and through its KITTI raw folder tracks the
+// same within a stated tolerance (MOTA and HOTA within 0.03; the KITTI path places each scan at one
+// instant, not deskewed, so its boxes may sit up to 0.1 m farther off on average).
+TEST(ProcessCli, ASimulatedDriveThroughPcapAndThroughKittiRawTracksTheSame) {
+  const auto dir = fresh_dir("kitti_sim");
+  const auto at = [&](const char* name) { return (dir / name).string(); };
+  CliResult r = stac("sim --scenario urban --seed 7 --duration 6 --out " + at("run.pcap") +
+                     " --truth " + at("run.jsonl") + " --kitti-raw " + at("drive"));
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("KITTI raw: 58 complete scans"), std::string::npos) << r.output;
+  for (const char* f :
+       {"drive/calib_imu_to_velo.txt", "drive/oxts/timestamps.txt",
+        "drive/velodyne_points/timestamps.txt", "drive/velodyne_points/data/0000000057.bin",
+        "drive/oxts/data/0000000057.txt"})
+    EXPECT_TRUE(std::filesystem::is_regular_file(dir / f)) << f;
+
+  r = stac("process " + at("run.pcap") + " --tracks " + at("pcap.jsonl"));
+  ASSERT_EQ(r.code, 0) << r.output;
+  r = stac("process " + at("drive") + " --tracks " + at("kitti.jsonl"));
+  ASSERT_EQ(r.code, 0) << r.output;
+  for (const char* said : {"58 OXTS records, 58 poses", "0 scans without a pose",
+                           "58 complete scans", "drive/calib_imu_to_velo.txt"})
+    EXPECT_NE(r.output.find(said), std::string::npos) << said << " missing from\n" << r.output;
+  std::map<std::string, nlohmann::json> m;
+  for (const char* path : {"pcap", "kitti"}) {
+    const std::string report = at(path) + std::string("_eval");
+    r = stac("eval --truth " + at("run.jsonl") + " --tracks " + at(path) + std::string(".jsonl") +
+             " --report " + report);
+    ASSERT_EQ(r.code, 0) << r.output;
+    std::ifstream in(report + "/metrics.json");
+    m[path] = nlohmann::json::parse(in);
+  }
+  const auto number = [&](const char* path, const char* key) {
+    return m[path].at(key).get<double>();
+  };
+  EXPECT_GT(number("pcap", "mota"), 0.8) << m["pcap"].dump(2);
+  EXPECT_NEAR(number("kitti", "mota"), number("pcap", "mota"), 0.03);
+  EXPECT_NEAR(number("kitti", "hota"), number("pcap", "hota"), 0.03);
+  EXPECT_NEAR(number("kitti", "motp_distance_m"), number("pcap", "motp_distance_m"), 0.1);
+  EXPECT_EQ(number("kitti", "gt"), number("pcap", "gt"));  // every truth scan paired
+
+  // Only the KITTI folder; nothing to write at all is refused.
+  r = stac("sim --scenario empty --seed 2 --duration 1 --truth " + at("only.jsonl") +
+           " --kitti-raw " + at("only"));
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("(no pcap)"), std::string::npos) << r.output;
+  EXPECT_TRUE(std::filesystem::is_regular_file(dir / "only/velodyne_points/data/0000000000.bin"));
+  r = stac("sim --scenario empty --duration 1 --truth " + at("none.jsonl"));
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.output.find("nothing to write"), std::string::npos) << r.output;
 }
 
 // Issue 31: Applanix messages dropped for a bad checksum are reported, not silently lost.

@@ -178,7 +178,9 @@ EvalResult evaluate(const std::vector<TruthScanRecord>& truth_in,
   r.truth_scans = truth_in.size();
   r.output_scans = tracks_in.size();
 
-  // Pair scans by time: each output scan with the nearest truth scan within the tolerance.
+  // Pair scans by time: each output scan with the nearest truth scan within the tolerance, or
+  // the one whose sweep holds its time (a scan placed at one instant of its sweep, as KITTI's
+  // mid-sweep times are).
   std::vector<const TruthScanRecord*> truth;
   truth.reserve(truth_in.size());
   for (const auto& t : truth_in) truth.push_back(&t);
@@ -198,7 +200,10 @@ EvalResult evaluate(const std::vector<TruthScanRecord>& truth_in,
     for (auto cand : {it, it == truth.begin() ? truth.end() : it - 1}) {
       if (cand == truth.end()) continue;
       const std::int64_t off = std::llabs((*cand)->stamp_ns - o->stamp_ns);
-      if (off <= tolerance_ns &&
+      const bool in_sweep = (*cand)->end_stamp_ns > (*cand)->stamp_ns &&
+                            o->stamp_ns >= (*cand)->stamp_ns &&
+                            o->stamp_ns <= (*cand)->end_stamp_ns;
+      if ((off <= tolerance_ns || in_sweep) &&
           (best == nullptr || off < std::llabs(best->stamp_ns - o->stamp_ns)))
         best = *cand;
     }

@@ -349,6 +349,8 @@ rt::Result<TruthScanRecord> parse_truth_line(std::string_view line) {
     if (j.is_object() && j.contains("origin")) s.origin = origin(j);
     s.scan = integer<std::uint64_t>(j, "scan");
     s.stamp_ns = stamp(j);
+    if (j.is_object() && j.contains("end_time"))
+      s.end_stamp_ns = std::llround(number(j, "end_time") * 1e9);
     s.ego = ego(j);
     for (const json& o : array(j, "objects")) {
       TruthObjectRecord r;

@@ -74,6 +74,7 @@ struct TruthScanRecord {
   std::optional<std::array<double, 3>> origin;  // the world's geodetic anchor (lat, lon, alt)
   std::uint64_t scan = 0;
   std::int64_t stamp_ns = 0;
+  std::int64_t end_stamp_ns = 0;  // its last firing ("end_time"); 0 when the file has none
   EgoRecord ego;
   std::vector<TruthObjectRecord> objects;
 };

@@ -1,0 +1,201 @@
+// A KITTI raw drive's GPS/IMU (issue 33): OXTS records read and refused with a reason, their
+// attitude turned into STAC's INS fix with the KITTI devkit's conventions, and the IMU -> velodyne
+// mounting.
+#include "formats/kitti_raw.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <string>
+
+#include "ego/local_frame.hpp"
+
+namespace stac::formats {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A record as KITTI writes one: 25 numbers, then navstat, numsats, posmode, velmode, orimode.
+constexpr const char* kRecord =
+    "49.015003823272 8.4342971002335 116.43032836914 0.035752 0.00903 -2.6087069803847 "
+    "-7.3848125497419 -11.167178269201 13.342774120196 0.18424810367317 -0.22164419262314 "
+    "-0.1253942541434 0.46617660707314 9.8105402154917 -0.14424584212937 0.43893620735698 "
+    "9.8244138656043 0.0087346616722958 -0.0031398713993441 0.0080013573264233 "
+    "0.0086669798207541 -0.0029914580263131 0.0082183398366087 0.26940243071706 "
+    "0.031710906736612 4 10 4 4 0";
+
+fs::path fresh(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("stac_kitti_raw_" + name);
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+TEST(KittiOxts, ARecordReadsItsThirtyValues) {
+  auto r = parse_oxts_record(kRecord);
+  ASSERT_TRUE(r.has_value()) << r.error().message;
+  EXPECT_DOUBLE_EQ(r->lat_deg, 49.015003823272);
+  EXPECT_DOUBLE_EQ(r->yaw_rad, -2.6087069803847);
+  EXPECT_DOUBLE_EQ(r->vf, 13.342774120196);
+  EXPECT_DOUBLE_EQ(r->wu, 0.0082183398366087);
+  EXPECT_EQ(r->navstat, 4);
+  EXPECT_EQ(r->numsats, 10);
+  EXPECT_EQ(r->orimode, 0);
+  // Written back as KITTI writes it, it reads the same.
+  auto again = parse_oxts_record(format_oxts_record(*r));
+  ASSERT_TRUE(again.has_value()) << again.error().message;
+  EXPECT_NEAR(again->lat_deg, r->lat_deg, 1e-12);
+  EXPECT_NEAR(again->yaw_rad, r->yaw_rad, 1e-11);
+  EXPECT_EQ(again->numsats, r->numsats);
+}
+
+TEST(KittiOxts, ABadRecordIsRefusedSayingWhichValue) {
+  const std::string good = kRecord;
+  const auto error = [](const std::string& text) {
+    auto r = parse_oxts_record(text);
+    return r.has_value() ? std::string("accepted") : r.error().message;
+  };
+  EXPECT_NE(error(good.substr(0, good.rfind(' '))).find("orimode missing"), std::string::npos);
+  EXPECT_NE(error(good + " 7").find("more than 30"), std::string::npos);
+  EXPECT_NE(error("nan" + good.substr(good.find(' '))).find("lat 'nan'"), std::string::npos);
+  EXPECT_NE(error("91" + good.substr(good.find(' '))).find("not a place"), std::string::npos);
+  EXPECT_NE(error(good.substr(0, good.rfind(" 4 10")) + " 4.5 10 4 4 0").find("navstat"),
+            std::string::npos);
+  EXPECT_NE(error("49 8 1e7" + good.substr(good.find(" 0.035752"))).find("alt"), std::string::npos);
+  EXPECT_NE(error("").find("0 values"), std::string::npos);
+}
+
+// The devkit's rotation of the IMU (x forward, y left, z up) into east-north-up:
+// Rz(yaw) * Ry(pitch) * Rx(roll).
+Eigen::Matrix3d devkit_rotation(double roll, double pitch, double yaw) {
+  return (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) *
+          Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
+          Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()))
+      .toRotationMatrix();
+}
+
+TEST(KittiOxts, TheAttitudeIsTheDevkitsInStacsFrame) {
+  OxtsRecord r;
+  r.lat_deg = 49.0, r.lon_deg = 8.4, r.alt_m = 110;
+  const auto attitude = [&](double roll, double pitch, double yaw) {
+    r.roll_rad = roll, r.pitch_rad = pitch, r.yaw_rad = yaw;
+    const ego::InsFix f = oxts_fix(r);
+    return ego::LocalFrame::attitude_enu(f.roll_deg, f.pitch_deg, f.heading_deg).toRotationMatrix();
+  };
+  // Facing east, then north (yaw 0 is east, counter-clockwise positive).
+  EXPECT_TRUE(attitude(0, 0, 0).col(0).isApprox(Eigen::Vector3d::UnitX(), 1e-9));
+  EXPECT_TRUE(attitude(0, 0, std::numbers::pi / 2).col(0).isApprox(Eigen::Vector3d::UnitY(), 1e-9));
+  // Pitch positive: the front goes down; roll positive: the left side goes up.
+  EXPECT_NEAR(attitude(0, 0.1, 0.4).col(0).z(), -std::sin(0.1), 1e-9);
+  EXPECT_NEAR(attitude(0.1, 0, 0.4).col(1).z(), std::sin(0.1), 1e-9);
+  // Any attitude: the devkit's matrix.
+  for (const auto& [roll, pitch, yaw] :
+       {std::array{0.03, -0.02, -2.6}, std::array{-0.2, 0.3, 1.1}, std::array{0.5, -0.6, 3.0}}) {
+    EXPECT_TRUE(attitude(roll, pitch, yaw).isApprox(devkit_rotation(roll, pitch, yaw), 1e-9))
+        << roll << " " << pitch << " " << yaw << "\n"
+        << attitude(roll, pitch, yaw) << "\n"
+        << devkit_rotation(roll, pitch, yaw);
+  }
+  // Velocity north, east, up -> NED; rates forward, left, up -> forward, right, down (deg/s).
+  r.vn = 1, r.ve = 2, r.vu = 0.5, r.wf = 0.1, r.wl = 0.2, r.wu = 0.3;
+  const ego::InsFix f = oxts_fix(r);
+  EXPECT_TRUE(f.velocity_ned_mps.isApprox(Eigen::Vector3d(1, 2, -0.5)));
+  EXPECT_NEAR(f.angular_rate_frd_dps.y(), -0.2 * 180 / std::numbers::pi, 1e-9);
+  EXPECT_NEAR(f.angular_rate_frd_dps.z(), -0.3 * 180 / std::numbers::pi, 1e-9);
+}
+
+TEST(KittiOxts, AFixWrittenAsARecordReadsBackTheSame) {
+  ego::InsFix f;
+  f.stamp_ns = 1'767'268'800'150'025'084;
+  f.position = {44.2449, -76.5098, 77.1};
+  f.roll_deg = 1.5, f.pitch_deg = -2.0, f.heading_deg = 250.0;
+  f.velocity_ned_mps = {-3.0, -8.0, 0.2};
+  f.angular_rate_frd_dps = {0.5, -1.0, 4.0};
+  const OxtsRecord r = oxts_record(f);
+  EXPECT_NEAR(r.yaw_rad, (90.0 - 250.0 + 360.0) * std::numbers::pi / 180.0 - 2 * std::numbers::pi,
+              1e-12);  // wrapped to +-pi
+  const ego::InsFix back = oxts_fix(r);
+  EXPECT_NEAR(back.roll_deg, f.roll_deg, 1e-9);
+  EXPECT_NEAR(back.pitch_deg, f.pitch_deg, 1e-9);
+  EXPECT_NEAR(back.heading_deg, f.heading_deg, 1e-9);
+  EXPECT_TRUE(back.velocity_ned_mps.isApprox(f.velocity_ned_mps, 1e-12));
+  EXPECT_TRUE(back.angular_rate_frd_dps.isApprox(f.angular_rate_frd_dps, 1e-12));
+  // Forward and left: heading east and moving east is forward; heading north and moving east is
+  // to the right (left negative).
+  f.velocity_ned_mps = {0.0, 5.0, 0.0};
+  f.heading_deg = 90.0;
+  EXPECT_NEAR(oxts_record(f).vf, 5.0, 1e-12);
+  EXPECT_NEAR(oxts_record(f).vl, 0.0, 1e-12);
+  f.heading_deg = 0.0;
+  EXPECT_NEAR(oxts_record(f).vf, 0.0, 1e-12);
+  EXPECT_NEAR(oxts_record(f).vl, -5.0, 1e-12);
+  // Its time as KITTI writes times, and back.
+  EXPECT_EQ(format_kitti_time(f.stamp_ns), "2026-01-01 12:00:00.150025084");
+  std::int64_t ns = 0;
+  ASSERT_TRUE(parse_kitti_time(format_kitti_time(f.stamp_ns), ns));
+  EXPECT_EQ(ns, f.stamp_ns);
+}
+
+TEST(KittiOxts, ADrivesRecordsComeWithTheirTimesOrAreRefused) {
+  const fs::path drive = fresh("oxts");
+  fs::create_directories(drive / "oxts" / "data");
+  for (int k = 0; k < 2; ++k)
+    std::ofstream(drive / "oxts" / "data" / ("000000000" + std::to_string(k) + ".txt"))
+        << kRecord << "\n";
+  auto r = read_kitti_oxts(drive);
+  ASSERT_FALSE(r.has_value());
+  EXPECT_NE(r.error().message.find("timestamps.txt: missing"), std::string::npos)
+      << r.error().message;
+  std::ofstream(drive / "oxts" / "timestamps.txt") << "2011-09-26 13:02:25.964389445\n";
+  r = read_kitti_oxts(drive);
+  ASSERT_FALSE(r.has_value());
+  EXPECT_NE(r.error().message.find("has 1 times for 2 records"), std::string::npos)
+      << r.error().message;
+  std::ofstream(drive / "oxts" / "timestamps.txt", std::ios::app)
+      << "2011-09-26 13:02:26.066013922\n";
+  r = read_kitti_oxts(drive);
+  ASSERT_TRUE(r.has_value()) << r.error().message;
+  ASSERT_EQ(r->size(), 2u);
+  EXPECT_EQ((*r)[1].stamp_ns - (*r)[0].stamp_ns, 101'624'477);
+  std::ofstream(drive / "oxts" / "data" / "0000000001.txt") << "49 8.4 116\n";
+  r = read_kitti_oxts(drive);
+  ASSERT_FALSE(r.has_value());
+  EXPECT_NE(r.error().message.find("0000000001.txt: has 3 values"), std::string::npos)
+      << r.error().message;
+}
+
+TEST(KittiOxts, TheImuToVelodyneMountingIsARigidTransform) {
+  const fs::path date = fresh("calib");
+  const fs::path drive = date / "2011_09_26_drive_0001_sync";
+  fs::create_directories(drive);
+  EXPECT_TRUE(find_kitti_imu_to_velo(drive).empty());
+  // Values of the kind KITTI ships: a small rotation, and the IMU 0.81 m behind, 0.32 m left of
+  // and 0.80 m below the velodyne.
+  std::ofstream(date / "calib_imu_to_velo.txt")
+      << "calib_time: 25-May-2012 16:47:16\n"
+         "R: 9.999976e-01 7.553071e-04 -2.035826e-03 -7.854027e-04 9.998898e-01 -1.482298e-02 "
+         "2.024406e-03 1.482454e-02 9.998881e-01\nT: -8.086759e-01 3.195559e-01 -7.997231e-01\n";
+  EXPECT_EQ(find_kitti_imu_to_velo(drive), date / "calib_imu_to_velo.txt");
+  EXPECT_EQ(find_kitti_imu_to_velo(drive.string() + "/"), date / "calib_imu_to_velo.txt");
+  auto v = read_kitti_imu_to_velo(date / "calib_imu_to_velo.txt");
+  ASSERT_TRUE(v.has_value()) << v.error().message;
+  EXPECT_NEAR(v->translation().x(), -0.8086759, 1e-9);
+  EXPECT_NEAR(v->linear()(1, 2), -1.482298e-02, 1e-12);
+  // The IMU's origin, seen from the velodyne, is T.
+  EXPECT_TRUE((*v * Eigen::Vector3d::Zero()).isApprox(v->translation()));
+  std::ofstream(drive / "calib_imu_to_velo.txt") << "R: 1 0 0 0 1 0 0 0 2\nT: 0 0 0\n";
+  EXPECT_EQ(find_kitti_imu_to_velo(drive), drive / "calib_imu_to_velo.txt");
+  v = read_kitti_imu_to_velo(drive / "calib_imu_to_velo.txt");
+  ASSERT_FALSE(v.has_value());
+  EXPECT_NE(v.error().message.find("not a rotation"), std::string::npos) << v.error().message;
+  std::ofstream(drive / "calib_imu_to_velo.txt") << "R: 1 0 0 0 1 0 0 0 1\n";
+  v = read_kitti_imu_to_velo(drive / "calib_imu_to_velo.txt");
+  ASSERT_FALSE(v.has_value());
+  EXPECT_NE(v.error().message.find("'T:'"), std::string::npos) << v.error().message;
+}
+
+}  // namespace
+}  // namespace stac::formats
