@@ -46,10 +46,18 @@ rt::Result<std::optional<CapturePoses>> load_capture_poses(const std::filesystem
 }
 
 rt::Result<CapturePoses> load_kitti_raw_poses(const std::filesystem::path& drive,
-                                              const settings::EgoSettings& settings) {
+                                              settings::EgoSettings& settings) {
   auto records = read_kitti_oxts(drive);
   if (!records) return rt::Unexpected<rt::Error>{records.error()};
   CapturePoses out;
+  if (const std::filesystem::path calib = find_kitti_imu_to_velo(drive); !calib.empty()) {
+    auto velo_T_imu = read_kitti_imu_to_velo(calib);
+    if (!velo_T_imu) return rt::Unexpected<rt::Error>{velo_T_imu.error()};
+    settings.deskew.vehicle_T_sensor = velo_T_imu->inverse();
+    out.mounting = calib.string();
+  } else {
+    out.mounting = "the config's ego extrinsics (no calib_imu_to_velo.txt in the drive or above)";
+  }
   out.group1 = records->size();
   out.frame = std::make_unique<ego::LocalFrame>(settings.origin);
   ego::PoseHistoryConfig hc = settings.history;

@@ -19,7 +19,8 @@ struct CapturePoses {
   std::unique_ptr<ego::PoseHistory> history;
   ego::EgoCounters counters;
   applanix::ParserCounters parser;  // the INS stream's messages dropped, by cause
-  std::uint64_t group1 = 0;         // Group 1 messages in the capture
+  std::uint64_t group1 = 0;         // Group 1 messages in the capture (OXTS records of a drive)
+  std::string mounting;             // a KITTI drive's: where the sensor's mounting came from
 };
 
 // Empty (no error) when the capture holds no Group 1 on the port: a parked sensor, identity pose.
@@ -29,8 +30,10 @@ rt::Result<std::optional<CapturePoses>> load_capture_poses(const std::filesystem
                                                            const settings::EgoSettings& settings);
 
 // The poses of a KITTI raw drive folder from its OXTS records (DIR/oxts; formats/kitti_raw.hpp),
-// through the same EgoEstimator (local frame, time jumps); `group1` counts the records.
+// through the same EgoEstimator (local frame, time jumps); `group1` counts the records. The IMU's
+// frame is the vehicle's: the drive's calib_imu_to_velo.txt (find_kitti_imu_to_velo) becomes
+// settings.deskew.vehicle_T_sensor, else the config's stays; `mounting` says which.
 rt::Result<CapturePoses> load_kitti_raw_poses(const std::filesystem::path& drive,
-                                              const settings::EgoSettings& settings);
+                                              settings::EgoSettings& settings);
 
 }  // namespace stac::formats

@@ -17,6 +17,7 @@
 #include "formats/capture_input.hpp"
 #include "formats/capture_poses.hpp"
 #include "formats/dataset_file.hpp"
+#include "formats/kitti_raw.hpp"
 #include "pipeline/scan_pipeline.hpp"
 #include "settings/settings.hpp"
 #include "sim/world.hpp"
@@ -131,8 +132,19 @@ class Builder : public classification::TrackClassifier::Observer {
     if (!o.calib.empty())
       vs.calibration =
           o.calib == "stream" ? std::filesystem::path{} : std::filesystem::path(o.calib);
-    auto calibration = capture_calibration(vs.calibration, in, vs.port, vs.assembler.decoder.model);
-    if (!calibration) return rt::Unexpected<rt::Error>{calibration.error()};
+    // A KITTI raw drive folder, or a capture.
+    std::optional<KittiRawDrive> drive;
+    if (is_kitti_raw_drive(in)) {
+      auto d = open_kitti_raw_drive(in);
+      if (!d) return rt::Unexpected<rt::Error>{d.error()};
+      drive = std::move(*d);
+    }
+    std::optional<velodyne::Calibration> calibration;
+    if (!drive) {
+      auto c = capture_calibration(vs.calibration, in, vs.port, vs.assembler.decoder.model);
+      if (!c) return rt::Unexpected<rt::Error>{c.error()};
+      calibration = std::move(*c);
+    }
     truth_.clear();
     if (out_.labelled) {
       auto t = read_truth_file(o.truth[k]);
@@ -145,41 +157,58 @@ class Builder : public classification::TrackClassifier::Observer {
       ego_settings.origin = ego::Geodetic{g[0], g[1], g[2]};
     }
     std::optional<CapturePoses> poses;
-    if (!o.no_deskew) {
+    if (!o.no_deskew && !drive) {
       auto p = load_capture_poses(in, ego_settings);
       if (!p) return rt::Unexpected<rt::Error>{p.error()};
       poses = std::move(*p);
+    } else if (!o.no_deskew && drive->has_oxts) {  // its OXTS records, and its mounting
+      auto p = load_kitti_raw_poses(in, ego_settings);
+      if (!p) return rt::Unexpected<rt::Error>{p.error()};
+      poses = std::move(*p);
     }
-    auto reader =
-        io::PcapReader::open(in, io::PcapFilter{.udp_dst_port = vs.port, .udp_src_port = {}});
-    if (!reader) return rt::Unexpected<rt::Error>{reader.error()};
 
     source_ = static_cast<std::uint32_t>(out_.sources.size());
     out_.sources.push_back(out_.labelled ? in + " " + o.truth[k] : in);
-    velodyne::ScanStream stream(*calibration, vs.assembler, 2);
     const pipeline::PipelineConfig pc = offline_pipeline_config(*settings, nullptr, true);
     pipeline::ScanPipeline pipeline(pc);
     pipeline.classifier()->set_observer(this);
     pipeline::ScanResult result = pipeline.make_result();
     counts_ = {};
     truth_next_ = 0;
-    Progress progress("dataset " + std::filesystem::path(in).filename().string(),
-                      static_cast<double>(std::filesystem::file_size(in)));
-    io::Datagram d;
-    while (reader->next(d)) {
-      if (stream.add_packet(d.payload, d.stamp_ns)) {
-        while (velodyne::Scan* scan = stream.take()) {
-          if (scan->header.complete()) {
-            pipeline.process(*scan, poses ? poses->history.get() : nullptr, result);
-            handle(*scan, result);
-          }
-          stream.release();
-        }
+    const std::string name = "dataset " + std::filesystem::path(in).filename().string();
+    if (drive) {
+      velodyne::Scan scan(drive->max_points);  // the one scan, reused
+      Progress progress(name, static_cast<double>(drive->scans.size()));
+      for (std::size_t i = 0; i < drive->scans.size(); ++i) {
+        auto c = load_kitti_raw_scan(drive->scans[i], i, drive->stamps_ns[i], scan);
+        if (!c) return rt::Unexpected<rt::Error>{c.error()};
+        pipeline.process(scan, poses ? poses->history.get() : nullptr, result);
+        handle(scan, result);
+        progress.update(static_cast<double>(i + 1));
       }
-      progress.update(static_cast<double>(reader->bytes_read()));
+      progress.finish();
+    } else {
+      auto reader =
+          io::PcapReader::open(in, io::PcapFilter{.udp_dst_port = vs.port, .udp_src_port = {}});
+      if (!reader) return rt::Unexpected<rt::Error>{reader.error()};
+      velodyne::ScanStream stream(*calibration, vs.assembler, 2);
+      Progress progress(name, static_cast<double>(std::filesystem::file_size(in)));
+      io::Datagram d;
+      while (reader->next(d)) {
+        if (stream.add_packet(d.payload, d.stamp_ns)) {
+          while (velodyne::Scan* scan = stream.take()) {
+            if (scan->header.complete()) {
+              pipeline.process(*scan, poses ? poses->history.get() : nullptr, result);
+              handle(*scan, result);
+            }
+            stream.release();
+          }
+        }
+        progress.update(static_cast<double>(reader->bytes_read()));
+      }
+      progress.finish();
+      if (!reader->error().empty()) return rt::make_error(capture_breaks_off(reader->error()));
     }
-    progress.finish();
-    if (!reader->error().empty()) return rt::make_error(capture_breaks_off(reader->error()));
     for (auto& [id, b] : live_) finish(b);
     live_.clear();
     if (counts_.scans == 0) return rt::make_error(in + ": no complete scan in the capture");
@@ -369,13 +398,15 @@ void add_dataset_command(CLI::App& app) {
       "points, counts per track the segments that are tracking or under-segmentation errors\n"
       "(over 10%: inconsistent, left out by `stac train` and `stac eval --classes`, as in the\n"
       "thesis), and writes DIR/tracks.bin and DIR/manifest.json (docs/classification.md).\n"
+      "A KITTI raw drive folder is an input too (its oxts/ records the INS, docs/kitti.md).\n"
       "Without --truth (any capture, a real drive too) the tracks are unlabeled: data for\n"
       "`stac induct --unlabeled` (or --background for drives without the taught classes).\n"
       "--merge DIR... joins datasets made apart (one per capture, e.g. by the Slurm job\n"
       "array deploy/slurm-dataset.sh) into one.");
   cmd->add_option("--in", o->in,
-                  "pcap capture (repeatable): a `stac sim` drive, or any with no --truth")
-      ->check(CLI::ExistingFile);
+                  "pcap capture or KITTI raw drive folder (repeatable): a `stac sim` drive (or "
+                  "its --kitti-raw folder), or any with no --truth")
+      ->check(CLI::ExistingPath);
   cmd->add_option("--truth", o->truth,
                   "its truth file (one per --in, same order); without: unlabeled tracks, for "
                   "`stac induct --unlabeled` or --background")

@@ -177,25 +177,15 @@ int run_process(const ProcessOptions& o) {
     ego_settings.origin = *g;
   }
   std::optional<CapturePoses> poses;
-  std::string mounting;  // a KITTI drive's: where its sensor mounting came from
   if (!o.no_deskew && !drive) {
     auto p = load_capture_poses(o.in, ego_settings);
     if (!p) return fail(p.error().message);
     poses = std::move(*p);
   } else if (!o.no_deskew && drive->has_oxts) {
-    // The OXTS records are the INS; the IMU's frame (x forward, y left, z up) is the vehicle's,
-    // and calib_imu_to_velo.txt the sensor's mounting on it.
+    // The OXTS records are its INS, its calib_imu_to_velo.txt the mounting.
     auto p = load_kitti_raw_poses(o.in, ego_settings);
     if (!p) return fail(p.error().message);
     poses = std::move(*p);
-    if (const std::filesystem::path calib = find_kitti_imu_to_velo(o.in); !calib.empty()) {
-      auto velo_T_imu = read_kitti_imu_to_velo(calib);
-      if (!velo_T_imu) return fail(velo_T_imu.error().message);
-      ego_settings.deskew.vehicle_T_sensor = velo_T_imu->inverse();
-      mounting = calib.string();
-    } else {
-      mounting = "the config's ego extrinsics (no calib_imu_to_velo.txt in the drive or above)";
-    }
   }
 
   std::optional<io::PcapReader> reader;
@@ -421,7 +411,8 @@ int run_process(const ProcessOptions& o) {
                  static_cast<unsigned long long>(poses->counters.impossible),
                  static_cast<unsigned long long>(poses->counters.time_jumps),
                  static_cast<unsigned long long>(poses->counters.backward_jumps),
-                 static_cast<unsigned long long>(pipeline.scans_without_pose()), mounting.c_str());
+                 static_cast<unsigned long long>(pipeline.scans_without_pose()),
+                 poses->mounting.c_str());
   } else if (poses) {
     std::fprintf(stderr,
                  "  ego         %llu INS fixes (%llu skipped before a GPS week, %llu not aligned, "

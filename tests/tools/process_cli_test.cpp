@@ -8,6 +8,7 @@
 #include <numbers>
 #include <string>
 
+#include "formats/dataset_file.hpp"
 #include "shared_data.hpp"
 #include "stac_cli.hpp"
 #include "tools/evaluation/tracks_jsonl.hpp"
@@ -328,6 +329,26 @@ TEST(ProcessCli, ASimulatedDriveThroughPcapAndThroughKittiRawTracksTheSame) {
   EXPECT_NEAR(number("kitti", "hota"), number("pcap", "hota"), 0.03);
   EXPECT_NEAR(number("kitti", "motp_distance_m"), number("pcap", "motp_distance_m"), 0.1);
   EXPECT_EQ(number("kitti", "gt"), number("pcap", "gt"));  // every truth scan paired
+
+  // `stac dataset` takes the folder as it takes the pcap: about as many tracks kept and labelled
+  // (a dataset for stac train, or, without --truth, for stac induct).
+  std::map<std::string, std::size_t> kept;
+  for (const char* in : {"run.pcap", "drive"}) {
+    const std::string out = at(in) + std::string("_data");
+    r = stac("dataset --in " + at(in) + " --truth " + at("run.jsonl") + " --out " + out);
+    ASSERT_EQ(r.code, 0) << r.output;
+    auto d = stac::formats::read_dataset(out);
+    ASSERT_TRUE(d.has_value()) << d.error().message;
+    kept[in] = d->tracks.size();
+    std::size_t cars = 0;
+    for (const auto& t : d->tracks) cars += t.label == 0 ? 1 : 0;
+    EXPECT_GT(cars, 10u) << in;
+  }
+  EXPECT_GT(kept["drive"], kept["run.pcap"] * 8 / 10);
+  EXPECT_LT(kept["drive"], kept["run.pcap"] * 12 / 10);
+  r = stac("dataset --in " + at("drive") + " --out " + at("unlabeled_data"));
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("unlabeled tracks"), std::string::npos) << r.output;
 
   // Only the KITTI folder; nothing to write at all is refused.
   r = stac("sim --scenario empty --seed 2 --duration 1 --truth " + at("only.jsonl") +

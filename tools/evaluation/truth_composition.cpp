@@ -23,11 +23,15 @@ pipeline::PipelineConfig offline_pipeline_config(
 
 const TruthScanRecord* nearest_truth_scan(const std::vector<TruthScanRecord>& truth,
                                           std::size_t& next, std::int64_t stamp_ns) {
-  while (next + 1 < truth.size() && std::llabs(truth[next + 1].stamp_ns - stamp_ns) <=
-                                        std::llabs(truth[next].stamp_ns - stamp_ns)) {
-    ++next;
-  }
-  return std::llabs(truth[next].stamp_ns - stamp_ns) <= 1'000'000 ? &truth[next] : nullptr;
+  // The last truth scan starting by the time (1 ms of slack): the scan itself when the time is
+  // its first firing, or the one whose sweep holds it (a scan placed mid-sweep, as KITTI's are).
+  constexpr std::int64_t kSlackNs = 1'000'000;
+  while (next + 1 < truth.size() && truth[next + 1].stamp_ns <= stamp_ns + kSlackNs) ++next;
+  const TruthScanRecord& t = truth[next];
+  const bool near = std::llabs(t.stamp_ns - stamp_ns) <= kSlackNs;
+  const bool in_sweep =
+      t.end_stamp_ns > t.stamp_ns && stamp_ns >= t.stamp_ns && stamp_ns <= t.end_stamp_ns;
+  return near || in_sweep ? &t : nullptr;
 }
 
 // Which truth object each segment point lies in (the smallest box holding it, grown by 5 cm),

@@ -22,8 +22,9 @@ pipeline::PipelineConfig offline_pipeline_config(
     std::shared_ptr<const classification::TrackClassifierModel> model = nullptr,
     bool describe = false);
 
-// Advances `next` to the truth scan nearest `stamp_ns` (truth in time order, not empty) and
-// returns it when within 1 ms, else null.
+// Advances `next` to the last truth scan starting by `stamp_ns` (1 ms of slack; truth in time
+// order, not empty) and returns it when it starts within 1 ms of it or its sweep ("end_time")
+// holds it (a scan placed mid-sweep), else null.
 const TruthScanRecord* nearest_truth_scan(const std::vector<TruthScanRecord>& truth,
                                           std::size_t& next, std::int64_t stamp_ns);
 
