@@ -193,6 +193,18 @@ rt::Result<Calibration> parse_db_xml(const std::string& text, const std::filesys
 
 namespace {
 
+// A laser id as a file writes it: a whole number 0..kMaxLasers-1 (checked before it becomes an
+// int: a float beyond int's range cannot be cast).
+bool laser_number(double v) noexcept {
+  return v >= 0 && v < kMaxLasers && v == std::floor(v);
+}
+
+std::string number_text(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
 rt::Result<Calibration> from_ros_yaml(const YAML::Node& root, const std::filesystem::path& path) {
   if (!root.IsMap() || !root["lasers"] || !root["lasers"].IsSequence()) {
     return rt::make_error(path.string() + ": missing the 'lasers' list of a ROS calibration");
@@ -221,6 +233,9 @@ rt::Result<Calibration> from_ros_yaml(const YAML::Node& root, const std::filesys
                             std::to_string(node.Mark().line + 1) + ")");
     auto id = yaml_number(node, "laser_id", ctx, std::nullopt);
     if (!id) return rt::Unexpected<rt::Error>{id.error()};
+    if (!laser_number(*id))
+      return rt::make_error(ctx + "'laser_id' " + number_text(*id) + " is not a laser number (0.." +
+                            std::to_string(kMaxLasers - 1) + ")");
     LaserCalibration l;
     l.laser_id = static_cast<int>(*id);
     ctx = where(path, l.laser_id);
@@ -255,6 +270,11 @@ rt::Result<Calibration> from_ros_yaml(const YAML::Node& root, const std::filesys
         return rt::make_error(ctx + "'two_pt_correction_available' is not true/false");
       }
     }
+    // Checked for 0..255 once they are ints (finish()); one beyond int's range cannot be cast.
+    for (const auto& [key, v] :
+         {std::pair{"min_intensity", min_i}, std::pair{"max_intensity", max_i}})
+      if (!(std::abs(v) <= 1e9))
+        return rt::make_error(ctx + "'" + key + "' = " + number_text(v) + " is outside 0..255");
     l.min_intensity = static_cast<int>(min_i);
     l.max_intensity = static_cast<int>(max_i);
     // A file that claims two-point correction with zero X/Y corrections (the utexas S1 file)
@@ -301,6 +321,9 @@ rt::Result<Calibration> from_db_xml(const tinyxml2::XMLDocument& doc,
     if (px == nullptr) return rt::make_error(ctx + "missing <px>");
     auto id = xml_number(px, "id_", ctx);  // VeloView writes ids as floats ("0.0")
     if (!id) return rt::Unexpected<rt::Error>{id.error()};
+    if (!laser_number(std::round(*id)))
+      return rt::make_error(ctx + "'id_' " + number_text(*id) + " is not a laser number (0.." +
+                            std::to_string(kMaxLasers - 1) + ")");
     LaserCalibration l;
     l.laser_id = static_cast<int>(std::lround(*id));
     ctx = where(path, l.laser_id);

@@ -206,6 +206,19 @@ TEST(Calibration, RejectsBrokenFilesWithClearMessages) {
       {"nan.yaml", non_number, "'focal_slope' is not a number"},
       {"range.yaml", out_of_range, "'vert_correction'"},
       {"intensity.yaml", intensity, "'max_intensity' = 99999 is outside"},
+      // Issue 31, found by config_files_fuzz: numbers beyond int's range were cast to int
+      // (undefined behaviour) before any check.
+      {"huge_id.yaml",
+       "lasers:\n- laser_id: 25999999999\n  rot_correction: 0\n  dist_correction: 1.4\n"
+       "  vert_correction: 0\n",
+       "'laser_id' 2.6e+10 is not a laser number (0..63)"},
+      {"huge_intensity.yaml",
+       "lasers:\n" + ros_yaml_laser(0) + "  min_intensity: -1e300\n" + rest(64),
+       "'min_intensity' = -1e+300 is outside 0..255"},
+      {"huge_id.xml",
+       "<?xml version=\"1.0\"?><boost_serialization><DB><points_><item><px><id_>1e300</id_>"
+       "<rotCorrection_>1</rotCorrection_></px></item></points_></DB></boost_serialization>",
+       "'id_' 1e+300 is not a laser number"},
       // A file cut short: the returns of the missing lasers would be lost.
       {"short.yaml", "lasers:\n" + ros_yaml_laser(0) + rest(63),
        "an HDL-64E calibration has 64 lasers, this file 63"},
