@@ -63,6 +63,19 @@ put("can_text_fuzz", "candump.log",
     b"(1700000000.000000) can0 123#DEADBEEF00112233\n(1700000000.010000) can0 1F0#0102\n"
     b"(1700000000.020000) can0 7FF##1112233\n\n")
 
+# A KITTI raw drive's text files: an OXTS record with its times, and the IMU -> velodyne mounting.
+put("kitti_text_fuzz", "oxts_and_times",
+    b"49.015003823272 8.4342971002335 116.43032836914 0.035752 0.00903 -2.6087069803847 "
+    b"-7.3848125497419 -11.167178269201 13.342774120196 0.18424810367317 -0.22164419262314 "
+    b"-0.1253942541434 0.46617660707314 9.8105402154917 -0.14424584212937 0.43893620735698 "
+    b"9.8244138656043 0.0087346616722958 -0.0031398713993441 0.0080013573264233 "
+    b"0.0086669798207541 -0.0029914580263131 0.0082183398366087 0.26940243071706 "
+    b"0.031710906736612 4 10 4 4 0\n2011-09-26 13:02:25.964389445\n")
+put("kitti_text_fuzz", "calib_imu_to_velo",
+    b"calib_time: 25-May-2012 16:47:16\nR: 9.999976e-01 7.553071e-04 -2.035826e-03 "
+    b"-7.854027e-04 9.998898e-01 -1.482298e-02 2.024406e-03 1.482454e-02 9.998881e-01\n"
+    b"T: -8.086759e-01 3.195559e-01 -7.997231e-01\n")
+
 model = open("config/models/stac_default.stacmodel", "rb").read()
 put("model_file_fuzz", "default_model_head", model[:4096])
 
@@ -153,4 +166,6 @@ put_dict("json_lines_fuzz", ['"scan"', '"time"', '"end_time"', '"ego"', '"segmen
                              '"objects"', '"box"', '"origin"', '"class"', '"log_odds"', '"state"',
                              '"truth"', '"id"', "null", "true", "false", "1e308", "-0"])
 put_dict("applanix_stream_fuzz", ["$GRP", "$MSG", "$#"])
+put_dict("kitti_text_fuzz", ["R:", "T:", "R0_rect:", "Tr_velo_to_cam:", "calib_time:", "nan", "inf",
+                             "1e308", "-", ":", "."])
 put_dict("dataset_file_fuzz", ["STACDSET", "car", "pedestrian", "bicyclist", "background"])
