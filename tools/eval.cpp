@@ -10,6 +10,7 @@
 #include "tools/eval_classes.hpp"
 #include "tools/evaluation/evaluation.hpp"
 #include "tools/evaluation/frames.hpp"
+#include "tools/evaluation/tracklet_truth.hpp"
 #include "tools/pictures/drawing.hpp"
 #include "tools/support/progress.hpp"
 
@@ -18,6 +19,7 @@ namespace {
 
 struct EvalOptions {
   std::string truth, tracks, report;
+  std::string tracklets, drive, config_file;  // --tracklets: KITTI raw labels instead of --truth
   EvalConfig config;
   bool classes = false;
   ClassEvalOptions class_options;
@@ -195,7 +197,8 @@ int write_report(const std::filesystem::path& dir, const EvalResult& r, const Ev
   }
   std::ofstream md(dir / "report.md");
   md << "# STAC evaluation\n\n"
-     << "- truth: `" << o.truth << "` (" << r.truth_scans << " scans)\n"
+     << "- truth: `" << (o.tracklets.empty() ? o.truth : o.tracklets) << "` (" << r.truth_scans
+     << " scans)\n"
      << "- tracks: `" << o.tracks << "` (" << r.output_scans << " scans, " << r.paired_scans
      << " paired by time)\n"
      << "- " << frames << "\n"
@@ -236,27 +239,40 @@ int write_report(const std::filesystem::path& dir, const EvalResult& r, const Ev
 }
 
 int run_eval(const EvalOptions& o) {
-  const EvalConfig& c = o.config;
+  EvalConfig c = o.config;
+  c.classified_outputs_only = !o.tracklets.empty();
   if (!(c.max_range_m > 0)) return fail("--max-range must be positive");
   std::error_code ec;
   const double total = static_cast<double>(std::filesystem::file_size(o.truth, ec)) +
                        static_cast<double>(std::filesystem::file_size(o.tracks, ec));
   Progress progress("eval: reading", ec ? 0.0 : total);
-  auto truth =
-      read_truth_file(o.truth, [&](std::uint64_t b) { progress.update(static_cast<double>(b)); });
+  rt::Result<std::vector<TruthScanRecord>> truth = std::vector<TruthScanRecord>{};
+  if (!o.tracklets.empty()) {
+    // KITTI raw labels, placed in the world by their drive's poses (its folder by default).
+    const std::filesystem::path drive = o.drive.empty()
+                                            ? std::filesystem::path(o.tracklets).parent_path()
+                                            : std::filesystem::path(o.drive);
+    auto ego = settings::load_ego_settings(settings::config_path(o.config_file));
+    if (!ego) return fail(ego.error().message);
+    truth = truth_from_tracklets(o.tracklets, drive.empty() ? "." : drive, *ego);
+  } else {
+    truth =
+        read_truth_file(o.truth, [&](std::uint64_t b) { progress.update(static_cast<double>(b)); });
+  }
   if (!truth) return fail(truth.error().message);
   double done = ec ? 0.0 : static_cast<double>(std::filesystem::file_size(o.truth, ec));
   auto tracks = read_tracks_file(
       o.tracks, [&](std::uint64_t b) { progress.update(done + static_cast<double>(b)); });
   if (!tracks) return fail(tracks.error().message);
   progress.finish();
-  if (truth->empty()) return fail(o.truth + ": no scans");
+  const std::string& truth_name = o.tracklets.empty() ? o.truth : o.tracklets;
+  if (truth->empty()) return fail(truth_name + ": no scans");
   // The truth in the tracks' frame, or a refusal that says what to do.
   auto frames = truth_in_tracks_frame(*truth, *tracks);
-  if (!frames) return fail(o.tracks + " against " + o.truth + ": " + frames.error().message);
+  if (!frames) return fail(o.tracks + " against " + truth_name + ": " + frames.error().message);
   const EvalResult r = evaluate(*truth, *tracks, c);
   if (r.paired_scans == 0) {
-    return fail("no scan of " + o.tracks + " matches a scan of " + o.truth +
+    return fail("no scan of " + o.tracks + " matches a scan of " + truth_name +
                 " by time: are they from the same run?");
   }
   std::printf("stac eval: %llu scans paired (truth %llu, output %llu)\n",
@@ -282,6 +298,18 @@ void add_eval_command(CLI::App& app) {
   cmd->add_option("--truth", o->truth,
                   "truth JSON lines written by `stac sim --truth` (required without --classes)")
       ->check(CLI::ExistingFile);
+  cmd->add_option("--tracklets", o->tracklets,
+                  "instead of --truth: a KITTI raw drive's tracklet_labels.xml (Car, Van, Truck, "
+                  "Tram -> car; Pedestrian, Person_sitting -> pedestrian; Cyclist -> bicyclist; "
+                  "Misc and DontCare left out), placed in the world by the drive's poses")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--drive", o->drive,
+                  "with --tracklets: the drive folder (default: the tracklets file's folder)")
+      ->check(CLI::ExistingDirectory);
+  cmd->add_option("--config", o->config_file,
+                  std::string(stac::settings::kConfigOptionHelp) +
+                      " (with --tracklets: the mounting when the drive has no "
+                      "calib_imu_to_velo.txt)");
   cmd->add_option(
          "--tracks", o->tracks,
          "tracks JSON lines written by `stac process --tracks` (required without --classes)")
@@ -305,6 +333,7 @@ void add_eval_command(CLI::App& app) {
   cmd->footer(
       "Metric definitions: docs/evaluation.md.\nExample:\n"
       "  stac eval --truth run.truth.jsonl --tracks run.tracks.jsonl --report eval/\n"
+      "  stac eval --tracklets drive/tracklet_labels.xml --tracks drive.tracks.jsonl  # KITTI raw\n"
       "  stac eval --classes --data test/ --model model.stac --report cls/  # classification");
   cmd->callback([o] {
     int code = 0;
@@ -321,8 +350,12 @@ void add_eval_command(CLI::App& app) {
         o->class_options.report = o->report;
         code = run_class_eval(o->class_options);
       }
-    } else if (o->truth.empty() || o->tracks.empty()) {
-      code = fail("--truth and --tracks are required (or --classes with --data and --model)");
+    } else if (!o->truth.empty() && !o->tracklets.empty()) {
+      code = fail("--truth or --tracklets, not both");
+    } else if ((o->truth.empty() && o->tracklets.empty()) || o->tracks.empty()) {
+      code = fail(
+          "--truth (or --tracklets) and --tracks are required (or --classes with --data and "
+          "--model)");
     } else if (!o->class_options.data.empty() || !o->class_options.model.empty()) {
       code = fail("--data and --model go with --classes");
     } else {

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <map>
 #include <optional>
 
 #include "drivers/can/candump.hpp"
@@ -14,6 +15,7 @@
 #include "drivers/velodyne/scan_stream.hpp"
 #include "drivers/velodyne/status.hpp"
 #include "formats/kitti_raw.hpp"
+#include "formats/kitti_tracklets.hpp"
 #include "settings/settings.hpp"
 #include "sim/ins.hpp"
 #include "sim/run.hpp"
@@ -131,6 +133,65 @@ int write_can_log(CanLog& c, const std::string& path, const sim::RunConfig& rc) 
   return 0;
 }
 
+// A truth scan's sweep and the cars, pedestrians and bicyclists in it.
+struct SweepTruth {
+  std::int64_t start_ns = 0, end_ns = 0;
+  std::vector<std::pair<std::uint32_t, sim::ObjectClass>> objects;
+};
+
+// KITTI raw's labels of a simulated drive: every car, pedestrian and bicyclist of the truth scan
+// whose sweep holds a KITTI frame's time, posed at that time in the velodyne's frame (the centre
+// of its box's bottom, its yaw), one tracklet per run of consecutive frames.
+std::vector<formats::Tracklet> sim_tracklets(const sim::SimRun& run, const sim::RunConfig& rc,
+                                             const std::vector<SweepTruth>& sweeps,
+                                             const std::vector<std::int64_t>& frames) {
+  const auto& actors = run.world().actors();
+  std::map<std::uint32_t, std::size_t> index;  // actor id -> index
+  for (std::size_t i = 0; i < actors.size(); ++i) index[actors[i].id] = i;
+  std::vector<formats::Tracklet> out;
+  std::map<std::uint32_t, std::pair<std::size_t, std::size_t>> open;  // id -> (tracklet, frame)
+  std::size_t s = 0;
+  for (std::size_t f = 0; f < frames.size(); ++f) {
+    const std::int64_t mid = frames[f];
+    while (s < sweeps.size() && sweeps[s].end_ns < mid) ++s;
+    if (s == sweeps.size() || sweeps[s].start_ns > mid) continue;
+    const double t = static_cast<double>(mid - rc.start_ns) * 1e-9;
+    const sim::EgoState e = run.ego(t);
+    const Eigen::Isometry3d world_T_sensor = Eigen::Translation3d(e.x, e.y, e.z) *
+                                             Eigen::AngleAxisd(e.yaw, Eigen::Vector3d::UnitZ()) *
+                                             Eigen::AngleAxisd(e.pitch, Eigen::Vector3d::UnitY()) *
+                                             Eigen::AngleAxisd(e.roll, Eigen::Vector3d::UnitX()) *
+                                             Eigen::Translation3d(0, 0, rc.lidar.mount_height_m);
+    const Eigen::Isometry3d sensor_T_world = world_T_sensor.inverse();
+    for (const auto& [id, cls] : sweeps[s].objects) {
+      const auto it = index.find(id);
+      if (it == index.end()) continue;
+      const sim::Actor& a = actors[it->second];
+      const sim::Pose p = run.world().actor_pose(it->second, t);
+      const Eigen::Vector3d bottom = sensor_T_world * Eigen::Vector3d(p.x, p.y, p.z);
+      const Eigen::Vector3d heading =
+          sensor_T_world.linear() * Eigen::Vector3d(std::cos(p.yaw), std::sin(p.yaw), 0);
+      formats::TrackletPose pose;
+      pose.tx = bottom.x(), pose.ty = bottom.y(), pose.tz = bottom.z();
+      pose.rz = std::atan2(heading.y(), heading.x());
+      auto o = open.find(id);
+      if (o == open.end() || o->second.second + 1 != f) {
+        formats::Tracklet tr;
+        tr.object_type = cls == sim::ObjectClass::kCar          ? "Car"
+                         : cls == sim::ObjectClass::kPedestrian ? "Pedestrian"
+                                                                : "Cyclist";
+        tr.h = a.size.z, tr.w = a.size.y, tr.l = a.size.x;
+        tr.first_frame = static_cast<std::uint32_t>(f);
+        out.push_back(std::move(tr));
+        o = open.insert_or_assign(id, std::pair{out.size() - 1, f}).first;
+      }
+      out[o->second.first].poses.push_back(pose);
+      o->second.second = f;
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 int run_sim(const SimOptions& o) {
@@ -223,8 +284,16 @@ int run_sim(const SimOptions& o) {
   const std::int64_t span_ns = timing.packet_span_ns(o.dual_return);
   std::uint64_t scans = 0, points = 0;
   const double origin_lat_lon_alt[3] = {ic.origin.lat_deg, ic.origin.lon_deg, ic.origin.alt_m};
+  std::vector<SweepTruth> sweeps;          // --kitti-raw: for its tracklets
+  std::vector<std::int64_t> kitti_frames;  // the KITTI scans' times
   auto on_scan = [&](const sim::TruthScan& s) {
     truth << sim::to_json(s, origin_lat_lon_alt) << '\n';
+    if (kitti) {
+      SweepTruth& w = sweeps.emplace_back();
+      w.start_ns = s.start_ns, w.end_ns = s.end_ns;
+      for (const sim::TruthObject& obj : s.objects)
+        if (sim::is_foreground(obj.cls)) w.objects.emplace_back(obj.id, obj.cls);
+    }
     ++scans;
     points += s.points;
   };
@@ -255,6 +324,7 @@ int run_sim(const SimOptions& o) {
         fix.velocity_ned_mps = {g.north_velocity_mps, g.east_velocity_mps, g.down_velocity_mps};
         fix.angular_rate_frd_dps = {g.rate_longitudinal_dps, g.rate_transverse_dps,
                                     g.rate_down_dps};
+        kitti_frames.push_back(mid);
         if (auto a = kitti->add(*scan, mid, formats::oxts_record(fix)); !a) {
           kitti_scans->release();
           return a;
@@ -288,6 +358,10 @@ int run_sim(const SimOptions& o) {
   (void)(*run)->finish(on_scan);
   if (kitti) {
     if (auto f = kitti->finish(); !f) return fail(f.error().message);
+    const auto labels = sim_tracklets(**run, rc, sweeps, kitti_frames);
+    const std::filesystem::path xml = std::filesystem::path(o.kitti_raw) / "tracklet_labels.xml";
+    std::ofstream(xml) << formats::format_kitti_tracklets(labels);
+    if (!std::filesystem::exists(xml)) return fail(xml.string() + ": cannot write");
   }
   if (auto w = write_ins_until(rc.start_ns + std::llround(rc.duration_s * 1e9)); !w)
     return fail(w.error().message);
@@ -315,7 +389,7 @@ int run_sim(const SimOptions& o) {
   if (kitti)
     std::fprintf(stderr,
                  "  KITTI raw: %zu complete scans with their OXTS records in %s (velodyne_points, "
-                 "oxts, calib_imu_to_velo.txt)\n",
+                 "oxts, calib_imu_to_velo.txt, tracklet_labels.xml)\n",
                  kitti->scans(), o.kitti_raw.c_str());
   if (can_log) return write_can_log(*can_log, o.can, rc);
   return 0;

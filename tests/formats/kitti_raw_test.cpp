@@ -12,6 +12,7 @@
 #include <string>
 
 #include "ego/local_frame.hpp"
+#include "formats/kitti_tracklets.hpp"
 
 namespace stac::formats {
 namespace {
@@ -195,6 +196,61 @@ TEST(KittiOxts, TheImuToVelodyneMountingIsARigidTransform) {
   v = read_kitti_imu_to_velo(drive / "calib_imu_to_velo.txt");
   ASSERT_FALSE(v.has_value());
   EXPECT_NE(v.error().message.find("'T:'"), std::string::npos) << v.error().message;
+}
+
+TEST(KittiTracklets, WrittenAsKittiWritesThemTheyReadBackAndBadOnesAreRefused) {
+  Tracklet car;
+  car.object_type = "Car";
+  car.h = 1.5, car.w = 1.8, car.l = 4.2;
+  car.first_frame = 3;
+  car.poses = {{10.5, -2.0, -1.7, 0, 0, 0.25, 1, 0, 0}, {11.0, -2.0, -1.7, 0, 0, 0.26, 1, 1, 0}};
+  Tracklet person = car;
+  person.object_type = "Person_sitting";
+  person.first_frame = 0;
+  person.poses.resize(1);
+  const std::string xml = format_kitti_tracklets({car, person});
+  auto r = parse_kitti_tracklets(xml, "t.xml");
+  ASSERT_TRUE(r.has_value()) << r.error().message;
+  ASSERT_EQ(r->size(), 2u);
+  EXPECT_EQ((*r)[0].object_type, "Car");
+  EXPECT_EQ((*r)[0].first_frame, 3u);
+  ASSERT_EQ((*r)[0].poses.size(), 2u);
+  EXPECT_NEAR((*r)[0].poses[1].tx, 11.0, 1e-9);
+  EXPECT_NEAR((*r)[0].poses[1].rz, 0.26, 1e-9);
+  EXPECT_EQ((*r)[0].poses[1].occlusion, 1);
+  EXPECT_NEAR((*r)[1].l, 4.2, 1e-9);
+  // The classes KITTI's types are scored as.
+  EXPECT_EQ(stac_class_of_kitti_type("Van"), "car");
+  EXPECT_EQ(stac_class_of_kitti_type("Tram"), "car");
+  EXPECT_EQ(stac_class_of_kitti_type("Person_sitting"), "pedestrian");
+  EXPECT_EQ(stac_class_of_kitti_type("Cyclist"), "bicyclist");
+  EXPECT_EQ(stac_class_of_kitti_type("Misc"), "");
+  EXPECT_EQ(stac_class_of_kitti_type("Dragon"), "?");
+
+  const auto error = [](const std::string& text) {
+    auto t = parse_kitti_tracklets(text, "t.xml");
+    return t.has_value() ? std::string("accepted") : t.error().message;
+  };
+  const auto replaced = [&](const std::string& what, const std::string& with) {
+    std::string t = xml;
+    t.replace(t.find(what), what.size(), with);
+    return t;
+  };
+  EXPECT_NE(error(xml.substr(0, xml.size() / 2)).find("not readable as XML"), std::string::npos);
+  EXPECT_NE(error("<a/>").find("missing <boost_serialization><tracklets>"), std::string::npos);
+  EXPECT_NE(error(replaced("<count>2</count>", "<count>3</count>")).find("<tracklets>' <count>"),
+            std::string::npos);
+  EXPECT_NE(error(replaced("<objectType>Car", "<objectType>Dragon")).find("'Dragon' is none"),
+            std::string::npos);
+  EXPECT_NE(error(replaced("<h>1.500000</h>", "<h>-1</h>")).find("(0, 50] m"), std::string::npos);
+  EXPECT_NE(error(replaced("<tx>10.500000</tx>", "<tx>nan</tx>")).find("tracklet 0: pose 0"),
+            std::string::npos);
+  EXPECT_NE(error(replaced("<tx>10.500000</tx>", "<tx>5000</tx>")).find("farther than 1 km"),
+            std::string::npos);
+  EXPECT_NE(error(replaced("<count>2</count>\n\t\t\t<item_version>",
+                           "<count>5</count>\n\t\t\t<item_version>"))
+                .find("<poses>' <count>"),
+            std::string::npos);
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <numbers>
@@ -329,6 +330,38 @@ TEST(ProcessCli, ASimulatedDriveThroughPcapAndThroughKittiRawTracksTheSame) {
   EXPECT_NEAR(number("kitti", "hota"), number("pcap", "hota"), 0.03);
   EXPECT_NEAR(number("kitti", "motp_distance_m"), number("pcap", "motp_distance_m"), 0.1);
   EXPECT_EQ(number("kitti", "gt"), number("pcap", "gt"));  // every truth scan paired
+
+  // The drive's tracklet_labels.xml, written from the truth, scores the same tracks as the truth
+  // does (only cars, pedestrians and bicyclists are labelled, so a track on background counts
+  // only when classified as one of them).
+  EXPECT_TRUE(std::filesystem::is_regular_file(dir / "drive/tracklet_labels.xml"));
+  r = stac("eval --tracklets " + at("drive") + "/tracklet_labels.xml --tracks " +
+           at("kitti.jsonl") + " --report " + at("tracklets_eval"));
+  ASSERT_EQ(r.code, 0) << r.output;
+  {
+    std::ifstream in(at("tracklets_eval") + "/metrics.json");
+    m["tracklets"] = nlohmann::json::parse(in);
+  }
+  EXPECT_NEAR(number("tracklets", "mota"), number("kitti", "mota"), 0.03);
+  EXPECT_NEAR(number("tracklets", "hota"), number("kitti", "hota"), 0.03);
+  EXPECT_GT(number("tracklets", "gt"), 0.9 * number("kitti", "gt"));
+  r = stac("eval --tracklets " + at("drive") + "/tracklet_labels.xml --truth " + at("run.jsonl") +
+           " --tracks " + at("kitti.jsonl"));
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.output.find("not both"), std::string::npos) << r.output;
+  {  // labels for frames the drive does not have
+    std::ifstream in(dir / "drive/tracklet_labels.xml");
+    std::string xml{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+    const std::string first = "<first_frame>0</first_frame>";
+    ASSERT_NE(xml.find(first), std::string::npos);
+    xml.replace(xml.find(first), first.size(), "<first_frame>57</first_frame>");
+    std::ofstream(dir / "late.xml") << xml;
+  }
+  r = stac("eval --tracklets " + at("late.xml") + " --drive " + at("drive") + " --tracks " +
+           at("kitti.jsonl"));
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.output.find("has a pose for frame 58; the drive has 58 scans"), std::string::npos)
+      << r.output;
 
   // `stac dataset` takes the folder as it takes the pcap: about as many tracks kept and labelled
   // (a dataset for stac train, or, without --truth, for stac induct).

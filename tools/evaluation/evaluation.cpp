@@ -268,7 +268,8 @@ EvalResult evaluate(const std::vector<TruthScanRecord>& truth_in,
           ++r.ignored_tracks;  // on a distractor
         continue;
       }
-      bool ignore = range_of(t.x, t.y, ts->ego) > c.max_range_m;
+      bool ignore = range_of(t.x, t.y, ts->ego) > c.max_range_m ||
+                    (c.classified_outputs_only && !(t.classified && is_tracked_class(c, t.cls)));
       for (const TruthObjectRecord& o : ts->objects) {
         if (!is_tracked_class(c, o.cls) && inside_box_xy(o, t.x, t.y, kBackgroundMarginM))
           ignore = true;

@@ -19,6 +19,10 @@ struct EvalConfig {
   double max_time_offset_s = 0.001;  // a truth scan and an output scan pair when this close
   // Outputs are confirmed tracks (updated in the scan); coasting ones (predictions) only when set.
   bool count_coasting = false;
+  // Labels that name only some objects (KITTI's tracklets: no background is labelled): a track
+  // that matches no label counts as a false positive only when it is classified as a tracked
+  // class; unclassified and background tracks are left out, as on the simulator's background.
+  bool classified_outputs_only = false;
   // Segmentation: a segment holding at least this share of an object's segmented points is a
   // "piece" of it; two or more pieces = over-segmented.
   double piece_share = 0.10;
