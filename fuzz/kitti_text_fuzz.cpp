@@ -1,6 +1,7 @@
-// A KITTI raw drive's text files (issue 33): the input as a calibration file (the "KEY:" lines
-// of calib_imu_to_velo.txt and the object benchmark's calib.txt), and each of its lines as an
-// OXTS record (turned into STAC's INS fix and written back) and as a timestamps line.
+// A KITTI raw drive's text files (issue 33): the input as a tracklet_labels.xml and as a
+// calibration file (the "KEY:" lines of calib_imu_to_velo.txt and the object benchmark's
+// calib.txt), and each of its lines as an OXTS record (turned into STAC's INS fix and written
+// back) and as a timestamps line.
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -9,9 +10,12 @@
 
 #include "formats/kitti_files.hpp"
 #include "formats/kitti_raw.hpp"
+#include "formats/kitti_tracklets.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);
+  if (auto t = stac::formats::parse_kitti_tracklets(text, "fuzz.xml"))
+    (void)stac::formats::parse_kitti_tracklets(stac::formats::format_kitti_tracklets(*t), "again");
   std::vector<double> values;
   for (const auto& [key, count] : {std::pair<const char*, std::size_t>{"R", 9},
                                    {"T", 3},

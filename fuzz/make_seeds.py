@@ -76,6 +76,20 @@ put("kitti_text_fuzz", "calib_imu_to_velo",
     b"-7.854027e-04 9.998898e-01 -1.482298e-02 2.024406e-03 1.482454e-02 9.998881e-01\n"
     b"T: -8.086759e-01 3.195559e-01 -7.997231e-01\n")
 
+put("kitti_text_fuzz", "tracklet_labels.xml",
+    b'<?xml version="1.0" encoding="UTF-8" standalone="yes" ?>\n<!DOCTYPE boost_serialization>\n'
+    b'<boost_serialization signature="serialization::archive" version="9">\n'
+    b'<tracklets class_id="0" tracking_level="0" version="0">\n<count>1</count>\n'
+    b'<item_version>1</item_version>\n<item class_id="1" tracking_level="0" version="1">\n'
+    b"<objectType>Car</objectType>\n<h>1.5</h>\n<w>1.8</w>\n<l>4.2</l>\n"
+    b"<first_frame>0</first_frame>\n"
+    b'<poses class_id="2" tracking_level="0" version="0">\n<count>1</count>\n'
+    b'<item_version>2</item_version>\n<item class_id="3" tracking_level="0" version="2">\n'
+    b"<tx>10.5</tx>\n<ty>-2.0</ty>\n<tz>-1.7</tz>\n<rx>0</rx>\n<ry>0</ry>\n<rz>0.25</rz>\n"
+    b"<state>1</state>\n<occlusion>0</occlusion>\n<occlusion_kf>0</occlusion_kf>\n"
+    b"<truncation>0</truncation>\n</item>\n</poses>\n<finished>1</finished>\n</item>\n"
+    b"</tracklets>\n</boost_serialization>\n")
+
 model = open("config/models/stac_default.stacmodel", "rb").read()
 put("model_file_fuzz", "default_model_head", model[:4096])
 
@@ -167,5 +181,7 @@ put_dict("json_lines_fuzz", ['"scan"', '"time"', '"end_time"', '"ego"', '"segmen
                              '"truth"', '"id"', "null", "true", "false", "1e308", "-0"])
 put_dict("applanix_stream_fuzz", ["$GRP", "$MSG", "$#"])
 put_dict("kitti_text_fuzz", ["R:", "T:", "R0_rect:", "Tr_velo_to_cam:", "calib_time:", "nan", "inf",
-                             "1e308", "-", ":", "."])
+                             "1e308", "-", ":", ".", "<boost_serialization>", "<tracklets>",
+                             "<item>", "</item>", "<count>", "<poses>", "<objectType>", "<tx>",
+                             "<rz>", "<first_frame>", "Car", "Pedestrian", "DontCare"])
 put_dict("dataset_file_fuzz", ["STACDSET", "car", "pedestrian", "bicyclist", "background"])
