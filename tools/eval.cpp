@@ -266,6 +266,16 @@ int run_eval(const EvalOptions& o) {
   if (!tracks) return fail(tracks.error().message);
   progress.finish();
   const std::string& truth_name = o.tracklets.empty() ? o.truth : o.tracklets;
+  if (c.classified_outputs_only) {
+    bool any = false;
+    for (const TracksScan& scan : *tracks)
+      for (const TrackRecord& t : scan.tracks) any = any || t.classified;
+    if (!any)
+      std::fprintf(stderr,
+                   "stac eval: note: no track of %s carries a class, so none can be a false "
+                   "positive against %s (KITTI labels no background); process with a model\n",
+                   o.tracks.c_str(), truth_name.c_str());
+  }
   if (truth->empty()) return fail(truth_name + ": no scans");
   // The truth in the tracks' frame, or a refusal that says what to do.
   auto frames = truth_in_tracks_frame(*truth, *tracks);
