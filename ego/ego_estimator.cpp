@@ -57,15 +57,19 @@ void EgoEstimator::add_ins(const applanix::Parsed& message,
     ++counters_.impossible;
     return;
   }
+  add_fix(ins_fix(*g, gps_to_utc_ns(*message.time1_gps_ns, parser.gps_utc_offset_s())));
+}
+
+InsFix ins_fix(const applanix::Group1& g, std::int64_t stamp_ns) noexcept {
   InsFix fix;
-  fix.stamp_ns = gps_to_utc_ns(*message.time1_gps_ns, parser.gps_utc_offset_s());
-  fix.position = {g->latitude_deg, g->longitude_deg, g->altitude_m};
-  fix.roll_deg = g->roll_deg;
-  fix.pitch_deg = g->pitch_deg;
-  fix.heading_deg = g->heading_deg;
-  fix.velocity_ned_mps = {g->north_velocity_mps, g->east_velocity_mps, g->down_velocity_mps};
-  fix.angular_rate_frd_dps = {g->rate_longitudinal_dps, g->rate_transverse_dps, g->rate_down_dps};
-  add_fix(fix);
+  fix.stamp_ns = stamp_ns;
+  fix.position = {g.latitude_deg, g.longitude_deg, g.altitude_m};
+  fix.roll_deg = g.roll_deg;
+  fix.pitch_deg = g.pitch_deg;
+  fix.heading_deg = g.heading_deg;
+  fix.velocity_ned_mps = {g.north_velocity_mps, g.east_velocity_mps, g.down_velocity_mps};
+  fix.angular_rate_frd_dps = {g.rate_longitudinal_dps, g.rate_transverse_dps, g.rate_down_dps};
+  return fix;
 }
 
 void EgoEstimator::add_fix(const InsFix& fix) noexcept {

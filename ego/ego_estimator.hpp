@@ -17,6 +17,9 @@ namespace stac::ego {
 // GPS time (ns since 1980-01-06) -> UTC (ns since 1970), GPS - UTC being `gps_utc_offset_s`.
 std::int64_t gps_to_utc_ns(std::int64_t gps_ns, double gps_utc_offset_s) noexcept;
 
+// An Applanix Group 1 navigation solution as the INS fix of time `stamp_ns` (pose clock).
+InsFix ins_fix(const applanix::Group1& g, std::int64_t stamp_ns) noexcept;
+
 enum class EgoSource : std::uint8_t {
   kNone,           // nothing received yet
   kIns,            // the last pose came from the INS

@@ -14,6 +14,7 @@
 #include "drivers/velodyne/decoder.hpp"
 #include "drivers/velodyne/scan_stream.hpp"
 #include "drivers/velodyne/status.hpp"
+#include "ego/ego_estimator.hpp"
 #include "formats/kitti_raw.hpp"
 #include "formats/kitti_tracklets.hpp"
 #include "settings/settings.hpp"
@@ -317,15 +318,8 @@ int run_sim(const SimOptions& o) {
         const std::int64_t mid =
             scan->header.stamp_ns + (scan->header.end_stamp_ns - scan->header.stamp_ns) / 2;
         const applanix::Group1 g = ins.group1_at(static_cast<double>(mid - rc.start_ns) * 1e-9);
-        ego::InsFix fix;
-        fix.stamp_ns = mid;
-        fix.position = {g.latitude_deg, g.longitude_deg, g.altitude_m};
-        fix.roll_deg = g.roll_deg, fix.pitch_deg = g.pitch_deg, fix.heading_deg = g.heading_deg;
-        fix.velocity_ned_mps = {g.north_velocity_mps, g.east_velocity_mps, g.down_velocity_mps};
-        fix.angular_rate_frd_dps = {g.rate_longitudinal_dps, g.rate_transverse_dps,
-                                    g.rate_down_dps};
         kitti_frames.push_back(mid);
-        if (auto a = kitti->add(*scan, mid, formats::oxts_record(fix)); !a) {
+        if (auto a = kitti->add(*scan, mid, formats::oxts_record(ego::ins_fix(g, mid))); !a) {
           kitti_scans->release();
           return a;
         }
