@@ -36,7 +36,7 @@ build=${BUILD:-build-fuzz}
 jobs=${JOBS:-$(nproc)}
 targets=(velodyne_stream_fuzz applanix_stream_fuzz can_text_fuzz model_file_fuzz json_lines_fuzz
          config_files_fuzz pcap_file_fuzz dataset_file_fuzz gs_usb_frame_fuzz candump_file_fuzz
-         velodyne_status_fuzz cannelloni_fuzz kitti_text_fuzz)
+         velodyne_status_fuzz cannelloni_fuzz kitti_text_fuzz velodyne_position_fuzz)
 
 if [[ ! -d fuzz/corpus ]]; then python3 fuzz/make_seeds.py; fi
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
