@@ -73,6 +73,7 @@ void fill_summary(Component::Live& l, std::int64_t start_ns) {
   s.invalid_block = n(Count::kInvalidBlock);
   s.duplicates = n(Count::kDuplicates);
   s.late_firings = n(Count::kLateFirings);
+  s.other_model = n(Count::kOtherModel);
   s.scans = n(Count::kScans);
   s.published = n(Count::kPublished);
   s.incomplete = n(Count::kIncomplete);
@@ -158,7 +159,18 @@ rt::Result<velodyne::Calibration> unit_calibration(const ComponentSettings& s) {
     return rt::make_error("'velodyne.calibration': " + s.name +
                           " needs the unit's calibration file");
   }
-  return velodyne::load_calibration(file);
+  const settings::VelodyneSettings& vs = s.pipeline.velodyne;
+  if (vs.model_auto) {
+    return rt::make_error("'velodyne.model: auto' follows a capture's packets; " + s.name +
+                          " decodes a live sensor from the first packet on and needs its model "
+                          "named (" +
+                          std::string(velodyne::model_names()) + ")");
+  }
+  auto c = velodyne::load_calibration(file);
+  if (!c) return c;
+  if (auto fits = velodyne::check_calibration_for(*c, vs.assembler.decoder.model); !fits)
+    return rt::Unexpected<rt::Error>{fits.error()};
+  return velodyne::lasers_of(*c, vs.assembler.decoder.model);
 }
 
 }  // namespace

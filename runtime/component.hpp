@@ -67,6 +67,7 @@ struct Summary {
   bool stop_requested = false;  // stop() ended the run (a signal), not a limit
   std::uint64_t received = 0, kernel_drops = 0, truncated = 0, receive_errors = 0;
   std::uint64_t packets_lost = 0, wrong_size = 0, invalid_block = 0, duplicates = 0;
+  std::uint64_t other_model = 0;  // packets whose bytes name another model (decoded as set)
   std::uint64_t late_firings = 0;
   std::uint64_t scans = 0, published = 0, incomplete = 0, below_completeness = 0;
   double min_completeness = 0;

@@ -48,6 +48,7 @@ dds::HealthIn HealthAssembly::sample(std::int64_t stamp_ns, std::uint64_t index,
             {"velodyne.invalid_block", n(Count::kInvalidBlock)},
             {"velodyne.duplicates", n(Count::kDuplicates)},
             {"velodyne.late_firings", n(Count::kLateFirings)},
+            {"velodyne.other_model", n(Count::kOtherModel)},
             {"velodyne.scan_slots_full", l.stream->scans_dropped()},
             // Scans not processed have no frame: these two are live, so that a health sample
             // while none is published (lost bursts, a dropout) shows them (issue 31).

@@ -34,7 +34,7 @@ class HealthAssembly {
  private:
   Component::Live& live_;
   FrameDrops frame_;
-  std::array<dds::DropCountIn, 29> drops_{};
+  std::array<dds::DropCountIn, 30> drops_{};
   static_assert(std::tuple_size_v<decltype(drops_)> <= dds::kMaxDrops, "idl/stac.idl's bound");
   std::array<dds::SensorStatusIn, 3> sensors_{};
 };

@@ -57,6 +57,7 @@ enum class Count : std::size_t {
   kInvalidBlock,
   kDuplicates,
   kLateFirings,
+  kOtherModel,      // receiver: packets whose bytes name another model (decoded as configured)
   kInsBadChecksum,  // pose: the INS parser's (ParserCounters) and the TCP connection's
   kInsBadFraming,   //   length, terminator, oversize, truncated
   kInsMalformed,

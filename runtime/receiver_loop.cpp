@@ -51,6 +51,7 @@ void receiver_loop(Component::Live& live) noexcept {
       live.counts.set(Count::kInvalidBlock, ac.invalid_block);
       live.counts.set(Count::kDuplicates, ac.duplicates);
       live.counts.set(Count::kLateFirings, ac.late_firings);
+      live.counts.set(Count::kOtherModel, ac.model_mismatch);
     }
     live.counts.set(Count::kKernelDrops, receiver.counters().kernel_drops);
   }

@@ -18,6 +18,12 @@ void print_summary(const Summary& s, const std::string& name, std::FILE* out) {
                "  dropped     wrong size %llu, invalid block %llu, duplicate %llu, late firings "
                "%llu (packets the decoder refused)\n",
                u(s.wrong_size), u(s.invalid_block), u(s.duplicates), u(s.late_firings));
+  if (s.other_model > 0) {
+    std::fprintf(out,
+                 "  sensor      %llu packets name another model than velodyne.model: decoded as "
+                 "configured (check velodyne.model; docs/velodyne.md)\n",
+                 u(s.other_model));
+  }
   std::fprintf(
       out,
       "  scans       %llu received (complete), %llu published, %llu incomplete (not processed), "

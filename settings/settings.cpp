@@ -66,12 +66,33 @@ rt::Result<VelodyneSettings> load_velodyne_settings(const std::filesystem::path&
 #undef STAC_GET
 
   const auto parsed = velodyne::parse_model(model);
-  if (!parsed)
-    return rt::make_error(file + ": 'velodyne.model' is '" + model + "'; use S2, S2.1 or S3");
-  a.decoder.model = *parsed;
+  s.model_auto = model == "auto";
+  if (!parsed && !s.model_auto) {
+    return rt::make_error(file + ": 'velodyne.model' is '" + model + "'; use " +
+                          std::string(velodyne::model_names()) + " or auto");
+  }
+  a.decoder.model = parsed ? *parsed : velodyne::Model::kS2_1;
+  if (const YAML::Node& m = v.node()["model_calibrations"]; m && !m.IsNull()) {
+    if (!m.IsMap())
+      return v.error("model_calibrations", "must be a map of model name: calibration file");
+    for (const auto& kv : m) {
+      if (!kv.first.IsScalar())
+        return v.error("model_calibrations", "has a key that is not a model name");
+      const auto name = kv.first.Scalar();
+      const auto which = velodyne::parse_model(name);
+      if (!which) {
+        return v.error("model_calibrations", "names '" + name + "', not a model (" +
+                                                 std::string(velodyne::model_names()) + ")");
+      }
+      if (!kv.second.IsScalar())
+        return v.error("model_calibrations", "'" + name + "' must be a file name");
+      s.model_calibrations[*which] = v.path(kv.second.Scalar());
+    }
+  }
   if (calibration != "stream") {
     s.calibration = v.path(calibration);
-  } else if (velodyne::traits(a.decoder.model).trailer != velodyne::TrailerKind::kGpsStatus) {
+  } else if (!s.model_auto &&
+             velodyne::traits(a.decoder.model).trailer != velodyne::TrailerKind::kGpsStatus) {
     return rt::make_error(file + ": 'velodyne.calibration: stream' needs an S2.1 or S3; the " +
                           model + " sends no calibration in its packets");
   }
@@ -99,6 +120,24 @@ rt::Result<VelodyneSettings> load_velodyne_settings(const std::filesystem::path&
     return rt::make_error(file + ": 'velodyne.receive_buffer_bytes' must be at least 65536");
   }
   return s;
+}
+
+rt::Status use_velodyne_model(VelodyneSettings& s, velodyne::Model model, bool calibration_given) {
+  const velodyne::Model before = s.assembler.decoder.model;
+  s.assembler.decoder.model = model;
+  s.model_auto = false;
+  if (calibration_given || velodyne::traits(before).lasers == velodyne::traits(model).lasers)
+    return {};
+  const auto it = s.model_calibrations.find(model);
+  if (it == s.model_calibrations.end()) {
+    return rt::make_error("the configured calibration is for a " +
+                          std::to_string(velodyne::traits(before).lasers) + "-laser sensor, a " +
+                          std::string(velodyne::traits(model).name) + " has " +
+                          std::to_string(velodyne::traits(model).lasers) +
+                          ": pass --calib, or name one in velodyne.model_calibrations");
+  }
+  s.calibration = it->second;
+  return {};
 }
 
 rt::Result<PipelineSettings> load_pipeline_settings(const std::filesystem::path& config_file) {

@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <string>
 
@@ -27,7 +28,12 @@ inline constexpr const char* kOutOfMemoryAtStartUp =
 
 struct VelodyneSettings {
   velodyne::ScanAssemblerConfig assembler;
+  // 'velodyne.model: auto': a capture's packets name the model (commands that read a capture
+  // resolve it there; assembler.decoder.model holds S2.1 until then).
+  bool model_auto = false;
   std::filesystem::path calibration;  // empty: from the status stream
+  // velodyne.model_calibrations: the calibration for a model other than the configured one.
+  std::map<velodyne::Model, std::filesystem::path> model_calibrations;
   std::string bind_address = "0.0.0.0";
   std::uint16_t port = velodyne::kPortData;
   std::string sender_address;  // empty: any sender
@@ -36,6 +42,10 @@ struct VelodyneSettings {
 };
 
 rt::Result<VelodyneSettings> load_velodyne_settings(const std::filesystem::path& config_file);
+// Switches `s` to another sensor model: the decoder's model, and (unless `calibration_given`)
+// the calibration velodyne.model_calibrations names for it when the configured one is not for
+// a sensor with the model's lasers. Errors say what to pass.
+rt::Status use_velodyne_model(VelodyneSettings& s, velodyne::Model model, bool calibration_given);
 // The `ego:` section: extrinsics, local frame, pose history, INS, deskew.
 struct EgoSettings {
   std::optional<ego::Geodetic> origin;  // empty: the first INS fix

@@ -108,13 +108,10 @@ LidarSim::LidarSim(const velodyne::Calibration& calibration, const LidarConfig& 
       world_(world),
       ego_(std::move(ego)) {
   const velodyne::ModelTraits& m = velodyne::traits(config.model);
-  const int per_firing = config.dual_return ? 4 : 2;
   for (int b = 0; b < 12; ++b) {
     for (int j = 0; j < 32; ++j) {
-      const int firing = b / per_firing, group = j / 4;  // whole firings and laser groups
       firing_offset_s_[static_cast<std::size_t>(b)][static_cast<std::size_t>(j)] =
-          1e-6 * (m.firing_period_us * firing + m.laser_group_us * group +
-                  m.laser_in_group_us[static_cast<std::size_t>(j % 4)]);
+          1e-6 * velodyne::firing_time_us(m, b, j, config.dual_return);
     }
   }
 }
@@ -166,35 +163,74 @@ void LidarSim::make_packet(std::uint32_t k, std::array<std::uint8_t, velodyne::k
   first_firing_s = t0;
   PacketBuilder builder;
   const bool dual = config_.dual_return;
-  const int per_firing = dual ? 4 : 2;
-  for (int firing = 0; firing < 12 / per_firing; ++firing) {
+  const ModelTraits& model = traits(config_.model);
+  const bool banks = model.layout == Layout::kBankPairs;
+  const int per_firing = (banks ? 2 : 1) * (dual ? 2 : 1);
+  const int firings = kBlocksPerPacket / per_firing;
+  // Every firing's rotation and the azimuth step to the next, as the scan assembler takes them
+  // from the packet (the last firing keeps the step before it).
+  std::array<std::uint16_t, kBlocksPerPacket> firing_rotation{};
+  std::array<int, kBlocksPerPacket> azimuth_step{};
+  for (int f = 0; f < firings; ++f) {
+    firing_rotation[static_cast<std::size_t>(f)] = rotation_at(
+        t0 +
+        firing_offset_s_[static_cast<std::size_t>(f) * static_cast<std::size_t>(per_firing)][0]);
+  }
+  for (int f = 0; f < firings; ++f) {
+    const auto fi = static_cast<std::size_t>(f);
+    if (f + 1 < firings) {
+      int d = (firing_rotation[fi + 1] - firing_rotation[fi] + 36000) % 36000;
+      if (d > 18000) d -= 36000;
+      azimuth_step[fi] = d;
+    } else {
+      azimuth_step[fi] = f > 0 ? azimuth_step[fi - 1] : 0;
+    }
+  }
+  for (int firing = 0; firing < firings; ++firing) {
     const int first_block = firing * per_firing;
     const double tf = t0 + firing_offset_s_[static_cast<std::size_t>(first_block)][0];
-    const std::uint16_t rotation = rotation_at(tf);
-    // The ego at the firing and 50 us later: every beam of the firing leaves in between, its
-    // origin interpolated linearly (the attitude changes by < 1e-4 deg in that time).
+    const std::uint16_t block_rotation = firing_rotation[static_cast<std::size_t>(firing)];
+    // The ego at the firing and 50 us later (or the firing's end): every beam of the firing
+    // leaves in between, its origin interpolated linearly (the attitude changes by < 1e-4 deg).
+    const double span =
+        banks ? 50e-6
+              : std::max(
+                    50e-6,
+                    firing_offset_s_[static_cast<std::size_t>(first_block + per_firing - 1)][31] -
+                        firing_offset_s_[static_cast<std::size_t>(first_block)][0] + 1e-6);
     const Frame f0 = sensor_frame(ego_(tf), config_.mount_height_m);
-    const Frame f1 = sensor_frame(ego_(tf + 50e-6), config_.mount_height_m);
-    for (int bank = 0; bank < 2; ++bank) {
-      const int strongest_block = first_block + bank;
-      builder.set_block(strongest_block, bank == 0 ? kUpperBank : kLowerBank, rotation);
-      if (dual)
-        builder.set_block(strongest_block + 2, bank == 0 ? kUpperBank : kLowerBank, rotation);
+    const Frame f1 = sensor_frame(ego_(tf + span), config_.mount_height_m);
+    // The blocks with the strongest (or only) return, and in dual return the block of the
+    // last return beside each: HDL-64E [upper, lower] then [upper, lower] again; the others
+    // [last, strongest] (PacketDecoder::return_type).
+    const int primaries = banks ? 2 : 1;
+    for (int bank = 0; bank < primaries; ++bank) {
+      const int strongest_block = banks ? first_block + bank : first_block + (dual ? 1 : 0);
+      const int last_block = banks ? strongest_block + 2 : first_block;
+      const std::uint16_t bank_id = bank == 0 ? kUpperBank : kLowerBank;
+      builder.set_block(strongest_block, bank_id, block_rotation);
+      if (dual) builder.set_block(last_block, bank_id, block_rotation);
       for (int j = 0; j < 32; ++j) {
-        const int laser = bank * 32 + j;
+        const int laser = banks ? bank * 32 + j : j % model.lasers;
         const LaserCalibration& l = calibration_.lasers[static_cast<std::size_t>(laser)];
+        const std::uint16_t rotation =
+            interpolated_rotation(block_rotation, azimuth_step[static_cast<std::size_t>(firing)],
+                                  static_cast<float>(azimuth_fraction_of(model, j)));
         const double t = t0 + firing_offset_s_[static_cast<std::size_t>(strongest_block)]
                                               [static_cast<std::size_t>(j)];
         if (t >= window_end_ || t < window_start_) refresh_candidates(t);
         const std::uint64_t h =
-            mix(config_.seed ^ mix((static_cast<std::uint64_t>(k) << 16) |
-                                   static_cast<std::uint64_t>(strongest_block * 64 + laser)));
+            mix(config_.seed ^
+                mix((static_cast<std::uint64_t>(k) << 16) |
+                    static_cast<std::uint64_t>(strongest_block * 64 + (banks ? laser : j))));
         Frame f = f0;
-        f.t = f0.t + (f1.t - f0.t) * ((t - tf) / 50e-6);
+        f.t = f0.t + (f1.t - f0.t) * ((t - tf) / span);
         BeamRecord rec{k,
                        static_cast<std::uint8_t>(strongest_block),
                        static_cast<std::uint8_t>(laser),
                        rotation,
+                       static_cast<std::uint8_t>(j),
+                       block_rotation,
                        -2,
                        t,
                        {0, 0, 0},
@@ -315,7 +351,7 @@ void LidarSim::make_packet(std::uint32_t k, std::array<std::uint8_t, velodyne::k
                     intensity2 = std::min(raw_intensity(0.5 * full, l, r2), intensity);
                   }
                 }
-                builder.set_return(strongest_block + 2, j, raw2, intensity2);
+                builder.set_return(last_block, j, raw2, intensity2);
               }
             }
           }

@@ -1,8 +1,9 @@
-// A virtual HDL-64E: every laser is cast at its real firing time (REFERENCE §1 timing) from the
-// moving ego, along the decoder's own beam line (drivers/velodyne/beam.hpp), so decoding the
-// packets gives back every hit within the 2 mm quantisation before noise. Adds range noise,
-// intensity from reflectivity, incidence and distance, and missing returns (too far, too dark,
-// grazing). Deterministic: every random draw is a hash of (seed, packet, block, laser).
+// A virtual Velodyne (HDL-64E, HDL-32E, VLP-16, VLP-32C: velodyne::Layout): every laser is cast at
+// its real firing time (REFERENCE §1 timing) from the moving ego, along the decoder's own beam line
+// (drivers/velodyne/beam.hpp), so decoding the packets gives back every hit within the 2 mm
+// quantisation before noise. Adds range noise, intensity from reflectivity, incidence and distance,
+// and missing returns (too far, too dark, grazing). Deterministic: every random draw is a hash of
+// (seed, packet, block, laser).
 #pragma once
 
 #include <array>
@@ -38,7 +39,7 @@ struct LidarConfig {
   velodyne::Model model = velodyne::Model::kS2_1;
   double rpm = 600.0;
   double start_azimuth_deg = 0.0;
-  bool dual_return = false;      // S3 only
+  bool dual_return = false;      // S3, HDL-32E, VLP-16, VLP-32C
   double mount_height_m = 1.73;  // sensor origin above the ground under the ego origin
   double range_noise_m = 0.012;  // 1 sigma (HDL-64E: < 2 cm)
   double max_range_m = 120.0;    // for a white target; dark ones are lost sooner
@@ -56,11 +57,13 @@ struct EgoState {
 // What happened to one beam, for truth and tests.
 struct BeamRecord {
   std::uint32_t packet;
-  std::uint8_t block, laser;  // block 0..11, laser 0..63
-  std::uint16_t rotation;     // 0.01 deg
-  std::int64_t actor;         // -1 ground, -2 nothing hit
-  double time_s;              // firing time
-  double sensor_xyz[3];       // exact hit in the sensor frame at firing time, before noise
+  std::uint8_t block, laser;     // block 0..11, laser 0..63
+  std::uint16_t rotation;        // 0.01 deg, of this beam (VLP-16: interpolated within the block)
+  std::uint8_t channel;          // 0..31 within the block
+  std::uint16_t block_rotation;  // the block's rotation, by which scans are framed
+  std::int64_t actor;            // -1 ground, -2 nothing hit
+  double time_s;                 // firing time
+  double sensor_xyz[3];          // exact hit in the sensor frame at firing time, before noise
   double world_xyz[3];
   bool returned;  // a return was written (not lost, in range)
 };

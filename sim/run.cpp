@@ -58,8 +58,14 @@ std::string to_json(const TruthScan& s, const double* origin) {
 rt::Result<std::unique_ptr<SimRun>> SimRun::create(const velodyne::Calibration& calibration,
                                                    const RunConfig& config) {
   if (!(config.duration_s > 0)) return rt::make_error("--duration must be positive");
-  if (config.lidar.dual_return && config.lidar.model != velodyne::Model::kS3) {
-    return rt::make_error("dual return needs the S3 model");
+  if (config.lidar.dual_return && !velodyne::traits(config.lidar.model).supports_dual_return) {
+    return rt::make_error(std::string("dual return needs a model that has it (S3, HDL-32E, VLP-16, "
+                                      "VLP-32C), not the ") +
+                          std::string(velodyne::traits(config.lidar.model).name));
+  }
+  if (calibration.num_lasers < velodyne::traits(config.lidar.model).lasers) {
+    return rt::make_error(calibration.source + ": too few lasers for a " +
+                          std::string(velodyne::traits(config.lidar.model).name));
   }
   auto scenario = make_scenario(config.scenario, config.seed, config.duration_s);
   if (!scenario) return rt::Unexpected<rt::Error>{scenario.error()};
@@ -116,13 +122,14 @@ void SimRun::packet(std::uint32_t k, std::array<std::uint8_t, velodyne::kPacketS
   double t0 = 0;
   lidar_->make_packet(k, bytes, t0, [&](const BeamRecord& b) {
     // Framing: a new scan at the first firing whose rotation crosses the cut angle.
-    if (b.laser == 0 || b.laser == 32) {
-      if (have_prev_ && b.rotation != prev_rotation_) {
-        const int d = forward(prev_rotation_, b.rotation);
+    if (b.channel == 0) {  // a block's first beam: the block's rotation frames the scans
+      if (have_prev_ && b.block_rotation != prev_rotation_) {
+        const int d = forward(prev_rotation_, b.block_rotation);
         const int to_cut = forward(prev_rotation_, config_.cut_angle);
         if (d < 18000 && to_cut > 0 && to_cut <= d && open_) close_scan(on_scan);
       }
-      if (!have_prev_ || forward(prev_rotation_, b.rotation) < 18000) prev_rotation_ = b.rotation;
+      if (!have_prev_ || forward(prev_rotation_, b.block_rotation) < 18000)
+        prev_rotation_ = b.block_rotation;
       have_prev_ = true;
     }
     const std::int64_t t_ns = config_.start_ns + std::llround(b.time_s * 1e9);

@@ -65,7 +65,8 @@ inline constexpr double kSanitizerLagS = kSanitizerBuild ? 0.8 : 0.0;
 
 // The shipped configuration (config/stac.yaml) written into `dir` as stac.yaml, with `edits`
 // applied (each a key of a section, as "  key: value", which must be there once) and its relative
-// paths (calibration, dbc, model, config_file) made absolute, since the copy lives elsewhere.
+// paths (calibration, dbc, model, config_file, velodyne.model_calibrations' files) made absolute,
+// since the copy lives elsewhere.
 // Returns its path, or an empty path (and why in `*error`) when an edit finds no such key.
 inline std::filesystem::path shipped_config_with(
     const std::filesystem::path& dir, const std::vector<std::pair<std::string, std::string>>& edits,
@@ -87,7 +88,7 @@ inline std::filesystem::path shipped_config_with(
   }
   std::string out;
   const std::regex path_line(
-      R"(^(  (?:calibration|dbc|model|config_file): )([^ #/][^ #]*/[^ #]*)(.*)$)");
+      R"(^(  (?:calibration|dbc|model|config_file): |    [A-Za-z0-9 .-]+: )([^ #/][^ #]*/[^ #]*)(.*)$)");
   std::istringstream lines(text);
   for (std::string l; std::getline(lines, l);) {
     std::smatch m;

@@ -141,7 +141,7 @@ class Builder : public classification::TrackClassifier::Observer {
     }
     std::optional<velodyne::Calibration> calibration;
     if (!drive) {
-      auto c = capture_calibration(vs.calibration, in, vs.port, vs.assembler.decoder.model);
+      auto c = capture_sensor(vs, in, !o.calib.empty());
       if (!c) return rt::Unexpected<rt::Error>{c.error()};
       calibration = std::move(*c);
     }

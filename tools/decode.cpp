@@ -1,4 +1,4 @@
-// stac decode: a pcap capture of HDL-64E packets -> calibrated, timed points (csv or KITTI bins).
+// stac decode: a pcap capture of Velodyne packets -> calibrated, timed points (csv or KITTI bins).
 #include "tools/decode.hpp"
 
 #include <cstdio>
@@ -30,11 +30,8 @@ rt::Result<VelodyneSettings> settings_for(const DecodeOptions& o) {
   if (!s) return s;
   if (!o.calib.empty())
     s->calibration = o.calib == "stream" ? std::filesystem::path{} : std::filesystem::path(o.calib);
-  if (!o.model.empty()) {
-    const auto m = velodyne::parse_model(o.model);
-    if (!m) return rt::make_error("--model '" + o.model + "': use S2, S2.1 or S3");
-    s->assembler.decoder.model = *m;
-  }
+  if (auto m = apply_sensor_option(*s, o.model, !o.calib.empty()); !m)
+    return rt::make_error("--model: " + m.error().message);
   if (o.port >= 0) {
     if (o.port == 0 || o.port > 65535) return rt::make_error("--port must be 1..65535");
     s->port = static_cast<std::uint16_t>(o.port);
@@ -52,8 +49,8 @@ rt::Result<VelodyneSettings> settings_for(const DecodeOptions& o) {
 int run_decode(const DecodeOptions& o) {
   auto settings = settings_for(o);
   if (!settings) return fail(settings.error().message);
-  const auto& s = *settings;
-  auto calibration = capture_calibration(s.calibration, o.in, s.port, s.assembler.decoder.model);
+  auto& s = *settings;
+  auto calibration = capture_sensor(s, o.in, !o.calib.empty());
   if (!calibration) return fail(calibration.error().message);
   auto writer = make_scan_writer(o.format, o.out);
   if (!writer) return fail(writer.error().message);
@@ -124,9 +121,10 @@ int run_decode(const DecodeOptions& o) {
 void add_decode_command(CLI::App& app) {
   auto o = std::make_shared<DecodeOptions>();
   CLI::App* cmd = app.add_subcommand(
-      "decode", "Decode a pcap capture of HDL-64E packets into calibrated, timed points");
+      "decode", "Decode a pcap capture of Velodyne packets into calibrated, timed points");
   cmd->description(
-      "Decode a pcap capture of HDL-64E packets into calibrated, timed points.\n"
+      "Decode a pcap capture of Velodyne packets (HDL-64E, HDL-32E, VLP-16, VLP-32C) into "
+      "calibrated, timed points.\n"
       "Scans are framed where the azimuth crosses the cut angle. csv: one row per point with\n"
       "columns scan,laser,azimuth (0.01 deg),distance (m),x,y,z (m; x forward, y left, z up),\n"
       "intensity,time (s). kitti: one float32 x,y,z,reflectance(0..1) file per scan in --out/.");
@@ -142,7 +140,10 @@ void add_decode_command(CLI::App& app) {
                   "S2.1/S3 sends in its status bytes. Default: the config's");
   cmd->add_option("--format", o->format, "csv or kitti")->check(CLI::IsMember({"csv", "kitti"}));
   cmd->add_option("--config", o->config, stac::settings::kConfigOptionHelp);
-  cmd->add_option("--model", o->model, "S2, S2.1 or S3 (default: the config's)");
+  cmd->add_option(
+      "--model", o->model,
+      "the sensor: S2, S2.1, S3 (HDL-64E), HDL-32E, VLP-16, Puck LITE, Puck Hi-Res, VLP-32C, or "
+      "auto (the model the packets name; default: the config's velodyne.model)");
   cmd->add_option("--port", o->port, "UDP data port in the capture (default: the config's, 2368)");
   cmd->add_option("--cut-angle", o->cut_angle_deg,
                   "scan cut angle in degrees (default: the config's)")

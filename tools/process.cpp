@@ -38,7 +38,7 @@ using namespace stac::formats;
 namespace {
 
 struct ProcessOptions {
-  std::string in, tracks, truth, config, calib, origin, model, dds_config, pictures;
+  std::string in, tracks, truth, config, calib, origin, model, dds_config, pictures, sensor;
   bool no_deskew = false;
   bool dds = false;
   int domain = -1;
@@ -153,9 +153,11 @@ int run_process(const ProcessOptions& o) {
   }
   if (!o.calib.empty())
     vs.calibration = o.calib == "stream" ? std::filesystem::path{} : std::filesystem::path(o.calib);
+  if (auto m = apply_sensor_option(vs, o.sensor, !o.calib.empty()); !m)
+    return fail("--sensor: " + m.error().message);
   std::optional<velodyne::Calibration> calibration;
   if (!drive) {
-    auto c = capture_calibration(vs.calibration, o.in, vs.port, vs.assembler.decoder.model);
+    auto c = capture_sensor(vs, o.in, !o.calib.empty());
     if (!c) return fail(c.error().message);
     calibration = std::move(*c);
   }
@@ -502,6 +504,10 @@ void add_process_command(CLI::App& app) {
       ->check(CLI::ExistingFile);
   cmd->add_option("--config", o->config, stac::settings::kConfigOptionHelp);
   cmd->add_option("--calib", o->calib, "calibration file or 'stream' (default: the config's)");
+  cmd->add_option("--sensor", o->sensor,
+                  "the lidar model (default: the config's velodyne.model): S2, S2.1, S3, HDL-32E, "
+                  "VLP-16, Puck LITE, Puck Hi-Res, VLP-32C, or auto (the model the capture's "
+                  "packets name); its calibration from velodyne.model_calibrations unless --calib");
   cmd->add_option(
       "--origin", o->origin,
       "LAT,LON,ALT of the world frame (default: the truth's, else the config's ego.origin)");

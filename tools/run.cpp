@@ -7,6 +7,7 @@
 #include "runtime/component.hpp"
 #include "settings/dds_settings.hpp"
 #include "tools/commands.hpp"
+#include "tools/status.hpp"
 #include "tools/support/cli_checks.hpp"
 
 namespace stac::tools {
@@ -15,7 +16,7 @@ using namespace stac::settings;
 namespace {
 
 struct RunOptions {
-  std::string config, calib, ins, ins_address, bind, model, dds_config;
+  std::string config, calib, ins, ins_address, bind, model, dds_config, sensor;
   double seconds = 0;
   std::uint64_t scans = 0;
   int domain = -1, port = -1, ins_port = -1, point_cloud_stride = -1;
@@ -28,6 +29,8 @@ int run_live(const RunOptions& o) {
   VelodyneSettings& vs = s.pipeline.velodyne;
   // Command-line overrides.
   if (!o.calib.empty()) vs.calibration = o.calib;
+  if (auto m = apply_sensor_option(vs, o.sensor, !o.calib.empty()); !m)
+    return fail("--sensor: " + m.error().message);
   if (o.port >= 0) vs.port = static_cast<std::uint16_t>(o.port);
   if (!o.bind.empty()) vs.bind_address = o.bind;
   stac::settings::override_dds(s.dds, o.domain, o.dds_config);
@@ -57,7 +60,8 @@ void add_run_command(CLI::App& app) {
   CLI::App* cmd =
       app.add_subcommand("run", "The live component: sensor UDP -> perception -> DDS topics");
   cmd->description(
-      "Receives the HDL-64E's UDP packets, the Applanix INS (TCP or UDP) and optionally the\n"
+      "Receives the lidar's UDP packets (HDL-64E, HDL-32E, VLP-16, VLP-32C: --sensor), the "
+      "Applanix INS (TCP or UDP) and optionally the\n"
       "vehicle CAN bus (SocketCAN, a gs_usb adapter or a cannelloni gateway over UDP:\n"
       "can.transport), runs every complete scan through deskew -> segment -> track -> classify\n"
       "on its own thread and publishes\n"
@@ -86,6 +90,10 @@ void add_run_command(CLI::App& app) {
   cmd->add_option("--bind", o->bind,
                   "Velodyne UDP address to bind (default: velodyne.bind_address)");
   cmd->add_option("--calib", o->calib, "calibration file (default: velodyne.calibration)");
+  cmd->add_option("--sensor", o->sensor,
+                  "the lidar model (default: velodyne.model): S2, S2.1, S3, HDL-32E, VLP-16, Puck "
+                  "LITE, Puck Hi-Res or VLP-32C; its calibration from velodyne.model_calibrations "
+                  "unless --calib");
   cmd->add_option(
       "--model", o->model,
       "track classifier model (`stac train`) or 'none' (default: classification.model)");

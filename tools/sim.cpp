@@ -12,6 +12,7 @@
 #include "drivers/can/config.hpp"
 #include "drivers/io/pcap_writer.hpp"
 #include "drivers/velodyne/decoder.hpp"
+#include "drivers/velodyne/position.hpp"
 #include "drivers/velodyne/scan_stream.hpp"
 #include "drivers/velodyne/status.hpp"
 #include "ego/ego_estimator.hpp"
@@ -198,11 +199,26 @@ std::vector<formats::Tracklet> sim_tracklets(const sim::SimRun& run, const sim::
 int run_sim(const SimOptions& o) {
   auto settings = load_velodyne_settings(config_path(o.config));
   if (!settings) return fail(settings.error().message);
+  // The virtual sensor: an HDL-64E S2.1 (S3 in dual return) unless --model names another.
+  velodyne::Model model = o.dual_return ? velodyne::Model::kS3 : velodyne::Model::kS2_1;
+  if (!o.model.empty()) {
+    const auto m = velodyne::parse_model(o.model);
+    if (!m) return fail("--model '" + o.model + "': use " + std::string(velodyne::model_names()));
+    model = *m;
+    if (o.dual_return && !velodyne::traits(model).supports_dual_return)
+      return fail("--dual-return: the " + std::string(velodyne::traits(model).name) +
+                  " has no dual-return mode (the S3, HDL-32E, VLP-16 and VLP-32C have)");
+  }
+  if (auto u = use_velodyne_model(*settings, model, !o.calib.empty()); !u)
+    return fail(u.error().message);
   const std::filesystem::path calib_path =
       o.calib.empty() ? settings->calibration : std::filesystem::path(o.calib);
   if (calib_path.empty()) return fail("stac sim needs a calibration file: pass --calib");
-  auto calibration = velodyne::load_calibration(calib_path);
-  if (!calibration) return fail(calibration.error().message);
+  auto loaded = velodyne::load_calibration(calib_path);
+  if (!loaded) return fail(loaded.error().message);
+  if (auto fits = velodyne::check_calibration_for(*loaded, model); !fits)
+    return fail(fits.error().message);
+  auto calibration = rt::Result<velodyne::Calibration>(velodyne::lasers_of(*loaded, model));
 
   sim::RunConfig rc;
   rc.scenario = o.scenario;
@@ -219,7 +235,7 @@ int run_sim(const SimOptions& o) {
   rc.cut_angle = settings->assembler.cut_angle;
   rc.lidar.seed = o.seed;
   rc.lidar.dual_return = o.dual_return;
-  rc.lidar.model = o.dual_return ? velodyne::Model::kS3 : velodyne::Model::kS2_1;
+  rc.lidar.model = model;
   sim::InsConfig ic;
   if (!o.origin.empty()) {
     auto origin = parse_origin(o.origin);
@@ -276,9 +292,21 @@ int run_sim(const SimOptions& o) {
   unit.return_mode = o.dual_return ? velodyne::ReturnMode::kDual : velodyne::ReturnMode::kStrongest;
   unit.power_level = 0xA8;
   unit.warnings = 0x60;  // PPS and GPS time present
-  auto trailer = velodyne::StatusTrailerWriter::create(rc.lidar.model, sensor, unit, *calibration);
-  if (!trailer)
-    return fail("the calibration cannot be sent in the status cycle: " + trailer.error().message);
+  // An HDL-32E / VLP sends GPS time, its return mode and product id instead (docs/velodyne.md).
+  const bool factory = velodyne::traits(model).trailer == velodyne::TrailerKind::kFactory;
+  std::optional<velodyne::StatusTrailerWriter> trailer;
+  if (!factory) {
+    auto t = velodyne::StatusTrailerWriter::create(model, sensor, unit, *calibration);
+    if (!t) return fail("the calibration cannot be sent in the status cycle: " + t.error().message);
+    trailer.emplace(std::move(*t));
+  }
+  auto write_trailer = [&](std::uint8_t* t, std::int64_t utc_ns) {
+    if (!factory) return trailer->write(t, utc_ns);
+    const std::int64_t usec = (utc_ns / 1000) % 3'600'000'000LL;
+    velodyne::store_u32(t, static_cast<std::uint32_t>(usec < 0 ? usec + 3'600'000'000LL : usec));
+    t[4] = o.dual_return ? velodyne::kReturnDual : velodyne::kReturnStrongest;
+    t[5] = velodyne::traits(model).product_id;
+  };
 
   const velodyne::PacketDecoder timing(*calibration,
                                        velodyne::DecoderConfig{.model = rc.lidar.model});
@@ -328,21 +356,58 @@ int run_sim(const SimOptions& o) {
     }
     return {};
   };
+  std::array<std::uint8_t, velodyne::kPositionPacketSize> position{};
+  auto write_position = [&](std::int64_t utc_ns) -> rt::Status {
+    const applanix::Group1 g = ins.group1_at(static_cast<double>(utc_ns - rc.start_ns) * 1e-9);
+    velodyne::NmeaFix fix;
+    fix.valid = true;
+    const std::int64_t day_ns = 86'400'000'000'000LL;
+    const std::int64_t days = utc_ns >= 0 ? utc_ns / day_ns : (utc_ns - day_ns + 1) / day_ns;
+    fix.time_of_day_ns = utc_ns - days * day_ns;
+    const std::chrono::year_month_day ymd{std::chrono::sys_days{std::chrono::days{days}}};
+    fix.date = velodyne::NmeaDate{static_cast<int>(ymd.year()),
+                                  static_cast<int>(static_cast<unsigned>(ymd.month())),
+                                  static_cast<int>(static_cast<unsigned>(ymd.day()))};
+    fix.latitude_deg = g.latitude_deg;
+    fix.longitude_deg = g.longitude_deg;
+    fix.speed_mps = std::max(0.0, static_cast<double>(g.speed_mps));
+    fix.course_deg = std::fmod(static_cast<double>(g.track_deg) + 360.0, 360.0);
+    const std::int64_t usec = (utc_ns / 1000) % 3'600'000'000LL;
+    if (auto w = velodyne::write_position_packet(
+            static_cast<std::uint32_t>(usec < 0 ? usec + 3'600'000'000LL : usec),
+            velodyne::PpsStatus::kLocked, fix, position);
+        !w) {
+      return rt::make_error(std::string("position packet: ") + velodyne::to_string(w.error()));
+    }
+    io::Datagram p;
+    p.payload = position;
+    p.stamp_ns = utc_ns;
+    p.src_ip = 0xC0A801C9;  // 192.168.1.201, a VLP's factory address
+    p.dst_ip = 0xFFFFFFFF;
+    p.src_port = velodyne::kPortPosition;
+    p.dst_port = velodyne::kPortPosition;
+    return pcap->write_udp(p);
+  };
   std::array<std::uint8_t, velodyne::kPacketSize> bytes{};
   for (std::uint32_t k = 0; k < n; ++k) {
     std::int64_t first_ns = 0;
     (*run)->packet(k, bytes, first_ns, on_scan);
     if (auto w = write_ins_until(first_ns + span_ns); !w) return fail(w.error().message);
-    trailer->write(bytes.data() + velodyne::kPacketSize - 6, first_ns);
+    write_trailer(bytes.data() + velodyne::kPacketSize - 6, first_ns);
     io::Datagram d;
     d.payload = bytes;
-    d.stamp_ns = first_ns + span_ns;  // received right after its last firing
-    d.src_ip = 0xC0A8032B;            // 192.168.3.43, the HDL-64E's factory address
+    d.stamp_ns = first_ns + span_ns;               // received right after its last firing
+    d.src_ip = factory ? 0xC0A801C9 : 0xC0A8032B;  // 192.168.1.201 (VLP) / 192.168.3.43 (64E)
     d.dst_ip = 0xFFFFFFFF;
     d.src_port = velodyne::kPortData;
     d.dst_port = velodyne::kPortData;
     if (pcap) {
       if (auto w = pcap->write_udp(d); !w) return fail(w.error().message);
+    }
+    // An HDL-32E / VLP also sends a position packet (port 8308) for about every 14 data packets
+    // (VLP-16 manual): its GPS time and the receiver's $GPRMC, here the INS's fix.
+    if (pcap && factory && k % 14 == 13) {
+      if (auto w = write_position(d.stamp_ns); !w) return fail(w.error().message);
     }
     if (kitti_scans && kitti_scans->add_packet(d.payload, d.stamp_ns)) {
       if (auto w = write_kitti_scans(); !w) return fail(w.error().message);
@@ -421,7 +486,12 @@ void add_sim_command(CLI::App& app) {
       ->required();
   cmd->add_option("--calib", o->calib, "calibration of the virtual unit (default: the config's)");
   cmd->add_option("--config", o->config, stac::settings::kConfigOptionHelp);
-  cmd->add_flag("--dual-return", o->dual_return, "an S3 in dual-return mode (strongest and last)");
+  cmd->add_flag("--dual-return", o->dual_return,
+                "dual-return mode (strongest and last): an S3, or the --model's");
+  cmd->add_option("--model", o->model,
+                  "the virtual sensor: S2.1 (default; S3 with --dual-return), S2, S3, HDL-32E, "
+                  "VLP-16, Puck LITE, Puck Hi-Res or VLP-32C, with velodyne.model_calibrations' "
+                  "calibration for it unless --calib is given (docs/velodyne.md)");
   cmd->add_option("--origin", o->origin,
                   "geodetic anchor of the sim world LAT,LON,ALT (deg, deg, m ellipsoidal; default "
                   "44.2449408681,-76.5096210157,77)");

@@ -18,6 +18,8 @@ struct SimOptions {
   std::string calib;
   std::string config;
   bool dual_return = false;
+  std::string model;   // the virtual sensor (velodyne::parse_model); empty: an HDL-64E S2.1 (S3
+                       // with dual_return)
   std::string origin;  // "LAT,LON,ALT"; empty: sim::InsConfig's default
   bool ins_udp = false;
   std::string can;                   // candump log to write; empty: none

@@ -1,10 +1,14 @@
 // stac status: what an HDL-64E S2.1/S3 says about itself in its packets' status bytes.
 #include "tools/status.hpp"
 
+#include <chrono>
 #include <cstdio>
+#include <map>
+#include <optional>
 #include <string>
 
 #include "drivers/velodyne/packet.hpp"
+#include "drivers/velodyne/position.hpp"
 #include "formats/capture_input.hpp"
 #include "settings/settings.hpp"
 #include "tools/commands.hpp"
@@ -18,9 +22,9 @@ rt::Result<CaptureStatus> read_capture_status(const std::filesystem::path& captu
                                               std::uint16_t port, velodyne::Model model,
                                               bool until_calibration) {
   if (velodyne::traits(model).trailer != velodyne::TrailerKind::kGpsStatus) {
-    return rt::make_error(std::string("the HDL-64E ") + std::string(velodyne::traits(model).name) +
-                          " sends no status cycle (only the S2.1 and S3 do); set --model or "
-                          "'velodyne.model'");
+    return rt::make_error(std::string("the ") + std::string(velodyne::traits(model).name) +
+                          " sends no status cycle (only the HDL-64E S2.1 and S3 do): give its "
+                          "calibration file (--calib or velodyne.calibration)");
   }
   auto reader =
       io::PcapReader::open(capture, io::PcapFilter{.udp_dst_port = port, .udp_src_port = {}});
@@ -54,8 +58,87 @@ rt::Result<velodyne::Calibration> stream_calibration(const std::filesystem::path
 rt::Result<velodyne::Calibration> capture_calibration(const std::filesystem::path& calibration_file,
                                                       const std::filesystem::path& capture,
                                                       std::uint16_t port, velodyne::Model model) {
-  return calibration_file.empty() ? stream_calibration(capture, port, model)
-                                  : velodyne::load_calibration(calibration_file);
+  auto c = calibration_file.empty() ? stream_calibration(capture, port, model)
+                                    : velodyne::load_calibration(calibration_file);
+  if (!c) return c;
+  if (auto fits = velodyne::check_calibration_for(*c, model); !fits)
+    return rt::Unexpected<rt::Error>{fits.error()};
+  return velodyne::lasers_of(*c, model);
+}
+
+rt::Result<velodyne::PacketIdentity> capture_identity(const std::filesystem::path& capture,
+                                                      std::uint16_t port) {
+  auto reader =
+      io::PcapReader::open(capture, io::PcapFilter{.udp_dst_port = port, .udp_src_port = {}});
+  if (!reader) return rt::Unexpected<rt::Error>{reader.error()};
+  io::Datagram d;
+  for (int n = 0; n < 200 && reader->next(d); ++n) {
+    const velodyne::PacketIdentity id = velodyne::identify_packet(d.payload);
+    if (id.kind != velodyne::PacketIdentity::Kind::kUnknown) return id;
+  }
+  return velodyne::PacketIdentity{};
+}
+
+rt::Status apply_sensor_option(settings::VelodyneSettings& s, const std::string& option,
+                               bool calibration_given) {
+  if (option.empty()) return {};
+  if (option == "auto") {
+    s.model_auto = true;
+    return {};
+  }
+  const auto m = velodyne::parse_model(option);
+  if (!m) {
+    return rt::make_error("'" + option + "' is not a sensor model: use " +
+                          std::string(velodyne::model_names()) + ", or auto");
+  }
+  return settings::use_velodyne_model(s, *m, calibration_given);
+}
+
+namespace {
+
+std::string describe(const velodyne::PacketIdentity& id) {
+  if (id.kind == velodyne::PacketIdentity::Kind::kHdl64) return "an HDL-64E (lower-bank blocks)";
+  char product[8];
+  std::snprintf(product, sizeof product, "0x%02X", id.product_id);
+  if (id.model) {
+    return "a " + std::string(velodyne::traits(*id.model).name) + " (product byte " + product + ")";
+  }
+  return std::string("an unknown model (product byte ") + product + ")";
+}
+
+}  // namespace
+
+rt::Result<velodyne::Calibration> capture_sensor(settings::VelodyneSettings& s,
+                                                 const std::filesystem::path& capture,
+                                                 bool calibration_given) {
+  auto id = capture_identity(capture, s.port);
+  if (!id) return rt::Unexpected<rt::Error>{id.error()};
+  const velodyne::Model configured = s.assembler.decoder.model;
+  if (s.model_auto) {
+    velodyne::Model model = velodyne::Model::kS2_1;
+    if (id->model) {
+      model = *id->model;
+    } else if (id->kind == velodyne::PacketIdentity::Kind::kFactory) {
+      return rt::make_error(capture.string() + ": its packets name " + describe(*id) +
+                            ", which STAC does not know; set velodyne.model (or --model)");
+    }
+    if (auto u = settings::use_velodyne_model(s, model, calibration_given); !u)
+      return rt::Unexpected<rt::Error>{u.error()};
+    std::fprintf(stderr, "stac: %s: velodyne.model auto: %s%s\n", capture.string().c_str(),
+                 id->kind == velodyne::PacketIdentity::Kind::kHdl64
+                     ? "HDL-64E packets (they do not say S2, S2.1 or S3): decoded as an S2.1"
+                     : ("packets of " + describe(*id)).c_str(),
+                 id->kind == velodyne::PacketIdentity::Kind::kUnknown ? " (none said: S2.1)" : "");
+  } else if (id->kind != velodyne::PacketIdentity::Kind::kUnknown &&
+             !velodyne::identity_matches(*id, configured)) {
+    std::fprintf(stderr,
+                 "stac: warning: %s: its packets name %s, but the model is %s: decoded as the %s "
+                 "as configured (velodyne.model: auto, or --model, follows the packets)\n",
+                 capture.string().c_str(), describe(*id).c_str(),
+                 std::string(velodyne::traits(configured).name).c_str(),
+                 std::string(velodyne::traits(configured).name).c_str());
+  }
+  return capture_calibration(s.calibration, capture, s.port, s.assembler.decoder.model);
 }
 
 namespace {
@@ -73,17 +156,109 @@ std::string ip(const std::array<std::uint8_t, 4>& a) {
          std::to_string(a[3]);
 }
 
+// An HDL-32E / VLP: the factory bytes of its data packets and its position packets (port 8308)
+// with the GPS receiver's NMEA sentence.
+int run_family_status(const StatusOptions& o, std::uint16_t port, velodyne::Model model) {
+  auto reader = io::PcapReader::open(o.in, io::PcapFilter{});
+  if (!reader) return fail(reader.error().message);
+  std::uint64_t data = 0, other_model = 0, positions = 0, position_errors = 0;
+  std::map<std::uint8_t, std::uint64_t> modes;
+  std::map<std::string, std::uint64_t> errors;
+  std::optional<velodyne::PositionPacket> last;
+  std::optional<velodyne::Hdl32eMotion> motion;
+  io::Datagram d;
+  while (reader->next(d)) {
+    if (d.dst_port == port && d.payload.size() == velodyne::kPacketSize) {
+      ++data;
+      const velodyne::PacketIdentity id = velodyne::identify_packet(d.payload);
+      if (!velodyne::identity_matches(id, model)) ++other_model;
+      if (id.kind == velodyne::PacketIdentity::Kind::kFactory) ++modes[id.return_mode];
+    } else if (d.dst_port == velodyne::kPortPosition) {
+      ++positions;
+      auto p = velodyne::parse_position_packet(d.payload);
+      if (!p) {
+        ++position_errors;
+        ++errors[velodyne::to_string(p.error())];
+        continue;
+      }
+      last = *p;
+      if (model == velodyne::Model::kHdl32e) motion = velodyne::parse_hdl32e_motion(d.payload);
+    }
+  }
+  if (!reader->error().empty()) return fail(capture_breaks_off(reader->error()));
+  if (data == 0) {
+    return fail(o.in + ": no " + std::string(velodyne::traits(model).name) +
+                " data packet to port " + std::to_string(port) + " (wrong --port?)");
+  }
+  const std::string name(velodyne::traits(model).name);
+  std::printf("%s: %llu %s data packets (%llu whose factory bytes name another model)\n",
+              o.in.c_str(), static_cast<unsigned long long>(data), name.c_str(),
+              static_cast<unsigned long long>(other_model));
+  std::printf("return mode");
+  for (const auto& [mode, count] : modes) {
+    std::printf(" %s %llu",
+                mode == velodyne::kReturnDual   ? "dual"
+                : mode == velodyne::kReturnLast ? "last"
+                                                : "strongest",
+                static_cast<unsigned long long>(count));
+  }
+  std::printf("\nposition     %llu packets on port %u, %llu unreadable",
+              static_cast<unsigned long long>(positions), velodyne::kPortPosition,
+              static_cast<unsigned long long>(position_errors));
+  for (const auto& [why, count] : errors)
+    std::printf(" (%s: %llu)", why.c_str(), static_cast<unsigned long long>(count));
+  std::printf("\n");
+  if (last) {
+    const velodyne::NmeaFix& f = last->fix;
+    std::printf("last fix     PPS %s, %.*s\n", velodyne::to_string(last->pps),
+                static_cast<int>(last->sentence_length), last->sentence.data());
+    if (const auto utc = velodyne::nmea_utc_ns(f)) {
+      const auto t =
+          std::chrono::sys_time<std::chrono::seconds>(std::chrono::seconds(*utc / 1'000'000'000));
+      const std::chrono::year_month_day ymd{std::chrono::floor<std::chrono::days>(t)};
+      const std::chrono::hh_mm_ss hms{t - std::chrono::floor<std::chrono::days>(t)};
+      std::printf(
+          "             %04d-%02u-%02u %02ld:%02ld:%02lld UTC, %s, %.7f %.7f deg, %.1f m/s\n",
+          static_cast<int>(ymd.year()), static_cast<unsigned>(ymd.month()),
+          static_cast<unsigned>(ymd.day()), static_cast<long>(hms.hours().count()),
+          static_cast<long>(hms.minutes().count()), static_cast<long long>(hms.seconds().count()),
+          f.valid ? "valid" : "no fix", f.latitude_deg.value_or(0.0), f.longitude_deg.value_or(0.0),
+          f.speed_mps.value_or(0.0));
+    }
+  }
+  const bool motion_sent =
+      motion && (motion->gyro_deg_per_s != std::array<double, 3>{} ||
+                 motion->temperature_c != std::array<double, 3>{25.0, 25.0, 25.0});
+  if (motion_sent) {
+    std::printf("motion       gyro %.2f %.2f %.2f deg/s, temperature %.1f %.1f %.1f C\n",
+                motion->gyro_deg_per_s[0], motion->gyro_deg_per_s[1], motion->gyro_deg_per_s[2],
+                motion->temperature_c[0], motion->temperature_c[1], motion->temperature_c[2]);
+  }
+  if (!o.calib_out.empty()) {
+    return fail("--calib-out: the " + name +
+                " sends no calibration in its packets; its calibration is a file (VeloView xml "
+                "or ROS yaml)");
+  }
+  return 0;
+}
+
 int run_status(const StatusOptions& o) {
   auto settings = load_velodyne_settings(config_path(o.config));
   if (!settings) return fail(settings.error().message);
   velodyne::Model model = settings->assembler.decoder.model;
-  if (!o.model.empty()) {
-    const auto m = velodyne::parse_model(o.model);
-    if (!m) return fail("--model '" + o.model + "': use S2.1 or S3");
-    model = *m;
-  }
   if (o.port == 0 || o.port > 65535) return fail("--port must be 1..65535");
   const auto port = o.port > 0 ? static_cast<std::uint16_t>(o.port) : settings->port;
+  if (o.model == "auto" || (o.model.empty() && settings->model_auto)) {
+    auto id = capture_identity(o.in, port);
+    if (!id) return fail(id.error().message);
+    if (id->model) model = *id->model;
+  } else if (!o.model.empty()) {
+    const auto m = velodyne::parse_model(o.model);
+    if (!m) return fail("--model '" + o.model + "': use " + std::string(velodyne::model_names()));
+    model = *m;
+  }
+  if (velodyne::traits(model).trailer == velodyne::TrailerKind::kFactory)
+    return run_family_status(o, port, model);
   auto read = read_capture_status(o.in, port, model, false);
   if (!read) return fail(read.error().message);
   if (read->packets == 0) {
@@ -146,18 +321,26 @@ void add_status_command(CLI::App& app) {
   auto o = std::make_shared<StatusOptions>();
   CLI::App* cmd = app.add_subcommand(
       "status",
-      "Show what an HDL-64E S2.1/S3 reports in its status bytes; extract its calibration");
+      "Show what an HDL-64E S2.1/S3 reports in its status bytes (extract its calibration), or an "
+      "HDL-32E/VLP in its position packets");
   cmd->description(
       "Reads the status cycle in the last two bytes of every packet of a capture: GPS date and\n"
       "time, GPS state, temperature and firmware every 16 packets, and the calibration dump "
       "(lasers,\n"
       "RPM, FOV, addresses, return mode) every 4160. --calib-out writes the calibration the unit\n"
-      "sent as a ROS yaml file; 'stac decode --calib stream' uses it directly.");
+      "sent as a ROS yaml file; 'stac decode --calib stream' uses it directly.\n"
+      "An HDL-32E, VLP-16, Puck or VLP-32C (--model) has no status cycle: its data packets' "
+      "return\n"
+      "mode and product bytes are counted, and its position packets (port 8308) read: PPS state\n"
+      "and the GPS receiver's NMEA sentence (UTC date and time, position, speed).");
   cmd->add_option("--in", o->in, "pcap capture of the sensor's packets")
       ->required()
       ->check(CLI::ExistingFile);
   cmd->add_option("--calib-out", o->calib_out, "write the unit's calibration here (ROS yaml)");
-  cmd->add_option("--model", o->model, "S2.1 or S3 (default: the config's)");
+  cmd->add_option("--model", o->model,
+                  "the sensor (default: the config's velodyne.model): S2.1 or S3, or an HDL-32E, "
+                  "VLP-16, Puck or VLP-32C, whose factory bytes and position packets (port 8308, "
+                  "NMEA) are shown instead; auto: the model the packets name");
   cmd->add_option("--port", o->port, "UDP data port in the capture (default: the config's, 2368)");
   cmd->add_option("--config", o->config, stac::settings::kConfigOptionHelp);
   cmd->callback([o] {

@@ -3,6 +3,7 @@
 #include <tinyxml2.h>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
@@ -69,9 +70,11 @@ rt::Result<Calibration> finish(const std::filesystem::path& path,
   Calibration c;
   c.source = path.string();
   c.distance_resolution_m = distance_resolution_m;
-  if (lasers.size() != static_cast<std::size_t>(kMaxLasers)) {  // the returns of missing ones: lost
-    return rt::make_error(path.string() + ": an HDL-64E calibration has 64 lasers, this file " +
-                          std::to_string(lasers.size()) + " (cut short, or another sensor's)");
+  if (lasers.size() != 16 && lasers.size() != 32 &&
+      lasers.size() != static_cast<std::size_t>(kMaxLasers)) {  // missing ones' returns: lost
+    return rt::make_error(path.string() +
+                          ": a Velodyne calibration lists 16, 32 or 64 lasers, this file " +
+                          std::to_string(lasers.size()) + " (cut short?)");
   }
   c.num_lasers = static_cast<int>(lasers.size());
   std::set<int> seen;
@@ -393,6 +396,37 @@ rt::Result<Calibration> load_calibration(const std::filesystem::path& path) {
 
 rt::Status check_calibration(const Calibration& calibration) {
   return check_ranges(calibration.source, calibration);
+}
+
+rt::Status check_calibration_for(const Calibration& c, Model model) {
+  const ModelTraits& t = traits(model);
+  const std::string what = c.source + ": ";
+  const std::string fix = "; is it another sensor's? (set velodyne.model or --model)";
+  if (c.num_lasers < t.lasers) {
+    return rt::make_error(what + "lists " + std::to_string(c.num_lasers) + " lasers, a " +
+                          std::string(t.name) + " has " + std::to_string(t.lasers) + fix);
+  }
+  int highest_enabled = -1;
+  for (int i = 0; i < c.num_lasers; ++i) {
+    if (c.lasers[static_cast<std::size_t>(i)].enabled) highest_enabled = i;
+  }
+  // VeloView pads 16- and 32-laser files to 64 entries, the padding disabled.
+  if (highest_enabled >= t.lasers) {
+    return rt::make_error(what + "enables laser " + std::to_string(highest_enabled) + ", a " +
+                          std::string(t.name) + " has lasers 0.." + std::to_string(t.lasers - 1) +
+                          fix);
+  }
+  if (highest_enabled < t.lasers / 2) {
+    return rt::make_error(what + "enables only lasers 0.." + std::to_string(highest_enabled) +
+                          ", a " + std::string(t.name) + " has " + std::to_string(t.lasers) + fix);
+  }
+  return {};
+}
+
+Calibration lasers_of(const Calibration& c, Model model) {
+  Calibration out = c;
+  out.num_lasers = std::min(c.num_lasers, traits(model).lasers);
+  return out;
 }
 
 rt::Status save_ros_yaml(const Calibration& c, const std::filesystem::path& path) {

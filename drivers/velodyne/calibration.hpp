@@ -1,5 +1,5 @@
-// HDL-64E per-laser calibration: the corrections the point math needs, in SI units.
-// Loaded from Velodyne db.xml (cm, degrees) or ROS yaml (m, radians).
+// Velodyne per-laser calibration (HDL-64E, HDL-32E, VLP-16, VLP-32C): the corrections the point
+// math needs, in SI units. Loaded from Velodyne db.xml (cm, degrees) or ROS yaml (m, radians).
 #pragma once
 
 #include <array>
@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <string>
 
+#include "drivers/velodyne/model.hpp"
 #include "rt/expected.hpp"
 
 namespace stac::velodyne {
@@ -49,6 +50,13 @@ rt::Result<Calibration> parse_ros_yaml(const std::string& text, const std::files
 // Checks every correction against an HDL-64E's sanity limits; errors name `source`, the laser
 // and the field. The loaders call it; so does the status-stream calibration.
 rt::Status check_calibration(const Calibration& calibration);
+
+// Checks that a calibration fits a model: at least its lasers, none enabled beyond them (a
+// VeloView file pads a VLP-16's 16 lasers to 64, disabled), and not only the first half enabled
+// (a VLP-16 file for a 32- or 64-laser sensor). Errors say what to set.
+rt::Status check_calibration_for(const Calibration& calibration, Model model);
+// The calibration with its padding cut to the model's lasers.
+Calibration lasers_of(const Calibration& calibration, Model model);
 
 // Writes the ROS yaml form (metres, radians), as gen_calibration.py would, without its bugs.
 rt::Status save_ros_yaml(const Calibration& calibration, const std::filesystem::path& path);

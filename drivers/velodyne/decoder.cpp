@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <memory>
 #include <numbers>
 #include <numeric>
 #include <string>
@@ -18,9 +19,12 @@ constexpr float kFocalScale = 13100.0f;  // cm, intensity formula constant
 }  // namespace
 
 std::optional<Model> parse_model(std::string_view text) noexcept {
-  std::string s;
-  for (char c : text) s.push_back(static_cast<char>(std::toupper(static_cast<unsigned char>(c))));
-  for (std::string_view prefix : {"HDL-64E ", "HDL-64E", "HDL64E", "64E_", "64E"}) {
+  std::string s;  // upper case, without spaces, dashes and underscores
+  for (char c : text) {
+    if (c == ' ' || c == '-' || c == '_') continue;
+    s.push_back(static_cast<char>(std::toupper(static_cast<unsigned char>(c))));
+  }
+  for (std::string_view prefix : {"HDL64E", "64E"}) {
     if (s.rfind(prefix, 0) == 0) {
       s.erase(0, prefix.size());
       break;
@@ -29,7 +33,48 @@ std::optional<Model> parse_model(std::string_view text) noexcept {
   if (s == "S2") return Model::kS2;
   if (s == "S2.1" || s == "S21") return Model::kS2_1;
   if (s == "S3") return Model::kS3;
+  if (s == "HDL32E" || s == "HDL32" || s == "32E") return Model::kHdl32e;
+  if (s == "VLP16" || s == "PUCK") return Model::kVlp16;
+  if (s == "PUCKLITE" || s == "VLP16LITE") return Model::kPuckLite;
+  if (s == "PUCKHIRES" || s == "VLP16HIRES") return Model::kPuckHiRes;
+  if (s == "VLP32C" || s == "VLP32" || s == "ULTRAPUCK") return Model::kVlp32c;
   return std::nullopt;
+}
+
+std::string_view model_names() noexcept {
+  return "S2, S2.1, S3 (HDL-64E), HDL-32E, VLP-16, Puck LITE, Puck Hi-Res or VLP-32C";
+}
+
+PacketIdentity identify_packet(std::span<const std::uint8_t> payload) noexcept {
+  PacketIdentity id;
+  const RawPacket* packet = as_packet(payload);
+  if (packet == nullptr) return id;
+  bool all_upper = true;
+  for (const RawBlock& b : packet->blocks) {
+    if (b.bank == kLowerBank) {
+      id.kind = PacketIdentity::Kind::kHdl64;
+      return id;
+    }
+    all_upper = all_upper && b.bank == kUpperBank;
+  }
+  const std::uint8_t mode = packet->trailer[4], product = packet->trailer[5];
+  if (!all_upper || mode < kReturnStrongest || mode > kReturnDual) return id;
+  id.kind = PacketIdentity::Kind::kFactory;
+  id.return_mode = mode;
+  id.product_id = product;
+  for (Model m : kAllModels) {
+    if (traits(m).product_id == product) {
+      id.model = m;
+      break;
+    }
+  }
+  return id;
+}
+
+bool identity_matches(const PacketIdentity& id, Model m) noexcept {
+  if (id.kind == PacketIdentity::Kind::kUnknown) return true;  // the bytes name no model
+  if (is_hdl64(m)) return id.kind == PacketIdentity::Kind::kHdl64;
+  return id.kind == PacketIdentity::Kind::kFactory && id.product_id == traits(m).product_id;
 }
 
 PacketDecoder::PacketDecoder(const Calibration& calibration, const DecoderConfig& config)
@@ -46,15 +91,16 @@ PacketDecoder::PacketDecoder(const Calibration& calibration, const DecoderConfig
   // Ring = rank of the vertical correction, lowest beam first.
   std::array<int, kMaxLasers> order{};
   std::iota(order.begin(), order.end(), 0);
-  const int n = calibration.num_lasers;
+  const int n = std::min(calibration.num_lasers, traits_->lasers);
   std::stable_sort(order.begin(), order.begin() + n, [&](int a, int b) {
     return calibration.lasers[static_cast<std::size_t>(a)].vert_correction_rad <
            calibration.lasers[static_cast<std::size_t>(b)].vert_correction_rad;
   });
+  auto by_laser = std::make_unique<LaserTables>();
   for (int rank = 0; rank < kMaxLasers; ++rank) {
     const int id = order[static_cast<std::size_t>(rank)];
     const LaserCalibration& c = calibration.lasers[static_cast<std::size_t>(id)];
-    LaserTables& t = lasers_;
+    LaserTables& t = *by_laser;
     t.cos_vert[id] = static_cast<float>(std::cos(c.vert_correction_rad));
     t.sin_vert[id] = static_cast<float>(std::sin(c.vert_correction_rad));
     t.cos_rot[id] = static_cast<float>(std::cos(c.rot_correction_rad));
@@ -74,31 +120,80 @@ PacketDecoder::PacketDecoder(const Calibration& calibration, const DecoderConfig
     t.two_pt[id] = c.two_pt_correction_available ? 1.0f : 0.0f;
     t.enabled[id] = c.enabled && id < n;
     t.ring[id] = static_cast<std::uint8_t>(rank);
+    t.laser[id] = static_cast<std::uint8_t>(id);
+    ring_by_laser_[static_cast<std::size_t>(id)] = static_cast<std::uint8_t>(rank);
+  }
+  if (traits_->layout == Layout::kBankPairs) {
+    lasers_ = *by_laser;
+  } else {
+    for (int slot = 0; slot < kMaxLasers; ++slot) {
+      const int from = slot < kLasersPerBlock ? slot % traits_->lasers : 0;
+      LaserTables& t = lasers_;
+      const LaserTables& f = *by_laser;
+      t.cos_vert[slot] = f.cos_vert[from], t.sin_vert[slot] = f.sin_vert[from];
+      t.cos_rot[slot] = f.cos_rot[from], t.sin_rot[slot] = f.sin_rot[from];
+      t.dist[slot] = f.dist[from], t.dist_x[slot] = f.dist_x[from], t.dist_y[slot] = f.dist_y[from];
+      t.vert_offset[slot] = f.vert_offset[from], t.horiz_offset[slot] = f.horiz_offset[from];
+      t.two_pt[slot] = f.two_pt[from];
+      t.focal_offset[slot] = f.focal_offset[from], t.focal_slope[slot] = f.focal_slope[from];
+      t.min_intensity[slot] = f.min_intensity[from], t.max_intensity[slot] = f.max_intensity[from];
+      t.enabled[slot] = f.enabled[from] && slot < kLasersPerBlock;
+      t.ring[slot] = f.ring[from];
+      t.laser[slot] = f.laser[from];
+    }
   }
   for (int dual = 0; dual < 2; ++dual) {
-    const int blocks_per_firing = dual ? 4 : 2;
     for (int b = 0; b < kBlocksPerPacket; ++b) {
       for (int j = 0; j < kLasersPerBlock; ++j) {
-        const int firing = b / blocks_per_firing, group = j / 4;  // whole firings and groups
-        const double us = traits_->firing_period_us * firing + traits_->laser_group_us * group +
-                          traits_->laser_in_group_us[static_cast<std::size_t>(j % 4)];
-        firing_ns_[static_cast<std::size_t>(dual)][static_cast<std::size_t>(b)]
-                  [static_cast<std::size_t>(j)] =
-                      static_cast<std::int32_t>(std::lround(us * 1000.0));
+        const auto d = static_cast<std::size_t>(dual);
+        const auto bi = static_cast<std::size_t>(b), ji = static_cast<std::size_t>(j);
+        firing_ns_[d][bi][ji] = static_cast<std::int32_t>(
+            std::lround(firing_time_us(*traits_, b, j, dual != 0) * 1000.0));
+        fraction_[d][bi][ji] = static_cast<float>(azimuth_fraction_of(*traits_, j));
+        interpolates_ = interpolates_ || fraction_[d][bi][ji] != 0.0f;
       }
     }
   }
 }
 
+ReturnType PacketDecoder::return_type(int block_index, bool dual_return) const noexcept {
+  if (!dual_return) return ReturnType::kStrongest;
+  // HDL-64E: [upper, lower] strongest then [upper, lower] last; the others: a pair of blocks,
+  // the last return first (docs/velodyne.md).
+  if (traits_->layout == Layout::kBankPairs)
+    return block_index % 4 >= 2 ? ReturnType::kLast : ReturnType::kStrongest;
+  return block_index % 2 == 0 ? ReturnType::kLast : ReturnType::kStrongest;
+}
+
 int PacketDecoder::decode_block(const RawBlock& block, int block_index, bool dual_return,
-                                std::int64_t packet_offset_ns, Point* out) noexcept {
+                                std::int64_t packet_offset_ns, Point* out,
+                                int azimuth_step) noexcept {
   if (block.rotation >= kRotationUnits) {  // the assembler drops such packets before this
     ++counters_.invalid_rotation;
     return 0;
   }
-  const int bank = block.bank == kLowerBank ? kLasersPerBlock : 0;
-  const float cos_r = cos_table_[block.rotation];
-  const float sin_r = sin_table_[block.rotation];
+  // Slot of channel 0 in the tables: the bank for an HDL-64E; the channels of the others.
+  const int base =
+      traits_->layout == Layout::kBankPairs && block.bank == kLowerBank ? kLasersPerBlock : 0;
+  // The rotation of every channel: the block's, or (VLP-16) interpolated by its firing time.
+  alignas(64) std::uint16_t rotation[kLasersPerBlock];
+  alignas(64) float cos_r[kLasersPerBlock], sin_r[kLasersPerBlock];
+  if (interpolates_ && azimuth_step != 0) {
+    const auto& fraction = fraction_[dual_return ? 1 : 0][static_cast<std::size_t>(block_index)];
+    for (int j = 0; j < kLasersPerBlock; ++j) {
+      rotation[j] = interpolated_rotation(block.rotation, azimuth_step,
+                                          fraction[static_cast<std::size_t>(j)]);
+      cos_r[j] = cos_table_[rotation[j]];
+      sin_r[j] = sin_table_[rotation[j]];
+    }
+  } else {
+    const float c = cos_table_[block.rotation], s = sin_table_[block.rotation];
+    for (int j = 0; j < kLasersPerBlock; ++j) {
+      rotation[j] = block.rotation;
+      cos_r[j] = c;
+      sin_r[j] = s;
+    }
+  }
   constexpr float kInvX = 1.0f / (kTwoPointFar - kTwoPointXAt);
   constexpr float kInvY = 1.0f / (kTwoPointFar - kTwoPointYAt);
   const LaserTables& t = lasers_;
@@ -113,11 +208,11 @@ int PacketDecoder::decode_block(const RawBlock& block, int block_index, bool dua
   alignas(64) float xx[kLasersPerBlock], yy[kLasersPerBlock];
   alignas(64) float corr_x[kLasersPerBlock], corr_y[kLasersPerBlock];
   for (int j = 0; j < kLasersPerBlock; ++j) {
-    const int l = bank + j;
+    const int l = base + j;
     distance[j] = raw[j] * resolution_m_ + t.dist[l];
     // Azimuth with the laser's rotational correction: cos/sin(rotation - rot_correction).
-    cos_a[j] = cos_r * t.cos_rot[l] + sin_r * t.sin_rot[l];
-    sin_a[j] = sin_r * t.cos_rot[l] - cos_r * t.sin_rot[l];
+    cos_a[j] = cos_r[j] * t.cos_rot[l] + sin_r[j] * t.sin_rot[l];
+    sin_a[j] = sin_r[j] * t.cos_rot[l] - cos_r[j] * t.sin_rot[l];
     const float xy = distance[j] * t.cos_vert[l] - t.vert_offset[l] * t.sin_vert[l];
     xx[j] = std::fabs(xy * sin_a[j] - t.horiz_offset[l] * cos_a[j]);
     yy[j] = std::fabs(xy * cos_a[j] + t.horiz_offset[l] * sin_a[j]);
@@ -137,7 +232,7 @@ int PacketDecoder::decode_block(const RawBlock& block, int block_index, bool dua
   alignas(64) float px[kLasersPerBlock], py[kLasersPerBlock], pz[kLasersPerBlock];
   alignas(64) float pi[kLasersPerBlock];
   for (int j = 0; j < kLasersPerBlock; ++j) {
-    const int l = bank + j;
+    const int l = base + j;
     const float cv = t.cos_vert[l], sv = t.sin_vert[l];
     const float vo = t.vert_offset[l], ho = t.horiz_offset[l];
     const float xy_x = (distance[j] + corr_x[j]) * cv - vo * sv;
@@ -155,11 +250,10 @@ int PacketDecoder::decode_block(const RawBlock& block, int block_index, bool dua
 
   // Pass 2: keep the valid returns, counting the others by cause.
   const auto& firing = firing_ns_[dual_return ? 1 : 0][static_cast<std::size_t>(block_index)];
-  const std::uint8_t return_type = static_cast<std::uint8_t>(
-      dual_return && (block_index % 4) >= 2 ? ReturnType::kLast : ReturnType::kStrongest);
+  const auto type = static_cast<std::uint8_t>(return_type(block_index, dual_return));
   int written = 0;
   for (int j = 0; j < kLasersPerBlock; ++j) {
-    const int l = bank + j;
+    const int l = base + j;
     if (block.returns[j].distance == 0) {
       ++counters_.no_return;
       continue;
@@ -180,10 +274,10 @@ int PacketDecoder::decode_block(const RawBlock& block, int block_index, bool dua
     p.distance_m = distance[j];
     p.time_offset_ns =
         static_cast<std::int32_t>(packet_offset_ns + firing[static_cast<std::size_t>(j)]);
-    p.azimuth = block.rotation;
-    p.laser = static_cast<std::uint8_t>(l);
+    p.azimuth = rotation[j];
+    p.laser = t.laser[l];
     p.ring = t.ring[l];
-    p.return_type = return_type;
+    p.return_type = type;
   }
   return written;
 }

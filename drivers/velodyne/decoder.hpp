@@ -38,8 +38,11 @@ class PacketDecoder {
 
   // Decodes block `block_index` of a packet whose first firing is at `packet_offset_ns`
   // relative to the scan stamp. Writes at most 32 points to `out`; returns how many.
+  // `azimuth_step`: rotation (0.01 deg) from this block's firing to the next one, for the models
+  // whose later firings in a block are placed by interpolation (VLP-16: the second sequence);
+  // ignored by the others.
   int decode_block(const RawBlock& block, int block_index, bool dual_return,
-                   std::int64_t packet_offset_ns, Point* out) noexcept;
+                   std::int64_t packet_offset_ns, Point* out, int azimuth_step = 0) noexcept;
 
   // Firing time of block `block_index`, laser j (0..31) relative to the packet's first firing.
   std::int32_t firing_offset_ns(int block_index, int j, bool dual_return) const noexcept {
@@ -50,13 +53,38 @@ class PacketDecoder {
   std::int32_t packet_span_ns(bool dual_return) const noexcept {
     return firing_offset_ns(kBlocksPerPacket - 1, kLasersPerBlock - 1, dual_return);
   }
+  // Blocks fired at once (sharing a rotation): 2 or 4 (dual) for an HDL-64E, else 1 or 2.
+  int blocks_per_firing(bool dual_return) const noexcept {
+    return (traits_->layout == Layout::kBankPairs ? 2 : 1) * (dual_return ? 2 : 1);
+  }
+  // The laser a channel of a block reads (HDL-64E: from the block's bank id).
+  int laser_of(std::uint16_t bank, int channel) const noexcept {
+    if (traits_->layout == Layout::kBankPairs)
+      return (bank == kLowerBank ? kLasersPerBlock : 0) + channel;
+    return channel % traits_->lasers;
+  }
+  ReturnType return_type(int block_index, bool dual_return) const noexcept;
+  // Whether a packet of this model is in dual-return mode.
+  bool dual_return(const RawPacket& packet) const noexcept {
+    return is_dual_return(packet, traits_->supports_dual_return,
+                          traits_->trailer == TrailerKind::kFactory);
+  }
+  // Fraction of the azimuth step to the next firing at which channel j of block b is fired
+  // (0 for every channel of the models that take the block's rotation for all its points).
+  float azimuth_fraction(int block_index, int j, bool dual_return) const noexcept {
+    return fraction_[dual_return ? 1 : 0][static_cast<std::size_t>(block_index)]
+                    [static_cast<std::size_t>(j)];
+  }
   const ModelTraits& model() const noexcept { return *traits_; }
+  Model model_id() const noexcept { return config_.model; }
   const DecodeCounters& counters() const noexcept { return counters_; }
-  int ring_of(int laser) const noexcept { return lasers_.ring[laser]; }
+  int ring_of(int laser) const noexcept { return ring_by_laser_[static_cast<std::size_t>(laser)]; }
 
  private:
-  // Per-laser constants as structure-of-arrays, so the 32 returns of a block are corrected in
-  // one branch-free loop the compiler vectorises; invalid returns are dropped afterwards.
+  // Per-channel constants as structure-of-arrays, so the 32 returns of a block are corrected in
+  // one branch-free loop the compiler vectorises; invalid returns are dropped afterwards. Slot
+  // = the channel's laser for an HDL-64E (bank * 32 + channel); the channel (0..31) for the
+  // others, holding its laser's constants (a VLP-16's lasers twice).
   struct LaserTables {
     alignas(64) float cos_vert[kMaxLasers], sin_vert[kMaxLasers];
     alignas(64) float cos_rot[kMaxLasers], sin_rot[kMaxLasers];
@@ -67,14 +95,18 @@ class PacketDecoder {
     alignas(64) float min_intensity[kMaxLasers], max_intensity[kMaxLasers];
     bool enabled[kMaxLasers];
     std::uint8_t ring[kMaxLasers];
+    std::uint8_t laser[kMaxLasers];
   };
   const ModelTraits* traits_;
   DecoderConfig config_;
   float resolution_m_;
   LaserTables lasers_{};
+  std::array<std::uint8_t, kMaxLasers> ring_by_laser_{};
+  bool interpolates_ = false;                 // some channel's azimuth is interpolated (VLP-16)
   std::vector<float> cos_table_, sin_table_;  // by raw rotation, 36000 entries, built once
   std::array<std::array<std::array<std::int32_t, kLasersPerBlock>, kBlocksPerPacket>, 2>
       firing_ns_{};
+  std::array<std::array<std::array<float, kLasersPerBlock>, kBlocksPerPacket>, 2> fraction_{};
   DecodeCounters counters_;
 };
 

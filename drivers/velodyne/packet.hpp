@@ -71,10 +71,16 @@ inline SpinTrailer read_spin_trailer(const RawPacket& packet) noexcept {
   return t;
 }
 
-// Dual return (S3 only): blocks come as [upper-strongest, lower-strongest, upper-last,
+// Dual return. HDL-64E S3: blocks come as [upper-strongest, lower-strongest, upper-last,
 // lower-last] sharing one rotation; the packet carries no flag (valgur/velodyne_decoder).
-inline bool is_dual_return(const RawPacket& packet, bool model_supports_dual) noexcept {
-  return model_supports_dual && packet.blocks[0].rotation == packet.blocks[2].rotation &&
+// HDL-32E / VLP: the return-mode byte says so (0x39), and pairs of blocks share a rotation.
+inline bool is_dual_return(const RawPacket& packet, bool model_supports_dual,
+                           bool factory_trailer = false) noexcept {
+  if (!model_supports_dual) return false;
+  if (factory_trailer) {
+    return packet.trailer[4] == 0x39 && packet.blocks[0].rotation == packet.blocks[1].rotation;
+  }
+  return packet.blocks[0].rotation == packet.blocks[2].rotation &&
          packet.blocks[1].rotation == packet.blocks[3].rotation;
 }
 

@@ -117,8 +117,11 @@ bool ScanAssembler::add_packet(std::span<const std::uint8_t> payload,
     ++counters_.wrong_size;
     return false;
   }
+  const ModelTraits& model = decoder_.model();
+  const bool banks = model.layout == Layout::kBankPairs;  // HDL-64E: upper and lower blocks
   for (const RawBlock& b : packet->blocks) {
-    if ((b.bank != kUpperBank && b.bank != kLowerBank) || b.rotation >= kRotationUnits) {
+    if ((b.bank != kUpperBank && (!banks || b.bank != kLowerBank)) ||
+        b.rotation >= kRotationUnits) {
       ++counters_.invalid_block;
       return false;
     }
@@ -140,10 +143,14 @@ bool ScanAssembler::add_packet(std::span<const std::uint8_t> payload,
   if (scan_ == nullptr) return false;     // begin() was never called: nothing to write into
   if (target_ == &carry_) begin(*scan_);  // the caller did not take the closed scan: reuse it
   std::memcpy(last_trailer_.data(), packet->trailer, last_trailer_.size());
-  const ModelTraits& model = decoder_.model();
+  if (const PacketIdentity id = identify_packet(payload);
+      !identity_matches(id, decoder_.model_id())) {
+    ++counters_.model_mismatch;
+    last_identity_ = id;
+  }
   if (model.trailer == TrailerKind::kGpsStatus) status_.add(packet->trailer[4], packet->trailer[5]);
   const std::uint32_t device_usec =
-      model.trailer == TrailerKind::kGpsStatus ? load_u32(packet->trailer) : 0;
+      model.trailer == TrailerKind::kSpinCount ? 0 : load_u32(packet->trailer);
 
   bool completed = false;
   bool restarted = !have_prev_;
@@ -161,8 +168,8 @@ bool ScanAssembler::add_packet(std::span<const std::uint8_t> payload,
       step_ema_ = 0.0;
     }
   }
-  const bool dual = is_dual_return(*packet, model.supports_dual_return);
-  const int group = dual ? 4 : 2;
+  const bool dual = decoder_.dual_return(*packet);
+  const int group = decoder_.blocks_per_firing(dual);
 
   // Loss estimate: an azimuth step between packets much larger than the usual one.
   const std::uint16_t r0 = packet->blocks[0].rotation;
@@ -197,8 +204,13 @@ bool ScanAssembler::add_packet(std::span<const std::uint8_t> payload,
 
   bool wrote_current = false;
   bool wrote_carry = false;
+  int azimuth_step = 0;  // to the next firing; the last firing of the packet keeps the one before
   for (int first = 0; first < kBlocksPerPacket; first += group) {
     const std::uint16_t r = packet->blocks[first].rotation;
+    if (first + group < kBlocksPerPacket) {
+      azimuth_step = forward(r, packet->blocks[first + group].rotation);
+      if (azimuth_step > kHalfTurn) azimuth_step -= kRotationUnits;  // jitter backwards
+    }
     const std::int32_t firing = decoder_.firing_offset_ns(first, 0, dual);
     const std::int64_t t = stamp_ns + firing;
     if (!have_prev_) {
@@ -235,13 +247,15 @@ bool ScanAssembler::add_packet(std::span<const std::uint8_t> payload,
       const std::size_t size = pts.size();
       if (pts.capacity() - size < static_cast<std::size_t>(kLasersPerBlock)) {
         Point spill[kLasersPerBlock];
-        const int n = decoder_.decode_block(packet->blocks[b], b, dual, offset, spill);
+        const int n =
+            decoder_.decode_block(packet->blocks[b], b, dual, offset, spill, azimuth_step);
         for (int i = 0; i < n; ++i) {
           if (!pts.push_back(spill[i])) ++h.points_dropped;
         }
         continue;
       }
-      const int n = decoder_.decode_block(packet->blocks[b], b, dual, offset, pts.data() + size);
+      const int n = decoder_.decode_block(packet->blocks[b], b, dual, offset, pts.data() + size,
+                                          azimuth_step);
       (void)pts.resize(size + static_cast<std::size_t>(n));
     }
     h.end_stamp_ns = std::max(

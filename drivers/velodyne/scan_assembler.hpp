@@ -35,6 +35,8 @@ struct ScanAssemblerConfig {
 struct AssemblerCounters {
   std::uint64_t packets = 0;             // payloads offered
   std::uint64_t wrong_size = 0;          // not 1206 bytes: dropped
+  std::uint64_t model_mismatch = 0;      // decoded as the configured model, though their bytes
+                                         // name another (PacketIdentity): see last_identity()
   std::uint64_t invalid_block = 0;       // bad bank id, rotation >= 36000, or rotations that jump
                                          // between its blocks (over 3 deg): packet dropped
   std::uint64_t duplicates = 0;          // identical to one of the last 16 packets: dropped
@@ -68,6 +70,8 @@ class ScanAssembler {
   const PacketDecoder& decoder() const noexcept { return decoder_; }
   // The S2.1/S3 status cycle of the accepted packets (GPS time, temperature, calibration dump).
   const StatusDecoder& status() const noexcept { return status_; }
+  // What the bytes of the last packet that disagreed with the configured model said.
+  const PacketIdentity& last_identity() const noexcept { return last_identity_; }
   // The 6 trailer bytes of the last accepted packet (see packet.hpp for both kinds).
   const std::array<std::uint8_t, 6>& last_trailer() const noexcept { return last_trailer_; }
 
@@ -111,6 +115,7 @@ class ScanAssembler {
   std::array<std::uint64_t, 16> recent_{};
   std::size_t recent_next_ = 0;
   std::array<std::uint8_t, 6> last_trailer_{};
+  PacketIdentity last_identity_;
   AssemblerCounters counters_;
 };
 

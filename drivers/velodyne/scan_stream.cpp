@@ -18,8 +18,7 @@ bool ScanStream::publish() noexcept {
 bool ScanStream::add_packet(std::span<const std::uint8_t> payload,
                             std::int64_t receive_stamp_ns) noexcept {
   const RawPacket* packet = as_packet(payload);
-  const bool dual = packet != nullptr &&
-                    is_dual_return(*packet, assembler_.decoder().model().supports_dual_return);
+  const bool dual = packet != nullptr && assembler_.decoder().dual_return(*packet);
   const std::int64_t first_firing_ns = receive_stamp_ns - assembler_.decoder().packet_span_ns(dual);
   if (!assembler_.add_packet(payload, first_firing_ns)) return false;
   return publish();

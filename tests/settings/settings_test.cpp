@@ -154,6 +154,54 @@ TEST(ConfigFile, TheShippedFileHasEveryKeyTheLoadersRead) {
   EXPECT_TRUE(load_pipeline_settings(kShipped)) << load_pipeline_settings(kShipped).error().message;
 }
 
+// Issue 33: the sensor model names every supported Velodyne or "auto"; a model's calibration
+// for --model/--sensor comes from velodyne.model_calibrations, paths relative to the file; what
+// does not fit is named, and nothing throws.
+TEST(VelodyneSettings, ModelsAndTheirCalibrationsAreReadAndBrokenOnesNamed) {
+  auto shipped = load_velodyne_settings(kShipped);
+  ASSERT_TRUE(shipped) << shipped.error().message;
+  EXPECT_EQ(shipped->assembler.decoder.model, velodyne::Model::kS2_1);
+  EXPECT_FALSE(shipped->model_auto);
+  ASSERT_EQ(shipped->model_calibrations.count(velodyne::Model::kVlp32c), 1u);
+  EXPECT_EQ(shipped->model_calibrations.at(velodyne::Model::kVlp32c),
+            kShipped.parent_path() / "calib/vlp32c.yaml");
+  EXPECT_EQ(shipped->model_calibrations.size(), 5u);
+  // Switching to a model with other lasers takes its calibration; the same lasers keep the file.
+  VelodyneSettings s = *shipped;
+  ASSERT_TRUE(use_velodyne_model(s, velodyne::Model::kS3, false));
+  EXPECT_EQ(s.calibration, shipped->calibration);
+  ASSERT_TRUE(use_velodyne_model(s, velodyne::Model::kVlp16, false));
+  EXPECT_EQ(s.calibration, kShipped.parent_path() / "calib/vlp16.yaml");
+  s = *shipped;
+  ASSERT_TRUE(use_velodyne_model(s, velodyne::Model::kHdl32e, true));  // --calib given: kept
+  EXPECT_EQ(s.calibration, shipped->calibration);
+  s = *shipped;
+  s.model_calibrations.clear();
+  const auto none = use_velodyne_model(s, velodyne::Model::kVlp16, false);
+  ASSERT_FALSE(none);
+  EXPECT_NE(none.error().message.find("pass --calib, or name one in velodyne.model_calibrations"),
+            std::string::npos)
+      << none.error().message;
+
+  auto automatic = load_velodyne_settings(with_line("  model: S2.1 ", "  model: auto "));
+  ASSERT_TRUE(automatic) << automatic.error().message;
+  EXPECT_TRUE(automatic->model_auto);
+  auto vlp = load_velodyne_settings(with_line("  model: S2.1 ", "  model: VLP-16 "));
+  ASSERT_TRUE(vlp) << vlp.error().message;
+  EXPECT_EQ(vlp->assembler.decoder.model, velodyne::Model::kVlp16);
+  const std::pair<std::string, std::string> broken[] = {
+      {"  model: S2.1 ", "  model: VLS-128 "},
+      {"    VLP-32C: calib/vlp32c.yaml", "    VLP-64: calib/vlp32c.yaml"},
+      {"    VLP-32C: calib/vlp32c.yaml", "    VLP-32C: [calib/vlp32c.yaml]"},
+      {"    VLP-32C: calib/vlp32c.yaml", "    [a, b]: calib/vlp32c.yaml"},
+  };
+  for (const auto& [pattern, replacement] : broken) {
+    auto b = load_velodyne_settings(with_line(pattern, replacement));
+    ASSERT_FALSE(b) << replacement;
+    EXPECT_NE(b.error().message.find("velodyne.model"), std::string::npos) << b.error().message;
+  }
+}
+
 // classification.model's line (velodyne.model is another key of the same name).
 const char* const kModelLine = R"(model: \S+( +# track classifier))";
 

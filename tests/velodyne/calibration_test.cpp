@@ -221,7 +221,7 @@ TEST(Calibration, RejectsBrokenFilesWithClearMessages) {
        "'id_' 1e+300 is not a laser number"},
       // A file cut short: the returns of the missing lasers would be lost.
       {"short.yaml", "lasers:\n" + ros_yaml_laser(0) + rest(63),
-       "an HDL-64E calibration has 64 lasers, this file 63"},
+       "lists 16, 32 or 64 lasers, this file 63"},
       {"count.yaml", "num_lasers: 32\nlasers:\n" + ros_yaml_laser(0) + rest(64),
        "'num_lasers' is 32 but the 'lasers' list holds 64"},
       {"garbage.yaml", "\x01\x02 not a calibration {{{", "neither a Velodyne db.xml"},

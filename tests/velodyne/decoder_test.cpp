@@ -188,7 +188,8 @@ TEST(PacketDecoder, ParsesModelNames) {
   EXPECT_EQ(parse_model("S2"), Model::kS2);
   EXPECT_EQ(parse_model("hdl-64e s2.1"), Model::kS2_1);
   EXPECT_EQ(parse_model("S3"), Model::kS3);
-  EXPECT_FALSE(parse_model("VLP-16"));
+  EXPECT_EQ(parse_model("VLP-16"), Model::kVlp16);
+  EXPECT_FALSE(parse_model("VLS-128"));
 }
 
 }  // namespace
