@@ -91,8 +91,58 @@ rt::Result<KittiRawDrive> open_kitti_raw_drive(const fs::path& path) {
     for (std::size_t i = 0; i < drive.scans.size(); ++i)
       drive.stamps_ns.push_back(1'000'000'000 + static_cast<std::int64_t>(i) * 100'000'000);
   }
+  // The sweeps' start and end times: both files or neither, one time per scan each.
+  const fs::path starts = path / "velodyne_points" / "timestamps_start.txt";
+  const fs::path ends = path / "velodyne_points" / "timestamps_end.txt";
+  const bool has_start = fs::exists(starts, ec), has_end = fs::exists(ends, ec);
+  if (has_start != has_end) {
+    return rt::make_error((has_start ? ends : starts).string() + " is missing beside " +
+                          (has_start ? starts : ends).filename().string() +
+                          " (a sweep's times need both; remove the other to read the drive "
+                          "without them)");
+  }
+  if (has_start) {
+    auto a = read_kitti_times(starts, "sweep");
+    if (!a) return rt::Unexpected<rt::Error>{a.error()};
+    auto b = read_kitti_times(ends, "sweep");
+    if (!b) return rt::Unexpected<rt::Error>{b.error()};
+    for (const auto& [file, list] : {std::pair{&starts, &*a}, std::pair{&ends, &*b}}) {
+      if (list->size() != drive.scans.size())
+        return rt::make_error(file->string() + " has " + std::to_string(list->size()) +
+                              " times for " + std::to_string(drive.scans.size()) + " scans");
+    }
+    for (std::size_t i = 0; i < a->size(); ++i) {
+      if ((*b)[i] <= (*a)[i] || (*b)[i] - (*a)[i] > 1'000'000'000) {
+        return rt::make_error(ends.string() + ": line " + std::to_string(i + 1) +
+                              ": a sweep must end after it starts, within 1 s (" +
+                              format_kitti_time((*a)[i]) + " .. " + format_kitti_time((*b)[i]) +
+                              ")");
+      }
+    }
+    drive.sweep_start_ns = std::move(*a);
+    drive.sweep_end_ns = std::move(*b);
+  }
   drive.has_oxts = fs::is_directory(path / "oxts" / "data", ec);
   return drive;
+}
+
+double kitti_sweep_fraction(double x, double y) noexcept {
+  return 0.5 * (1.0 - std::atan2(y, x) / std::numbers::pi);
+}
+
+rt::Result<KittiScanCounts> load_kitti_drive_scan(const KittiRawDrive& drive, std::size_t i,
+                                                  velodyne::Scan& out) {
+  const bool sweeps = !drive.sweep_start_ns.empty();
+  auto counts = load_kitti_raw_scan(drive.scans[i], i,
+                                    sweeps ? drive.sweep_start_ns[i] : drive.stamps_ns[i], out);
+  if (!counts || !sweeps) return counts;
+  const std::int64_t span = drive.sweep_end_ns[i] - drive.sweep_start_ns[i];
+  for (velodyne::Point& p : out.points) {
+    p.time_offset_ns = static_cast<std::int32_t>(
+        std::llround(kitti_sweep_fraction(p.x, p.y) * static_cast<double>(span)));
+  }
+  out.header.end_stamp_ns = drive.sweep_end_ns[i];
+  return counts;
 }
 
 rt::Result<KittiScanCounts> load_kitti_raw_scan(const fs::path& file, std::uint64_t sequence,
@@ -353,14 +403,22 @@ rt::Status KittiRawWriter::add(const velodyne::Scan& scan, std::int64_t stamp_ns
   std::ofstream(txt) << format_oxts_record(record) << '\n';
   if (!fs::exists(txt)) return rt::make_error(txt.string() + ": cannot write");
   stamps_ns_.push_back(stamp_ns);
+  starts_ns_.push_back(scan.header.stamp_ns);
+  ends_ns_.push_back(scan.header.end_stamp_ns);
   return {};
 }
 
 rt::Status KittiRawWriter::finish() {
-  std::string times;
-  for (const std::int64_t ns : stamps_ns_) times += format_kitti_time(ns) + "\n";
-  for (const fs::path& f :
-       {dir_ / "velodyne_points" / "timestamps.txt", dir_ / "oxts" / "timestamps.txt"}) {
+  const auto lines = [](const std::vector<std::int64_t>& ns) {
+    std::string times;
+    for (const std::int64_t t : ns) times += format_kitti_time(t) + "\n";
+    return times;
+  };
+  const fs::path velo = dir_ / "velodyne_points";
+  for (const auto& [f, times] : {std::pair{velo / "timestamps.txt", lines(stamps_ns_)},
+                                 std::pair{dir_ / "oxts" / "timestamps.txt", lines(stamps_ns_)},
+                                 std::pair{velo / "timestamps_start.txt", lines(starts_ns_)},
+                                 std::pair{velo / "timestamps_end.txt", lines(ends_ns_)}}) {
     std::ofstream out(f);
     out << times;
     if (!out) return rt::make_error(f.string() + ": cannot write");

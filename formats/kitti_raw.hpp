@@ -20,10 +20,13 @@ namespace stac::formats {
 
 struct KittiRawDrive {
   std::vector<std::filesystem::path> scans;  // in name order
-  std::vector<std::int64_t> stamps_ns;       // one per scan: UTC ns
+  std::vector<std::int64_t> stamps_ns;       // one per scan: UTC ns (facing forward, mid-sweep)
   bool stamps_from_file = false;             // else 100 ms apart (10 Hz) from 1 s
-  bool has_oxts = false;                     // DIR/oxts/data exists
-  std::size_t max_points = 0;                // of the largest scan
+  // velodyne_points/timestamps_start.txt and _end.txt, when the drive has both: when each
+  // sweep began and ended (facing backward); empty otherwise.
+  std::vector<std::int64_t> sweep_start_ns, sweep_end_ns;
+  bool has_oxts = false;       // DIR/oxts/data exists
+  std::size_t max_points = 0;  // of the largest scan
 };
 
 // Whether `path` is a folder holding velodyne_points/data/.
@@ -48,6 +51,16 @@ struct KittiScanCounts {
 rt::Result<KittiScanCounts> load_kitti_raw_scan(const std::filesystem::path& file,
                                                 std::uint64_t sequence, std::int64_t stamp_ns,
                                                 velodyne::Scan& out);
+
+// Scan i of a drive: load_kitti_raw_scan at the drive's time of it, or, when the drive has its
+// sweeps' start and end times, deskewable: the scan stamped at the sweep's start and ending at
+// its end, each point's firing time placed by its azimuth in the sweep. A KITTI sweep starts
+// and ends facing backward and turns clockwise seen from above (x forward, y left), facing
+// forward at mid-sweep: fraction = (1 - atan2(y, x) / pi) / 2 (as KISS-ICP's KITTI raw reader).
+rt::Result<KittiScanCounts> load_kitti_drive_scan(const KittiRawDrive& drive, std::size_t i,
+                                                  velodyne::Scan& out);
+// Where in a KITTI sweep (0 start .. 1 end) a point at sensor-frame (x, y) was fired.
+double kitti_sweep_fraction(double x, double y) noexcept;
 
 // One OXTS record (the KITTI raw devkit's readme, 30 values a line): the unit's position, its
 // attitude (rad; roll positive left side up, pitch positive front down, yaw 0 east and positive
@@ -96,15 +109,17 @@ class KittiRawWriter {
   // Makes the folders (an existing drive's files are replaced) and writes the mounting.
   static rt::Result<KittiRawWriter> create(const std::filesystem::path& dir,
                                            const Eigen::Isometry3d& velo_T_imu);
-  // One scan, placed at `stamp_ns`, and the record of that time.
+  // One scan, placed at `stamp_ns`, and the record of that time; its header's first and last
+  // firing are its sweep's start and end.
   rt::Status add(const velodyne::Scan& scan, std::int64_t stamp_ns, const OxtsRecord& record);
-  // The timestamps files; the drive is complete after it.
+  // The timestamps files (timestamps.txt, and the sweeps' _start and _end); the drive is
+  // complete after it.
   rt::Status finish();
   [[nodiscard]] std::size_t scans() const noexcept { return stamps_ns_.size(); }
 
  private:
   std::filesystem::path dir_;
-  std::vector<std::int64_t> stamps_ns_;
+  std::vector<std::int64_t> stamps_ns_, starts_ns_, ends_ns_;
 };
 
 // "2011-09-26 13:02:25.964389445": a UTC time (ns) as KITTI writes it.

@@ -180,7 +180,7 @@ class Builder : public classification::TrackClassifier::Observer {
       velodyne::Scan scan(drive->max_points);  // the one scan, reused
       Progress progress(name, static_cast<double>(drive->scans.size()));
       for (std::size_t i = 0; i < drive->scans.size(); ++i) {
-        auto c = load_kitti_raw_scan(drive->scans[i], i, drive->stamps_ns[i], scan);
+        auto c = load_kitti_drive_scan(*drive, i, scan);
         if (!c) return rt::Unexpected<rt::Error>{c.error()};
         pipeline.process(scan, poses ? poses->history.get() : nullptr, result);
         handle(scan, result);

@@ -357,7 +357,7 @@ int run_process(const ProcessOptions& o) {
     Progress progress("process", static_cast<double>(drive->scans.size()));
     for (std::size_t i = 0; i < drive->scans.size(); ++i) {
       const std::int64_t c0 = cpu_ns();
-      auto c = load_kitti_raw_scan(drive->scans[i], i, drive->stamps_ns[i], kitti_scan);
+      auto c = load_kitti_drive_scan(*drive, i, kitti_scan);
       if (!c) return fail(c.error().message);
       decode_ns += cpu_ns() - c0;
       kitti_points.points += c->points;
@@ -391,11 +391,14 @@ int run_process(const ProcessOptions& o) {
                o.tracks.c_str(), static_cast<unsigned long long>(scans));
   if (drive) {
     std::fprintf(stderr,
-                 "  input       KITTI raw drive: %zu scans (velodyne_points/data), times %s; %llu "
-                 "points, %llu left out (not finite, or beyond 1 km)\n",
+                 "  input       KITTI raw drive: %zu scans (velodyne_points/data), times %s%s; "
+                 "%llu points, %llu left out (not finite, or beyond 1 km)\n",
                  drive->scans.size(),
                  drive->stamps_from_file ? "from velodyne_points/timestamps.txt"
                                          : "100 ms apart (no velodyne_points/timestamps.txt)",
+                 drive->sweep_start_ns.empty()
+                     ? ", each scan one instant (no timestamps_start/_end.txt: not deskewed)"
+                     : ", each point's by its azimuth in its sweep (timestamps_start/_end.txt)",
                  static_cast<unsigned long long>(kitti_points.points),
                  static_cast<unsigned long long>(kitti_points.refused));
   } else {

@@ -141,12 +141,18 @@ struct SweepTruth {
   std::vector<std::pair<std::uint32_t, sim::ObjectClass>> objects;
 };
 
-// KITTI raw's labels of a simulated drive: every car, pedestrian and bicyclist of the truth scan
-// whose sweep holds a KITTI frame's time, posed at that time in the velodyne's frame (the centre
-// of its box's bottom, its yaw), one tracklet per run of consecutive frames.
+// A KITTI frame: its sweep (which starts and ends facing backward) and its time (facing forward).
+struct KittiFrame {
+  std::int64_t start_ns = 0, mid_ns = 0, end_ns = 0;
+};
+
+// KITTI raw's labels of a simulated drive: every car, pedestrian and bicyclist of the truth scans
+// whose sweeps overlap a KITTI frame's sweep (the truth scans start facing forward, half a turn
+// from the frame's), posed at the frame's time in the velodyne's frame (the centre of its box's
+// bottom, its yaw), one tracklet per run of consecutive frames.
 std::vector<formats::Tracklet> sim_tracklets(const sim::SimRun& run, const sim::RunConfig& rc,
                                              const std::vector<SweepTruth>& sweeps,
-                                             const std::vector<std::int64_t>& frames) {
+                                             const std::vector<KittiFrame>& frames) {
   const auto& actors = run.world().actors();
   std::map<std::uint32_t, std::size_t> index;  // actor id -> index
   for (std::size_t i = 0; i < actors.size(); ++i) index[actors[i].id] = i;
@@ -154,9 +160,12 @@ std::vector<formats::Tracklet> sim_tracklets(const sim::SimRun& run, const sim::
   std::map<std::uint32_t, std::pair<std::size_t, std::size_t>> open;  // id -> (tracklet, frame)
   std::size_t s = 0;
   for (std::size_t f = 0; f < frames.size(); ++f) {
-    const std::int64_t mid = frames[f];
-    while (s < sweeps.size() && sweeps[s].end_ns < mid) ++s;
-    if (s == sweeps.size() || sweeps[s].start_ns > mid) continue;
+    const std::int64_t mid = frames[f].mid_ns;
+    while (s < sweeps.size() && sweeps[s].end_ns < frames[f].start_ns) ++s;
+    std::map<std::uint32_t, sim::ObjectClass> seen;  // in the truth scans the sweep overlaps
+    for (std::size_t k = s; k < sweeps.size() && sweeps[k].start_ns <= frames[f].end_ns; ++k)
+      for (const auto& [id, cls] : sweeps[k].objects) seen.emplace(id, cls);
+    if (seen.empty()) continue;
     const double t = static_cast<double>(mid - rc.start_ns) * 1e-9;
     const sim::EgoState e = run.ego(t);
     const Eigen::Isometry3d world_T_sensor = Eigen::Translation3d(e.x, e.y, e.z) *
@@ -165,7 +174,7 @@ std::vector<formats::Tracklet> sim_tracklets(const sim::SimRun& run, const sim::
                                              Eigen::AngleAxisd(e.roll, Eigen::Vector3d::UnitX()) *
                                              Eigen::Translation3d(0, 0, rc.lidar.mount_height_m);
     const Eigen::Isometry3d sensor_T_world = world_T_sensor.inverse();
-    for (const auto& [id, cls] : sweeps[s].objects) {
+    for (const auto& [id, cls] : seen) {
       const auto it = index.find(id);
       if (it == index.end()) continue;
       const sim::Actor& a = actors[it->second];
@@ -269,7 +278,11 @@ int run_sim(const SimOptions& o) {
     auto w = formats::KittiRawWriter::create(o.kitti_raw, velo_T_imu);
     if (!w) return fail(w.error().message);
     kitti.emplace(std::move(*w));
-    kitti_scans.emplace(*calibration, settings->assembler, 2);
+    // KITTI's sweeps start and end facing backward (timestamps_start/_end.txt), facing
+    // forward at the frame's time (timestamps.txt).
+    velodyne::ScanAssemblerConfig sweep_framing = settings->assembler;
+    sweep_framing.cut_angle = 18000;
+    kitti_scans.emplace(*calibration, sweep_framing, 2);
   }
   std::ofstream truth(o.truth);
   if (!truth) return fail(o.truth + ": cannot create the truth file");
@@ -313,8 +326,8 @@ int run_sim(const SimOptions& o) {
   const std::int64_t span_ns = timing.packet_span_ns(o.dual_return);
   std::uint64_t scans = 0, points = 0;
   const double origin_lat_lon_alt[3] = {ic.origin.lat_deg, ic.origin.lon_deg, ic.origin.alt_m};
-  std::vector<SweepTruth> sweeps;          // --kitti-raw: for its tracklets
-  std::vector<std::int64_t> kitti_frames;  // the KITTI scans' times
+  std::vector<SweepTruth> sweeps;        // --kitti-raw: for its tracklets
+  std::vector<KittiFrame> kitti_frames;  // the KITTI scans' sweeps and times
   auto on_scan = [&](const sim::TruthScan& s) {
     truth << sim::to_json(s, origin_lat_lon_alt) << '\n';
     if (kitti) {
@@ -346,7 +359,7 @@ int run_sim(const SimOptions& o) {
         const std::int64_t mid =
             scan->header.stamp_ns + (scan->header.end_stamp_ns - scan->header.stamp_ns) / 2;
         const applanix::Group1 g = ins.group1_at(static_cast<double>(mid - rc.start_ns) * 1e-9);
-        kitti_frames.push_back(mid);
+        kitti_frames.push_back({scan->header.stamp_ns, mid, scan->header.end_stamp_ns});
         if (auto a = kitti->add(*scan, mid, formats::oxts_record(ego::ins_fix(g, mid))); !a) {
           kitti_scans->release();
           return a;

@@ -253,5 +253,61 @@ TEST(KittiTracklets, WrittenAsKittiWritesThemTheyReadBackAndBadOnesAreRefused) {
             std::string::npos);
 }
 
+// A KITTI sweep turns clockwise from backward (the left side first) through forward at mid-sweep
+// (the camera's trigger, timestamps.txt) to backward again (KITTI raw devkit; KISS-ICP's reader).
+TEST(KittiSweeps, APointsTimeIsItsAzimuthInTheSweep) {
+  EXPECT_NEAR(kitti_sweep_fraction(-1.0, 1e-9), 0.0, 1e-6);   // backward, from the left
+  EXPECT_NEAR(kitti_sweep_fraction(0.0, 1.0), 0.25, 1e-12);   // left
+  EXPECT_NEAR(kitti_sweep_fraction(1.0, 0.0), 0.5, 1e-12);    // forward
+  EXPECT_NEAR(kitti_sweep_fraction(0.0, -1.0), 0.75, 1e-12);  // right
+  EXPECT_NEAR(kitti_sweep_fraction(-1.0, -1e-9), 1.0, 1e-6);  // backward, from the right
+
+  const fs::path dir = fresh("sweeps");
+  fs::create_directories(dir / "velodyne_points" / "data");
+  const float points[3][4] = {{10, 0, 0, 0.5f}, {0, 10, 0, 0.5f}, {0, -10, 0, 0.5f}};
+  for (const char* name : {"0000000000.bin", "0000000001.bin"}) {
+    std::ofstream(dir / "velodyne_points" / "data" / name, std::ios::binary)
+        .write(reinterpret_cast<const char*>(points), sizeof points);
+  }
+  const auto write = [&](const char* file, const std::string& text) {
+    std::ofstream(dir / "velodyne_points" / file) << text;
+  };
+  write("timestamps.txt", "2011-09-26 13:02:25.100000000\n2011-09-26 13:02:25.200000000\n");
+  write("timestamps_start.txt", "2011-09-26 13:02:25.050000000\n2011-09-26 13:02:25.150000000\n");
+  // Without its end file the start file is refused, naming what is missing.
+  auto half = open_kitti_raw_drive(dir);
+  ASSERT_FALSE(half);
+  EXPECT_NE(half.error().message.find("timestamps_end.txt is missing"), std::string::npos)
+      << half.error().message;
+  write("timestamps_end.txt", "2011-09-26 13:02:25.150000000\n2011-09-26 13:02:25.250000000\n");
+  auto drive = open_kitti_raw_drive(dir);
+  ASSERT_TRUE(drive) << drive.error().message;
+  ASSERT_EQ(drive->sweep_start_ns.size(), 2u);
+  velodyne::Scan scan(drive->max_points);
+  ASSERT_TRUE(load_kitti_drive_scan(*drive, 1, scan));
+  EXPECT_EQ(scan.header.stamp_ns, drive->sweep_start_ns[1]);
+  EXPECT_EQ(scan.header.end_stamp_ns, drive->sweep_end_ns[1]);
+  ASSERT_EQ(scan.points.size(), 3u);
+  EXPECT_EQ(scan.points[0].time_offset_ns, 50'000'000);  // forward: mid-sweep, the frame's time
+  EXPECT_EQ(scan.points[1].time_offset_ns, 25'000'000);  // left
+  EXPECT_EQ(scan.points[2].time_offset_ns, 75'000'000);  // right
+  EXPECT_EQ(scan.header.stamp_ns + scan.points[0].time_offset_ns, drive->stamps_ns[1]);
+  // A sweep that ends before it starts is refused.
+  write("timestamps_end.txt", "2011-09-26 13:02:25.040000000\n2011-09-26 13:02:25.250000000\n");
+  auto bad = open_kitti_raw_drive(dir);
+  ASSERT_FALSE(bad);
+  EXPECT_NE(bad.error().message.find("line 1: a sweep must end after it starts"), std::string::npos)
+      << bad.error().message;
+  // Without both files each scan is one instant at the frame's time, as before.
+  fs::remove(dir / "velodyne_points" / "timestamps_start.txt");
+  fs::remove(dir / "velodyne_points" / "timestamps_end.txt");
+  auto plain = open_kitti_raw_drive(dir);
+  ASSERT_TRUE(plain) << plain.error().message;
+  ASSERT_TRUE(load_kitti_drive_scan(*plain, 1, scan));
+  EXPECT_EQ(scan.header.stamp_ns, plain->stamps_ns[1]);
+  EXPECT_EQ(scan.header.end_stamp_ns, plain->stamps_ns[1]);
+  EXPECT_EQ(scan.points[1].time_offset_ns, 0);
+}
+
 }  // namespace
 }  // namespace stac::formats

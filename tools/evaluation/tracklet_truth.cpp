@@ -50,8 +50,12 @@ rt::Result<std::vector<TruthScanRecord>> truth_from_tracklets(const std::filesys
     TruthScanRecord& r = out[f];
     r.origin = std::array<double, 3>{origin.lat_deg, origin.lon_deg, origin.alt_m};
     r.scan = f;
-    r.stamp_ns = r.end_stamp_ns = drive->stamps_ns[f];
-    const ego::PoseLookup at = poses->history->at(r.stamp_ns);
+    // The sweep the scan was fired in (a deskewed scan is stamped at its start), else the one
+    // instant of the scan; the labels and the ego at the frame's time (facing forward).
+    const bool sweeps = !drive->sweep_start_ns.empty();
+    r.stamp_ns = sweeps ? drive->sweep_start_ns[f] : drive->stamps_ns[f];
+    r.end_stamp_ns = sweeps ? drive->sweep_end_ns[f] : drive->stamps_ns[f];
+    const ego::PoseLookup at = poses->history->at(drive->stamps_ns[f]);
     if (!at.ok()) continue;
     posed[f] = true;
     const Eigen::Isometry3d world_T_vehicle = ego::to_isometry(at.pose);
