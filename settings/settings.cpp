@@ -4,6 +4,7 @@
 #include <cstdlib>
 #include <system_error>
 
+#include "drivers/velodyne/calibration.hpp"
 #include "settings/config_section.hpp"
 
 namespace stac::settings {
@@ -124,17 +125,24 @@ rt::Result<VelodyneSettings> load_velodyne_settings(const std::filesystem::path&
 
 rt::Status use_velodyne_model(VelodyneSettings& s, velodyne::Model model, bool calibration_given) {
   const velodyne::Model before = s.assembler.decoder.model;
+  const bool was_auto = s.model_auto;
   s.assembler.decoder.model = model;
   s.model_auto = false;
-  if (calibration_given || velodyne::traits(before).lasers == velodyne::traits(model).lasers)
+  if (calibration_given) return {};
+  // The configured calibration stays for the same sensor (the HDL-64E's variants, the VLP-16 and
+  // the Puck LITE share a product id), and with 'auto' when it fits the model the packets name
+  // (the unit's own file); else the model's from velodyne.model_calibrations.
+  if (!was_auto && velodyne::traits(before).product_id == velodyne::traits(model).product_id)
     return {};
+  if (was_auto && !s.calibration.empty()) {
+    const auto configured = velodyne::load_calibration(s.calibration);
+    if (configured && velodyne::check_calibration_for(*configured, model)) return {};
+  }
   const auto it = s.model_calibrations.find(model);
   if (it == s.model_calibrations.end()) {
-    return rt::make_error("the configured calibration is for a " +
-                          std::to_string(velodyne::traits(before).lasers) + "-laser sensor, a " +
-                          std::string(velodyne::traits(model).name) + " has " +
-                          std::to_string(velodyne::traits(model).lasers) +
-                          ": pass --calib, or name one in velodyne.model_calibrations");
+    return rt::make_error("the configured calibration is not a " +
+                          std::string(velodyne::traits(model).name) +
+                          "'s: pass --calib, or name one in velodyne.model_calibrations");
   }
   s.calibration = it->second;
   return {};

@@ -121,6 +121,12 @@ rt::Result<velodyne::Calibration> capture_sensor(settings::VelodyneSettings& s,
     } else if (id->kind == velodyne::PacketIdentity::Kind::kFactory) {
       return rt::make_error(capture.string() + ": its packets name " + describe(*id) +
                             ", which STAC does not know; set velodyne.model (or --model)");
+    } else if (id->kind == velodyne::PacketIdentity::Kind::kUnknown) {
+      // No lower-bank block and no factory bytes (an HDL-32E before firmware 2.2.20?): not an
+      // HDL-64E's packets, and nothing says whose.
+      return rt::make_error(capture.string() +
+                            ": its first packets do not say which model sent them; set "
+                            "velodyne.model (or --model, --sensor)");
     }
     if (auto u = settings::use_velodyne_model(s, model, calibration_given); !u)
       return rt::Unexpected<rt::Error>{u.error()};
@@ -128,7 +134,7 @@ rt::Result<velodyne::Calibration> capture_sensor(settings::VelodyneSettings& s,
                  id->kind == velodyne::PacketIdentity::Kind::kHdl64
                      ? "HDL-64E packets (they do not say S2, S2.1 or S3): decoded as an S2.1"
                      : ("packets of " + describe(*id)).c_str(),
-                 id->kind == velodyne::PacketIdentity::Kind::kUnknown ? " (none said: S2.1)" : "");
+                 "");
   } else if (id->kind != velodyne::PacketIdentity::Kind::kUnknown &&
              !velodyne::identity_matches(*id, configured)) {
     std::fprintf(stderr,
@@ -252,6 +258,8 @@ int run_status(const StatusOptions& o) {
     auto id = capture_identity(o.in, port);
     if (!id) return fail(id.error().message);
     if (id->model) model = *id->model;
+    if (id->kind == velodyne::PacketIdentity::Kind::kHdl64 && !velodyne::is_hdl64(model))
+      model = velodyne::Model::kS2_1;
   } else if (!o.model.empty()) {
     const auto m = velodyne::parse_model(o.model);
     if (!m) return fail("--model '" + o.model + "': use " + std::string(velodyne::model_names()));

@@ -416,6 +416,13 @@ rt::Status check_calibration_for(const Calibration& c, Model model) {
                           std::string(t.name) + " has lasers 0.." + std::to_string(t.lasers - 1) +
                           fix);
   }
+  if (!is_hdl64(model) && std::abs(c.distance_resolution_m - t.distance_resolution_m) > 1e-9) {
+    return rt::make_error(what + "has distance units of " +
+                          std::to_string(c.distance_resolution_m * 1000.0) + " mm, a " +
+                          std::string(t.name) + " sends " +
+                          std::to_string(t.distance_resolution_m * 1000.0) +
+                          " mm (distance_resolution / distLSB_)" + fix);
+  }
   if (highest_enabled < t.lasers / 2) {
     return rt::make_error(what + "enables only lasers 0.." + std::to_string(highest_enabled) +
                           ", a " + std::string(t.name) + " has " + std::to_string(t.lasers) + fix);

@@ -52,8 +52,9 @@ rt::Result<Calibration> parse_ros_yaml(const std::string& text, const std::files
 rt::Status check_calibration(const Calibration& calibration);
 
 // Checks that a calibration fits a model: at least its lasers, none enabled beyond them (a
-// VeloView file pads a VLP-16's 16 lasers to 64, disabled), and not only the first half enabled
-// (a VLP-16 file for a 32- or 64-laser sensor). Errors say what to set.
+// VeloView file pads a VLP-16's 16 lasers to 64, disabled), not only the first half enabled
+// (a VLP-16 file for a 32- or 64-laser sensor), and (HDL-32E, VLPs) the model's distance unit
+// (an HDL-32E file for a VLP-32C: 2 mm, not 4). Errors say what to set.
 rt::Status check_calibration_for(const Calibration& calibration, Model model);
 // The calibration with its padding cut to the model's lasers.
 Calibration lasers_of(const Calibration& calibration, Model model);

@@ -63,7 +63,7 @@ PacketIdentity identify_packet(std::span<const std::uint8_t> payload) noexcept {
   id.return_mode = mode;
   id.product_id = product;
   for (Model m : kAllModels) {
-    if (traits(m).product_id == product) {
+    if (traits(m).product_id != 0 && traits(m).product_id == product) {  // 0: an HDL-64E's
       id.model = m;
       break;
     }

@@ -78,7 +78,11 @@ inline bool is_dual_return(const RawPacket& packet, bool model_supports_dual,
                            bool factory_trailer = false) noexcept {
   if (!model_supports_dual) return false;
   if (factory_trailer) {
-    return packet.trailer[4] == 0x39 && packet.blocks[0].rotation == packet.blocks[1].rotation;
+    const bool pairs = packet.blocks[0].rotation == packet.blocks[1].rotation &&
+                       packet.blocks[2].rotation == packet.blocks[3].rotation &&
+                       packet.blocks[4].rotation == packet.blocks[5].rotation;
+    // A zero mode byte (HDL-32E firmware before 2.2.20): the shared azimuths say it (VeloView).
+    return pairs && (packet.trailer[4] == 0x39 || packet.trailer[4] == 0);
   }
   return packet.blocks[0].rotation == packet.blocks[2].rotation &&
          packet.blocks[1].rotation == packet.blocks[3].rotation;

@@ -303,6 +303,24 @@ TEST(VelodyneFamily, PacketIdentityNamesTheModel) {
   EXPECT_EQ(id.kind, velodyne::PacketIdentity::Kind::kUnknown);
   EXPECT_TRUE(velodyne::identity_matches(id, Model::kHdl32e));  // nothing to disagree with
   EXPECT_TRUE(velodyne::identity_matches(id, Model::kS2_1));
+  bytes[1204] = velodyne::kReturnStrongest;
+  bytes[1205] = 0x00;  // a return mode but no product: names no model (not an HDL-64E S2)
+  id = velodyne::identify_packet(b.bytes());
+  EXPECT_EQ(id.kind, velodyne::PacketIdentity::Kind::kFactory);
+  EXPECT_FALSE(id.model.has_value());
+  EXPECT_FALSE(velodyne::identity_matches(id, Model::kS2));
+  // Dual return: the mode byte, or (a zero mode byte, HDL-32E firmware before 2.2.20) pairs of
+  // blocks sharing their azimuths, as VeloView tells it.
+  const velodyne::RawPacket* packet = velodyne::as_packet(b.bytes());
+  ASSERT_NE(packet, nullptr);
+  bytes[1204] = 0x00;
+  EXPECT_TRUE(velodyne::is_dual_return(*packet, true, true));  // all 12 blocks at 100
+  bytes[1204] = velodyne::kReturnStrongest;
+  EXPECT_FALSE(velodyne::is_dual_return(*packet, true, true));
+  bytes[1204] = velodyne::kReturnDual;
+  EXPECT_TRUE(velodyne::is_dual_return(*packet, true, true));
+  b.set_block(1, velodyne::kUpperBank, 101);  // a pair apart: not dual
+  EXPECT_FALSE(velodyne::is_dual_return(*packet, true, true));
   b.set_block(1, velodyne::kLowerBank, 100);  // an HDL-64E's lower bank
   id = velodyne::identify_packet(b.bytes());
   EXPECT_EQ(id.kind, velodyne::PacketIdentity::Kind::kHdl64);
@@ -349,6 +367,11 @@ TEST(VelodyneFamily, CalibrationMustFitTheModel) {
   ASSERT_FALSE(too_many);
   EXPECT_NE(too_many.error().message.find("enables laser 63"), std::string::npos);
   EXPECT_FALSE(velodyne::check_calibration_for(*vlp32c, Model::kS2_1));  // 32 listed, 64 needed
+  // An HDL-32E's file for a VLP-32C: 32 lasers, but 2 mm units where the VLP-32C sends 4 mm.
+  const auto units = velodyne::check_calibration_for(*hdl32, Model::kVlp32c);
+  ASSERT_FALSE(units);
+  EXPECT_NE(units.error().message.find("distance units of 2.0"), std::string::npos)
+      << units.error().message;
   EXPECT_DOUBLE_EQ(vlp32c->distance_resolution_m, 0.004);
   EXPECT_EQ(vlp32c->num_lasers, 32);
   // The VLP-32C's laser 14: 0.667 deg up, the manual's azimuth offset +4.2 deg (rot -4.2).
