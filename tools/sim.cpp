@@ -315,8 +315,7 @@ int run_sim(const SimOptions& o) {
   }
   auto write_trailer = [&](std::uint8_t* t, std::int64_t utc_ns) {
     if (!factory) return trailer->write(t, utc_ns);
-    const std::int64_t usec = (utc_ns / 1000) % 3'600'000'000LL;
-    velodyne::store_u32(t, static_cast<std::uint32_t>(usec < 0 ? usec + 3'600'000'000LL : usec));
+    velodyne::store_u32(t, velodyne::usec_past_hour(utc_ns));
     t[4] = o.dual_return ? velodyne::kReturnDual : velodyne::kReturnStrongest;
     t[5] = velodyne::traits(model).product_id;
   };
@@ -385,10 +384,8 @@ int run_sim(const SimOptions& o) {
     fix.longitude_deg = g.longitude_deg;
     fix.speed_mps = std::max(0.0, static_cast<double>(g.speed_mps));
     fix.course_deg = std::fmod(static_cast<double>(g.track_deg) + 360.0, 360.0);
-    const std::int64_t usec = (utc_ns / 1000) % 3'600'000'000LL;
-    if (auto w = velodyne::write_position_packet(
-            static_cast<std::uint32_t>(usec < 0 ? usec + 3'600'000'000LL : usec),
-            velodyne::PpsStatus::kLocked, fix, position);
+    if (auto w = velodyne::write_position_packet(velodyne::usec_past_hour(utc_ns),
+                                                 velodyne::PpsStatus::kLocked, fix, position);
         !w) {
       return rt::make_error(std::string("position packet: ") + velodyne::to_string(w.error()));
     }

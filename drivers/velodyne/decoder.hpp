@@ -57,23 +57,11 @@ class PacketDecoder {
   int blocks_per_firing(bool dual_return) const noexcept {
     return (traits_->layout == Layout::kBankPairs ? 2 : 1) * (dual_return ? 2 : 1);
   }
-  // The laser a channel of a block reads (HDL-64E: from the block's bank id).
-  int laser_of(std::uint16_t bank, int channel) const noexcept {
-    if (traits_->layout == Layout::kBankPairs)
-      return (bank == kLowerBank ? kLasersPerBlock : 0) + channel;
-    return channel % traits_->lasers;
-  }
   ReturnType return_type(int block_index, bool dual_return) const noexcept;
   // Whether a packet of this model is in dual-return mode.
   bool dual_return(const RawPacket& packet) const noexcept {
     return is_dual_return(packet, traits_->supports_dual_return,
                           traits_->trailer == TrailerKind::kFactory);
-  }
-  // Fraction of the azimuth step to the next firing at which channel j of block b is fired
-  // (0 for every channel of the models that take the block's rotation for all its points).
-  float azimuth_fraction(int block_index, int j, bool dual_return) const noexcept {
-    return fraction_[dual_return ? 1 : 0][static_cast<std::size_t>(block_index)]
-                    [static_cast<std::size_t>(j)];
   }
   const ModelTraits& model() const noexcept { return *traits_; }
   Model model_id() const noexcept { return config_.model; }

@@ -62,6 +62,12 @@ inline void store_u32(std::uint8_t* p, std::uint32_t v) noexcept {
   for (int i = 0; i < 4; ++i) p[i] = static_cast<std::uint8_t>((v >> (8 * i)) & 0xFF);
 }
 
+// The trailer's GPS time of a UTC instant: microseconds past the top of its hour.
+inline std::uint32_t usec_past_hour(std::int64_t utc_ns) noexcept {
+  const std::int64_t usec = (utc_ns / 1000) % 3'600'000'000LL;
+  return static_cast<std::uint32_t>(usec < 0 ? usec + 3'600'000'000LL : usec);
+}
+
 inline GpsTrailer read_gps_trailer(const RawPacket& packet) noexcept {
   return {load_u32(packet.trailer), packet.trailer[4], packet.trailer[5]};
 }

@@ -446,8 +446,7 @@ void StatusTrailerWriter::write(std::uint8_t* trailer, std::int64_t utc_ns) noex
   if (position == 0) status_.time = utc_date_time(utc_ns);
   const StatusByte b =
       position < kStatusTypedBytes ? typed_status_byte(position, status_) : sequence_[k];
-  const std::int64_t usec = (utc_ns / 1000) % 3'600'000'000LL;
-  store_u32(trailer, static_cast<std::uint32_t>(usec < 0 ? usec + 3'600'000'000LL : usec));
+  store_u32(trailer, usec_past_hour(utc_ns));
   trailer[4] = b.type;
   trailer[5] = b.value;
 }
