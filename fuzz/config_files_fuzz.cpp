@@ -8,6 +8,7 @@
 
 #include "drivers/velodyne/calibration.hpp"
 #include "settings/config_section.hpp"
+#include "settings/dds_settings.hpp"
 #include "settings/run_settings.hpp"
 #include "settings/settings.hpp"
 
@@ -20,6 +21,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     (void)stac::settings::load_pipeline_settings(config);
     (void)stac::settings::load_run_settings(config);
     (void)stac::settings::load_can_settings(config);
+    (void)stac::settings::load_dds_settings(config);
   }
   (void)stac::velodyne::parse_ros_yaml(text, "fuzz.yaml");
   (void)stac::velodyne::parse_db_xml(text, "fuzz.xml");

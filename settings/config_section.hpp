@@ -11,8 +11,10 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <cmath>
 #include <filesystem>
 #include <string>
+#include <type_traits>
 
 #include "rt/expected.hpp"
 
@@ -74,7 +76,16 @@ class ConfigSection {
   template <class T>
   rt::Result<T> convert(const YAML::Node& v, const char* key) const {
     try {
-      return v.as<T>();
+      const T value = v.as<T>();
+      // .nan and .inf are numbers to YAML; no setting means them, and NaN would pass every
+      // range check after this one (each comparison is false).
+      if constexpr (std::is_floating_point_v<T>) {
+        if (!std::isfinite(value)) {
+          return error(key, "must be a finite number, not '" + v.Scalar() + "' (line " +
+                                std::to_string(v.Mark().line + 1) + ")");
+        }
+      }
+      return value;
     } catch (const YAML::Exception&) {
       return error(key, "has the wrong type (line " + std::to_string(v.Mark().line + 1) + ")");
     }

@@ -9,8 +9,11 @@
 #include <fstream>
 #include <regex>
 #include <sstream>
+#include <vector>
 
 #include "settings/config_section.hpp"
+#include "settings/dds_settings.hpp"
+#include "settings/run_settings.hpp"
 
 namespace stac::settings {
 namespace {
@@ -152,6 +155,50 @@ TEST(ConfigFile, CapacitiesOfTwoSectionsAreCheckedTogether) {
 
 TEST(ConfigFile, TheShippedFileHasEveryKeyTheLoadersRead) {
   EXPECT_TRUE(load_pipeline_settings(kShipped)) << load_pipeline_settings(kShipped).error().message;
+}
+
+// Issue 31: .nan and .inf are numbers to YAML, and NaN passes every range check written as
+// "x < lo || x > hi". Every number of the shipped file, made .nan, .inf or -.inf in turn, is
+// refused naming its key (a float as not finite; an integer as the wrong type).
+TEST(ConfigFile, EveryNumberMustBeFinite) {
+  std::ifstream in(kShipped);
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  const std::regex section_line(R"(^([a-z_]+):.*)");
+  const std::regex key_line(R"(^  ([a-z_0-9]+): *([-+0-9.eE]+)( +#.*)?$)");
+  const std::filesystem::path name = kShipped.parent_path() / "finite_numbers_in_memory.yaml";
+  std::size_t numbers = 0;
+  std::string section;
+  for (std::size_t i = 0; i < lines.size(); ++i) {
+    std::smatch m;
+    if (std::regex_match(lines[i], m, section_line)) section = m[1];
+    if (!std::regex_match(lines[i], m, key_line)) continue;
+    char* end = nullptr;
+    const std::string value = m[2];
+    std::strtod(value.c_str(), &end);
+    if (*end != '\0') continue;
+    ++numbers;
+    const std::string key = section + "." + std::string(m[1]);
+    for (const char* bad : {".nan", ".inf", "-.inf"}) {
+      std::string text;
+      for (std::size_t j = 0; j < lines.size(); ++j)
+        text += (j == i ? "  " + std::string(m[1]) + ": " + bad : lines[j]) + "\n";
+      const ConfigSnapshot snapshot(name, text);
+      std::string errors;
+      if (auto p = load_pipeline_settings(name); !p) errors += p.error().message + "\n";
+      if (auto r = load_run_settings(name); !r) errors += r.error().message + "\n";
+      if (auto c = load_can_settings(name); !c) errors += c.error().message + "\n";
+      if (auto d = load_dds_settings(name); !d) errors += d.error().message + "\n";
+      EXPECT_NE(errors.find("'" + key + "'"), std::string::npos)
+          << key << ": " << bad << " was accepted" << (errors.empty() ? "" : ": " + errors);
+    }
+  }
+  EXPECT_GT(numbers, 40u);  // the file's numbers were found
+  auto nan_rpm = load_velodyne_settings(with_line("min_rpm: [0-9.]+", "min_rpm: .nan"));
+  ASSERT_FALSE(nan_rpm);
+  EXPECT_NE(nan_rpm.error().message.find("'velodyne.min_rpm' must be a finite number, not '.nan'"),
+            std::string::npos)
+      << nan_rpm.error().message;
 }
 
 // Issue 33: the sensor model names every supported Velodyne or "auto"; a model's calibration
