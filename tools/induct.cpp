@@ -14,6 +14,7 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <numeric>
+#include <optional>
 #include <random>
 #include <set>
 #include <sstream>
@@ -49,9 +50,10 @@ struct InductOptions {
   std::string model;        // a model to start a new state from
   std::string add_classes;  // comma-separated classes taught beside the model's, kept as they are
   std::vector<std::string> background, labels, unlabeled, eval;
-  std::size_t labels_per_class = 0;  // 0: every track of the --labels datasets
-  std::size_t rounds = 0;            // extra rounds on the buffer after the chunks
-  std::size_t ask = 5;               // questions per class and kind after a round
+  std::size_t labels_per_class = 0;          // 0: every track of the --labels datasets
+  std::size_t rounds = 0;                    // extra rounds on the buffer after the chunks
+  std::size_t ask = 5;                       // questions per class and kind after a round
+  std::optional<std::size_t> ask_confident;  // confident-positive questions (default: ask)
   bool oracle = false;
   bool requery = false;  // after the rounds: new questions over every unlabeled dataset
   bool dual = false;
@@ -562,8 +564,8 @@ rt::Status Inductor::ask(const std::vector<std::uint32_t>& chunks) {
       where.push_back({chunk, k});
     }
   }
-  const auto chosen =
-      learning::choose_queries(candidates, s_.classes.size(), o_.ask, s_.kept_classes);
+  const auto chosen = learning::choose_queries(
+      candidates, s_.classes.size(), {o_.ask, o_.ask_confident.value_or(o_.ask)}, s_.kept_classes);
   std::string text;
   for (const std::size_t k : chosen) {
     nlohmann::json lo = nlohmann::json::object();
@@ -808,8 +810,14 @@ void add_induct_command(CLI::App& app) {
                   "(repeatable; its labels are read only by --oracle)");
   cmd->add_option("--rounds", o->rounds, "rounds on the buffer after the chunks")
       ->check(CLI::Range(std::size_t{0}, std::size_t{100'000}));
-  cmd->add_option("--ask", o->ask, "questions per class and kind after each chunk")
+  cmd->add_option("--ask", o->ask,
+                  "questions per class after each chunk about its least confident tracks (and, "
+                  "unless --ask-confident says otherwise, as many about confident positives)")
       ->capture_default_str()
+      ->check(CLI::Range(std::size_t{0}, std::size_t{10'000}));
+  cmd->add_option("--ask-confident", o->ask_confident,
+                  "questions per class about the most confident positives the user has not seen "
+                  "(default: --ask; 0: only the least confident, as the thesis's user was asked)")
       ->check(CLI::Range(std::size_t{0}, std::size_t{10'000}));
   cmd->add_flag("--requery", o->requery,
                 "after the rounds, write new questions about the tracks of every unlabeled dataset "

@@ -51,6 +51,7 @@ struct LabelOptions {
   std::string address = "127.0.0.1";
   int port = 8642;
   std::size_t ask = 5;
+  std::optional<std::size_t> ask_confident;  // passed on to stac induct when given
   std::size_t warm_rounds = 200, reset_rounds = 1000;
 };
 
@@ -274,18 +275,22 @@ class LabelServer {
   rt::Result<nlohmann::json> start_round() {
     poll_round();
     if (round_) return nlohmann::json{{"training", true}};
-    const std::vector<std::string> args = {"induct",
-                                           "--state",
-                                           dir_.string(),
-                                           "--rounds",
-                                           "1",
-                                           "--requery",
-                                           "--ask",
-                                           std::to_string(o_.ask),
-                                           "--warm-rounds",
-                                           std::to_string(o_.warm_rounds),
-                                           "--reset-rounds",
-                                           std::to_string(o_.reset_rounds)};
+    std::vector<std::string> args = {"induct",
+                                     "--state",
+                                     dir_.string(),
+                                     "--rounds",
+                                     "1",
+                                     "--requery",
+                                     "--ask",
+                                     std::to_string(o_.ask),
+                                     "--warm-rounds",
+                                     std::to_string(o_.warm_rounds),
+                                     "--reset-rounds",
+                                     std::to_string(o_.reset_rounds)};
+    if (o_.ask_confident) {
+      args.emplace_back("--ask-confident");
+      args.push_back(std::to_string(*o_.ask_confident));
+    }
     auto child = ChildProcess::start(args, dir_ / "label-round.log");
     if (!child) return rt::make_error("cannot start the round: " + child.error().message);
     round_.emplace(std::move(child).value());
@@ -380,6 +385,10 @@ void add_label_command(CLI::App& app) {
   cmd->add_option("--ask", o->ask, "questions per class and kind after each round")
       ->capture_default_str()
       ->check(CLI::Range(std::size_t{1}, std::size_t{10'000}));
+  cmd->add_option("--ask-confident", o->ask_confident,
+                  "questions per class about confident positives never shown (default: "
+                  "--ask; 0: only the least confident)")
+      ->check(CLI::Range(std::size_t{0}, std::size_t{10'000}));
   cmd->add_option("--warm-rounds", o->warm_rounds, "boosting rounds added per round")
       ->capture_default_str()
       ->check(CLI::Range(std::size_t{1}, std::size_t{1'000'000}));

@@ -286,17 +286,18 @@ rt::Result<classification::TrackClassifierModel> with_added_classes(
 }
 
 std::vector<std::size_t> choose_queries(std::span<const QueryCandidate> candidates,
-                                        std::size_t classes, std::size_t per_class,
+                                        std::size_t classes, QueryCounts counts,
                                         std::uint32_t kept) {
   std::vector<std::size_t> chosen;
   std::vector<bool> taken(candidates.size(), false);
   std::vector<std::size_t> order(candidates.size());
-  const auto pick = [&](auto&& better, auto&& eligible) {
+  const auto pick = [&](std::size_t wanted, auto&& better, auto&& eligible) {
+    if (wanted == 0) return;
     std::iota(order.begin(), order.end(), std::size_t{0});
     std::stable_sort(order.begin(), order.end(), better);
     std::size_t n = 0;
     for (const std::size_t i : order) {
-      if (n == per_class) break;
+      if (n == wanted) break;
       if (candidates[i].seen || taken[i] || !eligible(i)) continue;
       taken[i] = true;
       chosen.push_back(i);
@@ -306,15 +307,19 @@ std::vector<std::size_t> choose_queries(std::span<const QueryCandidate> candidat
   for (std::size_t k = 0; k < classes; ++k) {
     if (((kept >> k) & 1u) != 0) continue;
     pick(
+        counts.least_confident,
         [&](std::size_t a, std::size_t b) {
           return std::fabs(candidates[a].log_odds[k]) < std::fabs(candidates[b].log_odds[k]);
         },
         [](std::size_t) { return true; });
-    pick([&](std::size_t a,
-             std::size_t b) { return candidates[a].log_odds[k] > candidates[b].log_odds[k]; },
-         [&](std::size_t i) {
-           return classification::predict(candidates[i].log_odds, classes) == ClassIndex(k);
-         });
+    pick(
+        counts.confident_positives,
+        [&](std::size_t a, std::size_t b) {
+          return candidates[a].log_odds[k] > candidates[b].log_odds[k];
+        },
+        [&](std::size_t i) {
+          return classification::predict(candidates[i].log_odds, classes) == ClassIndex(k);
+        });
   }
   return chosen;
 }

@@ -147,12 +147,17 @@ struct QueryCandidate {
   LogOdds log_odds{};
   bool seen = false;  // the user has already answered about it
 };
-// Up to `per_class` tracks per class of the least confident (smallest |log odds|), then up to
-// `per_class` of the most confident positives (largest log odds, predicted that class): indices
-// into `candidates`, never a seen one, none twice, in the order asked. Nothing is asked about
-// the classes of `kept` (bit k: class k; classes not being taught).
+// How many questions per class of each kind.
+struct QueryCounts {
+  std::size_t least_confident = 5;      // smallest |log odds| (the thesis's 2.5.2 protocol)
+  std::size_t confident_positives = 5;  // largest log odds among those predicted the class
+};
+// Per class, up to `counts.least_confident` of the least confident tracks (smallest |log odds|),
+// then up to `counts.confident_positives` of the most confident positives (largest log odds,
+// predicted that class): indices into `candidates`, never a seen one, none twice, in the order
+// asked. Nothing is asked about the classes of `kept` (bit k: class k; classes not being taught).
 std::vector<std::size_t> choose_queries(std::span<const QueryCandidate> candidates,
-                                        std::size_t classes, std::size_t per_class,
+                                        std::size_t classes, QueryCounts counts,
                                         std::uint32_t kept = 0);
 
 }  // namespace stac::learning

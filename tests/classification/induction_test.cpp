@@ -172,12 +172,16 @@ TEST(Induction, QueriesAreTheLeastConfidentAndTheUnseenConfidentPositives) {
   c[3].seen = true;
   c[4].log_odds = {-3.0f, 0.05f};
   c[5].log_odds = {-4.0f, 7.0f};
-  const auto q = choose_queries(c, 2, 1);
+  const auto q = choose_queries(c, 2, {1, 1});
   // Class 0: least confident 0, most confident unseen positive 2; class 1: 4, then 5.
   EXPECT_EQ(q, (std::vector<std::size_t>{0, 2, 4, 5}));
   // Nothing is asked about a kept class (class 0 here): only class 1's questions.
-  EXPECT_EQ(choose_queries(c, 2, 1, 0b01u), (std::vector<std::size_t>{4, 5}));
-  const auto two = choose_queries(c, 2, 2);
+  EXPECT_EQ(choose_queries(c, 2, {1, 1}, 0b01u), (std::vector<std::size_t>{4, 5}));
+  // Only the least confident (the thesis's protocol), or only the confident positives.
+  EXPECT_EQ(choose_queries(c, 2, {1, 0}), (std::vector<std::size_t>{0, 4}));
+  EXPECT_EQ(choose_queries(c, 2, {0, 1}), (std::vector<std::size_t>{2, 5}));
+  EXPECT_EQ(choose_queries(c, 2, {2, 0}), (std::vector<std::size_t>{0, 1, 4, 2}));
+  const auto two = choose_queries(c, 2, {2, 2});
   EXPECT_EQ(std::count(two.begin(), two.end(), 3u), 0);
   std::vector<std::size_t> sorted = two;
   std::sort(sorted.begin(), sorted.end());

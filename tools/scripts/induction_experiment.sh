@@ -9,7 +9,9 @@
 #
 # Environment: STAC (default build/tools/stac), JOBS (drives made in parallel, default 1),
 # DURATION (s per drive, default 15), SEED_LABELS (per class, default 5), ASK (questions per
-# class and kind after each chunk, default 3), ROUNDS (boosting rounds of the baselines, 1000).
+# class about the least confident tracks after each chunk, default 3), ASK_CONFIDENT (per class
+# about confident positives never shown, default 0: the thesis's user inspected only the
+# low-confidence tracks, 2.5.2), ROUNDS (boosting rounds of the baselines, 1000).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 STAC=${STAC:-build/tools/stac}
@@ -18,6 +20,7 @@ JOBS=${JOBS:-1}
 DURATION=${DURATION:-15}
 SEED_LABELS=${SEED_LABELS:-5}
 ASK=${ASK:-3}
+ASK_CONFIDENT=${ASK_CONFIDENT:-0}
 ROUNDS=${ROUNDS:-1000}
 BACKGROUND=(empty:301 empty:302 empty:303)
 LABELS=(urban:311)
@@ -39,7 +42,8 @@ all_acc=$(sed -n 's/.*"track_accuracy": *\([0-9.]*\).*/\1/p' "$WORK/supervised_a
 rm -rf "$WORK/state"
 "$STAC" induct --state "$WORK/state" --classes car,pedestrian,bicyclist "${bg[@]}" "${labels[@]}" \
   --baseline \
-  --labels-per-class "$SEED_LABELS" "${stream[@]}" --rounds 2 --oracle --ask "$ASK" "${test[@]}" \
+  --labels-per-class "$SEED_LABELS" "${stream[@]}" --rounds 2 --oracle --ask "$ASK" \
+  --ask-confident "$ASK_CONFIDENT" "${test[@]}" \
   --export "$WORK/user_labels"
 "$STAC" eval --classes "${test_data[@]}" --model "$WORK/state/model.stacmodel" \
   --report "$WORK/group_induction"
