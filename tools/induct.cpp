@@ -354,8 +354,8 @@ rt::Status Inductor::apply_answers() {
                   [&](const learning::Group& g) { return g.source == source && g.track == track; });
   }
   if (!fresh.empty() && s_.has_model) {
-    const LogOdds eps =
-        learning::retrospection_noise(s_.model.segment, fresh, kSegDims, s_.induction.eps_max);
+    const LogOdds eps = learning::retrospection_noise(
+        s_.model.segment, fresh, kSegDims, s_.induction.eps_max, s_.induction.max_group_size);
     const auto summary = learning::induction_phase(s_.model.segment, s_.buffer, s_.induction, eps);
     std::size_t de = 0;
     for (const auto& c : summary.changes) de += c.to == learning::kUninducted ? 1 : 0;

@@ -115,13 +115,29 @@ InductionSummary induction_phase(const GridClassifier& segment, std::span<Group>
 }
 
 LogOdds retrospection_noise(const GridClassifier& segment, std::span<const TrackExample> new_labels,
-                            std::size_t segment_dimensions, double floor) {
+                            std::size_t segment_dimensions, double floor,
+                            std::size_t max_group_size) {
   LogOdds eps = uniform_noise(floor);
   const std::size_t classes = segment.classes();
-  for (const TrackExample& t : new_labels)
-    for (const LogOdds& x : log_odds_of(segment, t.segments, segment_dimensions))
-      for (std::size_t k = 0; k < classes; ++k)
-        eps[k] = std::max(eps[k], static_cast<float>(-sign(t.label, k) * x[k]));
+  const std::size_t group = std::max<std::size_t>(max_group_size, 1);
+  for (const TrackExample& t : new_labels) {
+    const std::vector<LogOdds> h = log_odds_of(segment, t.segments, segment_dimensions);
+    for (std::size_t first = 0; first < h.size(); first += group) {
+      const std::size_t end = std::min(h.size(), first + group);
+      for (std::size_t k = 0; k < classes; ++k) {
+        // log(mean exp(a_u)), a_u = y H / 2, taken about the largest a_u: finite for any H.
+        const double y = sign(t.label, k);
+        double top = -std::numeric_limits<double>::infinity();
+        for (std::size_t u = first; u < end; ++u)
+          top = std::max(top, 0.5 * y * static_cast<double>(h[u][k]));
+        double sum = 0;
+        for (std::size_t u = first; u < end; ++u)
+          sum += std::exp(0.5 * y * static_cast<double>(h[u][k]) - top);
+        const double log_mean = top + std::log(sum / static_cast<double>(end - first));
+        eps[k] = std::max(eps[k], static_cast<float>(-2.0 * log_mean));
+      }
+    }
+  }
   for (std::size_t k = classes; k < eps.size(); ++k) eps[k] = 0.0f;
   return eps;
 }

@@ -86,10 +86,18 @@ LogOdds uniform_noise(double eps) noexcept;
 InductionSummary induction_phase(const GridClassifier& segment, std::span<Group> groups,
                                  const InductionConfig& config, const LogOdds& eps);
 
-// Retrospection's noise (2.3.2): per class k, max over the segments of `new_labels` of
-// -y_k H_k(x) (y_k = +1 for the track's class, -1 otherwise), at least `floor`.
+// Retrospection's noise (2.3.2): eps_max = max over the new labelled examples of -y H(x), with
+// the example the unit that induction decides on, a group. Each new label's segments are cut as
+// an unlabeled track is (at most `max_group_size` consecutive ones); per class k (y_k = +1 for
+// the track's class, -1 otherwise) a group's W_k = -2 log(mean_u exp(y_k H_k(x_u) / 2)) is the
+// margin by which induction would have given it the wrong label (it would iff W_k > eps), and
+// eps_k is the largest W_k, at least `floor`. Every group inducted with no more confidence than
+// the worst new mistake is then de-inducted. (The max over single segments, which one noisy
+// segment decides, was log odds 15-150 on simulated drives and de-inducted nearly the whole
+// buffer at every answer; docs/learning.md.)
 LogOdds retrospection_noise(const GridClassifier& segment, std::span<const TrackExample> new_labels,
-                            std::size_t segment_dimensions, double floor);
+                            std::size_t segment_dimensions, double floor,
+                            std::size_t max_group_size);
 
 // Keeps at most `capacity` groups (2.3.3): the inducted ones of largest usefulness first, then
 // the uninducted nearest to induction. Order of the kept groups: that ranking. Deterministic.

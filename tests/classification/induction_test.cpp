@@ -24,7 +24,7 @@ using classification::TrackEvidence;
 
 // One element x, 20 bins over [-10, 10): bin b = floor(x + 10). Class 0's log odds are b - 10
 // (x = 3.5 gives +3); class 1's are +3 below x = -5 and -3 from there on.
-GridClassifier known_classifier() {
+GridClassifier known_classifier(float scale = 1.0f) {
   GridModel m;
   m.layout = {{"x", 1}};
   m.resolutions = {20};
@@ -33,8 +33,8 @@ GridClassifier known_classifier() {
   m.scale = {1.0f};
   m.table.assign(40, 0.0f);
   for (int b = 0; b < 20; ++b) {
-    m.table[static_cast<std::size_t>(2 * b)] = static_cast<float>(b - 10);
-    m.table[static_cast<std::size_t>(2 * b + 1)] = b < 5 ? 3.0f : -3.0f;
+    m.table[static_cast<std::size_t>(2 * b)] = scale * static_cast<float>(b - 10);
+    m.table[static_cast<std::size_t>(2 * b + 1)] = scale * (b < 5 ? 3.0f : -3.0f);
   }
   auto c = GridClassifier::create(std::move(m));
   EXPECT_TRUE(c.has_value());
@@ -118,30 +118,52 @@ TEST(Induction, DualInductionLabelsBackgroundWhenEveryClassSaysNo) {
   EXPECT_EQ(summary.inducted, (std::vector<std::size_t>{0, 0, 1}));
 }
 
+// Retrospection's noise is the worst new mistake, with a group (the unit induction decides on)
+// as the example: W_k = -2 log(mean_u exp(y_k H_k(x_u) / 2)), the margin by which the group would
+// have been inducted with the wrong label.
 TEST(Induction, RetrospectionNoiseIsTheWorstMistakeOnTheNewLabels) {
-  const GridClassifier h = known_classifier();
-  TrackExample car;  // labelled class 0, but the classifier gives H0 = -6, H1 = +3
-  car.label = 0;
-  car.segments = {3.5f, -5.5f};
-  TrackExample bg;
+  const GridClassifier h =
+      known_classifier();  // x = 3.5: H = (+3, -3); 1.5: (+1, -3); -5.5: (-6, +3)
+  TrackExample bg;  // background the classifier calls class 0 with H0 = +3 throughout: a mistake
   bg.label = kBackground;
-  bg.segments = {1.5f};  // H0 = +1: a mistake of 1 for class 0
+  bg.segments = std::vector<float>(10, 3.5f);
+  TrackExample car;  // class 0 with one segment badly wrong (H0 = -6) among right ones
+  car.label = 0;
+  car.segments = std::vector<float>(9, 3.5f);
+  car.segments.push_back(-5.5f);
   const std::vector<TrackExample> labels{car, bg};
-  const LogOdds eps = retrospection_noise(h, labels, 1, 0.0);
-  EXPECT_FLOAT_EQ(eps[0], 6.0f);
-  EXPECT_FLOAT_EQ(eps[1], 3.0f);
+  const LogOdds eps = retrospection_noise(h, labels, 1, 0.0, 10);
+  EXPECT_NEAR(eps[0], 3.0f, 1e-5);  // bg: y0 = -1, W0 = -2 log(e^(-3/2)) = 3
+  // car, class 1 (y1 = -1): W1 = -2 log((9 e^(-3/2) + e^(3/2)) / 10) < 0, not a mistake; the
+  // segment maximum would have made it 3, and 6 for class 0.
+  EXPECT_FLOAT_EQ(eps[1], 0.0f);
   EXPECT_FLOAT_EQ(eps[2], 0.0f);
+  // A long track counts group by group: its one wrong group of 10 sets the noise.
+  TrackExample long_bg = bg;
+  long_bg.segments.insert(long_bg.segments.begin(), 10, -5.5f);  // a right group first (H0 = -6)
+  EXPECT_NEAR(retrospection_noise(h, std::vector<TrackExample>{long_bg}, 1, 0.0, 10)[0], 3.0f,
+              1e-5);
+  // In one group of 20 the right half outweighs it: W0 = -2 log((e^3 + e^(-3/2)) / 2) < 0.
+  EXPECT_FLOAT_EQ(retrospection_noise(h, std::vector<TrackExample>{long_bg}, 1, 0.0, 20)[0], 0.0f);
   // The floor holds when every new label is right with a margin.
   TrackExample right;
   right.label = 0;
   right.segments = {3.5f};
-  EXPECT_FLOAT_EQ(retrospection_noise(h, std::vector<TrackExample>{right}, 1, 0.5)[0], 0.5f);
-  // With that noise the confident group of the test above is de-inducted.
-  std::vector<Group> groups{group_of(std::vector<float>(10, 3.5f))};
+  EXPECT_FLOAT_EQ(retrospection_noise(h, std::vector<TrackExample>{right}, 1, 0.5, 10)[0], 0.5f);
+  // Huge log odds stay finite (log-sum-exp about the largest term; exp(1500) is not a double).
+  const LogOdds huge = retrospection_noise(known_classifier(1000.0f), labels, 1, 0.0, 10);
+  EXPECT_NEAR(huge[0], 3000.0f, 0.5f);
+  EXPECT_FLOAT_EQ(huge[1], 0.0f);
+  // With that noise a group as confident as the mistake is de-inducted (a tie goes to y = 0),
+  // and a more confident one stays.
+  std::vector<Group> groups{group_of(std::vector<float>(10, 3.5f)),
+                            group_of(std::vector<float>(10, 4.5f))};  // H0 = +3, +4
   (void)induction_phase(h, groups, InductionConfig{}, uniform_noise(0.0));
   ASSERT_EQ(groups[0].label, 0);
+  ASSERT_EQ(groups[1].label, 0);
   (void)induction_phase(h, groups, InductionConfig{}, eps);
   EXPECT_EQ(groups[0].label, kUninducted);
+  EXPECT_EQ(groups[1].label, 0);
 }
 
 TEST(Induction, TheBufferKeepsTheMostUsefulGroups) {
