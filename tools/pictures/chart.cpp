@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <iterator>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -69,16 +71,47 @@ rt::Status save_chart(const Chart& chart, const std::filesystem::path& png) {
               cv::FONT_HERSHEY_SIMPLEX, 0.45, dark, 1, cv::LINE_AA);
   cv::putText(img, chart.y_label, {5, top - 8}, cv::FONT_HERSHEY_SIMPLEX, 0.4, dark, 1,
               cv::LINE_AA);
+  // The legend goes in the corner of the plot that the lines cross least (sampled every 2 px),
+  // on white, so that no line runs under its text.
+  std::size_t longest = 0;
+  for (const auto& s : chart.series) longest = std::max(longest, s.name.size());
+  const int legend_w = std::min(40 + 9 * static_cast<int>(longest), w);
+  const int legend_h = std::min(8 + 18 * static_cast<int>(chart.series.size()), h);
+  const cv::Rect corners[] = {{left + w - legend_w, top, legend_w, legend_h},
+                              {left + w - legend_w, top + h - legend_h, legend_w, legend_h},
+                              {left, top + h - legend_h, legend_w, legend_h},
+                              {left, top, legend_w, legend_h}};
+  std::size_t best = 0, best_hits = SIZE_MAX;
+  for (std::size_t corner = 0; corner < std::size(corners); ++corner) {
+    std::size_t hits = 0;
+    for (const auto& s : chart.series) {
+      for (std::size_t i = 1; i < s.x.size() && i < s.y.size(); ++i) {
+        const cv::Point a = px(s.x[i - 1], s.y[i - 1]), b = px(s.x[i], s.y[i]);
+        const int steps = std::max(1, static_cast<int>(cv::norm(b - a) / 2.0));
+        for (int t = 0; t <= steps; ++t) {
+          const double f = static_cast<double>(t) / steps;
+          const cv::Point p(static_cast<int>(std::lround(a.x + f * (b.x - a.x))),
+                            static_cast<int>(std::lround(a.y + f * (b.y - a.y))));
+          hits += corners[corner].contains(p) ? 1 : 0;
+        }
+      }
+    }
+    if (hits < best_hits) best_hits = hits, best = corner;
+  }
   for (std::size_t k = 0; k < chart.series.size(); ++k) {
     const auto& s = chart.series[k];
     const cv::Scalar c = colours[k % 4];
     for (std::size_t i = 1; i < s.x.size() && i < s.y.size(); ++i) {
       cv::line(img, px(s.x[i - 1], s.y[i - 1]), px(s.x[i], s.y[i]), c, 2, cv::LINE_AA);
     }
-    std::size_t longest = 0;
-    for (const auto& other : chart.series) longest = std::max(longest, other.name.size());
-    const int legend = 40 + 9 * static_cast<int>(longest);
-    const cv::Point at(left + w - std::min(legend, w), top + 18 + 18 * static_cast<int>(k));
+  }
+  const cv::Rect box = corners[best];
+  cv::rectangle(img, box, cv::Scalar(255, 255, 255), cv::FILLED);
+  cv::rectangle(img, box, grey, 1);
+  for (std::size_t k = 0; k < chart.series.size(); ++k) {
+    const auto& s = chart.series[k];
+    const cv::Scalar c = colours[k % 4];
+    const cv::Point at(box.x + 6, box.y + 13 + 18 * static_cast<int>(k));
     cv::line(img, at, at + cv::Point(25, 0), c, 3);
     cv::putText(img, s.name, at + cv::Point(32, 5), cv::FONT_HERSHEY_SIMPLEX, 0.45,
                 cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
