@@ -56,6 +56,10 @@ std::string hint(const std::string& key, const YAML::Node& known, bool list_all)
   for (const auto& kv : known) {
     const auto name = kv.first.as<std::string>();
     all += (all.empty() ? "" : ", ") + name;
+    // The distance is at least the difference in length: no table for names that far apart
+    // (a long garbage key would cost its length times each name's).
+    const std::size_t longer = std::max(key.size(), name.size());
+    if (longer - std::min(key.size(), name.size()) >= best_d) continue;
     const std::size_t d = distance(key, name);
     if (d < best_d) best_d = d, best = name;
   }
