@@ -11,7 +11,9 @@
 # DURATION (s per drive, default 15), SEED_LABELS (per class, default 5), ASK (questions per
 # class about the least confident tracks after each chunk, default 3), ASK_CONFIDENT (per class
 # about confident positives never shown, default 0: the thesis's user inspected only the
-# low-confidence tracks, 2.5.2), ROUNDS (boosting rounds of the baselines, 1000).
+# low-confidence tracks, 2.5.2), BUFFER (unlabeled groups kept, default 1200: the thesis sized
+# its 20,000 to B0's 150,000 frames, so that inducted positives and B0 are of one order of
+# magnitude; this B0 has about 9,000 segments), ROUNDS (boosting rounds of the baselines, 1000).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 STAC=${STAC:-build/tools/stac}
@@ -21,6 +23,7 @@ DURATION=${DURATION:-15}
 SEED_LABELS=${SEED_LABELS:-5}
 ASK=${ASK:-3}
 ASK_CONFIDENT=${ASK_CONFIDENT:-0}
+BUFFER=${BUFFER:-1200}
 ROUNDS=${ROUNDS:-1000}
 BACKGROUND=(empty:301 empty:302 empty:303)
 LABELS=(urban:311)
@@ -43,7 +46,7 @@ rm -rf "$WORK/state"
 "$STAC" induct --state "$WORK/state" --classes car,pedestrian,bicyclist "${bg[@]}" "${labels[@]}" \
   --baseline \
   --labels-per-class "$SEED_LABELS" "${stream[@]}" --rounds 2 --oracle --ask "$ASK" \
-  --ask-confident "$ASK_CONFIDENT" "${test[@]}" \
+  --ask-confident "$ASK_CONFIDENT" --buffer "$BUFFER" "${test[@]}" \
   --export "$WORK/user_labels"
 "$STAC" eval --classes "${test_data[@]}" --model "$WORK/state/model.stacmodel" \
   --report "$WORK/group_induction"
