@@ -351,7 +351,16 @@ void LidarSim::make_packet(std::uint32_t k, std::array<std::uint8_t, velodyne::k
                     intensity2 = std::min(raw_intensity(0.5 * full, l, r2), intensity);
                   }
                 }
-                builder.set_return(last_block, j, raw2, intensity2);
+                // The manuals' dual mode: the last block holds the farthest echo; the strongest
+                // block the strongest one, or the second strongest when that is the last. With
+                // two echoes the nearer one is in the strongest block either way (foliage before
+                // a brighter wall: the foliage there, the wall as the last return).
+                if (raw2 < static_cast<std::uint16_t>(raw)) {
+                  builder.set_return(strongest_block, j, raw2, intensity2);
+                  builder.set_return(last_block, j, static_cast<std::uint16_t>(raw), intensity);
+                } else {
+                  builder.set_return(last_block, j, raw2, intensity2);
+                }
               }
             }
           }

@@ -207,10 +207,11 @@ TEST_P(FamilyModel, DualReturnPairsLastThenStrongest) {
     for (int b = 0; b < 12; b += 2) {
       ASSERT_EQ(p->blocks[b].rotation, p->blocks[b + 1].rotation);
       for (int j = 0; j < 32; ++j) {
-        // The strongest return is at least as bright as the last one where they differ.
+        // Where they differ the last return is the farther echo (the strongest block then holds
+        // the stronger one, or the second strongest when the strongest is the last).
         if (p->blocks[b].returns[j].distance != p->blocks[b + 1].returns[j].distance) {
           ++differ;
-          EXPECT_LE(p->blocks[b].returns[j].intensity, p->blocks[b + 1].returns[j].intensity);
+          EXPECT_GT(p->blocks[b].returns[j].distance, p->blocks[b + 1].returns[j].distance);
         }
       }
     }
