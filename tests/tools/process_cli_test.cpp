@@ -1,6 +1,8 @@
 // `stac process` and `stac eval` run as a user would, on a short simulated drive.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -8,10 +10,14 @@
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <string>
+#include <vector>
 
 #include "formats/dataset_file.hpp"
+#include "formats/kitti_raw.hpp"
+#include "settings/settings.hpp"
 #include "shared_data.hpp"
 #include "stac_cli.hpp"
+#include "tools/evaluation/tracklet_truth.hpp"
 #include "tools/evaluation/tracks_jsonl.hpp"
 
 namespace stac::tools {
@@ -367,6 +373,46 @@ TEST(ProcessCli, ASimulatedDriveThroughPcapAndThroughKittiRawTracksTheSame) {
   EXPECT_NE(r.code, 0);
   EXPECT_NE(r.output.find("has a pose for frame 59; the drive has 59 scans"), std::string::npos)
       << r.output;
+
+  {  // Truth velocities are over the frames' times, at which KITTI's boxes are, not the sweeps'
+     // starts the truth scans are stamped with: every other sweep moved by 30 ms changes none.
+    auto ego = stac::settings::load_ego_settings(std::filesystem::path(STAC_SOURCE_DIR) /
+                                                 "config/stac.yaml");
+    ASSERT_TRUE(ego) << ego.error().message;
+    const auto velocities = [&] {
+      std::vector<double> v;
+      auto truth =
+          stac::tools::truth_from_tracklets(dir / "drive/tracklet_labels.xml", dir / "drive", *ego);
+      EXPECT_TRUE(truth) << truth.error().message;
+      if (truth)
+        for (const auto& scan : *truth)
+          for (const auto& o : scan.objects) v.insert(v.end(), {o.vx, o.vy});
+      return v;
+    };
+    const std::vector<double> before = velocities();
+    ASSERT_FALSE(before.empty());
+    EXPECT_GT(std::count_if(before.begin(), before.end(), [](double x) { return std::abs(x) > 1; }),
+              0);  // something moves
+    const auto sweeps = dir / "drive/velodyne_points";
+    for (const char* name : {"timestamps_start.txt", "timestamps_end.txt"}) {
+      std::filesystem::copy_file(sweeps / name, dir / name);
+      std::ifstream in(sweeps / name);
+      std::string shifted, line;
+      for (int k = 0; std::getline(in, line); ++k) {
+        std::int64_t ns = 0;
+        ASSERT_TRUE(stac::formats::parse_kitti_time(line, ns)) << line;
+        shifted += stac::formats::format_kitti_time(ns + (k % 2 == 1 ? 30'000'000 : 0)) + "\n";
+      }
+      in.close();
+      std::ofstream(sweeps / name) << shifted;
+    }
+    const std::vector<double> after = velocities();
+    ASSERT_EQ(after.size(), before.size());
+    for (std::size_t i = 0; i < before.size(); ++i) EXPECT_NEAR(after[i], before[i], 1e-9) << i;
+    for (const char* name : {"timestamps_start.txt", "timestamps_end.txt"})
+      std::filesystem::copy_file(dir / name, sweeps / name,
+                                 std::filesystem::copy_options::overwrite_existing);
+  }
 
   // `stac dataset` takes the folder as it takes the pcap: about as many tracks kept and labelled
   // (a dataset for stac train, or, without --truth, for stac induct).

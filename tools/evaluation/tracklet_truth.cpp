@@ -99,11 +99,12 @@ rt::Result<std::vector<TruthScanRecord>> truth_from_tracklets(const std::filesys
       placed.emplace_back(f, out[f].objects.size());
       out[f].objects.push_back(o);
     }
-    // Velocity from the neighbouring frames (one-sided at the ends).
+    // Velocity from the neighbouring frames (one-sided at the ends), over the frames' times, at
+    // which the boxes are (not the sweeps' starts the truth scans are stamped with).
     for (std::size_t j = 0; j < placed.size() && placed.size() > 1; ++j) {
       const auto& [fa, ia] = placed[j == 0 ? 0 : j - 1];
       const auto& [fb, ib] = placed[j + 1 == placed.size() ? j : j + 1];
-      const double dt = static_cast<double>(out[fb].stamp_ns - out[fa].stamp_ns) * 1e-9;
+      const double dt = static_cast<double>(drive->stamps_ns[fb] - drive->stamps_ns[fa]) * 1e-9;
       if (!(dt > 0)) continue;
       TruthObjectRecord& o = out[placed[j].first].objects[placed[j].second];
       o.vx = (out[fb].objects[ib].x - out[fa].objects[ia].x) / dt;
