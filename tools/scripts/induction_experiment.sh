@@ -13,7 +13,9 @@
 # about confident positives never shown, default 0: the thesis's user inspected only the
 # low-confidence tracks, 2.5.2), BUFFER (unlabeled groups kept, default 1200: the thesis sized
 # its 20,000 to B0's 150,000 frames, so that inducted positives and B0 are of one order of
-# magnitude; this B0 has about 9,000 segments), ROUNDS (boosting rounds of the baselines, 1000).
+# magnitude; this B0 has about 9,000 segments), ROUNDS (boosting rounds of the baselines, 1000),
+# B0 (the background drives, default "empty:301 empty:302 empty:303"), INDUCT_ARGS (more options
+# of stac induct, e.g. --dual).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 STAC=${STAC:-build/tools/stac}
@@ -25,7 +27,7 @@ ASK=${ASK:-3}
 ASK_CONFIDENT=${ASK_CONFIDENT:-0}
 BUFFER=${BUFFER:-1200}
 ROUNDS=${ROUNDS:-1000}
-BACKGROUND=(empty:301 empty:302 empty:303)
+read -r -a BACKGROUND <<< "${B0:-empty:301 empty:302 empty:303}"
 LABELS=(urban:311)
 STREAM=(urban:312 urban:313 urban:314 urban:315 urban:316 intersection:319 crowd:320
         urban:318 urban:331 urban:332 intersection:333 urban:334 urban:335 crowd:336
@@ -43,10 +45,11 @@ all_acc=$(sed -n 's/.*"track_accuracy": *\([0-9.]*\).*/\1/p' "$WORK/supervised_a
 
 # Group induction, the oracle answering; after each round, the same labels without induction.
 rm -rf "$WORK/state"
+# shellcheck disable=SC2086  # INDUCT_ARGS: words
 "$STAC" induct --state "$WORK/state" --classes car,pedestrian,bicyclist "${bg[@]}" "${labels[@]}" \
   --baseline \
   --labels-per-class "$SEED_LABELS" "${stream[@]}" --rounds 2 --oracle --ask "$ASK" \
-  --ask-confident "$ASK_CONFIDENT" --buffer "$BUFFER" "${test[@]}" \
+  --ask-confident "$ASK_CONFIDENT" --buffer "$BUFFER" ${INDUCT_ARGS:-} "${test[@]}" \
   --export "$WORK/user_labels"
 "$STAC" eval --classes "${test_data[@]}" --model "$WORK/state/model.stacmodel" \
   --report "$WORK/group_induction"
