@@ -322,9 +322,9 @@ void LidarSim::make_packet(std::uint32_t k, std::array<std::uint8_t, velodyne::k
               builder.set_return(strongest_block, j, static_cast<std::uint16_t>(raw), intensity);
               rec.returned = true;
               if (dual) {
-                // The last-return block: the other echo where there is one (the foliage and what
-                // lies behind it, or the far side of an edge the beam's footprint straddles),
-                // weaker than the strongest; else the same return again (one echo only).
+                // The other echo where there is one (the foliage and what lies behind it, or the
+                // far side of an edge the beam's footprint straddles), at most as bright as the
+                // main one; else the same return in both blocks (one echo only).
                 std::uint16_t raw2 = static_cast<std::uint16_t>(raw);
                 std::uint8_t intensity2 = intensity;
                 Echo other;
@@ -358,6 +358,7 @@ void LidarSim::make_packet(std::uint32_t k, std::array<std::uint8_t, velodyne::k
                 if (raw2 < static_cast<std::uint16_t>(raw)) {
                   builder.set_return(strongest_block, j, raw2, intensity2);
                   builder.set_return(last_block, j, static_cast<std::uint16_t>(raw), intensity);
+                  rec.block = static_cast<std::uint8_t>(last_block);  // where the main echo went
                 } else {
                   builder.set_return(last_block, j, raw2, intensity2);
                 }

@@ -57,7 +57,9 @@ struct EgoState {
 // What happened to one beam, for truth and tests.
 struct BeamRecord {
   std::uint32_t packet;
-  std::uint8_t block, laser;     // block 0..11, laser 0..63
+  // Block 0..11 of the echo described here (the one single-return mode gives: in dual return
+  // the strongest block, or the last-return block when it is the farther of two), laser 0..63.
+  std::uint8_t block, laser;
   std::uint16_t rotation;        // 0.01 deg, of this beam (VLP-16: interpolated within the block)
   std::uint8_t channel;          // 0..31 within the block
   std::uint16_t block_rotation;  // the block's rotation, by which scans are framed
