@@ -382,7 +382,9 @@ void add_label_command(CLI::App& app) {
   cmd->add_option("--port", o->port, "TCP port (0: any free port, printed)")
       ->capture_default_str()
       ->check(CLI::Range(0, 65535));
-  cmd->add_option("--ask", o->ask, "questions per class and kind after each round")
+  cmd->add_option("--ask", o->ask,
+                  "questions per class after each round about the least confident tracks (and, "
+                  "unless --ask-confident says otherwise, as many about confident positives)")
       ->capture_default_str()
       ->check(CLI::Range(std::size_t{1}, std::size_t{10'000}));
   cmd->add_option("--ask-confident", o->ask_confident,

@@ -134,7 +134,7 @@ TEST(Induction, RetrospectionNoiseIsTheWorstMistakeOnTheNewLabels) {
   const std::vector<TrackExample> labels{car, bg};
   const LogOdds eps = retrospection_noise(h, labels, 1, 0.0, 10);
   EXPECT_NEAR(eps[0], 3.0f, 1e-5);  // bg: y0 = -1, W0 = -2 log(e^(-3/2)) = 3
-  // car, class 1 (y1 = -1): W1 = -2 log((9 e^(-3/2) + e^(3/2)) / 10) < 0, not a mistake; the
+  // car, class 1 (y1 = -1): W1 = -2 log((9 e^(3/2) + e^(-3/2)) / 10) < 0, not a mistake; the
   // segment maximum would have made it 3, and 6 for class 0.
   EXPECT_FLOAT_EQ(eps[1], 0.0f);
   EXPECT_FLOAT_EQ(eps[2], 0.0f);

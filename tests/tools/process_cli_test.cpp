@@ -394,6 +394,15 @@ TEST(ProcessCli, ASimulatedDriveThroughPcapAndThroughKittiRawTracksTheSame) {
     EXPECT_GT(std::count_if(before.begin(), before.end(), [](double x) { return std::abs(x) > 1; }),
               0);  // something moves
     const auto sweeps = dir / "drive/velodyne_points";
+    struct Restore {  // the drive's own sweep times back for the steps below, even on a failure
+      std::filesystem::path from, to;
+      ~Restore() {
+        for (const char* name : {"timestamps_start.txt", "timestamps_end.txt"})
+          if (std::filesystem::exists(from / name))
+            std::filesystem::copy_file(from / name, to / name,
+                                       std::filesystem::copy_options::overwrite_existing);
+      }
+    } restore{dir, sweeps};
     for (const char* name : {"timestamps_start.txt", "timestamps_end.txt"}) {
       std::filesystem::copy_file(sweeps / name, dir / name);
       std::ifstream in(sweeps / name);
@@ -409,9 +418,6 @@ TEST(ProcessCli, ASimulatedDriveThroughPcapAndThroughKittiRawTracksTheSame) {
     const std::vector<double> after = velocities();
     ASSERT_EQ(after.size(), before.size());
     for (std::size_t i = 0; i < before.size(); ++i) EXPECT_NEAR(after[i], before[i], 1e-9) << i;
-    for (const char* name : {"timestamps_start.txt", "timestamps_end.txt"})
-      std::filesystem::copy_file(dir / name, sweeps / name,
-                                 std::filesystem::copy_options::overwrite_existing);
   }
 
   // `stac dataset` takes the folder as it takes the pcap: about as many tracks kept and labelled

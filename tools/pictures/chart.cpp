@@ -86,7 +86,9 @@ rt::Status save_chart(const Chart& chart, const std::filesystem::path& png) {
     std::size_t hits = 0;
     for (const auto& s : chart.series) {
       for (std::size_t i = 1; i < s.x.size() && i < s.y.size(); ++i) {
-        const cv::Point a = px(s.x[i - 1], s.y[i - 1]), b = px(s.x[i], s.y[i]);
+        cv::Point a = px(s.x[i - 1], s.y[i - 1]), b = px(s.x[i], s.y[i]);
+        // Only what is drawn inside the plot counts (and a point far outside costs nothing).
+        if (!cv::clipLine(cv::Rect(left, top, w + 1, h + 1), a, b)) continue;
         const int steps = std::max(1, static_cast<int>(cv::norm(b - a) / 2.0));
         for (int t = 0; t <= steps; ++t) {
           const double f = static_cast<double>(t) / steps;
