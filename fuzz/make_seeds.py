@@ -117,11 +117,25 @@ for name in ("tracks.jsonl", "truth.jsonl"):
     for k, line in enumerate(open(os.path.join("fuzz", "seeds", name), "rb").read().splitlines()):
         put("json_lines_fuzz", f"{name}_{k}", line)
 
-put("config_files_fuzz", "stac.yaml", open("config/stac.yaml", "rb").read())
+# config_files_fuzz reads inputs of at most 8,448 bytes (fuzz/options): the configuration without
+# its comments fits, the whole file and the HDL-64E's calibration are cut there; the HDL-32E
+# and VLP-16 calibrations fit whole.
+shipped = open("config/stac.yaml", "rb").read()
+put("config_files_fuzz", "stac.yaml", shipped)
+compact = []
+for line in shipped.decode().splitlines():
+    code = line.split(" #")[0].rstrip() if not line.lstrip().startswith("#") else ""
+    if code.strip():
+        compact.append(code)
+put("config_files_fuzz", "stac_compact.yaml", ("\n".join(compact) + "\n").encode())
 put("config_files_fuzz", "calibration.yaml",
     open(f"{SHARED}/velodyne/calib/rosdrivers_64e_s2.1-sztaki.yaml", "rb").read())
-put("config_files_fuzz", "db.xml",
+for name in ("hdl32e.yaml", "vlp16.yaml"):
+    put("config_files_fuzz", name, open(f"config/calib/{name}", "rb").read())
+put("calibration_xml_fuzz", "db.xml",
     open(f"{SHARED}/velodyne/calib/rosdrivers_64e_s2.1-sztaki_db.xml", "rb").read())
+for name in ("veloview_HDL-64.xml", "veloview_HDL-32.xml", "veloview_VLP-16.xml"):
+    put("calibration_xml_fuzz", name, open(f"{SHARED}/velodyne/calib/{name}", "rb").read())
 
 # gs_usb bulk-IN transfers: a received frame (20 bytes, no timestamp), a 24-byte one with a
 # timestamp, an echo, and a CAN FD one; each behind its 1-byte length. Then the candleLight's
@@ -170,10 +184,14 @@ for line in open("config/stac.yaml"):
     stripped = line.strip()
     if stripped and not stripped.startswith("#") and ":" in stripped:
         keys.append(stripped.split(":")[0].strip("- ") + ":")
-keys += ["lasers:", "laser_id:", "rot_correction:", "vert_correction:", "dist_correction:",
-         "<item>", "</item>", "<px>", "<rotCorrection_>", "<vertCorrection_>", "<distCorrection_>",
-         "<enabled_>", "<intensity_>", "<minIntensity_>", "<maxIntensity_>", "<points_>"]
+keys += ["lasers:", "laser_id:", "rot_correction:", "vert_correction:", "dist_correction:"]
 put_dict("config_files_fuzz", keys)
+put_dict("calibration_xml_fuzz", ["<item>", "</item>", "<px>", "<id_>", "<rotCorrection_>",
+                                  "<vertCorrection_>", "<distCorrection_>", "<distCorrectionX_>",
+                                  "<distCorrectionY_>", "<vertOffsetCorrection_>",
+                                  "<horizOffsetCorrection_>", "<focalDistance_>", "<focalSlope_>",
+                                  "<enabled_>", "<intensity_>", "<minIntensity_>",
+                                  "<maxIntensity_>", "<points_>", "<count>", "<distLSB_>"])
 put_dict("can_text_fuzz", ["VERSION", "NS_", "BS_:", "BU_:", "BO_", "SG_", "CM_", "BA_DEF_", "BA_",
                            "VAL_", "SIG_VALTYPE_", "@1+", "@0-", "|", "#", "##", "can0", "(", ")"])
 put_dict("json_lines_fuzz", ['"scan"', '"time"', '"end_time"', '"ego"', '"segments"', '"tracks"',

@@ -16,6 +16,8 @@
 #                              not 10, as a niced process waits behind the rest of the machine;
 #                              campaign runs take ASAN_OPTIONS without quarantine and malloc
 #                              contexts (1.4x faster; rerun a crash input by hand for its stacks)
+# fuzz/dict/TARGET.dict is a harness's dictionary; fuzz/options/TARGET.options holds more libFuzzer
+# flags for it, one a line (e.g. -max_len=8448), used when fuzzing, not by --regress.
 # A crash, a leak-free sanitizer report or a timeout leaves its input in build-fuzz/crashes/ and
 # makes the script fail. Environment: BUILD (build-fuzz), JOBS (nproc).
 set -euo pipefail
@@ -36,7 +38,21 @@ build=${BUILD:-build-fuzz}
 jobs=${JOBS:-$(nproc)}
 targets=(velodyne_stream_fuzz applanix_stream_fuzz can_text_fuzz model_file_fuzz json_lines_fuzz
          config_files_fuzz pcap_file_fuzz dataset_file_fuzz gs_usb_frame_fuzz candump_file_fuzz
-         velodyne_status_fuzz cannelloni_fuzz kitti_text_fuzz velodyne_position_fuzz)
+         velodyne_status_fuzz cannelloni_fuzz kitti_text_fuzz velodyne_position_fuzz
+         calibration_xml_fuzz)
+
+# fuzz/options/TARGET.options: more libFuzzer flags, one a line (blank lines and # comments
+# skipped), appended to the array named by $2. Not in --regress, which replays every seed whole.
+add_options() {
+  local -n into=$2
+  [[ -f fuzz/options/$1.options ]] || return 0
+  local line
+  while IFS= read -r line || [[ -n $line ]]; do
+    line=${line%$'\r'}
+    [[ -z $line || $line == \#* ]] && continue
+    into+=("$line")
+  done < "fuzz/options/$1.options"
+}
 
 if [[ ! -d fuzz/corpus ]]; then python3 fuzz/make_seeds.py; fi
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
@@ -61,6 +77,7 @@ if [[ $mode == campaign ]]; then
     ledger="fuzz/campaign/$t.tsv"
     dict=()
     [[ -f fuzz/dict/$t.dict ]] && dict=(-dict="fuzz/dict/$t.dict")
+    add_options "$t" dict
     mkdir -p "$build/corpus/$t"
     while :; do
       done_runs=$(awk -F'\t' '{s += $2} END {print s + 0}' "$ledger" 2>/dev/null || echo 0)
@@ -95,6 +112,7 @@ for t in "${targets[@]}"; do
   fi
   dict=()
   [[ -f fuzz/dict/$t.dict ]] && dict=(-dict="fuzz/dict/$t.dict")
+  [[ $mode == regress ]] || add_options "$t" dict
   start=$(date +%s)
   if "$build/fuzz/$t" "${dict[@]}" -artifact_prefix="$build/crashes/$t-" -print_final_stats=1 \
       "${args[@]}" >"$log" 2>&1; then
