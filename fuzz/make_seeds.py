@@ -1,10 +1,21 @@
 #!/usr/bin/env python3
-"""Seed corpora for the harnesses, from real files (../shared/data, config/): fuzz/corpus/<target>/.
-Run from the repository root: python3 fuzz/make_seeds.py"""
+"""Seed corpora for the harnesses, from real files, run from the repository root.
+
+  python3 fuzz/make_seeds.py                 seeds from the project's own files (config/, a
+                                             simulated drive) into fuzz/corpus/<target>/, and
+                                             the dictionaries into fuzz/dict/ (both in git)
+  python3 fuzz/make_seeds.py --shared DIR    seeds copied from ../shared/data into DIR/<target>/;
+                                             fuzz/run.sh makes them at each run, as shared/data's
+                                             README asks that its files stay out of the repository
+"""
 import os
 import struct
+import sys
 
 SHARED = "../shared/data"
+SHARED_OUT = sys.argv[2] if len(sys.argv) == 3 and sys.argv[1] == "--shared" else None
+if len(sys.argv) > 1 and SHARED_OUT is None:
+    sys.exit("usage: fuzz/make_seeds.py [--shared DIR]")
 
 
 def payloads(pcap):
@@ -29,34 +40,51 @@ def payloads(pcap):
     return out
 
 
-def put(target, name, data):
-    d = os.path.join("fuzz", "corpus", target)
+def write(root, target, name, data):
+    d = os.path.join(root, target)
     os.makedirs(d, exist_ok=True)
     with open(os.path.join(d, name), "wb") as f:
         f.write(data)
 
 
+def put(target, name, data):
+    """A seed made from the project's own files (fuzz/corpus/, in git)."""
+    if SHARED_OUT is None:
+        write(os.path.join("fuzz", "corpus"), target, name, data)
+
+
+def put_shared(target, name, data):
+    """A seed copied or cut from ../shared/data (made at each run, never in git)."""
+    if SHARED_OUT is not None:
+        write(SHARED_OUT, target, name, data)
+
+
+if SHARED_OUT is not None and not os.path.isdir(SHARED):
+    print(f"fuzz/make_seeds.py: {SHARED} is absent; no seeds from it", file=sys.stderr)
+    sys.exit(0)
+
+
 packet = open(f"{SHARED}/velodyne/hdl64e_s2_manual_sample_packet_1206B.bin", "rb").read()
 framed = struct.pack("<H", len(packet)) + packet
-put("velodyne_stream_fuzz", "one_packet", framed)
-put("velodyne_stream_fuzz", "three_packets", framed * 3)
+put_shared("velodyne_stream_fuzz", "one_packet", framed)
+put_shared("velodyne_stream_fuzz", "three_packets", framed * 3)
 
 grp = b"".join(payloads(f"{SHARED}/applanix/clearpath_basic_data_smoke.pcap"))
 for i in range(4):
-    put("applanix_stream_fuzz", f"capture_{i}", grp[i * 3000:(i + 1) * 3000])
+    put_shared("applanix_stream_fuzz", f"capture_{i}", grp[i * 3000:(i + 1) * 3000])
 
 # Capture files: the head of the real Applanix capture (TCP), and the sample Velodyne packet in
 # a one-record capture (Ethernet, IPv4, UDP to port 2368) that a truncation corrupts.
 capture = open(f"{SHARED}/applanix/clearpath_basic_data_smoke.pcap", "rb").read()
-put("pcap_file_fuzz", "applanix_head", capture[:6000])
+put_shared("pcap_file_fuzz", "applanix_head", capture[:6000])
 udp = struct.pack(">HHHH", 2368, 2368, 8 + len(packet), 0) + packet
 ip = struct.pack(">BBHHHBBH4s4s", 0x45, 0, 20 + len(udp), 0, 0, 64, 17, 0,
                  bytes([192, 168, 3, 43]), bytes([255, 255, 255, 255]))
 frame = b"\xff" * 6 + b"\x60\x76\x88\x00\x00\x00" + b"\x08\x00" + ip + udp
 velodyne_pcap = (struct.pack("<IHHiIII", 0xA1B2C3D4, 2, 4, 0, 0, 65535, 1) +
                  struct.pack("<IIII", 1700000000, 0, len(frame), len(frame)) + frame)
-put("pcap_file_fuzz", "velodyne_packet", velodyne_pcap)
-put("pcap_file_fuzz", "velodyne_packet_cut", velodyne_pcap[:-300])
+put_shared("pcap_file_fuzz", "velodyne_packet", velodyne_pcap)
+put_shared("pcap_file_fuzz", "velodyne_packet_cut", velodyne_pcap[:-300])
 
 put("can_text_fuzz", "vehicle.dbc", open("config/can/vehicle.dbc", "rb").read())
 put("can_text_fuzz", "candump.log",
@@ -128,14 +156,14 @@ for line in shipped.decode().splitlines():
     if code.strip():
         compact.append(code)
 put("config_files_fuzz", "stac_compact.yaml", ("\n".join(compact) + "\n").encode())
-put("config_files_fuzz", "calibration.yaml",
+put_shared("config_files_fuzz", "calibration.yaml",
     open(f"{SHARED}/velodyne/calib/rosdrivers_64e_s2.1-sztaki.yaml", "rb").read())
 for name in ("hdl32e.yaml", "vlp16.yaml"):
     put("config_files_fuzz", name, open(f"config/calib/{name}", "rb").read())
-put("calibration_xml_fuzz", "db.xml",
+put_shared("calibration_xml_fuzz", "db.xml",
     open(f"{SHARED}/velodyne/calib/rosdrivers_64e_s2.1-sztaki_db.xml", "rb").read())
 for name in ("veloview_HDL-64.xml", "veloview_HDL-32.xml", "veloview_VLP-16.xml"):
-    put("calibration_xml_fuzz", name, open(f"{SHARED}/velodyne/calib/{name}", "rb").read())
+    put_shared("calibration_xml_fuzz", name, open(f"{SHARED}/velodyne/calib/{name}", "rb").read())
 
 # gs_usb bulk-IN transfers: a received frame (20 bytes, no timestamp), a 24-byte one with a
 # timestamp, an echo, and a CAN FD one; each behind its 1-byte length. Then the candleLight's
@@ -157,7 +185,7 @@ put("candump_file_fuzz", "candump.log",
 # simulator sends the real S2.1 calibration); written
 # when a built stac is found (build/tools/stac), model byte 1 (S2.1) first.
 stac = "build/tools/stac"
-if os.path.exists(stac):
+if SHARED_OUT is None and os.path.exists(stac):
     import subprocess
     import tempfile
     with tempfile.TemporaryDirectory() as tmp:
@@ -171,6 +199,8 @@ if os.path.exists(stac):
 
 
 def put_dict(target, words):
+    if SHARED_OUT is not None:
+        return
     d = os.path.join("fuzz", "dict")
     os.makedirs(d, exist_ok=True)
     with open(os.path.join(d, f"{target}.dict"), "w") as f:

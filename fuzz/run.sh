@@ -54,7 +54,16 @@ add_options() {
   done < "fuzz/options/$1.options"
 }
 
-if [[ ! -d fuzz/corpus ]]; then python3 fuzz/make_seeds.py; fi
+# Seeds: fuzz/corpus/TARGET (in git: made from the project's files, and every crash input) and
+# $build/seeds/TARGET, cut from ../shared/data at each run (kept out of the repository).
+rm -rf "$build/seeds"
+python3 fuzz/make_seeds.py --shared "$build/seeds"
+seed_dirs() {  # the seed folders of harness $1 that exist, into the array named by $2
+  local -n into=$2
+  local d
+  for d in "$build/seeds/$1" "fuzz/corpus/$1"; do [[ -d $d ]] && into+=("$d"); done
+  return 0
+}
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DCMAKE_C_COMPILER=clang-14 -DCMAKE_CXX_COMPILER=clang++-14 \
   -DCMAKE_CXX_FLAGS=-fsanitize=fuzzer-no-link -DSTAC_SANITIZE=address -DSTAC_FUZZ=ON \
@@ -78,6 +87,8 @@ if [[ $mode == campaign ]]; then
     dict=()
     [[ -f fuzz/dict/$t.dict ]] && dict=(-dict="fuzz/dict/$t.dict")
     add_options "$t" dict
+    seeds=()
+    seed_dirs "$t" seeds
     mkdir -p "$build/corpus/$t"
     while :; do
       done_runs=$(awk -F'\t' '{s += $2} END {print s + 0}' "$ledger" 2>/dev/null || echo 0)
@@ -88,7 +99,7 @@ if [[ $mode == campaign ]]; then
       crashes=0
       ASAN_OPTIONS="$ASAN_OPTIONS:quarantine_size_mb=0:malloc_context_size=0:max_malloc_fill_size=0" \
         "$build/fuzz/$t" "${dict[@]}" -artifact_prefix="$build/crashes/$t-" -print_final_stats=1 \
-        -runs="$chunk" -timeout=120 -rss_limit_mb=4096 "$build/corpus/$t" "fuzz/corpus/$t" \
+        -runs="$chunk" -timeout=120 -rss_limit_mb=4096 "$build/corpus/$t" "${seeds[@]}" \
         >"$log" 2>&1 || crashes=1
       runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
       cov=$(grep -o 'cov: [0-9]*' "$log" | tail -1 | cut -d' ' -f2)
@@ -104,11 +115,13 @@ fi
 printf '%-22s %12s %10s %8s %s\n' target executions seconds cov crashes
 for t in "${targets[@]}"; do
   log="$build/$t.log"
+  seeds=()
+  seed_dirs "$t" seeds
   if [[ $mode == regress ]]; then
-    args=(-runs=0 "fuzz/corpus/$t")
+    args=(-runs=0 "${seeds[@]}")
   else
     mkdir -p "$build/corpus/$t"
-    args=(-max_total_time="$seconds" -timeout=10 -rss_limit_mb=4096 "$build/corpus/$t" "fuzz/corpus/$t")
+    args=(-max_total_time="$seconds" -timeout=10 -rss_limit_mb=4096 "$build/corpus/$t" "${seeds[@]}")
   fi
   dict=()
   [[ -f fuzz/dict/$t.dict ]] && dict=(-dict="fuzz/dict/$t.dict")
