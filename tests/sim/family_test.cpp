@@ -209,9 +209,12 @@ TEST_P(FamilyModel, DualReturnPairsLastThenStrongest) {
       for (int j = 0; j < 32; ++j) {
         // Where they differ the last return is the farther echo (the strongest block then holds
         // the stronger one, or the second strongest when the strongest is the last).
-        if (p->blocks[b].returns[j].distance != p->blocks[b + 1].returns[j].distance) {
+        // (Copies: gtest binds references, and the packet's fields are packed, unaligned.)
+        const unsigned last_raw = p->blocks[b].returns[j].distance;
+        const unsigned strongest_raw = p->blocks[b + 1].returns[j].distance;
+        if (last_raw != strongest_raw) {
           ++differ;
-          EXPECT_GT(p->blocks[b].returns[j].distance, p->blocks[b + 1].returns[j].distance);
+          EXPECT_GT(last_raw, strongest_raw);
         }
       }
     }
