@@ -52,7 +52,7 @@ struct InductOptions {
   std::vector<std::string> background, labels, unlabeled, eval;
   std::size_t labels_per_class = 0;          // 0: every track of the --labels datasets
   std::size_t rounds = 0;                    // extra rounds on the buffer after the chunks
-  std::size_t ask = 5;                       // questions per class and kind after a round
+  std::size_t ask = 5;                       // least-confident questions per class a round
   std::optional<std::size_t> ask_confident;  // confident-positive questions (default: ask)
   bool oracle = false;
   bool requery = false;  // after the rounds: new questions over every unlabeled dataset
