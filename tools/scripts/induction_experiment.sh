@@ -9,7 +9,8 @@
 #
 # Environment: STAC (default build/tools/stac), JOBS (drives made in parallel, default 1),
 # DURATION (s per drive, default 15), SEED_LABELS (per class, default 5), ASK (questions per
-# class about the least confident tracks after each chunk, default 3), ASK_CONFIDENT (per class
+# class about the least confident tracks after each chunk, default 5: about as many user labels
+# per class as the issue's target allows, 100), ASK_CONFIDENT (per class
 # about confident positives never shown, default 0: the thesis's user inspected only the
 # low-confidence tracks, 2.5.2), BUFFER (unlabeled groups kept, default 1200: the thesis sized
 # its 20,000 to B0's 150,000 frames, so that inducted positives and B0 are of one order of
@@ -23,7 +24,7 @@ WORK=${1:-build/induction-experiment}
 JOBS=${JOBS:-1}
 DURATION=${DURATION:-15}
 SEED_LABELS=${SEED_LABELS:-5}
-ASK=${ASK:-3}
+ASK=${ASK:-5}
 ASK_CONFIDENT=${ASK_CONFIDENT:-0}
 BUFFER=${BUFFER:-1200}
 ROUNDS=${ROUNDS:-1000}
