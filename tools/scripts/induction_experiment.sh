@@ -3,7 +3,8 @@
 # a few labelled tracks per class, an empty street as B0, a stream of unlabeled drives (one
 # chunk a round), the oracle answering the active-learning questions, accuracy on held-out drives
 # after every round; beside it (a) `stac train` on the same user labels + B0 without induction
-# and (b) `stac train` on every label of every drive. No test uses these seeds.
+# and (b) `stac train` on every label of every drive, and (b) again on the first 1, 2, 4 and 8
+# drives (supervised_curve.tsv: the thesis's Fig. 2.5). No test uses these seeds.
 #
 #   tools/scripts/induction_experiment.sh [WORK_DIR]     (default: build/induction-experiment)
 #
@@ -39,10 +40,28 @@ source tools/scripts/simulated_drives.sh
 induction_drives
 
 # (b) fully supervised: every label of the labels' and the stream's drives, and B0.
-"$STAC" train "${everything[@]}" --rounds "$ROUNDS" --out "$WORK/supervised_all.stacmodel"
+"$STAC" train "${everything[@]}" --rounds "$ROUNDS" --out "$WORK/supervised_all.stacmodel" 2>&1 |
+  tee "$WORK/supervised_all.log"
 "$STAC" eval --classes "${test_data[@]}" --model "$WORK/supervised_all.stacmodel" \
   --report "$WORK/supervised_all"
 all_acc=$(sed -n 's/.*"track_accuracy": *\([0-9.]*\).*/\1/p' "$WORK/supervised_all/metrics.json" | head -n 1)
+
+# Fully supervised with fewer labels (the thesis's Fig. 2.5): every label of the first N drives
+# of the labels' and the stream's, and B0; a line each in supervised_curve.tsv.
+printf 'drives\ttracks\ttrack_accuracy\n' > "$WORK/supervised_curve.tsv"
+drives=("${LABELS[@]}" "${STREAM[@]}")
+for n in 1 2 4 8; do
+  mapfile -t part < <(dataset_options --data "${BACKGROUND[@]}" "${drives[@]:0:n}")
+  "$STAC" train "${part[@]}" --rounds "$ROUNDS" --out "$WORK/supervised_$n.stacmodel" \
+    > "$WORK/supervised_$n.log" 2>&1
+  "$STAC" eval --classes "${test_data[@]}" --model "$WORK/supervised_$n.stacmodel" \
+    --report "$WORK/supervised_$n" > /dev/null
+  acc=$(sed -n 's/.*"track_accuracy": *\([0-9.]*\).*/\1/p' "$WORK/supervised_$n/metrics.json" | head -n 1)
+  tracks=$(sed -n 's/^stac train: \([0-9]* tracks ([^;]*\);.*/\1)/p' "$WORK/supervised_$n.log")
+  printf '%s\t%s\t%s\n' "$n" "$tracks" "$acc" >> "$WORK/supervised_curve.tsv"
+done
+tracks=$(sed -n 's/^stac train: \([0-9]* tracks ([^;]*\);.*/\1)/p' "$WORK/supervised_all.log")
+printf '%s\t%s\t%s\n' "${#drives[@]}" "$tracks" "$all_acc" >> "$WORK/supervised_curve.tsv"
 
 # Group induction, the oracle answering; after each round, the same labels without induction.
 rm -rf "$WORK/state"
