@@ -15,7 +15,10 @@
 #                              lost, the corpus it grew is kept); an input's time limit is 120 s,
 #                              not 10, as a niced process waits behind the rest of the machine;
 #                              campaign runs take ASAN_OPTIONS without quarantine and malloc
-#                              contexts (1.4x faster; rerun a crash input by hand for its stacks)
+#                              contexts (1.4x faster; rerun a crash input by hand for its stacks);
+#                              a second campaign on the same target may run beside it from
+#                              another build tree (BUILD=build-fuzz2), one core each: both add
+#                              to the one ledger, read again before every chunk
 # fuzz/dict/TARGET.dict is a harness's dictionary; fuzz/options/TARGET.options holds more libFuzzer
 # flags for it, one a line (e.g. -max_len=8448), used when fuzzing, not by --regress.
 # A crash, a leak-free sanitizer report or a timeout leaves its input in build-fuzz/crashes/ and
