@@ -39,29 +39,31 @@ TEST=(urban:317 urban:341 intersection:342 crowd:343 urban:344)
 source tools/scripts/simulated_drives.sh
 induction_drives
 
-# (b) fully supervised: every label of the labels' and the stream's drives, and B0.
-"$STAC" train "${everything[@]}" --rounds "$ROUNDS" --out "$WORK/supervised_all.stacmodel" 2>&1 |
-  tee "$WORK/supervised_all.log"
-"$STAC" eval --classes "${test_data[@]}" --model "$WORK/supervised_all.stacmodel" \
-  --report "$WORK/supervised_all"
-all_acc=$(sed -n 's/.*"track_accuracy": *\([0-9.]*\).*/\1/p' "$WORK/supervised_all/metrics.json" | head -n 1)
+# train_scored NAME DATA_OPTION...: `stac train` on the datasets into WORK/NAME.stacmodel (its
+# output also in WORK/NAME.log), scored on the held-out drives (report WORK/NAME/); sets acc
+# (track accuracy) and tracks (what it was trained on, from stac train's first line).
+train_scored() {
+  local name=$1
+  shift
+  "$STAC" train "$@" --rounds "$ROUNDS" --out "$WORK/$name.stacmodel" 2>&1 | tee "$WORK/$name.log"
+  "$STAC" eval --classes "${test_data[@]}" --model "$WORK/$name.stacmodel" --report "$WORK/$name"
+  acc=$(sed -n 's/.*"track_accuracy": *\([0-9.]*\).*/\1/p' "$WORK/$name/metrics.json" | head -n 1)
+  tracks=$(sed -n 's/^stac train: \([0-9]* tracks ([^;]*\);.*/\1)/p' "$WORK/$name.log")
+}
 
-# Fully supervised with fewer labels (the thesis's Fig. 2.5): every label of the first N drives
-# of the labels' and the stream's, and B0; a line each in supervised_curve.tsv.
-printf 'drives\ttracks\ttrack_accuracy\n' > "$WORK/supervised_curve.tsv"
+# Fully supervised with fewer labels (the thesis's Fig. 2.5): every label of the first N of the
+# labels' and the stream's drives, and B0; then (b), every label of all of them, and B0. A line
+# each in supervised_curve.tsv.
 drives=("${LABELS[@]}" "${STREAM[@]}")
+printf 'drives\ttracks\ttrack_accuracy\n' > "$WORK/supervised_curve.tsv"
 for n in 1 2 4 8; do
   mapfile -t part < <(dataset_options --data "${BACKGROUND[@]}" "${drives[@]:0:n}")
-  "$STAC" train "${part[@]}" --rounds "$ROUNDS" --out "$WORK/supervised_$n.stacmodel" \
-    > "$WORK/supervised_$n.log" 2>&1
-  "$STAC" eval --classes "${test_data[@]}" --model "$WORK/supervised_$n.stacmodel" \
-    --report "$WORK/supervised_$n" > /dev/null
-  acc=$(sed -n 's/.*"track_accuracy": *\([0-9.]*\).*/\1/p' "$WORK/supervised_$n/metrics.json" | head -n 1)
-  tracks=$(sed -n 's/^stac train: \([0-9]* tracks ([^;]*\);.*/\1)/p' "$WORK/supervised_$n.log")
+  train_scored "supervised_$n" "${part[@]}" > /dev/null
   printf '%s\t%s\t%s\n' "$n" "$tracks" "$acc" >> "$WORK/supervised_curve.tsv"
 done
-tracks=$(sed -n 's/^stac train: \([0-9]* tracks ([^;]*\);.*/\1)/p' "$WORK/supervised_all.log")
-printf '%s\t%s\t%s\n' "${#drives[@]}" "$tracks" "$all_acc" >> "$WORK/supervised_curve.tsv"
+train_scored supervised_all "${everything[@]}"
+printf '%s\t%s\t%s\n' "${#drives[@]}" "$tracks" "$acc" >> "$WORK/supervised_curve.tsv"
+all_acc=$acc
 
 # Group induction, the oracle answering; after each round, the same labels without induction.
 rm -rf "$WORK/state"
@@ -75,10 +77,8 @@ rm -rf "$WORK/state"
   --report "$WORK/group_induction"
 
 # (a) the same user labels and B0, no induction.
-"$STAC" train --data "$WORK/user_labels" --rounds "$ROUNDS" --out "$WORK/supervised_labels.stacmodel"
-"$STAC" eval --classes "${test_data[@]}" --model "$WORK/supervised_labels.stacmodel" \
-  --report "$WORK/supervised_labels"
-labels_acc=$(sed -n 's/.*"track_accuracy": *\([0-9.]*\).*/\1/p' "$WORK/supervised_labels/metrics.json" | head -n 1)
+train_scored supervised_labels --data "$WORK/user_labels"
+labels_acc=$acc
 
 # The chart again, with the baselines as lines.
 "$STAC" induct --state "$WORK/state" --reference "stac train, every label (b)=$all_acc" \
