@@ -12,6 +12,7 @@
 
 #include "dds/idl_types.hpp"
 #include "dds/publisher.hpp"
+#include "settings/build_tree.hpp"
 
 namespace {
 
@@ -34,7 +35,7 @@ std::unique_ptr<Publisher> publisher(std::uint32_t domain) {
   setenv("DDS_TEST_TAG", ("stac-bench-" + std::to_string(getpid())).c_str(), 1);
   stac::dds::PublisherConfig c;
   c.domain_id = domain;
-  c.config_uri = std::string("file://") + STAC_SOURCE_DIR + "/config/dds/loopback.xml";
+  c.config_uri = std::string("file://") + stac::settings::kSourceDir + "/config/dds/loopback.xml";
   auto p = Publisher::create(c);
   if (!p) std::abort();
   return std::move(*p);

@@ -8,6 +8,7 @@
 #include <random>
 
 #include "drivers/velodyne/scan_assembler.hpp"
+#include "settings/build_tree.hpp"
 #include "velodyne/synthetic_stream.hpp"
 
 namespace {
@@ -17,7 +18,7 @@ using namespace stac::velodyne;
 constexpr double kSensorPointsPerSecond = 1'333'312.0;
 
 Calibration benchmark_calibration() {
-  const std::filesystem::path path = std::filesystem::path(STAC_SHARED_DATA_DIR) /
+  const std::filesystem::path path = std::filesystem::path(stac::settings::kSharedDataDir) /
                                      "velodyne/calib/rosdrivers_64e_s2.1-sztaki.yaml";
   auto c = load_calibration(path);
   if (!c) {
@@ -114,7 +115,8 @@ Model family_model(std::int64_t arg) {
 void BM_DecodeFamily(benchmark::State& state) {
   const Model model = family_model(state.range(0));
   const ModelTraits& t = traits(model);
-  const std::filesystem::path shared(STAC_SHARED_DATA_DIR), source(STAC_SOURCE_DIR);
+  const std::filesystem::path shared(stac::settings::kSharedDataDir),
+      source(stac::settings::kSourceDir);
   const std::filesystem::path file =
       model == Model::kHdl32e  ? shared / "velodyne/calib/veloview_HDL-32.xml"
       : model == Model::kVlp16 ? shared / "velodyne/calib/veloview_VLP-16.xml"

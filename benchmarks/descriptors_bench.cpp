@@ -21,6 +21,7 @@
 #include "perception/classification/track_classifier.hpp"
 #include "perception/descriptors/descriptors.hpp"
 #include "perception/segmentation/segmenter.hpp"
+#include "settings/build_tree.hpp"
 #include "tests/classification/made_up_model.hpp"
 
 namespace {
@@ -93,7 +94,7 @@ BENCHMARK(BM_SegmentDescriptors)->Iterations(20000)->Unit(benchmark::kMicrosecon
 // real model's bins are spread over its tables, so it costs more cache misses.
 std::shared_ptr<const classification::TrackClassifierModel> bench_model(bool& shipped) {
   const std::filesystem::path file =
-      std::filesystem::path(STAC_SOURCE_DIR) / "config/models/stac_default.stacmodel";
+      std::filesystem::path(stac::settings::kSourceDir) / "config/models/stac_default.stacmodel";
   std::ifstream in(file, std::ios::binary);
   const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)),
                                         std::istreambuf_iterator<char>());

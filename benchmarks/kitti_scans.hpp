@@ -9,13 +9,15 @@
 #include <string>
 #include <vector>
 
+#include "settings/build_tree.hpp"
+
 namespace stac::benchmarks {
 
 inline const std::vector<std::vector<float>>& kitti_scans() {
   static const std::vector<std::vector<float>> all = [] {
     std::vector<std::vector<float>> out;
     for (int i = 0; i < 6; ++i) {
-      const auto path = std::filesystem::path(STAC_SHARED_DATA_DIR) /
+      const auto path = std::filesystem::path(stac::settings::kSharedDataDir) /
                         ("kitti/00000" + std::to_string(i) + ".bin");
       std::ifstream f(path, std::ios::binary | std::ios::ate);
       if (!f) {

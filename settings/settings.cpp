@@ -5,6 +5,7 @@
 #include <system_error>
 
 #include "drivers/velodyne/calibration.hpp"
+#include "settings/build_tree.hpp"
 #include "settings/config_section.hpp"
 
 namespace stac::settings {
@@ -16,7 +17,7 @@ bool running_from_build_tree() {
   std::error_code error;
   const auto exe = std::filesystem::read_symlink("/proc/self/exe", error);
   if (error) return true;  // unknown: keep the developer's default
-  const std::string build = STAC_BINARY_DIR;
+  const std::string build = kBinaryDir;
   const std::string path = exe.string();
   return path.size() > build.size() && path.compare(0, build.size(), build) == 0 &&
          path[build.size()] == '/';
@@ -27,7 +28,7 @@ bool running_from_build_tree() {
 std::filesystem::path default_config_path() {
   if (const char* env = std::getenv("STAC_CONFIG"); env != nullptr && *env != '\0') return env;
   if (!running_from_build_tree()) return kInstalledConfigPath;
-  return std::filesystem::path(STAC_SOURCE_DIR) / "config" / "stac.yaml";
+  return std::filesystem::path(kSourceDir) / "config" / "stac.yaml";
 }
 
 std::filesystem::path config_path(const std::string& option) {

@@ -8,10 +8,12 @@
 #include <string>
 #include <vector>
 
+#include "test_paths.hpp"
+
 namespace stac::testing {
 
 inline std::filesystem::path shared_data(const std::string& relative) {
-  return std::filesystem::path(STAC_SHARED_DATA_DIR) / relative;
+  return std::filesystem::path(::stac::testing::shared_data_dir()) / relative;
 }
 
 // A KITTI velodyne .bin of shared/data (float32 x, y, z, reflectance per point); empty when absent.

@@ -1,4 +1,4 @@
-// Runs the real `stac` binary as a user would (tests that define STAC_CLI, its path).
+// Runs the real `stac` binary as a user would (its path: stac::testing::stac_cli()).
 #pragma once
 
 #include <sys/wait.h>
@@ -12,6 +12,8 @@
 #include <string>
 #include <utility>
 #include <vector>
+
+#include "test_paths.hpp"
 
 namespace stac::testing {
 
@@ -33,13 +35,13 @@ inline CliResult run_shell(const std::string& command) {
 }
 
 inline CliResult stac(const std::string& args) {
-  return run_shell(std::string(STAC_CLI) + " " + args);
+  return run_shell(std::string(::stac::testing::stac_cli()) + " " + args);
 }
 
 // `stac ARGS`, killed after `seconds` (exit code 137) if it has not ended by then.
 inline CliResult stac_within(int seconds, const std::string& args) {
-  return run_shell("timeout -s KILL " + std::to_string(seconds) + " " + std::string(STAC_CLI) +
-                   " " + args);
+  return run_shell("timeout -s KILL " + std::to_string(seconds) + " " +
+                   std::string(::stac::testing::stac_cli()) + " " + args);
 }
 
 // An empty folder of this name under the system's temp folder (emptied first).
@@ -71,7 +73,8 @@ inline constexpr double kSanitizerLagS = kSanitizerBuild ? 0.8 : 0.0;
 inline std::filesystem::path shipped_config_with(
     const std::filesystem::path& dir, const std::vector<std::pair<std::string, std::string>>& edits,
     std::string* error = nullptr) {
-  const std::filesystem::path config_dir = std::filesystem::path(STAC_SOURCE_DIR) / "config";
+  const std::filesystem::path config_dir =
+      std::filesystem::path(::stac::testing::source_dir()) / "config";
   std::ifstream in(config_dir / "stac.yaml");
   std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
   for (const auto& [key, value] : edits) {

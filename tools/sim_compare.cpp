@@ -14,6 +14,7 @@
 #include "formats/capture_input.hpp"
 #include "formats/kitti_files.hpp"
 #include "formats/kitti_raw.hpp"
+#include "settings/build_tree.hpp"
 #include "settings/settings.hpp"
 #include "tools/commands.hpp"
 #include "tools/pictures/birds_eye.hpp"
@@ -486,8 +487,8 @@ void add_sim_compare_command(CLI::App& app) {
       ->check(CLI::ExistingFile);
   cmd->add_option("--kitti", o->kitti,
                   "a KITTI .bin scan, a folder of them, or a KITTI raw drive folder")
-      ->default_str(std::string(STAC_SOURCE_DIR) + "/../shared/data/kitti");
-  o->kitti = std::string(STAC_SOURCE_DIR) + "/../shared/data/kitti";
+      ->default_str(std::string(stac::settings::kSourceDir) + "/../shared/data/kitti");
+  o->kitti = std::string(stac::settings::kSourceDir) + "/../shared/data/kitti";
   cmd->add_option("--report", o->report, "folder to write the report into")->required();
   cmd->add_option("--calib", o->calib, "calibration of the simulated unit (default: the config's)");
   cmd->add_option("--config", o->config, stac::settings::kConfigOptionHelp);

@@ -13,6 +13,7 @@
 #include "drivers/io/pcap_reader.hpp"
 #include "rt/testing/alloc_counter.hpp"
 #include "shared_data.hpp"
+#include "test_paths.hpp"
 
 namespace stac::applanix {
 namespace {
@@ -429,9 +430,9 @@ TEST(ApplanixGroups, GpsTimeOfAWeekOrSecondsNoReceiverSendsIsNoTime) {
 
 // The fuzzer's input itself, through the stream parser, chunk by chunk.
 TEST(ApplanixStreamParser, TheFuzzersWeekOverflowInputIsParsedWithoutATime) {
-  std::ifstream f(
-      std::string(STAC_SOURCE_DIR) + "/fuzz/corpus/applanix_stream_fuzz/crash_gps_week_overflow",
-      std::ios::binary);
+  std::ifstream f(std::string(::stac::testing::source_dir()) +
+                      "/fuzz/corpus/applanix_stream_fuzz/crash_gps_week_overflow",
+                  std::ios::binary);
   const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(f)),
                                         std::istreambuf_iterator<char>());
   ASSERT_FALSE(bytes.empty());

@@ -11,6 +11,7 @@
 #include "drivers/can/candump.hpp"
 #include "drivers/can/dbc.hpp"
 #include "stac_cli.hpp"
+#include "test_paths.hpp"
 
 namespace stac::can {
 namespace {
@@ -28,7 +29,8 @@ std::vector<std::string> lines_of(const std::filesystem::path& file) {
 // Ten seconds of a 10 m/s, 36 deg/s left turn at 100 Hz, encoded with the shipped DBC, plus
 // unrelated traffic and one CAN FD line.
 std::filesystem::path write_circle_log(const std::filesystem::path& dir) {
-  const auto db = load_dbc(std::filesystem::path(STAC_SOURCE_DIR) / "config/can/vehicle.dbc");
+  const auto db =
+      load_dbc(std::filesystem::path(::stac::testing::source_dir()) / "config/can/vehicle.dbc");
   EXPECT_TRUE(db);
   const Message* wheel = db->find("WheelSpeeds");
   const Message* yaw = db->find("YawRate");

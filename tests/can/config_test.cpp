@@ -5,11 +5,13 @@
 #include <sstream>
 
 #include "settings/settings.hpp"
+#include "test_paths.hpp"
 
 namespace stac::can {
 namespace {
 
-const std::filesystem::path kShipped = std::filesystem::path(STAC_SOURCE_DIR) / "config/stac.yaml";
+const std::filesystem::path kShipped =
+    std::filesystem::path(::stac::testing::source_dir()) / "config/stac.yaml";
 
 TEST(CanConfig, TheShippedConfigLoadsAndMapsTheShippedDbc) {
   const auto c = settings::load_can_settings(kShipped);

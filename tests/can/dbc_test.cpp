@@ -5,6 +5,8 @@
 #include <array>
 #include <random>
 
+#include "test_paths.hpp"
+
 namespace stac::can {
 namespace {
 
@@ -222,7 +224,8 @@ TEST(DbcParse, ErrorsNameTheFileTheLineAndTheProblem) {
 }
 
 TEST(DbcParse, TheShippedVehicleDbcLoads) {
-  const auto db = load_dbc(std::filesystem::path(STAC_SOURCE_DIR) / "config/can/vehicle.dbc");
+  const auto db =
+      load_dbc(std::filesystem::path(::stac::testing::source_dir()) / "config/can/vehicle.dbc");
   ASSERT_TRUE(db) << db.error().message;
   EXPECT_NE(db->find("WheelSpeeds"), nullptr);
   EXPECT_NE(db->find("YawRate"), nullptr);

@@ -6,12 +6,14 @@
 #include <numbers>
 
 #include "rt/testing/alloc_counter.hpp"
+#include "test_paths.hpp"
 
 namespace stac::can {
 namespace {
 
 Database shipped_dbc() {
-  auto db = load_dbc(std::filesystem::path(STAC_SOURCE_DIR) / "config/can/vehicle.dbc");
+  auto db =
+      load_dbc(std::filesystem::path(::stac::testing::source_dir()) / "config/can/vehicle.dbc");
   EXPECT_TRUE(db) << db.error().message;
   return std::move(db).value();
 }

@@ -9,6 +9,7 @@
 #include <initializer_list>
 
 #include "drivers/can/odometry.hpp"
+#include "test_paths.hpp"
 
 namespace stac::testing {
 
@@ -18,7 +19,8 @@ inline constexpr std::uint32_t kYawRateId = 0x1B0;
 inline constexpr std::initializer_list<std::uint8_t> kTenMetresPerSecond = {0x0E, 0x10};
 
 inline can::OdometryDecoder shipped_decoder() {
-  auto db = can::load_dbc(std::filesystem::path(STAC_SOURCE_DIR) / "config/can/vehicle.dbc");
+  auto db = can::load_dbc(std::filesystem::path(::stac::testing::source_dir()) /
+                          "config/can/vehicle.dbc");
   EXPECT_TRUE(db) << db.error().message;
   auto d =
       can::OdometryDecoder::create(*db, {"WheelSpeeds", "VehicleSpeed", "YawRate", "YawRate", 1.0});

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "dds/topics.hpp"
+#include "test_paths.hpp"
 
 namespace stac::testing {
 
@@ -30,7 +31,7 @@ inline std::string loopback_uri() {
     return setenv("DDS_TEST_TAG", tag.c_str(), 1) == 0;
   }();
   (void)tagged;
-  return std::string("file://") + STAC_SOURCE_DIR + "/config/dds/loopback.xml";
+  return std::string("file://") + ::stac::testing::source_dir() + "/config/dds/loopback.xml";
 }
 
 // A reader on the publisher's domain (same process: the domain already has the loopback config).

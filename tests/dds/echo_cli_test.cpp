@@ -16,6 +16,7 @@
 
 #include "dds/publisher.hpp"
 #include "dds_test_support.hpp"
+#include "test_paths.hpp"
 
 namespace stac::dds {
 namespace {
@@ -24,8 +25,8 @@ using testing::run_to_end;
 
 TEST(StacEcho, ReceivesTrackedObjectsFromAnotherProcess) {
   const std::string uri = testing::loopback_uri();  // sets DDS_TEST_TAG, inherited by the child
-  const std::string cmd =
-      std::string(STAC_CLI) + " echo tracked_objects --count 5 --timeout 20 --domain 121 2>&1";
+  const std::string cmd = std::string(::stac::testing::stac_cli()) +
+                          " echo tracked_objects --count 5 --timeout 20 --domain 121 2>&1";
   FILE* child = popen(cmd.c_str(), "r");
   ASSERT_NE(child, nullptr);
 
@@ -73,9 +74,10 @@ bool may_run_fifo_50() {
 TEST(StacEcho, RealTimeLoopbackConfigReceivesOnASchedFifoReceiveThread) {
   if (!may_run_fifo_50()) GTEST_SKIP() << "SCHED_FIFO not permitted here (Cyclone would abort)";
   (void)testing::loopback_uri();  // the tag
-  const std::string xml = std::string(STAC_SOURCE_DIR) + "/config/dds/loopback-rt.xml";
+  const std::string xml =
+      std::string(::stac::testing::source_dir()) + "/config/dds/loopback-rt.xml";
   const std::string cmd =
-      std::string(STAC_CLI) +
+      std::string(::stac::testing::stac_cli()) +
       " echo tracked_objects --count 3 --timeout 20 --domain 124 --dds-config " + xml + " 2>&1";
   FILE* child = popen(cmd.c_str(), "r");
   ASSERT_NE(child, nullptr);
@@ -114,7 +116,8 @@ TEST(StacEcho, RealTimeLoopbackConfigReceivesOnASchedFifoReceiveThread) {
 // examples/c_subscriber, built from idl/stac.idl alone, reads what the publisher writes.
 TEST(CSubscriberExample, PrintsIdsPositionsAndClassNamesFromAnotherProcess) {
   const std::string uri = testing::loopback_uri();
-  const std::string cmd = "CYCLONEDDS_URI=" + uri + " " + STAC_C_SUBSCRIBER + " 3 123 2>&1";
+  const std::string cmd =
+      "CYCLONEDDS_URI=" + uri + " " + ::stac::testing::c_subscriber() + " 3 123 2>&1";
   FILE* child = popen(cmd.c_str(), "r");
   ASSERT_NE(child, nullptr);
   PublisherConfig c;
@@ -148,9 +151,10 @@ TEST(CSubscriberExample, PrintsIdsPositionsAndClassNamesFromAnotherProcess) {
 
 TEST(StacEcho, TimesOutWithAClearMessageWithoutAPublisher) {
   testing::loopback_uri();
-  FILE* child = popen(
-      (std::string(STAC_CLI) + " echo health --count 3 --timeout 0.5 --domain 122 2>&1").c_str(),
-      "r");
+  FILE* child = popen((std::string(::stac::testing::stac_cli()) +
+                       " echo health --count 3 --timeout 0.5 --domain 122 2>&1")
+                          .c_str(),
+                      "r");
   ASSERT_NE(child, nullptr);
   int code = -1;
   const std::string out = run_to_end(child, &code);
@@ -163,10 +167,10 @@ TEST(StacEcho, TimesOutWithAClearMessageWithoutAPublisher) {
 // (a 5-class model's background is 6, unclassified 7).
 TEST(StacEcho, PointCloudCountsThePointsOfEveryLabel) {
   const std::string uri = testing::loopback_uri();
-  FILE* child =
-      popen((std::string(STAC_CLI) + " echo point_cloud --count 1 --timeout 20 --domain 124 2>&1")
-                .c_str(),
-            "r");
+  FILE* child = popen((std::string(::stac::testing::stac_cli()) +
+                       " echo point_cloud --count 1 --timeout 20 --domain 124 2>&1")
+                          .c_str(),
+                      "r");
   ASSERT_NE(child, nullptr);
   PublisherConfig c;
   c.domain_id = 124;
@@ -197,10 +201,10 @@ TEST(StacEcho, PointCloudCountsThePointsOfEveryLabel) {
 TEST(StacEcho, ADdsConfigThatIsNotCycloneXmlIsNamed) {
   const auto file = std::filesystem::temp_directory_path() / "stac_echo_not_xml.xml";
   std::ofstream(file) << "this is not xml\n";
-  FILE* child = popen(
-      (std::string(STAC_CLI) + " echo health --timeout 0.5 --dds-config " + file.string() + " 2>&1")
-          .c_str(),
-      "r");
+  FILE* child = popen((std::string(::stac::testing::stac_cli()) +
+                       " echo health --timeout 0.5 --dds-config " + file.string() + " 2>&1")
+                          .c_str(),
+                      "r");
   ASSERT_NE(child, nullptr);
   int code = -1;
   const std::string out = run_to_end(child, &code);
@@ -209,7 +213,8 @@ TEST(StacEcho, ADdsConfigThatIsNotCycloneXmlIsNamed) {
 }
 
 TEST(StacEcho, UnknownTopicListsTheTopics) {
-  FILE* child = popen((std::string(STAC_CLI) + " echo tracks --timeout 0.1 2>&1").c_str(), "r");
+  FILE* child = popen(
+      (std::string(::stac::testing::stac_cli()) + " echo tracks --timeout 0.1 2>&1").c_str(), "r");
   ASSERT_NE(child, nullptr);
   int code = -1;
   const std::string out = run_to_end(child, &code);

@@ -13,9 +13,11 @@
 #include <string>
 #include <vector>
 
+#include "test_paths.hpp"
+
 namespace {
 
-const std::filesystem::path kSource = STAC_SOURCE_DIR;
+const std::filesystem::path kSource = ::stac::testing::source_dir();
 const std::filesystem::path kPackage = kSource / "idl" / "ros2" / "stac_msgs";
 
 std::string read(const std::filesystem::path& p) {

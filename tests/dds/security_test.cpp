@@ -16,6 +16,7 @@
 
 #include "dds/publisher.hpp"
 #include "dds_test_support.hpp"
+#include "test_paths.hpp"
 
 namespace stac::dds {
 namespace {
@@ -48,7 +49,8 @@ class DdsSecurity : public ::testing::Test {
   static void SetUpTestSuite() {
     dir_ = fs::temp_directory_path() / ("stac-dds-security-" + std::to_string(getpid()));
     fs::remove_all(dir_);
-    const std::string script = std::string(STAC_SOURCE_DIR) + "/deploy/dds-security.sh";
+    const std::string script =
+        std::string(::stac::testing::source_dir()) + "/deploy/dds-security.sh";
     const std::string quiet = " >" + (dir_.string() + ".log") + " 2>&1";
     ASSERT_EQ(std::system((script + " " + dir_.string() + " --subscriber viewer" + quiet).c_str()),
               0)
@@ -91,10 +93,10 @@ class DdsSecurity : public ::testing::Test {
   // `stac echo tracked_objects` as another process, started now (popen).
   static FILE* echo(const std::string& xml_file, std::uint32_t domain, int count, double timeout) {
     testing::loopback_uri();
-    const std::string cmd = std::string(STAC_CLI) + " echo tracked_objects --count " +
-                            std::to_string(count) + " --timeout " + std::to_string(timeout) +
-                            " --domain " + std::to_string(domain) + " --dds-config " + xml_file +
-                            " 2>&1";
+    const std::string cmd = std::string(::stac::testing::stac_cli()) +
+                            " echo tracked_objects --count " + std::to_string(count) +
+                            " --timeout " + std::to_string(timeout) + " --domain " +
+                            std::to_string(domain) + " --dds-config " + xml_file + " 2>&1";
     return popen(cmd.c_str(), "r");
   }
   // Publishes one object per scan every 100 ms for `seconds`; returns the most readers the
@@ -163,8 +165,8 @@ TEST_F(DdsSecurity, AnAuthenticatedSubscriberReceivesEveryScan) {
 
 TEST_F(DdsSecurity, TheCSubscriberReadsWithItsIdentity) {
   testing::loopback_uri();
-  const std::string cmd =
-      "CYCLONEDDS_URI=file://" + xml("viewer") + " " + STAC_C_SUBSCRIBER + " 3 142 2>&1";
+  const std::string cmd = "CYCLONEDDS_URI=file://" + xml("viewer") + " " +
+                          ::stac::testing::c_subscriber() + " 3 142 2>&1";
   int code = -1;
   const std::string out = serve_three_scans(popen(cmd.c_str(), "r"), 142, &code);
   EXPECT_EQ(code, 0) << out;
@@ -173,7 +175,7 @@ TEST_F(DdsSecurity, TheCSubscriberReadsWithItsIdentity) {
 
 TEST_F(DdsSecurity, AnUnauthenticatedParticipantDiscoversNothingAndReadsNothing) {
   // A plain participant (no security) on the same domain, tag and loopback.
-  const std::string plain = std::string(STAC_SOURCE_DIR) + "/config/dds/loopback.xml";
+  const std::string plain = std::string(::stac::testing::source_dir()) + "/config/dds/loopback.xml";
   FILE* child = echo(plain, 143, 1, 6);
   ASSERT_NE(child, nullptr);
   auto pub = publisher(xml("stac"), 143);

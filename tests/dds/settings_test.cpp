@@ -6,11 +6,13 @@
 #include <fstream>
 
 #include "settings/dds_settings.hpp"
+#include "test_paths.hpp"
 
 namespace stac::settings {
 namespace {
 
-const std::filesystem::path kConfig = std::filesystem::path(STAC_SOURCE_DIR) / "config/stac.yaml";
+const std::filesystem::path kConfig =
+    std::filesystem::path(::stac::testing::source_dir()) / "config/stac.yaml";
 
 std::filesystem::path write_yaml(const std::string& name, const std::string& text) {
   const auto p =

@@ -19,12 +19,15 @@
 #include "drivers/can/gs_usb.hpp"
 #include "rt/scheduling.hpp"
 #include "stac_cli.hpp"
+#include "test_paths.hpp"
 
 namespace {
 
-const std::string kUnit = std::string(STAC_SOURCE_DIR) + "/deploy/stac.service";
-const std::string kUdevRule = std::string(STAC_SOURCE_DIR) + "/deploy/60-stac-gs-usb.rules";
-const std::string kLatencyRule = std::string(STAC_SOURCE_DIR) + "/deploy/60-stac-cpu-latency.rules";
+const std::string kUnit = std::string(::stac::testing::source_dir()) + "/deploy/stac.service";
+const std::string kUdevRule =
+    std::string(::stac::testing::source_dir()) + "/deploy/60-stac-gs-usb.rules";
+const std::string kLatencyRule =
+    std::string(::stac::testing::source_dir()) + "/deploy/60-stac-cpu-latency.rules";
 
 std::string read(const std::string& path) {
   std::ifstream f(path);
@@ -83,10 +86,11 @@ TEST(SystemdUnit, RunsStacNodeWithTheVehicleConfigRestartsOnFailureAndAllowsReal
   EXPECT_EQ(keys.at("Install.WantedBy"), "multi-user.target");
   EXPECT_TRUE(keys.count("Unit.Description"));
   // The command line is one stac-node accepts.
-  const auto help = stac::testing::run_shell(std::string(STAC_NODE) + " --help");
+  const auto help = stac::testing::run_shell(std::string(::stac::testing::stac_node()) + " --help");
   EXPECT_EQ(help.code, 0);
   EXPECT_NE(help.output.find("--config"), std::string::npos);
-  const auto version = stac::testing::run_shell(std::string(STAC_NODE) + " --version");
+  const auto version =
+      stac::testing::run_shell(std::string(::stac::testing::stac_node()) + " --version");
   EXPECT_EQ(version.code, 0);
   EXPECT_NE(version.output.find("stac-node "), std::string::npos) << version.output;
 }
@@ -94,7 +98,8 @@ TEST(SystemdUnit, RunsStacNodeWithTheVehicleConfigRestartsOnFailureAndAllowsReal
 TEST(SystemdUnit, SystemdAnalyzeVerifiesItAndWouldNameAnError) {
   if (!have_systemd_analyze()) GTEST_SKIP() << "systemd-analyze not installed (the parse test ran)";
   std::string text = read(kUnit);
-  text = std::regex_replace(text, std::regex("/usr/bin/stac-node"), std::string(STAC_NODE));
+  text = std::regex_replace(text, std::regex("/usr/bin/stac-node"),
+                            std::string(::stac::testing::stac_node()));
   EXPECT_EQ(verify(text), "");
   // The check can fail: a restart policy systemd does not know is named.
   const std::string broken =
@@ -173,10 +178,10 @@ std::string commit_of(const std::string& exe, const std::string& name) {
 }  // namespace
 
 TEST(Version, StacAndStacNodeNameTheVersionAndTheCommitTheyWereBuiltFrom) {
-  const std::string of_stac = commit_of(STAC_CLI, "stac");
-  const std::string of_node = commit_of(STAC_NODE, "stac-node");
+  const std::string of_stac = commit_of(::stac::testing::stac_cli(), "stac");
+  const std::string of_node = commit_of(::stac::testing::stac_node(), "stac-node");
   EXPECT_EQ(of_stac, of_node);
-  const std::string git = "git -C " + std::string(STAC_SOURCE_DIR);
+  const std::string git = "git -C " + std::string(::stac::testing::source_dir());
   if (stac::testing::run_shell(git + " rev-parse --git-dir").code != 0) {
     EXPECT_EQ(of_stac.rfind("unknown", 0), 0u) << of_stac;
     GTEST_SKIP() << "not a git checkout: the commit is unknown, as printed";
@@ -185,5 +190,5 @@ TEST(Version, StacAndStacNodeNameTheVersionAndTheCommitTheyWereBuiltFrom) {
   std::smatch m;
   ASSERT_TRUE(std::regex_match(of_stac, m, std::regex("([0-9a-f]{12})(\\+changes)?"))) << of_stac;
   EXPECT_EQ(stac::testing::run_shell(git + " cat-file -e " + m[1].str() + "^{commit}").code, 0)
-      << m[1] << " is not a commit of " << STAC_SOURCE_DIR;
+      << m[1] << " is not a commit of " << ::stac::testing::source_dir();
 }

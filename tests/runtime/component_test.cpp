@@ -13,6 +13,7 @@
 #include "dds/idl_types.hpp"
 #include "shared_data.hpp"
 #include "stac_cli.hpp"
+#include "test_paths.hpp"
 #include "tools/replay/udp_replay.hpp"
 
 namespace stac::runtime {
@@ -23,7 +24,8 @@ constexpr const char* kYaml = "velodyne/calib/rosdrivers_64e_s2.1-sztaki.yaml";
 
 // The shipped configuration, on loopback: any free port, no INS (a parked sensor), its own domain.
 ComponentSettings loopback_settings(std::uint32_t domain, const std::string& model) {
-  auto s = load_component_settings(std::filesystem::path(STAC_SOURCE_DIR) / "config/stac.yaml");
+  auto s = load_component_settings(std::filesystem::path(::stac::testing::source_dir()) /
+                                   "config/stac.yaml");
   EXPECT_TRUE(s.has_value()) << s.error().message;
   s->pipeline.velodyne.calibration = stac::testing::shared_data(kYaml);
   s->pipeline.velodyne.bind_address = "127.0.0.1";

@@ -9,6 +9,7 @@
 
 #include "shared_data.hpp"
 #include "stac_cli.hpp"
+#include "test_paths.hpp"
 
 namespace stac::segmentation {
 namespace {
@@ -22,7 +23,7 @@ std::filesystem::path fresh_dir(const std::string& name) {
 
 // The text of the shipped config/stac.yaml.
 std::string shipped_config() {
-  std::ifstream in(std::string(STAC_SOURCE_DIR) + "/config/stac.yaml");
+  std::ifstream in(std::string(::stac::testing::source_dir()) + "/config/stac.yaml");
   std::stringstream text;
   text << in.rdbuf();
   return text.str();
@@ -169,7 +170,7 @@ TEST(SegmentCli, CapacitiesAreBoundedAndMemoryLeftShortIsAnError) {
   GTEST_SKIP() << "the memory limit part: AddressSanitizer reserves terabytes of address space for "
                   "its shadow memory, which a 400 MB `ulimit -v` refuses at start-up";
 #endif
-  const std::string cmd = "bash -c 'ulimit -v 400000; " + std::string(STAC_CLI) +
+  const std::string cmd = "bash -c 'ulimit -v 400000; " + std::string(::stac::testing::stac_cli()) +
                           " segment --config " + most + " --in " + scan + " --out " +
                           (dir / "x.csv").string() + "' 2>&1";
   FILE* p = popen(cmd.c_str(), "r");

@@ -6,11 +6,13 @@
 #include <fstream>
 #include <string>
 
+#include "test_paths.hpp"
+
 namespace stac::settings {
 namespace {
 
 const std::filesystem::path kShipped =
-    std::filesystem::path(STAC_SOURCE_DIR) / "config" / "stac.yaml";
+    std::filesystem::path(::stac::testing::source_dir()) / "config" / "stac.yaml";
 
 constexpr const char* kRunKeys[] = {"deadline_ms: 100",
                                     "latency_histogram_max_ms: 1000",

@@ -14,11 +14,13 @@
 #include "settings/config_section.hpp"
 #include "settings/dds_settings.hpp"
 #include "settings/run_settings.hpp"
+#include "test_paths.hpp"
 
 namespace stac::settings {
 namespace {
 
-const std::filesystem::path kShipped = std::filesystem::path(STAC_SOURCE_DIR) / "config/stac.yaml";
+const std::filesystem::path kShipped =
+    std::filesystem::path(::stac::testing::source_dir()) / "config/stac.yaml";
 
 // The shipped file with one line of the ego section replaced.
 std::filesystem::path with_line(const std::string& pattern, const std::string& replacement) {
@@ -30,7 +32,7 @@ std::filesystem::path with_line(const std::string& pattern, const std::string& r
   // One file per test and process: ctest runs the tests of this file in parallel.
   const auto path = std::filesystem::temp_directory_path() /
                     ("stac_settings_test_" +
-                     std::string(testing::UnitTest::GetInstance()->current_test_info()->name()) +
+                     std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) +
                      "_" + std::to_string(::getpid()) + ".yaml");
   std::ofstream(path) << edited;
   return path;

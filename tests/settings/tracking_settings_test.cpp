@@ -5,12 +5,13 @@
 #include <string>
 
 #include "settings/settings.hpp"
+#include "test_paths.hpp"
 
 namespace stac::settings {
 namespace {
 
 const std::filesystem::path kShipped =
-    std::filesystem::path(STAC_SOURCE_DIR) / "config" / "stac.yaml";
+    std::filesystem::path(::stac::testing::source_dir()) / "config" / "stac.yaml";
 
 // The shipped file with the line holding `key:` in the tracking section replaced.
 std::filesystem::path edited(const std::string& name, const std::string& key,

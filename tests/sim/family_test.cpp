@@ -18,6 +18,7 @@
 #include "drivers/velodyne/scan_assembler.hpp"
 #include "shared_data.hpp"
 #include "sim/run.hpp"
+#include "test_paths.hpp"
 
 namespace stac::sim {
 namespace {
@@ -30,7 +31,7 @@ constexpr const char* kVlp16 = "velodyne/calib/veloview_VLP-16.xml";
 constexpr const char* kSztaki = "velodyne/calib/rosdrivers_64e_s2.1-sztaki.yaml";
 
 std::filesystem::path repo_file(const std::string& relative) {
-  return std::filesystem::path(STAC_SOURCE_DIR) / relative;
+  return std::filesystem::path(::stac::testing::source_dir()) / relative;
 }
 
 struct Family {

@@ -13,6 +13,7 @@
 #include "ego/pose.hpp"
 #include "sim/ins.hpp"
 #include "sim/vehicle_can.hpp"
+#include "test_paths.hpp"
 
 namespace stac::sim {
 namespace {
@@ -200,7 +201,8 @@ TEST(SimIns, GroupsTwoAndThreeOncePerGpsSecondAfterItsGroup1) {
 }
 
 can::Database vehicle_dbc() {
-  auto db = can::load_dbc(std::filesystem::path(STAC_SOURCE_DIR) / "config/can/vehicle.dbc");
+  auto db = can::load_dbc(std::filesystem::path(::stac::testing::source_dir()) /
+                          "config/can/vehicle.dbc");
   EXPECT_TRUE(db) << db.error().message;
   return *db;
 }

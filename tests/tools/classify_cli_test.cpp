@@ -13,6 +13,7 @@
 
 #include "formats/dataset_file.hpp"
 #include "stac_cli.hpp"
+#include "test_paths.hpp"
 #include "tools/evaluation/tracks_jsonl.hpp"
 
 namespace {
@@ -272,8 +273,9 @@ TEST_F(ClassifyCli, ExtraClassesFromTheDatasetGoThroughTrainEvalAndProcess) {
   EXPECT_NE(other.code, 0);
   EXPECT_NE(other.output.find("--class"), std::string::npos) << other.output;
   // A model without tree and pole scored on the 5-class drives: they are background for it.
-  const std::string three_class_model =
-      (std::filesystem::path(STAC_SOURCE_DIR) / "config/models/stac_default.stacmodel").string();
+  const std::string three_class_model = (std::filesystem::path(::stac::testing::source_dir()) /
+                                         "config/models/stac_default.stacmodel")
+                                            .string();
   const CliResult fewer = stac("eval --classes --data " + at("test5") + " --model " +
                                three_class_model + " --report " + at("report3on5"));
   ASSERT_EQ(fewer.code, 0) << fewer.output;

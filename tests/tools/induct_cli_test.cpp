@@ -18,6 +18,7 @@
 #include "formats/model_file.hpp"
 #include "json_lines.hpp"
 #include "stac_cli.hpp"
+#include "test_paths.hpp"
 
 namespace {
 
@@ -126,8 +127,8 @@ TEST_F(InductCli, AKillAtAnyMomentLosesAtMostTheRoundInProgress) {
   const std::string command = first_run("killed");
   int kills = 0;
   for (const char* after : {"0.3", "0.7", "1.2", "1.8", "2.5", "3.5"}) {
-    const std::string cmd = std::string("timeout -s KILL ") + after + " " + STAC_CLI + " " +
-                            command + " >/dev/null 2>&1";
+    const std::string cmd = std::string("timeout -s KILL ") + after + " " +
+                            ::stac::testing::stac_cli() + " " + command + " >/dev/null 2>&1";
     const int status = std::system(cmd.c_str());
     if (WIFEXITED(status) && WEXITSTATUS(status) == 137) ++kills;
     // Whatever the moment, what is on disk loads (or is not there yet).
@@ -289,7 +290,7 @@ TEST(InductNewClass, ATreeClassIsTaughtBesideTheDefaultClassesWhichStayAsTheyAre
     }
   }
   const std::string model =
-      (fs::path(STAC_SOURCE_DIR) / "config/models/stac_default.stacmodel").string();
+      (fs::path(::stac::testing::source_dir()) / "config/models/stac_default.stacmodel").string();
   const std::string command =
       "induct --state " + at("state") + " --model " + model + " --add-classes tree --background " +
       at("empty_data") + " --labels " + at("labels_data") + " --labels-per-class 3 --unlabeled " +

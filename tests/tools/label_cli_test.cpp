@@ -21,6 +21,7 @@
 
 #include "json_lines.hpp"
 #include "stac_cli.hpp"
+#include "test_paths.hpp"
 #include "tools/support/child_process.hpp"
 
 namespace {
@@ -37,7 +38,7 @@ struct LabelServer {
     std::vector<std::string> words{"label"};
     std::istringstream in(args);
     for (std::string w; in >> w;) words.push_back(w);
-    auto c = stac::tools::ChildProcess::start_program(STAC_CLI, words, log);
+    auto c = stac::tools::ChildProcess::start_program(::stac::testing::stac_cli(), words, log);
     if (!c) return;
     child.emplace(std::move(*c));
     const std::regex serving("on (http://127\\.0\\.0\\.1:[0-9]+/)");
@@ -81,7 +82,7 @@ TEST(LabelCli, APersonAnswersInABrowserAndTheAnswersTrainARoundWithNewQuestions)
   ASSERT_TRUE(server.child.has_value());
   ASSERT_FALSE(server.url.empty()) << server.child->log();
   const CliResult page = stac::testing::run_shell(
-      "cd " + std::string(STAC_SOURCE_DIR) +
+      "cd " + std::string(::stac::testing::source_dir()) +
       "/tests/web && timeout -s KILL 400 node label_page.mjs " + server.url + " 2>&1");
   ASSERT_EQ(page.code, 0) << page.output << "\n--- stac label:\n" << server.child->log();
   const auto report = page.output.find("{\"classes\"");  // the one JSON line it prints

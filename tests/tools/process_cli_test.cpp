@@ -17,6 +17,7 @@
 #include "settings/settings.hpp"
 #include "shared_data.hpp"
 #include "stac_cli.hpp"
+#include "test_paths.hpp"
 #include "tools/evaluation/tracklet_truth.hpp"
 #include "tools/evaluation/tracks_jsonl.hpp"
 
@@ -376,8 +377,8 @@ TEST(ProcessCli, ASimulatedDriveThroughPcapAndThroughKittiRawTracksTheSame) {
 
   {  // Truth velocities are over the frames' times, at which KITTI's boxes are, not the sweeps'
      // starts the truth scans are stamped with: every other sweep moved by 30 ms changes none.
-    auto ego = stac::settings::load_ego_settings(std::filesystem::path(STAC_SOURCE_DIR) /
-                                                 "config/stac.yaml");
+    auto ego = stac::settings::load_ego_settings(
+        std::filesystem::path(::stac::testing::source_dir()) / "config/stac.yaml");
     ASSERT_TRUE(ego) << ego.error().message;
     const auto velocities = [&] {
       std::vector<double> v;
@@ -489,8 +490,8 @@ TEST(ProcessCli, BadInputsAreNamed) {
   EXPECT_NE(missing.code, 0);
   EXPECT_NE(missing.output.find("nonexistent.pcap"), std::string::npos) << missing.output;
   const CliResult origin =
-      stac("process " + std::string(STAC_SOURCE_DIR) + "/README.md --origin 95,0,0 --tracks " +
-           (dir / "x.jsonl").string());
+      stac("process " + std::string(::stac::testing::source_dir()) +
+           "/README.md --origin 95,0,0 --tracks " + (dir / "x.jsonl").string());
   EXPECT_NE(origin.code, 0);
 }
 

@@ -16,6 +16,7 @@
 #include "drivers/io/udp_receiver.hpp"
 #include "shared_data.hpp"
 #include "stac_cli.hpp"
+#include "test_paths.hpp"
 
 namespace stac::tools {
 namespace {
@@ -65,8 +66,8 @@ TEST(ReplayCli, ServesTheInsStreamCompleteNextToTheVelodynePackets) {
     while (!done) packets += static_cast<std::uint64_t>(std::max(0, velodyne->receive(batch, 50)));
   });
 
-  const std::string cmd = std::string(STAC_CLI) + " replay --in " + pcap.string() +
-                          " --rate 4 --wait-tcp --tcp-port 5602:0 --port " +
+  const std::string cmd = std::string(::stac::testing::stac_cli()) + " replay --in " +
+                          pcap.string() + " --rate 4 --wait-tcp --tcp-port 5602:0 --port " +
                           std::to_string(velodyne->port()) + " 2>&1";
   FILE* out = popen(cmd.c_str(), "r");
   ASSERT_NE(out, nullptr);

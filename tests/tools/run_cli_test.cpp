@@ -28,6 +28,7 @@
 #include "formats/model_file.hpp"
 #include "shared_data.hpp"
 #include "stac_cli.hpp"
+#include "test_paths.hpp"
 #include "tools/support/child_process.hpp"
 
 namespace stac::tools {
@@ -64,7 +65,7 @@ class Child {
     std::vector<std::string> words;
     std::istringstream in(args);
     for (std::string w; in >> w;) words.push_back(w);
-    auto child = tools::ChildProcess::start_program(STAC_CLI, words, log);
+    auto child = tools::ChildProcess::start_program(::stac::testing::stac_cli(), words, log);
     if (child) child_.emplace(std::move(*child));
   }
   [[nodiscard]] bool started() const { return child_.has_value(); }
@@ -585,7 +586,7 @@ TEST(ProcessDds, EveryScanOfTheTracksFileIsPublishedInOrderWithItsTracks) {
 TEST(RunCli, SighupSwapsInTheModelFileAndHealthSaysWhichModelIsInUse) {
   const auto dir = fresh_dir("reload");
   const auto file = dir / "model.stacmodel";
-  auto a = formats::read_model_file(std::filesystem::path(STAC_SOURCE_DIR) /
+  auto a = formats::read_model_file(std::filesystem::path(::stac::testing::source_dir()) /
                                     "config/models/stac_default.stacmodel");
   ASSERT_TRUE(a.has_value()) << a.error().message;
   classification::TrackClassifierModel b = *a;
@@ -1088,8 +1089,9 @@ TEST(FaultsInTheLoop, ACanSilenceIsStaleOnHealthAndCanDeadReckoningBridgesAnInsD
   ASSERT_TRUE(udp != 0 && ins != 0 && can_port != 0 && can_port != udp);
   const auto config =
       can_config(dir, "cannelloni", "can0", {{"cannelloni_port", std::to_string(can_port)}});
-  const std::string model =
-      (std::filesystem::path(STAC_SOURCE_DIR) / "config/models/stac_default.stacmodel").string();
+  const std::string model = (std::filesystem::path(::stac::testing::source_dir()) /
+                             "config/models/stac_default.stacmodel")
+                                .string();
   Child run("run --config " + config.string() + " --model " + model + " --domain " +
                 std::to_string(kDomain) + " --bind 127.0.0.1 --port " + std::to_string(udp) +
                 " --ins tcp --ins-address 127.0.0.1 --ins-port " + std::to_string(ins),
