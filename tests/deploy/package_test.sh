@@ -33,7 +33,8 @@ contents)
     /lib/udev/rules.d/60-stac-gs-usb.rules /lib/udev/rules.d/60-stac-cpu-latency.rules
     /lib/systemd/system-generators/stac-cpu-affinity
     /usr/share/stac/models/stac_default.stacmodel
-    /usr/share/stac/calib/rosdrivers_64e_s2.1-sztaki.yaml /usr/share/doc/stac/deploy.md)
+    /usr/share/stac/calib/rosdrivers_64e_s2.1-sztaki.yaml /usr/share/doc/stac/deploy.md
+    /usr/share/doc/stac/LICENSE /usr/share/doc/stac/THIRD-PARTY-NOTICES.md)
   for f in "${expected[@]}"; do
     printf '%s\n' "${files[@]}" | grep -qx "$f" || fail "$f is not in the package"
   done
