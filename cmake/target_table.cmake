@@ -1,0 +1,27 @@
+# Checks or updates the table of targets in docs/architecture.md (cmake/TargetTable.cmake):
+#   cmake -DTABLE=build/architecture_targets.md -DDOC=docs/architecture.md -DMODE=check|update -P cmake/target_table.cmake
+# check fails, naming what differs, when the doc's table is not the build's; update rewrites it.
+set(begin "<!-- targets: made by cmake/target_table.cmake from the build; do not edit -->\n")
+set(end "<!-- targets end -->")
+file(READ ${TABLE} table)
+file(READ ${DOC} doc)
+string(FIND "${doc}" "${begin}" at_begin)
+string(FIND "${doc}" "${end}" at_end)
+if(at_begin EQUAL -1 OR at_end EQUAL -1 OR at_end LESS at_begin)
+  message(FATAL_ERROR "${DOC}: the markers of the targets table are missing")
+endif()
+string(LENGTH "${begin}" begin_length)
+math(EXPR from "${at_begin} + ${begin_length}")
+math(EXPR length "${at_end} - ${from}")
+string(SUBSTRING "${doc}" ${from} ${length} current)
+if(current STREQUAL table)
+  message(STATUS "${DOC}: the targets table is the build's")
+elseif(MODE STREQUAL "update")
+  string(SUBSTRING "${doc}" 0 ${from} head)
+  string(SUBSTRING "${doc}" ${at_end} -1 tail)
+  file(WRITE ${DOC} "${head}${table}${tail}")
+  message(STATUS "${DOC}: the targets table rewritten from the build")
+else()
+  message(FATAL_ERROR "${DOC}'s targets table is not the build's. Run:\n  cmake -DTABLE=${TABLE} "
+                      "-DDOC=${DOC} -DMODE=update -P cmake/target_table.cmake\nThe build's:\n${table}")
+endif()
