@@ -5,9 +5,13 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <filesystem>
+#include <limits>
 #include <opencv2/imgcodecs.hpp>
 #include <string>
+
+#include "tools/pictures/birds_eye.hpp"
 
 namespace stac::tools {
 namespace {
@@ -51,6 +55,28 @@ TEST(Chart, AFileThatCannotBeWrittenIsNamed) {
   const auto r = save_chart(c, "/nonexistent/folder/chart.png");
   ASSERT_FALSE(r);
   EXPECT_NE(r.error().message.find("/nonexistent/folder/chart.png"), std::string::npos);
+}
+
+// A point whose coordinates are NaN, infinite or far off the picture is left out (issue 47: a KITTI
+// scan with a point of NaN x, y and z crashed stac sim-compare's picture); one on it is drawn.
+TEST(BirdsEye, NonFiniteAndFarPointsAreLeftOutAndThePictureIsWritten) {
+  BirdsEyeOptions o;
+  o.size_px = 200;
+  o.range_m = 10.0;
+  BirdsEye view(o);
+  const float nan = std::nanf(""), inf = std::numeric_limits<float>::infinity();
+  view.add_point(nan, nan, nan);
+  view.add_point(inf, -inf, 0.0f);
+  view.add_point(1e30f, 0.0f, 1e30f);
+  view.add_point(0.0f, 3e9f, 0.0f);
+  view.add_point(5.0f, 0.0f, nan);  // on the picture: drawn in the bottom colour
+  const auto png = std::filesystem::temp_directory_path() /
+                   ("stac_birds_eye_test_" + std::to_string(::getpid()) + ".png");
+  ASSERT_TRUE(view.save(png));
+  const cv::Mat img = cv::imread(png.string());
+  std::filesystem::remove(png);
+  ASSERT_FALSE(img.empty());
+  EXPECT_EQ(img.at<cv::Vec3b>(50, 100), cv::Vec3b(84, 1, 68));  // x 5 m forward: 50 px up
 }
 
 }  // namespace

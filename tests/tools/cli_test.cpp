@@ -596,16 +596,21 @@ TEST(SimCompareCli, NonFinitePointsInAKittiScanAreLeftOutAndCounted) {
     scan.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
   }
   const float nan = std::nanf(""), huge = 1e30f, inf = std::numeric_limits<float>::infinity();
-  std::memcpy(scan.data() + 16 * 10, &nan, 4);       // x of point 10
-  std::memcpy(scan.data() + 16 * 20 + 8, &huge, 4);  // z of point 20
-  std::memcpy(scan.data() + 16 * 30 + 12, &inf, 4);  // reflectance of point 30
+  std::memcpy(scan.data() + 16 * 10, &nan, 4);             // x of point 10
+  std::memcpy(scan.data() + 16 * 20 + 8, &huge, 4);        // z of point 20
+  std::memcpy(scan.data() + 16 * 30 + 12, &inf, 4);        // reflectance of point 30
+  for (int k = 0; k < 3; ++k) {                            // x, y and z of point 40 (issue 47: the
+    std::memcpy(scan.data() + 16 * 40 + 4 * k, &nan, 4);   // bird's-eye picture crashed on it)
+    std::memcpy(scan.data() + 16 * 50 + 4 * k, &huge, 4);  // and of point 50
+  }
   const auto bin = dir / "damaged.bin";
   std::ofstream(bin, std::ios::binary) << scan;
   const CliResult r =
       stac("sim-compare --sim " + pcap.string() + " --kitti " + bin.string() + " --calib " +
            stac::testing::shared_data(kYaml).string() + " --report " + (dir / "report").string());
   ASSERT_EQ(r.code, 0) << r.output;
-  EXPECT_NE(r.output.find("and 3 KITTI points that are NaN"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("and 5 KITTI points that are NaN"), std::string::npos) << r.output;
+  EXPECT_TRUE(std::filesystem::exists(dir / "report" / "realism.md"));
 }
 
 }  // namespace

@@ -10,11 +10,12 @@
 namespace stac::tools {
 namespace {
 
-// A perceptual blue-to-yellow ramp (viridis-like) for t in [0, 1].
+// A perceptual blue-to-yellow ramp (viridis-like) for t in [0, 1] (NaN: the bottom colour).
 Bgr ramp(double t) {
   static const double stops[5][3] = {
       {68, 1, 84}, {59, 82, 139}, {33, 145, 140}, {94, 201, 98}, {253, 231, 37}};  // RGB
-  t = std::clamp(t, 0.0, 1.0) * 4.0;
+  if (!(t >= 0.0)) t = 0.0;  // NaN would index the stops at INT_MIN
+  t = std::min(t, 1.0) * 4.0;
   const int i = std::min(static_cast<int>(t), 3);
   const double f = t - i;
   auto mix = [&](int c) {
@@ -62,6 +63,9 @@ void BirdsEye::add_point(float x, float y, float z) noexcept {
 }
 
 void BirdsEye::add_point(float x, float y, Bgr colour) noexcept {
+  // Off the picture (NaN and infinities too) before any conversion to int.
+  const double limit = options_.size_px / (2.0 * px_per_m_);
+  if (!(std::abs(x) <= limit && std::abs(y) <= limit)) return;
   const cv::Point p = pixel(options_, px_per_m_, x, y);
   if (p.x < 0 || p.y < 0 || p.x >= options_.size_px || p.y >= options_.size_px) return;
   const std::size_t at =
