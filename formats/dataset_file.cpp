@@ -3,12 +3,14 @@
 #include <algorithm>
 #include <array>
 #include <bit>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <iterator>
 #include <map>
 #include <nlohmann/json.hpp>
 
+#include "formats/durable_file.hpp"
 #include "perception/classification/holistic.hpp"
 
 namespace stac::formats {
@@ -126,15 +128,17 @@ rt::Status write_dataset(const std::filesystem::path& dir, const Dataset& data) 
     segments[name] = segments[name].get<std::uint64_t>() + t.segments;
     total_segments += t.segments;
   }
-  put(b, classification::fnv1a64(b));
-  const std::filesystem::path bin = dir / "tracks.bin";
-  {
-    std::ofstream out(bin, std::ios::binary | std::ios::trunc);
-    out.write(reinterpret_cast<const char*>(b.data()), static_cast<std::streamsize>(b.size()));
-    out.close();
-    if (!out) return rt::make_error(bin.string() + ": write failed");
-  }
+  const std::uint64_t checksum = classification::fnv1a64(b);
+  put(b, checksum);
+  // Each file through FILE.tmp, fsynced and renamed (durable_file.hpp): a kill leaves the old
+  // dataset or the new one, never a cut tracks.bin. The manifest names the tracks.bin it
+  // describes by its checksum (a kill between the two renames leaves it naming the old one).
+  if (auto w = write_file_durably(dir / "tracks.bin", b); !w) return w;
+  char checksum_hex[17];
+  std::snprintf(checksum_hex, sizeof(checksum_hex), "%016llx",
+                static_cast<unsigned long long>(checksum));
   const nlohmann::json manifest = {{"format", "stac-dataset"},
+                                   {"tracks_bin_checksum_fnv1a64", checksum_hex},
                                    {"version", kDatasetFormatVersion},
                                    {"labelled", data.labelled},
                                    {"classes", data.classes},
@@ -146,11 +150,10 @@ rt::Status write_dataset(const std::filesystem::path& dir, const Dataset& data) 
                                    {"inconsistent_tracks_per_class", inconsistent},
                                    {"segment_dimensions", segment_dims()},
                                    {"holistic_dimensions", holistic_dims()}};
-  std::ofstream m(dir / "manifest.json");
-  m << manifest.dump(2) << '\n';
-  m.close();
-  if (!m) return rt::make_error((dir / "manifest.json").string() + ": write failed");
-  return {};
+  const std::string text = manifest.dump(2) + "\n";
+  return write_file_durably(
+      dir / "manifest.json",
+      std::span(reinterpret_cast<const std::uint8_t*>(text.data()), text.size()));
 }
 
 rt::Result<Dataset> read_dataset(const std::filesystem::path& dir) {

@@ -82,7 +82,10 @@ std::uint32_t off_label_segments(classification::ClassIndex label,
 // (the rows are moved out of `t`).
 learning::TrackExample track_example(DatasetTrack t);
 
-// Creates DIR when missing; overwrites tracks.bin and manifest.json.
+// Creates DIR when missing; replaces tracks.bin, then manifest.json, each durably (written to a
+// temporary file, fsynced, renamed): a kill leaves the old or the new tracks.bin, whole. The
+// manifest names its tracks.bin by checksum (tracks_bin_checksum_fnv1a64: the file's last 8
+// bytes, little-endian).
 rt::Status write_dataset(const std::filesystem::path& dir, const Dataset& data);
 // Errors name the file and what is wrong (missing, truncated, checksum, version, layout).
 rt::Result<Dataset> read_dataset(const std::filesystem::path& dir);

@@ -340,6 +340,18 @@ int write_and_summarize(const std::string& out, const Dataset& data) {
 int run_merge(const DatasetOptions& o) {
   if (!o.in.empty() || !o.truth.empty())
     return fail("--merge joins datasets: give no --in or --truth");
+  // One folder given twice would double its tracks, and --out among the inputs would replace an
+  // input: both are refused, however the paths are spelt (the folders compared as files).
+  for (std::size_t k = 0; k < o.merge.size(); ++k) {
+    std::error_code ec;
+    for (std::size_t j = 0; j < k; ++j)
+      if (std::filesystem::equivalent(o.merge[j], o.merge[k], ec))
+        return fail("--merge names " + o.merge[j] + " twice (also as " + o.merge[k] +
+                    "): each dataset once");
+    if (std::filesystem::equivalent(o.merge[k], o.out, ec))
+      return fail("--out " + o.out + " is the input " + o.merge[k] +
+                  ": write the merged dataset to a new folder");
+  }
   Dataset data;
   for (std::size_t k = 0; k < o.merge.size(); ++k) {
     auto part = read_dataset(o.merge[k]);

@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -324,6 +326,31 @@ TEST_F(ClassifyCli, MalformedInputsAreRefusedWithMessages) {
   const CliResult background = stac("dataset --in " + at("empty.pcap") + " --truth " +
                                     at("empty.jsonl") + " --out " + at("background_data"));
   ASSERT_EQ(background.code, 0) << background.output;
+  {  // tracks.bin is replaced whole (no .tmp left) and the manifest names it by its checksum
+    std::ifstream in(at("background_data") + "/tracks.bin", std::ios::binary);
+    const std::string bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+    ASSERT_GT(bytes.size(), 8U);
+    std::uint64_t last = 0;
+    std::memcpy(&last, bytes.data() + bytes.size() - 8, 8);
+    char hex[17];
+    std::snprintf(hex, sizeof(hex), "%016llx", static_cast<unsigned long long>(last));
+    EXPECT_EQ(read_json(at("background_data") + "/manifest.json")["tracks_bin_checksum_fnv1a64"],
+              hex);
+    EXPECT_FALSE(std::filesystem::exists(at("background_data") + "/tracks.bin.tmp"));
+  }
+  // Issue 47: --merge A A doubled every track, and --merge A B --out A replaced an input.
+  const CliResult twice = stac("dataset --merge " + at("background_data") + " " +
+                               at("background_data") + "/. --out " + at("merged_twice"));
+  EXPECT_EQ(twice.code, 1);
+  EXPECT_NE(twice.output.find("twice"), std::string::npos) << twice.output;
+  EXPECT_FALSE(std::filesystem::exists(at("merged_twice")));
+  const auto before = std::filesystem::last_write_time(at("background_data") + "/tracks.bin");
+  std::filesystem::copy(at("background_data"), at("background_copy"));
+  const CliResult onto = stac("dataset --merge " + at("background_copy") + " " +
+                              at("background_data") + " --out " + at("background_data"));
+  EXPECT_EQ(onto.code, 1);
+  EXPECT_NE(onto.output.find("is the input"), std::string::npos) << onto.output;
+  EXPECT_EQ(std::filesystem::last_write_time(at("background_data") + "/tracks.bin"), before);
   const CliResult nothing =
       stac("train --data " + at("background_data") + " --out " + at("m0.stac") + " --rounds 5");
   EXPECT_EQ(nothing.code, 1);
