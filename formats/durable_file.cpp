@@ -86,6 +86,39 @@ rt::Status cut_torn_tail(const std::filesystem::path& path) {
   return r;
 }
 
+rt::Result<bool> complete_or_cut_tail(const std::filesystem::path& path,
+                                      const std::function<bool(const std::string&)>& whole) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) return false;
+  const int fd = ::open(path.c_str(), O_RDWR | O_CLOEXEC);
+  if (fd < 0) return rt::make_error(path.string() + ": cannot open (" + std::strerror(errno) + ")");
+  const off_t end = ::lseek(fd, 0, SEEK_END);
+  off_t start = end;
+  char c = '\n';
+  while (start > 0 && ::pread(fd, &c, 1, start - 1) == 1 && c != '\n') --start;
+  if (start == end) {  // empty, or ends with its newline
+    ::close(fd);
+    return false;
+  }
+  std::string last(static_cast<std::size_t>(end - start), '\0');
+  if (::pread(fd, last.data(), last.size(), start) != static_cast<ssize_t>(last.size())) {
+    const std::string why = std::strerror(errno);
+    ::close(fd);
+    return rt::make_error(path.string() + ": cannot read its last line (" + why + ")");
+  }
+  if (whole(last)) {
+    const bool ok = ::pwrite(fd, "\n", 1, end) == 1 && ::fsync(fd) == 0;
+    const std::string why = ok ? "" : std::strerror(errno);
+    ::close(fd);
+    if (!ok) return rt::make_error(path.string() + ": cannot end its last line (" + why + ")");
+    return false;
+  }
+  auto cut = cut_tail(fd, path);
+  ::close(fd);
+  if (!cut) return rt::make_error(cut.error().message);
+  return true;
+}
+
 rt::Status append_line_durably(const std::filesystem::path& path, const std::string& line) {
   const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
   if (fd < 0)

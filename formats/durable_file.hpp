@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <span>
 #include <string>
 
@@ -21,5 +22,10 @@ rt::Status write_file_durably(const std::filesystem::path& path,
 rt::Status append_line_durably(const std::filesystem::path& path, const std::string& line);
 // Cuts a torn last line (no '\n': a kill during an append) off `path`, if it exists.
 rt::Status cut_torn_tail(const std::filesystem::path& path);
+// A last line without its '\n' in a file people also write by hand (printf, echo -n and many
+// editors end a file so): completed with the '\n' when `whole` says it is a whole record, cut
+// off as torn otherwise. Returns whether a torn line was cut.
+rt::Result<bool> complete_or_cut_tail(const std::filesystem::path& path,
+                                      const std::function<bool(const std::string&)>& whole);
 
 }  // namespace stac::formats

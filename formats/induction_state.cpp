@@ -4,6 +4,7 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <nlohmann/json.hpp>
 
 #include "perception/classification/holistic.hpp"
 #include "perception/descriptors/descriptors.hpp"
@@ -235,6 +236,13 @@ rt::Result<InductionState> read_induction_state(const std::filesystem::path& dir
   }
   if (r.at != r.b.size()) return bad("trailing bytes");
   return s;
+}
+
+bool is_answer_line(const std::string& line) {
+  const nlohmann::json j = nlohmann::json::parse(line, nullptr, false);
+  return !j.is_discarded() && j.is_object() && j.contains("source") && j["source"].is_string() &&
+         j.contains("track") && j["track"].is_number_unsigned() && j.contains("label") &&
+         j["label"].is_string();
 }
 
 }  // namespace stac::formats

@@ -62,6 +62,9 @@ inline constexpr std::uint32_t kInductionStateVersion = 2;
 
 // DIR/state.bin. Errors name the file and say what to do.
 rt::Result<InductionState> read_induction_state(const std::filesystem::path& dir);
+// Whether a line of labels.jsonl is a whole answer: a JSON object with "source" (a dataset path,
+// a string), "track" (its index, an unsigned number) and "label" (a string).
+bool is_answer_line(const std::string& line);
 rt::Status write_induction_state(const std::filesystem::path& dir, const InductionState& state);
 
 }  // namespace stac::formats

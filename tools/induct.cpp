@@ -22,6 +22,8 @@
 #include <vector>
 
 #include "formats/dataset_file.hpp"
+#include "formats/durable_file.hpp"
+#include "formats/folder_lock.hpp"
 #include "formats/induction_state.hpp"
 #include "formats/model_file.hpp"
 #include "perception/classification/holistic.hpp"
@@ -128,6 +130,7 @@ class Inductor {
   std::set<std::pair<std::uint32_t, std::uint64_t>> seen_;
   std::vector<std::string> pending_history_;
   bool creating_ = false;
+  std::optional<FolderLock> lock_;  // one stac induct at a time on a state folder
 };
 
 learning::TrainingPhaseConfig Inductor::phase() const {
@@ -166,6 +169,11 @@ rt::Result<std::uint32_t> Inductor::source_index(const std::string& path, Source
 
 rt::Status Inductor::open_state() {
   std::error_code ec;
+  if (fs::is_directory(dir_, ec)) {  // before reading anything of it: one writer at a time
+    auto lock = FolderLock::acquire(dir_, "the induction state");
+    if (!lock) return rt::make_error(lock.error().message);
+    lock_.emplace(std::move(lock).value());
+  }
   const bool exists = fs::exists(dir_ / "state.bin", ec);
   if (exists) {
     auto s = read_induction_state(dir_);
@@ -293,29 +301,19 @@ rt::Status Inductor::apply_answers() {
   std::vector<learning::TrackExample> fresh;
   std::uint64_t line_no = 0;
   std::size_t skipped = 0;
+  // Every line is read each time; an answer is known by its dataset and track (seen_), so a
+  // line deleted or moved by hand moves no other answer (issue 47). A torn last line was cut or
+  // completed before (run(): complete_or_cut_tail), so every line here was written whole.
   for (std::string line; std::getline(in, line);) {
-    if (++line_no <= s_.answers_applied) continue;
+    ++line_no;
     const auto bad = [&](const std::string& what) {
       return rt::make_error(file.string() + ":" + std::to_string(line_no) + ": " + what +
                             "; fix or delete that line (each line: {\"source\": DATASET, "
                             "\"track\": INDEX, \"label\": CLASS | \"background\" | \"skip\"})");
     };
-    if (line.find_first_not_of(" \t\r") == std::string::npos) {
-      s_.answers_applied = line_no;
-      continue;
-    }
-    const nlohmann::json j = nlohmann::json::parse(line, nullptr, false);
-    if (j.is_discarded() || !j.is_object() || !j.contains("source") || !j["source"].is_string() ||
-        !j.contains("track") || !j["track"].is_number_unsigned() || !j.contains("label") ||
-        !j["label"].is_string()) {
-      if (in.peek() == std::char_traits<char>::eof() && line_no > s_.answers_applied) {
-        // A last line cut short by a kill while it was written: said, and left for the user.
-        std::fprintf(stderr, "stac: %s:%llu: an incomplete last line, ignored\n",
-                     file.string().c_str(), static_cast<unsigned long long>(line_no));
-        break;
-      }
-      return bad("not an answer");
-    }
+    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+    if (!is_answer_line(line)) return bad("not an answer");
+    const nlohmann::json j = nlohmann::json::parse(line);
     const std::string path = j["source"].get<std::string>();
     const auto track = j["track"].get<std::uint64_t>();
     const std::string label = j["label"].get<std::string>();
@@ -338,8 +336,9 @@ rt::Status Inductor::apply_answers() {
                    ", background, skip");
       cls = static_cast<ClassIndex>(it - s_.classes.begin());
     }
+    if (seen(source, track)) continue;  // answered before: the first answer holds
     s_.answers_applied = line_no;
-    if (!seen_.insert({source, track}).second) continue;  // answered before: the first answer holds
+    seen_.insert({source, track});
     s_.seen.emplace_back(source, track);
     if (label == "skip") {
       ++skipped;
@@ -703,9 +702,23 @@ int Inductor::run() {
     std::error_code ec;
     fs::create_directories(dir_ / "models", ec);
     if (ec) return fail(dir_.string() + ": cannot create the state folder (" + ec.message() + ")");
+    if (!lock_) {
+      auto lock = FolderLock::acquire(dir_, "the induction state");
+      if (!lock) return fail(lock.error().message);
+      lock_.emplace(std::move(lock).value());
+      if (fs::exists(dir_ / "state.bin", ec))
+        return fail(dir_.string() +
+                    ": another stac induct created a state here meanwhile; run "
+                    "this again to continue it");
+    }
   }
-  for (const char* file : {"labels.jsonl", "history.jsonl"})  // a kill during an append
-    if (auto r = cut_torn_tail(dir_ / file); !r) return fail(r.error().message);
+  // A kill during an append leaves a torn last line; a person's last answer may lack its newline.
+  if (auto r = complete_or_cut_tail(dir_ / "labels.jsonl", is_answer_line); !r)
+    return fail(r.error().message);
+  else if (*r)
+    std::fprintf(stderr, "stac: %s: its last line was torn (not a whole answer), cut off\n",
+                 (dir_ / "labels.jsonl").c_str());
+  if (auto r = cut_torn_tail(dir_ / "history.jsonl"); !r) return fail(r.error().message);
   if (auto r = apply_answers(); !r) return fail(r.error().message);  // a killed run's answers
   if (auto r = seed_labels(); !r) return fail(r.error().message);
   if (auto r = apply_answers(); !r) return fail(r.error().message);

@@ -86,7 +86,9 @@ class LabelServer {
                             " ... --unlabeled DATASET` first, it writes the questions");
     classes_ = s->classes;
     rounds_ = s->rounds;
-    if (auto c = cut_torn_tail(dir_ / "labels.jsonl"); !c) return c;
+    // A torn last line is cut; a person's whole last answer without its newline is kept.
+    if (auto c = complete_or_cut_tail(dir_ / "labels.jsonl", is_answer_line); !c)
+      return rt::make_error(c.error().message);
     if (questions().empty())
       std::fprintf(stderr,
                    "stac label: %s has no open question; answered ones start a round with "

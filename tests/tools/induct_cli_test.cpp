@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "formats/folder_lock.hpp"
 #include "formats/induction_state.hpp"
 #include "formats/model_file.hpp"
 #include "json_lines.hpp"
@@ -110,6 +111,17 @@ TEST_F(InductCli, OracleRoundsTeachAModelThatEvalAndProcessTake) {
                                  "/model.stacmodel --tracks " + at("tracks.jsonl"));
   EXPECT_EQ(process.code, 0) << process.output;
 
+  {  // Issue 47: one stac induct at a time on a state (two had both exited 0 with rounds lost).
+    auto lock = stac::formats::FolderLock::acquire(at("state"), "the induction state");
+    ASSERT_TRUE(lock) << lock.error().message;
+    const auto before = fs::last_write_time(at("state") + "/state.bin");
+    const CliResult busy = stac("induct --state " + at("state") + " --rounds 1 --warm-rounds 40");
+    EXPECT_EQ(busy.code, 1) << busy.output;
+    EXPECT_NE(busy.output.find("is in use by another process (pid " + std::to_string(::getpid())),
+              std::string::npos)
+        << busy.output;
+    EXPECT_EQ(fs::last_write_time(at("state") + "/state.bin"), before);
+  }  // released: the runs below take it
   // A chunk already taken is not taken twice; a new round on the buffer is.
   const CliResult again = stac("induct --state " + at("state") + " --unlabeled " +
                                at("chunk1_data") + " --rounds 1 --warm-rounds 40");
@@ -120,6 +132,40 @@ TEST_F(InductCli, OracleRoundsTeachAModelThatEvalAndProcessTake) {
   auto state = stac::formats::read_induction_state(at("state"));
   ASSERT_TRUE(state.has_value()) << state.error().message;
   EXPECT_EQ(state->rounds, 3u);
+
+  // Issue 47: answers written by hand. Tracks of the first chunk nobody answered yet:
+  std::set<std::uint64_t> answered;
+  for (const auto& a : stac::testing::read_json_lines(at("state") + "/labels.jsonl"))
+    if (a["source"] == at("chunk1_data")) answered.insert(a["track"].get<std::uint64_t>());
+  std::vector<std::uint64_t> fresh;
+  for (std::uint64_t k = 0; fresh.size() < 2 && k < 1000; ++k)
+    if (answered.count(k) == 0) fresh.push_back(k);
+  ASSERT_EQ(fresh.size(), 2u);
+  const auto answer = [&](std::uint64_t track) {
+    return "{\"source\": \"" + at("chunk1_data") + "\", \"track\": " + std::to_string(track) +
+           ", \"label\": \"background\"}";
+  };
+  const auto labels_now = [&] {
+    auto s = stac::formats::read_induction_state(at("state"));
+    EXPECT_TRUE(s.has_value()) << s.error().message;
+    return s ? s->labels.size() : 0;
+  };
+  const std::size_t labels_before = labels_now();
+  // A whole last answer without its newline (printf, echo -n, many editors) is an answer: kept,
+  // completed with its newline, and taken.
+  std::ofstream(at("state") + "/labels.jsonl", std::ios::app) << answer(fresh[0]);
+  CliResult more = stac("induct --state " + at("state") + " --rounds 1 --warm-rounds 40");
+  ASSERT_EQ(more.code, 0) << more.output;
+  const std::string text = read_text(at("state") + "/labels.jsonl");
+  EXPECT_NE(text.find(answer(fresh[0]) + "\n"), std::string::npos);
+  EXPECT_EQ(labels_now(), labels_before + 1);
+  // An earlier line deleted by hand: the next new answer is still taken (answers are known by
+  // their dataset and track, not by their line's number).
+  const std::string rest = text.substr(text.find('\n') + 1);
+  std::ofstream(at("state") + "/labels.jsonl", std::ios::trunc) << rest << answer(fresh[1]) << "\n";
+  more = stac("induct --state " + at("state") + " --rounds 1 --warm-rounds 40");
+  ASSERT_EQ(more.code, 0) << more.output;
+  EXPECT_EQ(labels_now(), labels_before + 2);
 }
 
 TEST_F(InductCli, AKillAtAnyMomentLosesAtMostTheRoundInProgress) {
