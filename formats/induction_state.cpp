@@ -74,9 +74,12 @@ struct Reader {
     at += n * sizeof(float);
     return v;
   }
-  std::uint64_t count() {
+  // A count of records each at least `min_bytes` long: more than the bytes left can hold is
+  // refused before anything is allocated for them (a damaged count with a valid checksum had
+  // sized 1.6 GB of records from a 114-byte file).
+  std::uint64_t count(std::size_t min_bytes) {
     const auto n = get<std::uint64_t>();
-    if (n > kMaxCount) ok = false;
+    if (n > kMaxCount || (ok && n > (b.size() - at) / min_bytes)) ok = false;
     return ok ? n : 0;
   }
 };
@@ -179,7 +182,14 @@ rt::Result<InductionState> read_induction_state(const std::filesystem::path& dir
   s.reset_pending = r.get<std::uint8_t>() != 0;
   if (version >= 2) s.kept_classes = r.get<std::uint32_t>();
   s.answers_applied = r.get<std::uint64_t>();
-  s.sources.resize(r.count());
+  using Label = classification::ClassIndex;
+  constexpr std::size_t kSourceMin = sizeof(std::uint32_t) + 2;  // path length, role, stage
+  constexpr std::size_t kLabelMin = sizeof(std::uint32_t) + sizeof(std::uint64_t) + sizeof(Label) +
+                                    2 * sizeof(std::uint64_t);  // ..., two float counts
+  constexpr std::size_t kGroupMin = 2 * sizeof(std::uint32_t) + sizeof(std::uint64_t) +
+                                    sizeof(Label) + 2 * sizeof(double) + 2 * sizeof(std::uint64_t);
+  constexpr std::size_t kSeenMin = sizeof(std::uint32_t) + sizeof(std::uint64_t);
+  s.sources.resize(r.count(kSourceMin));
   for (InductionSource& src : s.sources) {
     src.path = r.string();
     const auto role = r.get<std::uint8_t>();
@@ -189,7 +199,7 @@ rt::Result<InductionState> read_induction_state(const std::filesystem::path& dir
     src.stage = static_cast<ChunkStage>(stage);
   }
   const auto source_ok = [&s](std::uint32_t i) { return i < s.sources.size(); };
-  s.labels.resize(r.count());
+  s.labels.resize(r.count(kLabelMin));
   for (LabelledTrack& t : s.labels) {
     t.source = r.get<std::uint32_t>();
     t.track = r.get<std::uint64_t>();
@@ -200,7 +210,7 @@ rt::Result<InductionState> read_induction_state(const std::filesystem::path& dir
         (t.label != classification::kBackground && t.label >= s.classes.size()))
       r.ok = false;
   }
-  s.buffer.resize(r.count());
+  s.buffer.resize(r.count(kGroupMin));
   for (learning::Group& g : s.buffer) {
     g.source = r.get<std::uint32_t>();
     g.track = r.get<std::uint64_t>();
@@ -214,7 +224,7 @@ rt::Result<InductionState> read_induction_state(const std::filesystem::path& dir
                                  g.label != learning::kUninducted && g.label >= s.classes.size()))
       r.ok = false;
   }
-  s.seen.resize(r.count());
+  s.seen.resize(r.count(kSeenMin));
   for (auto& [source, track] : s.seen)
     source = r.get<std::uint32_t>(), track = r.get<std::uint64_t>();
   s.has_model = r.get<std::uint8_t>() != 0;
@@ -226,7 +236,7 @@ rt::Result<InductionState> read_induction_state(const std::filesystem::path& dir
   if (const std::string wrong = learning::validate(s.induction); !wrong.empty())
     return bad("bad settings: " + wrong);
   if (s.has_model) {
-    const auto n = r.count();
+    const auto n = r.count(1);
     if (!r.ok || r.b.size() - r.at < n) return bad("truncated model");
     auto model = classification::deserialize(r.b.subspan(r.at, n));
     if (!model) return bad("its model: " + model.error().message);
