@@ -123,6 +123,10 @@ rt::Result<KittiRawDrive> open_kitti_raw_drive(const fs::path& path) {
     drive.sweep_end_ns = std::move(*b);
   }
   drive.has_oxts = fs::is_directory(path / "oxts" / "data", ec);
+  if (!drive.has_oxts && fs::exists(path / "oxts", ec))
+    return rt::make_error((path / "oxts").string() +
+                          ": has no data/ folder of records; a drive's GPS/IMU is oxts/data/*.txt "
+                          "with oxts/timestamps.txt (remove oxts/ to run the drive unposed)");
   return drive;
 }
 
@@ -251,6 +255,44 @@ std::string format_oxts_record(const OxtsRecord& r) {
   return line;
 }
 
+namespace {
+
+// What makes record `b` impossible right after `a` (empty: nothing): time that does not move on
+// or jumps more than a second, or a move a vehicle cannot make in that time (the Applanix reader
+// counts such fixes as impossible: ego/ego_estimator.hpp).
+std::string oxts_jump(const OxtsRecord& a, const OxtsRecord& b) {
+  constexpr double kMaxGapS = 1.0, kMaxSpeedMps = 100.0, kMaxYawRateRadps = 4.0;
+  constexpr double kEarthRadiusM = 6'378'137.0, kRad = std::numbers::pi / 180.0;
+  const double dt = static_cast<double>(b.stamp_ns - a.stamp_ns) * 1e-9;
+  char text[160];
+  if (dt <= 0.0) {
+    std::snprintf(text, sizeof(text), "its time is %.3f s, not after", dt);
+    return text;
+  }
+  if (dt > kMaxGapS) {
+    std::snprintf(text, sizeof(text), "its time jumps %.3f s (more than %.0f s)", dt, kMaxGapS);
+    return text;
+  }
+  const double north = (b.lat_deg - a.lat_deg) * kRad * kEarthRadiusM;
+  const double east = (b.lon_deg - a.lon_deg) * kRad * kEarthRadiusM *
+                      std::cos(0.5 * (a.lat_deg + b.lat_deg) * kRad);
+  const double moved = std::hypot(north, east, b.alt_m - a.alt_m);
+  if (moved > kMaxSpeedMps * dt + 1.0) {
+    std::snprintf(text, sizeof(text), "it is %.1f m away in %.3f s (over %.0f m/s)", moved, dt,
+                  kMaxSpeedMps);
+    return text;
+  }
+  const double yaw = std::remainder(b.yaw_rad - a.yaw_rad, 2.0 * std::numbers::pi);
+  if (std::abs(yaw) > kMaxYawRateRadps * dt + 0.05) {
+    std::snprintf(text, sizeof(text), "its yaw turns %.2f rad in %.3f s (over %.0f rad/s)", yaw, dt,
+                  kMaxYawRateRadps);
+    return text;
+  }
+  return {};
+}
+
+}  // namespace
+
 rt::Result<std::vector<OxtsRecord>> read_kitti_oxts(const fs::path& drive) {
   const fs::path data = drive / "oxts" / "data";
   std::error_code ec;
@@ -275,7 +317,19 @@ rt::Result<std::vector<OxtsRecord>> read_kitti_oxts(const fs::path& drive) {
       return rt::make_error(files[i].string() + ": cannot read (one line of 30 values)");
     auto r = parse_oxts_record(text);
     if (!r) return rt::make_error(files[i].string() + ": " + r.error().message);
+    for (std::string more; std::getline(in, more);)
+      if (more.find_first_not_of(" \t\r") != std::string::npos)
+        return rt::make_error(files[i].string() +
+                              ": holds more than one record (KITTI writes "
+                              "one a file, one file a frame)");
     r->stamp_ns = (*times)[i];
+    if (i > 0)
+      if (const std::string why = oxts_jump(out.back(), *r); !why.empty())
+        return rt::make_error(files[i].string() + " (" +
+                              (drive / "oxts" / "timestamps.txt").string() + " line " +
+                              std::to_string(i + 1) + "): " + why +
+                              " after the record before it; a drive's records follow each "
+                              "other at 10 Hz (a damaged or spliced drive)");
     out.push_back(*r);
   }
   return out;

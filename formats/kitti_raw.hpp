@@ -86,8 +86,10 @@ rt::Result<OxtsRecord> parse_oxts_record(const std::string& text);
 std::string format_oxts_record(const OxtsRecord& r);
 
 // DIR/oxts: every record with its time, in name order. Fails naming the file (and line): no
-// record, a record that does not parse, a timestamps file missing, or whose count or order does
-// not fit.
+// record, a record that does not parse, a file of more than one record, a timestamps file
+// missing, or whose count does not fit, and a record impossible after the one before it (its time
+// not later, or more than 1 s later; moved faster than 100 m/s; its yaw turned faster than
+// 4 rad/s).
 rt::Result<std::vector<OxtsRecord>> read_kitti_oxts(const std::filesystem::path& drive);
 
 // The record as the INS fix STAC's ego path takes (ego::InsFix: Tate-Bryant angles of the

@@ -168,6 +168,67 @@ TEST(KittiOxts, ADrivesRecordsComeWithTheirTimesOrAreRefused) {
       << r.error().message;
 }
 
+// Issue 47: a time jump, a record 1.1 km or 3 rad of yaw from its neighbour 0.1 s before, a file
+// of two records, and oxts/ without data/ were all taken (most scans then had no pose, written at
+// the origin, rc 0); each is refused naming the file and what is impossible.
+TEST(KittiOxts, ARecordImpossibleAfterTheOneBeforeIsRefused) {
+  const fs::path drive = fresh("oxts_jump");
+  fs::create_directories(drive / "oxts" / "data");
+  const auto record = [&](int k, const std::string& text) {
+    std::ofstream(drive / "oxts" / "data" / ("000000000" + std::to_string(k) + ".txt"))
+        << text << "\n";
+  };
+  const auto times = [&](const std::string& third) {
+    std::ofstream(drive / "oxts" / "timestamps.txt")
+        << "2011-09-26 13:02:25.900000000\n2011-09-26 13:02:26.000000000\n"
+        << third << "\n";
+  };
+  const auto refused = [&](const std::string& what) {
+    auto r = read_kitti_oxts(drive);
+    if (r) return ::testing::AssertionFailure() << "taken, expected: " << what;
+    if (r.error().message.find(what) == std::string::npos)
+      return ::testing::AssertionFailure() << r.error().message;
+    return ::testing::AssertionSuccess();
+  };
+  const std::string good = kRecord;
+  for (int k = 0; k < 3; ++k) record(k, good);
+  times("2011-09-26 13:02:26.100000000");
+  auto r = read_kitti_oxts(drive);
+  ASSERT_TRUE(r) << r.error().message;
+  EXPECT_EQ(r->size(), 3u);
+
+  times("2011-09-26 13:02:41.100000000");  // 15 s of records missing
+  EXPECT_TRUE(refused("0000000002.txt"));
+  EXPECT_TRUE(refused("line 3): its time jumps 15.100 s"));
+  times("2011-09-26 13:02:26.100000000");
+
+  // 0.01 degree of latitude: 1.1 km in 0.1 s.
+  record(2, "49.025003823272" + good.substr(good.find(' ')));
+  EXPECT_TRUE(refused("it is 1113.2 m away in 0.100 s"));
+  // Yaw -2.61 -> 0.39 rad in 0.1 s; across +-pi (-3.1 -> 3.1) is a turn of 0.08 rad, taken.
+  std::string turned = good;
+  turned.replace(turned.find("-2.6087069803847"), 16, "0.39129301961530");
+  record(2, turned);
+  EXPECT_TRUE(refused("its yaw turns 3.00 rad in 0.100 s"));
+  std::string west = good, east = good;
+  west.replace(west.find("-2.6087069803847"), 16, "-3.1000000000000");
+  east.replace(east.find("-2.6087069803847"), 16, "3.10000000000000");
+  record(0, west);
+  record(1, west);
+  record(2, east);
+  r = read_kitti_oxts(drive);
+  EXPECT_TRUE(r) << r.error().message;
+  record(0, good);
+  record(1, good);
+  record(2, good);
+
+  // Two records in one file: KITTI writes one a file.
+  record(1, good + "\n" + good);
+  EXPECT_TRUE(refused("0000000001.txt: holds more than one record"));
+  record(1, good);
+  ASSERT_TRUE(read_kitti_oxts(drive));
+}
+
 TEST(KittiOxts, TheImuToVelodyneMountingIsARigidTransform) {
   const fs::path date = fresh("calib");
   const fs::path drive = date / "2011_09_26_drive_0001_sync";
@@ -307,6 +368,14 @@ TEST(KittiSweeps, APointsTimeIsItsAzimuthInTheSweep) {
   EXPECT_EQ(scan.header.stamp_ns, plain->stamps_ns[1]);
   EXPECT_EQ(scan.header.end_stamp_ns, plain->stamps_ns[1]);
   EXPECT_EQ(scan.points[1].time_offset_ns, 0);
+  // oxts/ without its data/ is refused (it ran as a parked sensor, no pose ever); without oxts/
+  // the drive runs unposed.
+  fs::create_directories(dir / "oxts");
+  auto no_data = open_kitti_raw_drive(dir);
+  ASSERT_FALSE(no_data);
+  EXPECT_NE(no_data.error().message.find("oxts: has no data/ folder of records"), std::string::npos)
+      << no_data.error().message;
+  fs::remove(dir / "oxts");
 }
 
 }  // namespace
