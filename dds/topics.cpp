@@ -60,8 +60,15 @@ QosPtr base_qos(Topic t) {
 
 QosPtr writer_qos(Topic t) {
   QosPtr q = base_qos(t);
-  if (t == Topic::kTrackedObjects || t == Topic::kEgoPose)
+  if (t == Topic::kTrackedObjects || t == Topic::kEgoPose) {
     dds_qset_deadline(q.get(), kTrackDeadline);
+    // Cyclone prunes a keep-last writer's unacknowledged sample as soon as `depth` newer ones are
+    // written (dds_whc.c), so at depth 1 a sample lost on the wire to a reader that stalled for a
+    // moment (its socket buffer full) can never be resent: CI lost 2 of 21 scans that way under
+    // load. The writer keeps the last second of scans for retransmission; readers still keep the
+    // latest only, and a keep-last writer never blocks.
+    dds_qset_history(q.get(), DDS_HISTORY_KEEP_LAST, kWriterRepairDepth);
+  }
   return q;
 }
 

@@ -3,6 +3,7 @@
 
 #include <dds/dds.h>
 
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -23,10 +24,10 @@ rt::Result<Topic> topic_from_suffix(std::string_view suffix);
 // "<prefix>/<suffix>", and in ROS 2 naming mode "rt/<prefix>/<suffix>" (ROS topic /<prefix>/...).
 std::string topic_name(Topic t, const std::string& prefix, bool ros2_names);
 
-// The QoS of a topic (docs/dds.md): tracked objects and ego pose reliable keep-last 1 with a
-// 100 ms deadline; segments and the point cloud best effort keep-last 1; health reliable
-// keep-last 10. Readers
-// use the same QoS without the deadline.
+// The QoS of a topic (docs/dds.md): tracked objects and ego pose reliable with a 100 ms deadline,
+// their writers keep-last kWriterRepairDepth (what a stalled reader may still be resent), their
+// readers keep-last 1; segments and the point cloud best effort keep-last 1; health reliable
+// keep-last 10. Readers use the writers' QoS without the deadline.
 struct QosDeleter {
   void operator()(dds_qos_t* q) const noexcept { dds_delete_qos(q); }
 };
@@ -34,6 +35,7 @@ using QosPtr = std::unique_ptr<dds_qos_t, QosDeleter>;
 QosPtr writer_qos(Topic t);
 QosPtr reader_qos(Topic t);
 inline constexpr dds_duration_t kTrackDeadline = DDS_MSECS(100);
+inline constexpr int32_t kWriterRepairDepth = 10;  // one second of scans at 10 Hz
 
 // "what: <Cyclone's retcode text>" for a negative Cyclone return value.
 rt::Unexpected<rt::Error> dds_error(const std::string& what, dds_return_t rc);

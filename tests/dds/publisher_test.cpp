@@ -327,7 +327,7 @@ TEST(DdsPublisher, Ros2NamingModeUsesRmwTypeAndTopicNames) {
   EXPECT_STREQ(type, "stac_msgs::msg::Health");
 }
 
-TEST(DdsPublisher, WriterQosIsReliableKeepLastOneWithDeadlineForTracks) {
+TEST(DdsPublisher, WriterQosIsReliableKeepLastTenWithDeadlineForTracksReadersKeepTheLatest) {
   auto pub = make_publisher(106);
   ASSERT_NE(pub, nullptr);
   auto qos = [&](Topic t) {
@@ -342,7 +342,10 @@ TEST(DdsPublisher, WriterQosIsReliableKeepLastOneWithDeadlineForTracks) {
   auto tracks = qos(Topic::kTrackedObjects);
   ASSERT_TRUE(dds_qget_history(tracks.get(), &hk, &depth));
   EXPECT_EQ(hk, DDS_HISTORY_KEEP_LAST);
-  EXPECT_EQ(depth, 1);
+  EXPECT_EQ(depth, 10);  // a second of scans a stalled reader can still be resent
+  auto tracks_reader = reader_qos(Topic::kTrackedObjects);
+  ASSERT_TRUE(dds_qget_history(tracks_reader.get(), &hk, &depth));
+  EXPECT_EQ(depth, 1);  // the reader keeps the latest
   ASSERT_TRUE(dds_qget_reliability(tracks.get(), &rk, &blocking));
   EXPECT_EQ(rk, DDS_RELIABILITY_RELIABLE);
   ASSERT_TRUE(dds_qget_deadline(tracks.get(), &deadline));
