@@ -27,6 +27,7 @@ constexpr std::size_t kMaxClientMessageBytes = std::size_t{64} * 1024;
 struct Client {
   Handle handle;
   std::map<std::uint32_t, std::size_t> subscriptions;  // the client's id -> channel
+  std::size_t record = kClientRecords;  // its ServerCounts::clients entry (none past the last)
 };
 
 // Little-endian bytes of v appended to out.
@@ -46,6 +47,11 @@ struct FoxgloveServer::Impl {
   std::uint16_t port = 0;
   // Server thread only:
   std::map<Handle, Client, std::owner_less<Handle>> clients;
+  struct ClientDelta {
+    std::size_t record;
+    std::uint64_t sent, slow;
+  };
+  std::vector<ClientDelta> per_client;  // deliver()'s, kept to reuse its storage
   // Any thread:
   std::vector<std::atomic<int>> subscribers;  // per channel: subscriptions to it
   std::atomic<std::size_t> pending{0};
@@ -86,11 +92,18 @@ struct FoxgloveServer::Impl {
   }
 
   void open(const Handle& h) {
-    clients[h] = Client{h, {}};
+    Client& client = clients[h] = Client{h, {}};
     ++open_clients;
-    count([this](ServerCounts& c) {
+    websocketpp::lib::error_code ec;
+    WsServer::connection_ptr con = server.get_con_from_hdl(h, ec);
+    const std::string peer = ec || !con ? std::string("?") : con->get_remote_endpoint();
+    count([&](ServerCounts& c) {
       ++c.clients_accepted;
       c.clients_now = clients.size();
+      if (c.clients.size() < kClientRecords) {
+        client.record = c.clients.size();
+        c.clients.push_back({c.clients_accepted, peer, 0, 0});
+      }
     });
     send_text(h, {{"op", "serverInfo"},
                   {"name", options.name},
@@ -171,6 +184,7 @@ struct FoxgloveServer::Impl {
   // On the server thread: the message to each subscriber that keeps up.
   void deliver(std::size_t channel, std::uint64_t time_ns, const std::string& json) {
     std::uint64_t sent = 0, slow = 0;
+    per_client.clear();  // (record, sent, slow) of this message
     for (auto& [handle, client] : clients) {
       websocketpp::lib::error_code ec;
       WsServer::connection_ptr con = server.get_con_from_hdl(handle, ec);
@@ -179,6 +193,7 @@ struct FoxgloveServer::Impl {
         if (ch != channel) continue;
         if (con->get_buffered_amount() > options.max_client_buffer_bytes) {
           ++slow;
+          per_client.push_back({client.record, 0, 1});
           continue;
         }
         std::string frame;
@@ -189,11 +204,17 @@ struct FoxgloveServer::Impl {
         frame += json;
         con->send(frame, websocketpp::frame::opcode::binary);
         ++sent;
+        per_client.push_back({client.record, 1, 0});
       }
     }
     count([&](ServerCounts& c) {
       c.channels[channel].sent += sent;
       c.channels[channel].dropped_slow_client += slow;
+      for (const ClientDelta& d : per_client) {
+        if (d.record >= c.clients.size()) continue;
+        c.clients[d.record].sent += d.sent;
+        c.clients[d.record].dropped_slow_client += d.slow;
+      }
     });
   }
 };

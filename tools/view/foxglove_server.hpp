@@ -37,12 +37,22 @@ struct ChannelCounts {
   std::uint64_t dropped_backlog = 0;      // the server thread was max_pending_messages behind
 };
 
+// One client's messages (every channel), for the first kClientRecords clients accepted.
+struct ClientCounts {
+  std::uint64_t number = 0;  // 1 for the first client accepted
+  std::string peer;          // its address and port
+  std::uint64_t sent = 0;
+  std::uint64_t dropped_slow_client = 0;  // it had too much unsent
+};
+inline constexpr std::size_t kClientRecords = 64;
+
 struct ServerCounts {
   std::uint64_t clients_accepted = 0;
   std::uint64_t clients_refused = 0;  // no foxglove.websocket.v1 subprotocol, or too many clients
   std::uint64_t bad_client_messages = 0;  // not JSON, unknown op, unknown channel (status sent)
   std::size_t clients_now = 0;
   std::vector<ChannelCounts> channels;  // in the order given to start()
+  std::vector<ClientCounts> clients;    // in the order accepted, kClientRecords at most
 };
 
 class FoxgloveServer {

@@ -115,6 +115,14 @@ std::string ViewBridge::summary() const {
                   static_cast<unsigned long long>(k.dropped_backlog));
     out += line;
   }
+  for (const ClientCounts& k : c.clients) {
+    char line[256];
+    std::snprintf(line, sizeof line, "  client %llu (%s): sent %llu, dropped %llu (slow client)\n",
+                  static_cast<unsigned long long>(k.number), k.peer.c_str(),
+                  static_cast<unsigned long long>(k.sent),
+                  static_cast<unsigned long long>(k.dropped_slow_client));
+    out += line;
+  }
   return out;
 }
 
