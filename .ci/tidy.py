@@ -80,8 +80,16 @@ def main():
         if source in seen or not pattern.match(relative):
             continue
         seen.add(source)
-        output = os.path.normpath(os.path.join(entry["directory"], entry.get("output", "")))
-        listed = deps.get(os.path.relpath(output, build_abs)) if "output" in entry else None
+        # The object: the entry's "output" (CMake 3.20+ with some generators), else the command's
+        # -o (CMake 3.25's Ninja generator writes no "output").
+        output = entry.get("output")
+        if output is None:
+            m = re.search(r"(?:^|\s)-o\s+(\S+)", entry["command"])
+            output = m.group(1) if m else None
+        listed = None
+        if output is not None:
+            output = os.path.normpath(os.path.join(entry["directory"], output))
+            listed = deps.get(os.path.relpath(output, build_abs))
         key = None
         if listed:
             h = hashlib.sha256()
