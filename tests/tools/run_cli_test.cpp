@@ -1218,7 +1218,11 @@ TEST(RunCli, ThreeTimesTheSensorsRateKeepsLatencyAndMemoryBoundedAndCountsWhatIt
     if (rss_before == 0 && scans >= 45) rss_before = run.rss_kb();
     dds_sleepfor(DDS_MSECS(5));
   }
-  ASSERT_GT(rss_before, 0u) << scans << " scans";
+  // (Under a sanitizer fewer than 45 scans may get through all three passes; its memory is not
+  // checked, below.)
+  if constexpr (!stac::testing::kSanitizerBuild) {
+    ASSERT_GT(rss_before, 0u) << scans << " scans";
+  }
   ASSERT_EQ(replay.wait(), 0) << replay.output();
   dds_sleepfor(DDS_MSECS(500));
   const std::uint64_t rss_after = run.rss_kb();
