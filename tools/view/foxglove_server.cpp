@@ -7,9 +7,11 @@
 #include <atomic>
 #include <chrono>
 #include <functional>
+#include <limits>
 #include <map>
 #include <mutex>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <thread>
 #include <utility>
 #include <websocketpp/config/asio_no_tls.hpp>
@@ -23,6 +25,8 @@ using Handle = websocketpp::connection_hdl;
 constexpr const char* kSubprotocol = "foxglove.websocket.v1";
 constexpr std::uint8_t kMessageDataOpcode = 0x01;
 constexpr std::size_t kMaxClientMessageBytes = std::size_t{64} * 1024;
+// A connection must finish its WebSocket handshake within this, and answer a close within it.
+constexpr long kHandshakeTimeoutMs = 5000;
 
 struct Client {
   Handle handle;
@@ -47,6 +51,9 @@ struct FoxgloveServer::Impl {
   std::uint16_t port = 0;
   // Server thread only:
   std::map<Handle, Client, std::owner_less<Handle>> clients;
+  // Handshakes accepted (validate said yes) whose connection is not open yet: they count against
+  // max_clients too, or connections arriving together would all pass before any is open.
+  std::set<Handle, std::owner_less<Handle>> admitted;
   struct ClientDelta {
     std::size_t record;
     std::uint64_t sent, slow;
@@ -81,17 +88,19 @@ struct FoxgloveServer::Impl {
     bool speaks = false;
     for (const std::string& p : con->get_requested_subprotocols())
       speaks = speaks || p == kSubprotocol;
-    if (!speaks || clients.size() >= options.max_clients) {
+    if (!speaks || clients.size() + admitted.size() >= options.max_clients) {
       con->set_status(speaks ? websocketpp::http::status_code::service_unavailable
                              : websocketpp::http::status_code::bad_request);
       count([](ServerCounts& c) { ++c.clients_refused; });
       return false;
     }
     con->select_subprotocol(kSubprotocol);
+    admitted.insert(h);
     return true;
   }
 
   void open(const Handle& h) {
+    admitted.erase(h);
     Client& client = clients[h] = Client{h, {}};
     ++open_clients;
     websocketpp::lib::error_code ec;
@@ -125,6 +134,7 @@ struct FoxgloveServer::Impl {
   }
 
   void closed(const Handle& h) {
+    admitted.erase(h);  // a handshake accepted that failed before the connection opened
     auto it = clients.find(h);
     if (it == clients.end()) return;
     for (const auto& [id, channel] : it->second.subscriptions) --subscribers[channel];
@@ -154,7 +164,13 @@ struct FoxgloveServer::Impl {
           status(h, 2, "a subscription needs an unsigned \"id\" and \"channelId\"");
           continue;
         }
-        const auto id = s["id"].get<std::uint32_t>();
+        // Ids are 32-bit on the wire (a message's header); a larger one is refused, not cut.
+        const auto wide_id = s["id"].get<std::uint64_t>();
+        if (wide_id > std::numeric_limits<std::uint32_t>::max()) {
+          status(h, 2, "subscription id " + std::to_string(wide_id) + " is over 2^32-1");
+          continue;
+        }
+        const auto id = static_cast<std::uint32_t>(wide_id);
         const auto channel = s["channelId"].get<std::uint64_t>();
         if (channel == 0 || channel > channels.size()) {
           status(h, 2, "no channel " + std::to_string(channel));
@@ -164,13 +180,24 @@ struct FoxgloveServer::Impl {
           status(h, 2, "subscription id " + std::to_string(id) + " is in use");
           continue;
         }
+        // One subscription per channel and client (as Foxglove's own server): a client holds
+        // at most as many subscriptions as there are channels, and gets each message once.
+        bool already = false;
+        for (const auto& [other_id, other_channel] : client.subscriptions)
+          already = already || other_channel == channel - 1;
+        if (already) {
+          status(h, 2, "already subscribed to channel " + std::to_string(channel));
+          continue;
+        }
         client.subscriptions[id] = static_cast<std::size_t>(channel - 1);
         ++subscribers[channel - 1];
       }
     } else if (op == "unsubscribe" && j.contains("subscriptionIds") &&
                j["subscriptionIds"].is_array()) {
       for (const nlohmann::json& id : j["subscriptionIds"]) {
-        if (!id.is_number_unsigned()) continue;
+        if (!id.is_number_unsigned() ||
+            id.get<std::uint64_t>() > std::numeric_limits<std::uint32_t>::max())
+          continue;
         auto s = client.subscriptions.find(id.get<std::uint32_t>());
         if (s == client.subscriptions.end()) continue;
         --subscribers[s->second];
@@ -239,6 +266,8 @@ std::unique_ptr<FoxgloveServer> FoxgloveServer::start(const ServerOptions& optio
   }
   ws.set_reuse_addr(true);
   ws.set_max_message_size(kMaxClientMessageBytes);
+  ws.set_open_handshake_timeout(kHandshakeTimeoutMs);
+  ws.set_close_handshake_timeout(kHandshakeTimeoutMs);
   ws.set_validate_handler([&s](const Handle& h) { return s.validate(h); });
   ws.set_open_handler([&s](const Handle& h) { s.open(h); });
   ws.set_close_handler([&s](const Handle& h) { s.closed(h); });

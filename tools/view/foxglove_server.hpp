@@ -22,10 +22,10 @@ struct Channel {
 };
 
 struct ServerOptions {
-  std::string address = "127.0.0.1";                // IPv4 address to listen on
-  std::uint16_t port = 8765;                        // 0: any free port (port() says which)
-  std::string name = "stac view";                   // serverInfo's name
-  std::size_t max_clients = 16;                     // more are refused at the handshake
+  std::string address = "127.0.0.1";  // IPv4 address to listen on
+  std::uint16_t port = 8765;          // 0: any free port (port() says which)
+  std::string name = "stac view";     // serverInfo's name
+  std::size_t max_clients = 16;       // more are refused at the handshake (ones in progress count)
   std::size_t max_client_buffer_bytes = 16u << 20;  // per client, unsent bytes
   std::size_t max_pending_messages = 64;            // handed over, not yet on the server thread
 };
