@@ -7,6 +7,7 @@
 #include <string_view>
 #include <vector>
 
+#include "dds/identity.hpp"
 #include "dds/idl_types.hpp"
 #include "perception/tracking/track.hpp"
 
@@ -327,6 +328,8 @@ class TypedPublisher final : public Publisher {
 
 template <bool Ros2>
 rt::Result<std::unique_ptr<Publisher>> make(const PublisherConfig& config) {
+  if (auto s = check_identity_keys(config.config_uri); !s)
+    return rt::Unexpected<rt::Error>{s.error()};
   dds_entity_t domain = 0;
   if (!config.config_uri.empty()) {
     domain = dds_create_domain(config.domain_id, config.config_uri.c_str());

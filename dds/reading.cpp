@@ -1,5 +1,6 @@
 #include "dds/reading.hpp"
 
+#include "dds/identity.hpp"
 #include "dds/idl_types.hpp"
 
 namespace stac::dds {
@@ -28,6 +29,8 @@ const dds_topic_descriptor_t* descriptor(dds::Topic t) {
 rt::Result<std::unique_ptr<TopicReaders>> TopicReaders::create(const dds::PublisherConfig& c) {
   if (c.domain_id > 230)
     return rt::make_error("DDS domain " + std::to_string(c.domain_id) + ": must be 0..230");
+  if (auto s = dds::check_identity_keys(c.config_uri); !s)
+    return rt::Unexpected<rt::Error>{s.error()};
   dds_entity_t domain = 0;
   if (!c.config_uri.empty()) {
     domain = dds_create_domain(c.domain_id, c.config_uri.c_str());

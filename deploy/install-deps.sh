@@ -14,6 +14,7 @@ packages=(
   libpcl-dev  # benchmarks only: PCL Euclidean clustering as the baseline of perception/segmentation
   cyclonedds-dev cyclonedds-tools  # DDS publishing edge (dds/, idl/): C API and idlc
   openssl  # deploy/dds-security.sh: the DDS Security CAs, certificates and signed documents
+  libssl-dev  # dds/identity.cpp: a DDS Security private key checked against its certificate
   clang-format clang-tidy  # .ci/check-style (STYLE.md rule 14)
   clang-14 libclang-rt-14-dev  # fuzz/: libFuzzer harnesses with ASan + UBSan (fuzz/run.sh)
   libcpp-httplib-dev  # stac label: the local web page of group induction

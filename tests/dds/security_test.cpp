@@ -14,6 +14,7 @@
 #include <thread>
 #include <vector>
 
+#include "dds/identity.hpp"
 #include "dds/publisher.hpp"
 #include "dds_test_support.hpp"
 #include "test_paths.hpp"
@@ -73,6 +74,16 @@ class DdsSecurity : public ::testing::Test {
                replace_all(read_file(dir_ / "viewer" / "cyclonedds.xml"),
                            (dir_ / "viewer" / "cert.pem").string(),
                            (dir_ / "tampered" / "cert.pem").string()));
+
+    // 'stac' (which may publish and subscribe) with the private key of 'viewer': both made by the
+    // vehicle's CA, each well formed, but the key is not the certificate's.
+    fs::copy(dir_ / "stac", dir_ / "mismatched");
+    fs::copy_file(dir_ / "viewer" / "key.pem", dir_ / "mismatched" / "key.pem",
+                  fs::copy_options::overwrite_existing);
+    write_file(dir_ / "mismatched" / "cyclonedds.xml",
+               replace_all(read_file(dir_ / "stac" / "cyclonedds.xml"),
+                           (dir_ / "stac" / "key.pem").string(),
+                           (dir_ / "mismatched" / "key.pem").string()));
   }
   static void TearDownTestSuite() {
     fs::remove_all(dir_);
@@ -214,6 +225,29 @@ TEST_F(DdsSecurity, ATamperedCertificateIsRefused) {
   EXPECT_NE(code, 0) << out;
   EXPECT_EQ(out.find("listening on"), std::string::npos) << out;
   EXPECT_NE(out.find("participant"), std::string::npos) << out;
+}
+
+// Cyclone 0.10 starts a participant whose private key is not its certificate's (no peer can
+// authenticate it: a `stac run` serving nobody, rc 0); STAC refuses it first, naming both files.
+TEST_F(DdsSecurity, APrivateKeyThatIsNotTheCertificatesIsRefusedAtStart) {
+  auto pub = publisher(xml("mismatched"), 154);
+  ASSERT_FALSE(pub) << "a publisher started with another identity's private key";
+  EXPECT_NE(pub.error().message.find("is not the key of the identity certificate"),
+            std::string::npos)
+      << pub.error().message;
+  EXPECT_NE(pub.error().message.find((dir_ / "mismatched" / "key.pem").string()), std::string::npos)
+      << pub.error().message;
+  // The same for a reader (`stac echo`); and XML given inline is read as a file is.
+  FILE* child = echo(xml("mismatched"), 154, 1, 6);
+  ASSERT_NE(child, nullptr);
+  int code = -1;
+  const std::string out = run_to_end(child, &code);
+  EXPECT_NE(code, 0) << out;
+  EXPECT_NE(out.find("is not the key of the identity certificate"), std::string::npos) << out;
+  auto good = publisher(xml("stac"), 155);  // the right key still starts
+  EXPECT_TRUE(good) << good.error().message;
+  EXPECT_FALSE(check_identity_keys(read_file(xml("mismatched"))));
+  EXPECT_TRUE(check_identity_keys(read_file(xml("stac"))));
 }
 
 }  // namespace
