@@ -199,6 +199,7 @@ rt::Result<Dataset> parse_dataset(std::span<const std::uint8_t> bytes, const std
     return bad("descriptor layout differs from this build's");
   }
   Dataset d;
+  d.checksum = stored;
   const auto get_string = [&r](std::string& s) {
     std::uint32_t n = 0;
     if (!r.get(n) || r.bytes.size() - r.at < n) return false;

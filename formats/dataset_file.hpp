@@ -49,6 +49,10 @@ struct Dataset {
   bool labelled = true;
   std::vector<std::string> sources;  // "capture truth" of each run
   std::vector<DatasetTrack> tracks;
+  // Read: tracks.bin's checksum (its last 8 bytes), which names this dataset's contents (a state
+  // of `stac induct` keeps it, so a dataset remade at the same path is not taken for the one it
+  // read). Not written: write_dataset computes its own.
+  std::uint64_t checksum = 0;
 };
 
 // Version 5 adds each track's path and point snapshots; version 4 says whether the tracks are

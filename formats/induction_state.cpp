@@ -1,6 +1,7 @@
 #include "formats/induction_state.hpp"
 
 #include <bit>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <iterator>
@@ -107,6 +108,7 @@ rt::Status write_induction_state(const std::filesystem::path& dir, const Inducti
     w.string(src.path);
     w.put(static_cast<std::uint8_t>(src.role));
     w.put(static_cast<std::uint8_t>(src.stage));
+    w.put(src.dataset_checksum);
   }
   w.put(static_cast<std::uint64_t>(s.labels.size()));
   for (const LabelledTrack& t : s.labels) {
@@ -164,7 +166,7 @@ rt::Result<InductionState> read_induction_state(const std::filesystem::path& dir
   Reader r{body, sizeof(kMagic)};
   InductionState s;
   const auto version = r.get<std::uint32_t>();
-  if (version != 1 && version != kInductionStateVersion)
+  if (version < 1 || version > kInductionStateVersion)
     return bad("format version " + std::to_string(version) + ", this build reads 1 to " +
                std::to_string(kInductionStateVersion));
   if (r.get<std::uint32_t>() != descriptors::kDimensions ||
@@ -197,6 +199,7 @@ rt::Result<InductionState> read_induction_state(const std::filesystem::path& dir
     if (role > 2 || stage > 2) r.ok = false;
     src.role = static_cast<SourceRole>(role);
     src.stage = static_cast<ChunkStage>(stage);
+    if (version >= 3) src.dataset_checksum = r.get<std::uint64_t>();
   }
   const auto source_ok = [&s](std::uint32_t i) { return i < s.sources.size(); };
   s.labels.resize(r.count(kLabelMin));
@@ -253,6 +256,28 @@ bool is_answer_line(const std::string& line) {
   return !j.is_discarded() && j.is_object() && j.contains("source") && j["source"].is_string() &&
          j.contains("track") && j["track"].is_number_unsigned() && j.contains("label") &&
          j["label"].is_string();
+}
+
+rt::Status bind_source_dataset(InductionState& state, const std::string& path,
+                               std::uint64_t checksum) {
+  for (InductionSource& src : state.sources) {
+    if (src.path != path) continue;
+    if (src.dataset_checksum == 0) {
+      src.dataset_checksum = checksum;
+    } else if (src.dataset_checksum != checksum) {
+      char had[17], has[17];
+      std::snprintf(had, sizeof had, "%016llx",
+                    static_cast<unsigned long long>(src.dataset_checksum));
+      std::snprintf(has, sizeof has, "%016llx", static_cast<unsigned long long>(checksum));
+      return rt::make_error(
+          path + ": not the dataset this state read there (its tracks.bin's checksum is " + has +
+          ", the state read " + had +
+          "): it was remade, and the questions and answers, which name its tracks by number, "
+          "would fall on other tracks. Give the dataset the state read (restore it), or start a "
+          "new state for the new one");
+    }
+  }
+  return {};
 }
 
 }  // namespace stac::formats

@@ -28,6 +28,10 @@ struct InductionSource {
   std::string path;  // as given on the command line
   SourceRole role = SourceRole::kUnlabeled;
   ChunkStage stage = ChunkStage::kNew;  // unlabeled chunks: its round done, its questions asked
+  // The checksum of the tracks.bin read there (Dataset::checksum); 0 until first read (and in a
+  // state of version 2 or older). Questions and answers name tracks by index, so a dataset remade
+  // at the same path is refused rather than read as the same tracks.
+  std::uint64_t dataset_checksum = 0;
 };
 
 // A track the user labelled (an answer of labels.jsonl with its descriptors).
@@ -57,8 +61,9 @@ struct InductionState {
   classification::TrackClassifierModel model;
 };
 
-// Version 2 added kept_classes; a version 1 state reads as keeping none.
-inline constexpr std::uint32_t kInductionStateVersion = 2;
+// Version 3 added each source's dataset checksum (older states learn it at the next read);
+// version 2 added kept_classes (a version 1 state reads as keeping none).
+inline constexpr std::uint32_t kInductionStateVersion = 3;
 
 // DIR/state.bin. Errors name the file and say what to do.
 rt::Result<InductionState> read_induction_state(const std::filesystem::path& dir);
@@ -66,5 +71,11 @@ rt::Result<InductionState> read_induction_state(const std::filesystem::path& dir
 // a string), "track" (its index, an unsigned number) and "label" (a string).
 bool is_answer_line(const std::string& line);
 rt::Status write_induction_state(const std::filesystem::path& dir, const InductionState& state);
+
+// The dataset read at `path` (its tracks.bin's `checksum`) checked against the state's source of
+// that path: an error when the state read other contents there (the dataset was remade), naming
+// both checksums and what to do; a source not read before learns the checksum.
+rt::Status bind_source_dataset(InductionState& state, const std::string& path,
+                               std::uint64_t checksum);
 
 }  // namespace stac::formats

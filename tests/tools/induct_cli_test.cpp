@@ -308,6 +308,33 @@ TEST_F(InductCli, BadInputsAreRefusedNamingTheFileAndNoAnswerIsLost) {
   EXPECT_EQ(read_text(labels), before);
 }
 
+// Questions and answers name a dataset's tracks by number: a dataset remade at the same path (other
+// tracks under the same numbers) is refused naming it, not read as the tracks the state asked
+// about (issue 47: every question and answer moved onto other tracks, rc 0); the same contents
+// restored are taken again.
+TEST_F(InductCli, ADatasetRemadeAtTheSamePathIsRefusedNotReadAsTheSameTracks) {
+  const fs::path remade = at("remade_data");
+  fs::copy(at("chunk1_data"), remade, fs::copy_options::recursive);
+  const std::string state = "--state " + at("remade");
+  CliResult r = stac("induct " + state + " --classes car,pedestrian,bicyclist --background " +
+                     at("empty_data") + " --labels " + at("labels_data") +
+                     " --labels-per-class 2 --unlabeled " + remade.string() +
+                     " --oracle --ask 1 --warm-rounds 10 --reset-rounds 20");
+  ASSERT_EQ(r.code, 0) << r.output;
+  fs::remove_all(remade);
+  fs::copy(at("chunk2_data"), remade, fs::copy_options::recursive);
+  r = stac("induct " + state + " --requery");
+  EXPECT_NE(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find(remade.string() + ": not the dataset this state read there"),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("start a new state"), std::string::npos) << r.output;
+  fs::remove_all(remade);
+  fs::copy(at("chunk1_data"), remade, fs::copy_options::recursive);
+  r = stac("induct " + state + " --requery");
+  EXPECT_EQ(r.code, 0) << r.output;
+}
+
 // A class the default model does not have (issue 29): trees, taught with --add-classes beside
 // the default model's three, which are kept as they are; B0 a street without trees
 // (`stac sim --without tree`).
