@@ -26,12 +26,30 @@ std::string capture_frames_summary(const io::PcapCounters& pc, std::uint64_t pac
   return s;
 }
 
+namespace {
+
+std::string other_model_summary(const velodyne::AssemblerCounters& a) {
+  std::string s;
+  if (a.other_model_dropped > 0) {
+    s += "; another model's packets " + n(a.other_model_dropped) +
+         " (their bytes name a model other than the one the capture's first packets named: "
+         "another sensor on the port? dropped, not decoded as this one's lasers)";
+  }
+  if (a.model_mismatch > a.other_model_dropped) {
+    s += "; packets naming another model " + n(a.model_mismatch - a.other_model_dropped) +
+         " (decoded as the configured model: check velodyne.model, or --model auto)";
+  }
+  return s;
+}
+
+}  // namespace
+
 std::string packet_drops_summary(const velodyne::AssemblerCounters& a) {
   return "wrong size " + n(a.wrong_size) + ", invalid block " + n(a.invalid_block) +
          ", duplicate " + n(a.duplicates) + ", late firings " + n(a.late_firings) +
          ", points over capacity " + n(a.points_dropped) + "; estimated packets lost " +
          n(a.packets_lost) + ", scans closed by silence " + n(a.time_gaps) + ", by timeout " +
-         n(a.timeouts);
+         n(a.timeouts) + other_model_summary(a);
 }
 
 std::string nothing_decoded_reason(const std::string& capture, const io::PcapCounters& pc,
@@ -47,7 +65,8 @@ std::string nothing_decoded_reason(const std::string& capture, const io::PcapCou
       return s + " (" + n(pc.filtered_out) + " UDP datagrams to other ports: wrong --port?)";
     return s + " (wrong --port?)";
   }
-  const std::uint64_t dropped = a.wrong_size + a.invalid_block + a.duplicates;
+  const std::uint64_t dropped =
+      a.wrong_size + a.invalid_block + a.duplicates + a.other_model_dropped;
   if (dropped == a.packets) {
     return capture + ": none of its " + n(a.packets) + " packets to port " + n(port) +
            " is an HDL-64E data packet: wrong size " + n(a.wrong_size) +

@@ -130,6 +130,8 @@ rt::Result<velodyne::Calibration> capture_sensor(settings::VelodyneSettings& s,
     }
     if (auto u = settings::use_velodyne_model(s, model, calibration_given); !u)
       return rt::Unexpected<rt::Error>{u.error()};
+    // The capture's word is taken: packets naming another model are another sensor's.
+    s.assembler.drop_other_models = true;
     std::fprintf(stderr, "stac: %s: velodyne.model auto: %s%s\n", capture.string().c_str(),
                  id->kind == velodyne::PacketIdentity::Kind::kHdl64
                      ? "HDL-64E packets (they do not say S2, S2.1 or S3): decoded as an S2.1"

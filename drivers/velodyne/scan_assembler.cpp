@@ -140,14 +140,19 @@ bool ScanAssembler::add_packet(std::span<const std::uint8_t> payload,
     ++counters_.duplicates;
     return false;
   }
-  if (scan_ == nullptr) return false;     // begin() was never called: nothing to write into
-  if (target_ == &carry_) begin(*scan_);  // the caller did not take the closed scan: reuse it
-  std::memcpy(last_trailer_.data(), packet->trailer, last_trailer_.size());
   if (const PacketIdentity id = identify_packet(payload);
       !identity_matches(id, decoder_.model_id())) {
     ++counters_.model_mismatch;
     last_identity_ = id;
+    if (config_.drop_other_models &&
+        (id.kind == PacketIdentity::Kind::kHdl64 || id.model.has_value())) {
+      ++counters_.other_model_dropped;
+      return false;
+    }
   }
+  if (scan_ == nullptr) return false;     // begin() was never called: nothing to write into
+  if (target_ == &carry_) begin(*scan_);  // the caller did not take the closed scan: reuse it
+  std::memcpy(last_trailer_.data(), packet->trailer, last_trailer_.size());
   if (model.trailer == TrailerKind::kGpsStatus) status_.add(packet->trailer[4], packet->trailer[5]);
   const std::uint32_t device_usec =
       model.trailer == TrailerKind::kSpinCount ? 0 : load_u32(packet->trailer);

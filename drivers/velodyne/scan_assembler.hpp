@@ -30,23 +30,29 @@ struct ScanAssemblerConfig {
   // A scan whose packets arrived for less than this fraction (the rest lost on the wire,
   // estimated from azimuth steps) is not complete: not processed, counted.
   double min_completeness = 0.9;
+  // The model was taken from the capture's own packets (velodyne.model: auto, offline): a packet
+  // whose bytes name another model STAC knows is then another sensor's, and is dropped and counted
+  // (other_model_dropped) rather than decoded as the first one's lasers. Off: decoded as
+  // configured and counted (model_mismatch), as the bytes are not always true.
+  bool drop_other_models = false;
 };
 
 struct AssemblerCounters {
-  std::uint64_t packets = 0;             // payloads offered
-  std::uint64_t wrong_size = 0;          // not 1206 bytes: dropped
-  std::uint64_t model_mismatch = 0;      // decoded as the configured model, though their bytes
-                                         // name another (PacketIdentity): see last_identity()
-  std::uint64_t invalid_block = 0;       // bad bank id, rotation >= 36000, or rotations that jump
-                                         // between its blocks (over 3 deg): packet dropped
-  std::uint64_t duplicates = 0;          // identical to one of the last 16 packets: dropped
-  std::uint64_t late_firings = 0;        // reordered firings belonging to an already closed scan
-  std::uint64_t packets_lost = 0;        // estimated from azimuth steps
-  std::uint64_t time_gaps = 0;           // scans closed by silence or a clock jump
-  std::uint64_t timeouts = 0;            // scans closed by max_scan_duration_s
-  std::uint64_t points_dropped = 0;      // returns beyond a scan's capacity
-  std::uint64_t scans = 0;               // scans closed
-  std::uint64_t below_completeness = 0;  // scans closed with too many packets lost
+  std::uint64_t packets = 0;              // payloads offered
+  std::uint64_t wrong_size = 0;           // not 1206 bytes: dropped
+  std::uint64_t model_mismatch = 0;       // their bytes name another model (PacketIdentity): see
+                                          // last_identity(); decoded as the configured model...
+  std::uint64_t other_model_dropped = 0;  // ...but for these: dropped (drop_other_models)
+  std::uint64_t invalid_block = 0;        // bad bank id, rotation >= 36000, or rotations that jump
+                                          // between its blocks (over 3 deg): packet dropped
+  std::uint64_t duplicates = 0;           // identical to one of the last 16 packets: dropped
+  std::uint64_t late_firings = 0;         // reordered firings belonging to an already closed scan
+  std::uint64_t packets_lost = 0;         // estimated from azimuth steps
+  std::uint64_t time_gaps = 0;            // scans closed by silence or a clock jump
+  std::uint64_t timeouts = 0;             // scans closed by max_scan_duration_s
+  std::uint64_t points_dropped = 0;       // returns beyond a scan's capacity
+  std::uint64_t scans = 0;                // scans closed
+  std::uint64_t below_completeness = 0;   // scans closed with too many packets lost
 };
 
 // Points a scan must hold at the slowest configured rotation, with 10% margin.

@@ -278,6 +278,51 @@ TEST_P(FamilyModel, AssemblerFramesTurnsAndCountsAnotherModelsPackets) {
   EXPECT_FALSE(assembler.last_identity().model.has_value());
 }
 
+// With the model taken from the capture's packets (drop_other_models, `--model auto` offline), a
+// packet naming another model STAC knows is another sensor's: dropped and counted, never decoded
+// as this model's lasers; one naming an unknown product is still decoded (the bytes may lie).
+TEST_P(FamilyModel, WithTheModelFromThePacketsAnotherKnownModelsPacketsAreDropped) {
+  const Model m = GetParam();
+  if (family(m).shared != nullptr) STAC_REQUIRE_SHARED_DATA(family(m).shared);
+  const velodyne::Calibration cal = load_for(m);
+  const auto run = family_run(m, cal, 3, 0.45);
+  ASSERT_TRUE(run);
+  velodyne::ScanAssemblerConfig ac;
+  ac.decoder.model = m;
+  ac.decoder.min_range_m = 0.0f;
+  ac.decoder.max_range_m = 250.0f;
+  ac.drop_other_models = true;
+  velodyne::ScanAssembler assembler(cal, ac);
+  velodyne::Scan scan(velodyne::scan_capacity(ac));
+  assembler.begin(scan);
+  const Model other = m == Model::kHdl32e ? Model::kVlp32c : Model::kHdl32e;
+  std::array<std::uint8_t, velodyne::kPacketSize> bytes{};
+  std::size_t kept_returns = 0, points = 0, others = 0, unknown = 0;
+  const double period = 1.0 / velodyne::traits(m).packets_per_second_single;
+  for (std::uint32_t k = 0; k < run->packet_count(); ++k) {
+    std::int64_t first = 0;
+    std::size_t returned = 0;
+    run->packet(k, bytes, first, {}, [&](const BeamRecord& b) { returned += b.returned; });
+    bytes[1204] = velodyne::kReturnStrongest;
+    bytes[1205] = velodyne::traits(m).product_id;
+    if (k % 10 == 9) {
+      bytes[1205] = velodyne::traits(other).product_id;  // 1 in 10: a known other model
+      ++others;
+    } else {
+      if (k % 10 == 4) bytes[1205] = 0x77, ++unknown;  // 1 in 10: a product STAC does not know
+      kept_returns += returned;
+    }
+    if (assembler.add_packet(bytes, std::llround(k * period * 1e9))) {
+      points += scan.points.size();
+      assembler.begin(scan);
+    }
+  }
+  if (assembler.flush()) points += scan.points.size();
+  EXPECT_EQ(points, kept_returns);  // every return of the kept packets, none of the others'
+  EXPECT_EQ(assembler.counters().other_model_dropped, others);
+  EXPECT_EQ(assembler.counters().model_mismatch, others + unknown);
+}
+
 INSTANTIATE_TEST_SUITE_P(Models, FamilyModel,
                          ::testing::Values(Model::kHdl32e, Model::kVlp16, Model::kPuckHiRes,
                                            Model::kVlp32c),

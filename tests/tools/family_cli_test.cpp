@@ -3,10 +3,15 @@
 // `stac process --sensor auto` tracks the drive and `stac eval` scores it against the truth.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "shared_data.hpp"
 #include "stac_cli.hpp"
@@ -88,6 +93,81 @@ INSTANTIATE_TEST_SUITE_P(Models, FamilyCli,
                            std::erase_if(name, [](char ch) { return !std::isalnum(ch); });
                            return name;
                          });
+
+// The records of two pcap files (same link type) merged in time order into `out`.
+void merge_pcaps(const std::filesystem::path& a, const std::filesystem::path& b,
+                 const std::filesystem::path& out) {
+  struct Record {
+    std::uint64_t stamp_us;
+    std::string bytes;
+  };
+  std::string header;
+  std::vector<Record> records;
+  for (const auto& file : {a, b}) {
+    std::ifstream in(file, std::ios::binary);
+    std::string bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+    ASSERT_GE(bytes.size(), 24u) << file;
+    header = bytes.substr(0, 24);
+    for (std::size_t at = 24; at + 16 <= bytes.size();) {
+      std::uint32_t sec = 0, usec = 0, length = 0;
+      std::memcpy(&sec, bytes.data() + at, 4);
+      std::memcpy(&usec, bytes.data() + at + 4, 4);
+      std::memcpy(&length, bytes.data() + at + 8, 4);
+      ASSERT_LE(at + 16 + length, bytes.size()) << file;
+      records.push_back({std::uint64_t{sec} * 1'000'000 + usec, bytes.substr(at, 16 + length)});
+      at += 16 + length;
+    }
+  }
+  std::stable_sort(records.begin(), records.end(),
+                   [](const Record& x, const Record& y) { return x.stamp_us < y.stamp_us; });
+  std::ofstream o(out, std::ios::binary);
+  o << header;
+  for (const Record& r : records) o << r.bytes;
+}
+
+// The number after `label` in `text` (0 when absent).
+unsigned long long number_after(const std::string& text, const std::string& label) {
+  const auto at = text.find(label);
+  return at == std::string::npos ? 0 : std::stoull(text.substr(at + label.size()));
+}
+
+// Two sensors on one port (issue 47): with --model auto the capture's first packets name the model
+// and the other sensor's packets are dropped and counted, not decoded as garbage points of the
+// first (a VLP-16's 16 lasers with an HDL-32E's blocks).
+TEST(FamilyCli, TwoModelsOnOnePortWithModelAutoKeepOnlyTheFirstModelsPoints) {
+  const auto dir = stac::testing::fresh_dir("stac_family_two_models");
+  for (const char* model : {"VLP-16", "HDL-32E"}) {
+    const CliResult sim = stac(std::string("sim --model ") + model +
+                               " --scenario parking-lot --seed 11 --duration 1 --out " +
+                               (dir / (std::string(model) + ".pcap")).string() + " --truth " +
+                               (dir / (std::string(model) + ".jsonl")).string());
+    ASSERT_EQ(sim.code, 0) << sim.output;
+  }
+  merge_pcaps(dir / "VLP-16.pcap", dir / "HDL-32E.pcap", dir / "both.pcap");
+  std::map<std::string, CliResult> alone;
+  for (const char* model : {"VLP-16", "HDL-32E"}) {
+    alone[model] =
+        stac("decode --model auto --in " + (dir / (std::string(model) + ".pcap")).string() +
+             " --out " + (dir / "alone.csv").string());
+    ASSERT_EQ(alone[model].code, 0) << alone[model].output;
+  }
+  const CliResult both = stac("decode --model auto --in " + (dir / "both.pcap").string() +
+                              " --out " + (dir / "both.csv").string());
+  ASSERT_EQ(both.code, 0) << both.output;
+  // The model of the earliest packet is taken; the other's packets (every one to the port) are
+  // dropped, and the points are exactly those of the first model's capture alone.
+  const bool vlp_first = both.output.find("packets of a VLP-16") != std::string::npos;
+  const std::string first = vlp_first ? "VLP-16" : "HDL-32E",
+                    other = vlp_first ? "HDL-32E" : "VLP-16";
+  ASSERT_NE(both.output.find("packets of a " + first), std::string::npos) << both.output;
+  const unsigned long long other_packets = number_after(alone[other].output, "frames: ");
+  EXPECT_GT(other_packets, 700u) << alone[other].output;
+  EXPECT_EQ(number_after(both.output, "another model's packets "), other_packets) << both.output;
+  EXPECT_GT(number_after(alone[first].output, "  points    "), 10'000u) << alone[first].output;
+  EXPECT_EQ(number_after(both.output, "  points    "),
+            number_after(alone[first].output, "  points    "))
+      << both.output;
+}
 
 // A sensor the calibration does not fit, and a model name STAC does not know, are refused with
 // what to do.
