@@ -160,6 +160,13 @@ rt::Result<Dataset> read_dataset(const std::filesystem::path& dir) {
   const std::filesystem::path bin = dir / "tracks.bin";
   const std::string name = bin.string();
   std::error_code ec;
+  if (std::filesystem::exists(dir, ec) && !std::filesystem::is_directory(dir, ec)) {
+    // A capture (or a drive's file) where a dataset folder was meant: its dataset goes elsewhere.
+    return rt::make_error(dir.string() +
+                          ": a file, not a dataset folder; if it is a capture, make its dataset "
+                          "with `stac dataset --in " +
+                          dir.string() + " --out FOLDER` and give FOLDER here");
+  }
   if (!std::filesystem::is_regular_file(bin, ec)) {
     return rt::make_error(name +
                           ": missing; make the dataset with `stac dataset --in RUN.pcap "

@@ -3,8 +3,11 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <fstream>
+#include <iterator>
 
 namespace stac::formats {
 namespace {
@@ -87,7 +90,8 @@ rt::Status cut_torn_tail(const std::filesystem::path& path) {
 }
 
 rt::Result<bool> complete_or_cut_tail(const std::filesystem::path& path,
-                                      const std::function<bool(const std::string&)>& whole) {
+                                      const std::function<bool(const std::string&)>& whole,
+                                      const std::function<bool(const std::string&)>& complete) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) return false;
   const int fd = ::open(path.c_str(), O_RDWR | O_CLOEXEC);
@@ -112,6 +116,16 @@ rt::Result<bool> complete_or_cut_tail(const std::filesystem::path& path,
     ::close(fd);
     if (!ok) return rt::make_error(path.string() + ": cannot end its last line (" + why + ")");
     return false;
+  }
+  if (complete && complete(last)) {
+    ::close(fd);
+    std::ifstream in(path);
+    const auto lines = static_cast<std::size_t>(
+        std::count(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>(), '\n'));
+    return rt::make_error(path.string() + ":" + std::to_string(lines + 1) +
+                          ": the last line is complete but not a valid record (" +
+                          (last.size() > 80 ? last.substr(0, 80) + "..." : last) +
+                          "); fix or delete that line");
   }
   auto cut = cut_tail(fd, path);
   ::close(fd);

@@ -24,8 +24,11 @@ rt::Status append_line_durably(const std::filesystem::path& path, const std::str
 rt::Status cut_torn_tail(const std::filesystem::path& path);
 // A last line without its '\n' in a file people also write by hand (printf, echo -n and many
 // editors end a file so): completed with the '\n' when `whole` says it is a whole record, cut
-// off as torn otherwise. Returns whether a torn line was cut.
+// off as torn otherwise. Returns whether a torn line was cut. With `complete` (e.g. "parses as a
+// JSON value"): a line that is complete but not a whole record was written so by a person, not
+// torn by a kill, and is an error naming the file and the line (the file is left as it is).
 rt::Result<bool> complete_or_cut_tail(const std::filesystem::path& path,
-                                      const std::function<bool(const std::string&)>& whole);
+                                      const std::function<bool(const std::string&)>& whole,
+                                      const std::function<bool(const std::string&)>& complete = {});
 
 }  // namespace stac::formats

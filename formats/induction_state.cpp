@@ -258,6 +258,10 @@ bool is_answer_line(const std::string& line) {
          j["label"].is_string();
 }
 
+bool is_json_line(const std::string& line) {
+  return nlohmann::json::accept(line);
+}
+
 rt::Status bind_source_dataset(InductionState& state, const std::string& path,
                                std::uint64_t checksum) {
   for (InductionSource& src : state.sources) {

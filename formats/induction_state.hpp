@@ -70,6 +70,9 @@ rt::Result<InductionState> read_induction_state(const std::filesystem::path& dir
 // Whether a line of labels.jsonl is a whole answer: a JSON object with "source" (a dataset path,
 // a string), "track" (its index, an unsigned number) and "label" (a string).
 bool is_answer_line(const std::string& line);
+// Whether a line is a whole JSON value: a last line that is, but is no answer, was written so by
+// a person (not torn by a kill) and is refused, not cut (complete_or_cut_tail).
+bool is_json_line(const std::string& line);
 rt::Status write_induction_state(const std::filesystem::path& dir, const InductionState& state);
 
 // The dataset read at `path` (its tracks.bin's `checksum`) checked against the state's source of

@@ -66,7 +66,8 @@ struct InductOptions {
   std::string out;
   std::string export_dir;
   std::vector<std::string> references;  // NAME=ACCURACY lines on the chart
-  bool settings_given = false;
+  // Which of --dual, --eps, --group-size, --buffer were given (each is checked against a state's).
+  bool dual_given = false, eps_given = false, group_given = false, buffer_given = false;
   bool baseline = false;
 };
 
@@ -163,6 +164,11 @@ rt::Result<std::uint32_t> Inductor::source_index(const std::string& path, Source
         return rt::make_error(path +
                               ": already read as labelled or unlabeled data; B0 must hold only "
                               "drives without the taught classes");
+      if (s_.sources[i].role != role && s_.sources[i].role == SourceRole::kBackground)
+        return rt::make_error(path + ": this state read it as B0 (--background: drives without " +
+                              "the taught classes, every track background); it cannot be " +
+                              (role == SourceRole::kLabels ? "--labels" : "--unlabeled") +
+                              " data too");
       return i;
     }
   s_.sources.push_back({path, role});
@@ -188,16 +194,38 @@ rt::Status Inductor::open_state() {
     std::vector<std::string> asked;
     std::stringstream list(o_.classes);
     for (std::string name; std::getline(list, name, ',');) asked.push_back(name);
-    const bool same =
-        (o_.classes.empty() || asked == s->classes) && o_.model.empty() && o_.add_classes.empty() &&
-        (!o_.settings_given ||
-         (o_.dual == s->induction.dual && o_.eps == s->induction.eps_max &&
-          o_.group_size == s->induction.max_group_size && o_.buffer == s->induction.buffer_groups));
-    if (!same)
-      return rt::make_error(dir_.string() +
-                            ": the state exists with other settings; --classes, --model, "
-                            "--add-classes, --dual, --eps, --group-size and --buffer are set when "
-                            "it is created (start a new folder to change them)");
+    // Each setting given that is not the state's, with the state's value and the one given.
+    std::string differ;
+    const auto note = [&differ](const std::string& what) {
+      differ += (differ.empty() ? "" : "; ") + what;
+    };
+    if (!o_.classes.empty() && asked != s->classes)
+      note("--classes " + o_.classes + " (the state's: " + classification::joined(s->classes) +
+           ")");
+    if (!o_.model.empty()) note("--model " + o_.model + " (a model starts a state only)");
+    if (!o_.add_classes.empty())
+      note("--add-classes " + o_.add_classes + " (added when a state starts only)");
+    const auto num = [](double v) {
+      std::ostringstream t;
+      t << v;
+      return t.str();
+    };
+    if (o_.dual_given && o_.dual != s->induction.dual)
+      note(std::string("--dual ") + (o_.dual ? "on" : "off") +
+           " (the state's: " + (s->induction.dual ? "on" : "off") + ")");
+    if (o_.eps_given && o_.eps != s->induction.eps_max)
+      note("--eps " + num(o_.eps) + " (the state's: " + num(s->induction.eps_max) + ")");
+    if (o_.group_given && o_.group_size != s->induction.max_group_size)
+      note("--group-size " + std::to_string(o_.group_size) +
+           " (the state's: " + std::to_string(s->induction.max_group_size) + ")");
+    if (o_.buffer_given && o_.buffer != s->induction.buffer_groups)
+      note("--buffer " + std::to_string(o_.buffer) +
+           " (the state's: " + std::to_string(s->induction.buffer_groups) + ")");
+    if (!differ.empty())
+      return rt::make_error(dir_.string() + ": the state exists with other settings: " + differ +
+                            ". --classes, --model, --add-classes, --dual, --eps, --group-size and "
+                            "--buffer are set when it is created (leave them out to go on, or "
+                            "start a new folder to change them)");
     s_ = std::move(s).value();
   } else {
     if (fs::exists(dir_, ec) && !fs::is_directory(dir_, ec))
@@ -718,7 +746,7 @@ int Inductor::run() {
     }
   }
   // A kill during an append leaves a torn last line; a person's last answer may lack its newline.
-  if (auto r = complete_or_cut_tail(dir_ / "labels.jsonl", is_answer_line); !r)
+  if (auto r = complete_or_cut_tail(dir_ / "labels.jsonl", is_answer_line, is_json_line); !r)
     return fail(r.error().message);
   else if (*r)
     std::fprintf(stderr, "stac: %s: its last line was torn (not a whole answer), cut off\n",
@@ -875,7 +903,10 @@ void add_induct_command(CLI::App& app) {
                   "NAME=ACCURACY: a line on DIR/learning.png (repeatable)");
 
   cmd->callback([o, dual, eps, group, buffer] {
-    o->settings_given = dual->count() + eps->count() + group->count() + buffer->count() > 0;
+    o->dual_given = dual->count() > 0;
+    o->eps_given = eps->count() > 0;
+    o->group_given = group->count() > 0;
+    o->buffer_given = buffer->count() > 0;
     if (const int code = Inductor(*o).run(); code != 0) throw CLI::RuntimeError(code);
   });
 }

@@ -274,13 +274,46 @@ TEST_F(InductCli, BadInputsAreRefusedNamingTheFileAndNoAnswerIsLost) {
   r = stac("induct --state " + at("bad") + " --classes car,pedestrian,bicyclist --unlabeled " +
            at("test.pcap"));
   EXPECT_NE(r.code, 0);
-  EXPECT_NE(r.output.find("test.pcap"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(at("test.pcap") + ": a file, not a dataset folder"), std::string::npos)
+      << r.output;
+  EXPECT_EQ(r.output.find("--out " + at("test.pcap")), std::string::npos)
+      << "advises writing a dataset into the capture's path: " << r.output;
   r = stac("induct --state " + at("bad") + " --classes car,pedestrian,bicyclist --background " +
            at("empty_data") + " --labels " + at("labels_data") + " --labels-per-class 2");
   ASSERT_EQ(r.code, 0) << r.output;
   r = stac("induct --state " + at("bad") + " --classes car --dual");
   EXPECT_NE(r.code, 0);
   EXPECT_NE(r.output.find("set when it is created"), std::string::npos) << r.output;
+  // ... naming each setting that differs, with the state's value, and only those given.
+  EXPECT_NE(r.output.find("--classes car (the state's: car, pedestrian, bicyclist)"),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("--dual on (the state's: off)"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("--eps 0"), std::string::npos) << r.output;
+  // B0 (every track background) is not unlabeled data too.
+  r = stac("induct --state " + at("bad") + " --unlabeled " + at("empty_data"));
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.output.find(at("empty_data") + ": this state read it as B0"), std::string::npos)
+      << r.output;
+
+  // A whole JSON last line without its newline that is not an answer was written by a person,
+  // not torn by a kill: refused naming its line, and left in the file (not cut).
+  const std::string answers = at("bad") + "/labels.jsonl";
+  const std::string kept = read_text(answers);
+  {
+    std::ofstream out(answers, std::ios::app);
+    out << R"({"source": ")" << at("labels_data") << R"(", "track": 1, "lable": "car"})";
+  }
+  const std::string with_wrong = read_text(answers);
+  r = stac("induct --state " + at("bad") + " --rounds 1");
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.output.find("the last line is complete but not a valid record"), std::string::npos)
+      << r.output;
+  EXPECT_EQ(read_text(answers), with_wrong);
+  {
+    std::ofstream out(answers, std::ios::trunc);
+    out << kept;
+  }
 
   // A garbage line among the answers: refused with its line number; the file is untouched.
   const std::string labels = at("bad") + "/labels.jsonl";
