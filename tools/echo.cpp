@@ -180,7 +180,7 @@ void add_echo_command(CLI::App& app) {
   cmd->add_option("topic", o->topic, "tracked_objects, segments, ego_pose, health or point_cloud")
       ->required();
   cmd->add_option("--count", o->count, "exit after this many samples (0: run until the timeout)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(finite_range(0, 1e12));
   cmd->add_option("--timeout", o->timeout_s, "give up after this many seconds")
       ->check(finite_range(0.001, 1e6));
   cmd->add_option("--domain", o->domain, "DDS domain id (default: dds.domain_id of the config)")

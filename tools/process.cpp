@@ -29,6 +29,7 @@
 #include "tools/evaluation/truth_composition.hpp"
 #include "tools/pictures/birds_eye.hpp"
 #include "tools/status.hpp"
+#include "tools/support/cli_checks.hpp"
 #include "tools/support/progress.hpp"
 
 namespace stac::tools {
@@ -538,8 +539,9 @@ void add_process_command(CLI::App& app) {
       ->check(CLI::ExistingFile);
   cmd->add_option(
          "--dds-wait", o->dds_wait_s,
-         "with --dds: wait up to S seconds for a tracked_objects reader before the first scan")
-      ->check(CLI::NonNegativeNumber);
+         "with --dds: wait up to S seconds (a day at most) for a tracked_objects reader before "
+         "the first scan")
+      ->check(finite_range(0, 86'400));
   cmd->callback([o] {
     if (const int code = run_process(*o); code != 0) throw CLI::RuntimeError(code);
   });

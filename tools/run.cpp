@@ -76,7 +76,7 @@ void add_run_command(CLI::App& app) {
   cmd->add_option("--seconds", o->seconds, "stop after this many seconds")
       ->check(finite_range(0.001, 1e9));
   cmd->add_option("--scans", o->scans, "stop after this many scans are published")
-      ->check(CLI::PositiveNumber);
+      ->check(finite_range(1, 1e12));
   cmd->add_option("--domain", o->domain, "DDS domain (default: dds.domain_id)")
       ->check(CLI::Range(0, 230));
   cmd->add_option("--point-cloud-stride", o->point_cloud_stride,
