@@ -293,7 +293,8 @@ class LabelServer {
       args.emplace_back("--ask-confident");
       args.push_back(std::to_string(*o_.ask_confident));
     }
-    auto child = ChildProcess::start(args, dir_ / "label-round.log");
+    // A labeller killed by SIGKILL leaves no round writing the state behind it.
+    auto child = ChildProcess::start(args, dir_ / "label-round.log", OnParentDeath::kTerminate);
     if (!child) return rt::make_error("cannot start the round: " + child.error().message);
     round_.emplace(std::move(child).value());
     last_round_ = "round " + std::to_string(rounds_ + 1) + " running";

@@ -1,12 +1,20 @@
 // stac label (issue 29): the page in a real headless browser (Debian's chromium driven by
 // puppeteer-core, tests/web/label_page.mjs) over a state `stac induct` made from short simulated
 // drives without the oracle. Answers given by key land in labels.jsonl at once, and the last one
-// starts a round (retrospection, new questions) that the page then shows.
+// starts a round (retrospection, new questions) that the page then shows. Then what a hostile
+// client tries over real loopback sockets (issue 47): huge bodies, other sites and host names,
+// framing, slow connections, a labeller killed during a round, and an IPv6 address.
+#include <arpa/inet.h>
 #include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <chrono>
 #include <csignal>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -34,6 +42,8 @@ namespace fs = std::filesystem;
 struct LabelServer {
   std::optional<stac::tools::ChildProcess> child;
   std::string url;
+  std::string host;  // the URL's host and port, as a Host header names them
+  int port = 0;
   LabelServer(const std::string& args, const fs::path& log) {
     std::vector<std::string> words{"label"};
     std::istringstream in(args);
@@ -41,13 +51,166 @@ struct LabelServer {
     auto c = stac::tools::ChildProcess::start_program(::stac::testing::stac_cli(), words, log);
     if (!c) return;
     child.emplace(std::move(*c));
-    const std::regex serving("on (http://127\\.0\\.0\\.1:[0-9]+/)");
+    const std::regex serving("on (http://((127\\.0\\.0\\.1|\\[::1\\]):([0-9]+))/)");
     for (int i = 0; i < 300 && url.empty() && !child->poll(); ++i) {
       std::smatch m;
       const std::string text = child->log();
-      if (std::regex_search(text, m, serving)) url = m[1];
+      if (std::regex_search(text, m, serving)) {
+        url = m[1];
+        host = m[2];
+        port = std::stoi(m[4]);
+      }
       std::this_thread::sleep_for(std::chrono::milliseconds(100));
     }
+  }
+};
+
+// A connection to ADDRESS:PORT (IPv4 or IPv6, numeric); -1 when it fails.
+int connect_to(const std::string& address, int port) {
+  sockaddr_storage to{};
+  socklen_t size = 0;
+  auto* v4 = reinterpret_cast<sockaddr_in*>(&to);
+  auto* v6 = reinterpret_cast<sockaddr_in6*>(&to);
+  if (::inet_pton(AF_INET, address.c_str(), &v4->sin_addr) == 1) {
+    v4->sin_family = AF_INET;
+    v4->sin_port = htons(static_cast<std::uint16_t>(port));
+    size = sizeof *v4;
+  } else if (::inet_pton(AF_INET6, address.c_str(), &v6->sin6_addr) == 1) {
+    v6->sin6_family = AF_INET6;
+    v6->sin6_port = htons(static_cast<std::uint16_t>(port));
+    size = sizeof *v6;
+  } else {
+    return -1;
+  }
+  const int fd = ::socket(to.ss_family, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  if (fd < 0) return -1;
+  if (::connect(fd, reinterpret_cast<const sockaddr*>(&to), size) != 0) {
+    ::close(fd);
+    return -1;
+  }
+  return fd;
+}
+
+struct Reply {
+  int status = 0;  // 0: no reply within the time given
+  std::string head, body;
+  double seconds = 0;  // from the request sent to the reply read
+  [[nodiscard]] std::string header(const std::string& name) const {
+    const std::regex line("\r\n" + name + ": ([^\r]*)\r\n", std::regex::icase);
+    std::smatch m;
+    return std::regex_search(head, m, line) ? std::string(m[1]) : std::string();
+  }
+};
+
+// A reply read from `fd` until the server closes the connection, the body its Content-Length
+// announces is in, or timeout_s passes.
+Reply read_reply(int fd, double timeout_s) {
+  using Clock = std::chrono::steady_clock;
+  const auto start = Clock::now();
+  const auto end = start + std::chrono::duration<double>(timeout_s);
+  std::string in;
+  Reply r;
+  for (;;) {
+    const auto left =
+        std::chrono::duration_cast<std::chrono::milliseconds>(end - Clock::now()).count();
+    pollfd p{fd, POLLIN, 0};
+    if (left <= 0 || ::poll(&p, 1, static_cast<int>(left)) <= 0) break;
+    char buf[65536];
+    const ssize_t n = ::recv(fd, buf, sizeof buf, 0);
+    if (n <= 0) break;
+    in.append(buf, static_cast<std::size_t>(n));
+    const std::size_t blank = in.find("\r\n\r\n");
+    if (blank == std::string::npos) continue;
+    r.head = in.substr(0, blank + 2);
+    r.body = in.substr(blank + 4);
+    const std::string length = r.header("Content-Length");
+    if (!length.empty() && r.body.size() >= std::stoul(length)) break;
+  }
+  r.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  std::smatch m;
+  if (std::regex_search(in, m, std::regex("^HTTP/1\\.1 ([0-9]{3}) "))) r.status = std::stoi(m[1]);
+  return r;
+}
+
+// `request` (head and body as given: a head may announce a body never sent) on a new connection,
+// and the reply.
+Reply exchange(const std::string& address, int port, const std::string& request,
+               double timeout_s = 10) {
+  const int fd = connect_to(address, port);
+  if (fd < 0) return {};
+  (void)::send(fd, request.data(), request.size(), MSG_NOSIGNAL);
+  Reply r = read_reply(fd, timeout_s);
+  ::close(fd);
+  return r;
+}
+
+// A request's text: HEAD_LINES (each ending in \r\n) after the request line and Host, then BODY.
+std::string request(const std::string& method, const std::string& target, const std::string& host,
+                    const std::string& head_lines = "", const std::string& body = "") {
+  return method + " " + target + " HTTP/1.1\r\nHost: " + host + "\r\n" + head_lines +
+         "Connection: close\r\n\r\n" + body;
+}
+
+// A POST as the page sends it (JSON), with EXTRA head lines.
+std::string json_post(const std::string& target, const std::string& host, const std::string& body,
+                      const std::string& extra = "") {
+  return request("POST", target, host,
+                 "Content-Type: application/json\r\nContent-Length: " +
+                     std::to_string(body.size()) + "\r\n" + extra,
+                 body);
+}
+
+// A state `stac induct` made from short simulated drives (the test's own copy, the datasets
+// shared), made once per test program.
+fs::path state_copy(const std::string& name) {
+  static const fs::path made = [] {
+    const fs::path dir =
+        stac::testing::fresh_dir("stac_label_limits_" + std::to_string(::getpid()));
+    const auto at = [&](const std::string& n) { return (dir / n).string(); };
+    for (const auto& [n, args] :
+         {std::pair<std::string, std::string>{"drive", "--scenario urban --seed 1 --duration 4"},
+          {"empty", "--scenario empty --seed 3 --duration 3"}}) {
+      const CliResult sim =
+          stac("sim " + args + " --out " + at(n) + ".pcap --truth " + at(n) + ".jsonl");
+      EXPECT_EQ(sim.code, 0) << sim.output;
+    }
+    // The drive twice: labelled (the first labels) and as a user has it (the questions).
+    for (const auto& [n, truth] : {std::pair<std::string, std::string>{"labels", "drive"},
+                                   {"chunk", ""},
+                                   {"empty", "empty"}}) {
+      const CliResult data = stac("dataset --in " + at(n == "empty" ? "empty" : "drive") + ".pcap" +
+                                  (truth.empty() ? "" : " --truth " + at(truth) + ".jsonl") +
+                                  " --out " + at(n) + "_data");
+      EXPECT_EQ(data.code, 0) << data.output;
+    }
+    const CliResult induct = stac(
+        "induct --state " + at("state") + " --classes car,pedestrian,bicyclist --background " +
+        at("empty_data") + " --labels " + at("labels_data") + " --labels-per-class 2 --unlabeled " +
+        at("chunk_data") + " --ask 2 --warm-rounds 30 --reset-rounds 80");
+    EXPECT_EQ(induct.code, 0) << induct.output;
+    return dir;
+  }();
+  static const struct Cleanup {
+    ~Cleanup() { fs::remove_all(made); }
+  } cleanup;
+  const fs::path copy = made / name;
+  fs::remove_all(copy);
+  fs::copy(made / "state", copy, fs::copy_options::recursive);
+  return copy;
+}
+
+// `stac label --port 0 EXTRA` on this test's own copy of the state.
+struct ServedCopy {
+  fs::path state;
+  LabelServer server;
+  explicit ServedCopy(const std::string& name, const std::string& extra = "")
+      : state(state_copy(name)),
+        server("--state " + state.string() + " --port 0" + extra,
+               state.parent_path() / (name + ".log")) {}
+  // Empty while it serves; else what it printed.
+  [[nodiscard]] std::string failure() const {
+    if (!server.child) return "stac label did not start";
+    return server.url.empty() ? "no URL printed: " + server.child->log() : "";
   }
 };
 
@@ -152,6 +315,65 @@ TEST(LabelCli, AFolderThatIsNoStateIsRefusedWithAMessage) {
   EXPECT_NE(missing.code, 0);
   EXPECT_NE(missing.output.find("--state"), std::string::npos) << missing.output;
   fs::remove_all(dir);
+}
+
+// The process ids whose parent is `parent`, and whether a process runs (a zombie does not).
+std::vector<pid_t> children_of(pid_t parent) {
+  std::vector<pid_t> out;
+  for (const auto& e : fs::directory_iterator("/proc")) {
+    const std::string name = e.path().filename();
+    if (name.find_first_not_of("0123456789") != std::string::npos) continue;
+    std::ifstream in(e.path() / "stat");
+    std::string stat;
+    std::getline(in, stat);
+    std::istringstream fields(stat.substr(stat.rfind(')') + 1));
+    char state = 0;
+    pid_t ppid = 0;
+    if (fields >> state >> ppid && ppid == parent) out.push_back(std::stoi(name));
+  }
+  return out;
+}
+bool runs(pid_t pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
+  std::string stat;
+  if (!std::getline(in, stat)) return false;
+  const std::size_t close = stat.rfind(')');
+  return close != std::string::npos && close + 2 < stat.size() && stat[close + 2] != 'Z';
+}
+
+TEST(LabelCli, AKilledLabellerLeavesNoRoundRunning) {
+  ServedCopy served("killed");
+  ASSERT_EQ(served.failure(), "");
+  const fs::path& state = served.state;
+  LabelServer& server = served.server;
+  // The round blocks as long as the test wants: the labels it reads first come from a pipe no one
+  // writes (the server read them when it started).
+  fs::remove(state / "labels.jsonl");
+  ASSERT_EQ(::mkfifo((state / "labels.jsonl").c_str(), 0644), 0);
+  const Reply train =
+      exchange("127.0.0.1", server.port, json_post("/api/train", server.host, "{}"));
+  ASSERT_EQ(train.status, 200) << train.head << train.body;
+  pid_t round = -1;
+  for (int i = 0; i < 100 && round < 0; ++i) {
+    for (const pid_t pid : children_of(server.child->pid())) {
+      std::ifstream in("/proc/" + std::to_string(pid) + "/cmdline");
+      const std::string cmdline{std::istreambuf_iterator<char>(in), {}};
+      if (cmdline.find(std::string("induct\0--state", 14)) != std::string::npos) round = pid;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  ASSERT_GT(round, 0) << "no `stac induct` child of stac label";
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  ASSERT_TRUE(runs(round)) << "the round ended by itself: " << server.child->log();
+
+  EXPECT_EQ(server.child->stop(SIGKILL, 10), -1);
+  bool ended = false;
+  for (int i = 0; i < 50 && !ended; ++i) {
+    ended = !runs(round);
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  EXPECT_TRUE(ended) << "the round (pid " << round << ") still runs after stac label was killed";
+  if (!ended) ::kill(round, SIGKILL);
 }
 
 }  // namespace
