@@ -55,6 +55,34 @@ struct LabelOptions {
   std::size_t warm_rounds = 200, reset_rounds = 1000;
 };
 
+// What one labeller's page needs, and no more (docs/learning.md "Limits"; issue 47).
+constexpr std::size_t kMaxBodyBytes = std::size_t{64} * 1024;  // an answer is about 100 bytes
+constexpr std::size_t kMaxEchoedChars = 80;  // of a request's value in an error message
+
+// A value from a request as an error message may quote it: at most kMaxEchoedChars of it.
+std::string echoed(const std::string& text) {
+  if (text.size() <= kMaxEchoedChars) return text;
+  return text.substr(0, kMaxEchoedChars) + "... (" + std::to_string(text.size()) + " bytes)";
+}
+
+struct Refusal {
+  int status;
+  std::string error;
+};
+
+// Why a request is refused before its body is read, if it is: a POST whose body is over
+// kMaxBodyBytes or has no Content-Length (a chunked one could be of any length).
+std::optional<Refusal> refusal(const httplib::Request& req) {
+  if (req.method != "POST") return std::nullopt;
+  const std::string length = req.get_header_value("Content-Length");
+  if (req.has_header("Transfer-Encoding") || length.empty() ||
+      length.find_first_not_of("0123456789") != std::string::npos)
+    return Refusal{411, "a POST here has a Content-Length (and no Transfer-Encoding)"};
+  if (length.size() > 12 || std::stoull(length) > kMaxBodyBytes)
+    return Refusal{413, "a body here is at most " + std::to_string(kMaxBodyBytes) + " bytes"};
+  return std::nullopt;
+}
+
 struct Question {
   std::string source;
   std::uint64_t track = 0;
@@ -98,6 +126,13 @@ class LabelServer {
   }
 
   void routes(httplib::Server& server) {
+    server.set_pre_routing_handler([](const httplib::Request& req, httplib::Response& res) {
+      const std::optional<Refusal> r = refusal(req);
+      if (!r) return httplib::Server::HandlerResponse::Unhandled;
+      res.status = r->status;
+      res.set_content(nlohmann::json{{"error", r->error}}.dump(), "application/json");
+      return httplib::Server::HandlerResponse::Handled;
+    });
     server.Get("/", [](const httplib::Request&, httplib::Response& res) {
       res.set_content(kLabelPage, "text/html; charset=utf-8");
     });
@@ -204,11 +239,13 @@ class LabelServer {
     char* end = nullptr;
     const unsigned long long track = std::strtoull(track_text.c_str(), &end, 10);
     if (track_text.empty() || end == nullptr || *end != '\0' || !asked(questions(), source, track))
-      return rt::make_error("no question about track " + track_text + " of " + source);
+      return rt::make_error("no question about track " + echoed(track_text) + " of " +
+                            echoed(source));
     auto d = dataset(source);
     if (!d) return rt::make_error(d.error().message);
     if (track >= (*d)->tracks.size())
-      return rt::make_error(source + " has " + std::to_string((*d)->tracks.size()) + " tracks");
+      return rt::make_error(echoed(source) + " has " + std::to_string((*d)->tracks.size()) +
+                            " tracks");
     const DatasetTrack& t = (*d)->tracks[track];
     nlohmann::json path = nlohmann::json::array(), snapshots = nlohmann::json::array();
     for (std::size_t k = 0; k + 1 < t.path.size(); k += 2)
@@ -246,12 +283,13 @@ class LabelServer {
     const std::string label = j["label"].get<std::string>();
     if (label != "background" && label != "skip" &&
         std::find(classes_.begin(), classes_.end(), label) == classes_.end())
-      return rt::make_error("label " + label + " is none of " + classification::joined(classes_) +
-                            ", background, skip");
+      return rt::make_error("label " + echoed(label) + " is none of " +
+                            classification::joined(classes_) + ", background, skip");
     // Each file read once per answer.
     const std::vector<Question> qs = questions();
     if (!asked(qs, source, track))
-      return rt::make_error("no question about track " + std::to_string(track) + " of " + source);
+      return rt::make_error("no question about track " + std::to_string(track) + " of " +
+                            echoed(source));
     auto answered = answers();
     if (answered.count({source, track}) != 0)
       return rt::make_error("track " + std::to_string(track) + " of " + source +
@@ -330,6 +368,10 @@ int run_label(const LabelOptions& o) {
     const int yes = 1;
     ::setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
   });
+  // At most kMaxBodyBytes of a body. One request per connection: a refused request's unread
+  // body is never taken for the next request.
+  server.set_payload_max_length(kMaxBodyBytes);
+  server.set_keep_alive_max_count(1);
   labels.routes(server);
   const int port = o.port == 0 ? server.bind_to_any_port(o.address)
                                : (server.bind_to_port(o.address, o.port) ? o.port : -1);

@@ -317,6 +317,62 @@ TEST(LabelCli, AFolderThatIsNoStateIsRefusedWithAMessage) {
   fs::remove_all(dir);
 }
 
+// The state the server shows, as the page asks for it (null when refused).
+nlohmann::json state_of(const LabelServer& server) {
+  const Reply r = exchange("127.0.0.1", server.port, request("GET", "/api/state", server.host));
+  return r.status == 200 ? nlohmann::json::parse(r.body, nullptr, false) : nlohmann::json();
+}
+
+TEST(LabelCli, ABodyOverItsLimitIsRefusedAtOnceAndAnErrorQuotesAtMost80Characters) {
+  ServedCopy served("body_limit");
+  ASSERT_EQ(served.failure(), "");
+  const fs::path& state = served.state;
+  LabelServer& server = served.server;
+  const auto send = [&](const std::string& text) {
+    return exchange("127.0.0.1", server.port, text, 5);
+  };
+  // 500 MB announced, none sent: refused before any of it is read (it was read into memory).
+  const Reply huge =
+      send(request("POST", "/api/answer", server.host,
+                   "Content-Type: application/json\r\nContent-Length: 500000000\r\n"));
+  EXPECT_EQ(huge.status, 413) << huge.head << " after " << huge.seconds << " s";
+  EXPECT_LT(huge.seconds, 3.0);
+  const nlohmann::json error = nlohmann::json::parse(huge.body, nullptr, false);
+  EXPECT_TRUE(error.is_object() && error.contains("error")) << huge.body;
+  // One byte over 64 KiB, sent whole.
+  const Reply over = send(json_post("/api/answer", server.host, std::string(64 * 1024 + 1, ' ')));
+  EXPECT_EQ(over.status, 413) << over.head;
+  // A body of no announced length (chunked: a 256 MB chunk announced) is refused too.
+  const Reply chunked = send(request("POST", "/api/answer", server.host,
+                                     "Content-Type: application/json\r\n"
+                                     "Transfer-Encoding: chunked\r\n",
+                                     "10000000\r\n"));
+  EXPECT_EQ(chunked.status, 411) << chunked.head << " after " << chunked.seconds << " s";
+  EXPECT_LT(chunked.seconds, 3.0);
+
+  // Under the limit, a 50 000-character label and source are quoted in 80 characters at most.
+  const nlohmann::json q = stac::testing::read_json_lines(state / "queries.jsonl").at(0);
+  const std::string long_label(50'000, 'x');
+  const Reply label = send(json_post(
+      "/api/answer", server.host,
+      nlohmann::json{{"source", q["source"]}, {"track", q["track"]}, {"label", long_label}}
+          .dump()));
+  EXPECT_EQ(label.status, 400) << label.head;
+  EXPECT_LT(label.body.size(), 300u) << label.body.substr(0, 300);
+  EXPECT_NE(label.body.find("label " + std::string(80, 'x') + "... (50000 bytes) is none of"),
+            std::string::npos)
+      << label.body.substr(0, 300);
+  const Reply track =
+      send(request("GET", "/api/track?track=1&source=" + std::string(6000, 'y'), server.host));
+  EXPECT_EQ(track.status, 400) << track.head;
+  EXPECT_LT(track.body.size(), 300u) << track.body.substr(0, 300);
+  EXPECT_EQ(stac::testing::read_json_lines(state / "labels.jsonl").size(),
+            stac::testing::read_json_lines(state.parent_path() / "state" / "labels.jsonl").size());
+  // The server still serves.
+  EXPECT_TRUE(state_of(server).is_object()) << server.child->log();
+  EXPECT_EQ(server.child->stop(SIGTERM, 20), 0) << server.child->log();
+}
+
 // The process ids whose parent is `parent`, and whether a process runs (a zombie does not).
 std::vector<pid_t> children_of(pid_t parent) {
   std::vector<pid_t> out;
