@@ -65,15 +65,59 @@ std::string echoed(const std::string& text) {
   return text.substr(0, kMaxEchoedChars) + "... (" + std::to_string(text.size()) + " bytes)";
 }
 
+// An address as a URL names it: an IPv6 address in brackets.
+std::string url_host(const std::string& address) {
+  return address.find(':') == std::string::npos ? address : "[" + address + "]";
+}
+
+std::string lowercase(std::string text) {
+  std::transform(text.begin(), text.end(), text.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return text;
+}
+
+// The Host header's name for each way this connection's page may be reached: the address served
+// (--address, as printed), the address the connection came to (an IPv4 one also as IPv4-mapped
+// IPv6 gives it) and, on loopback, localhost and both loopback addresses; the port served. A
+// name of another site resolved to this machine (DNS rebinding) is none of them.
+bool host_allowed(const std::string& host, const std::string& served, const std::string& local_addr,
+                  int local_port) {
+  const std::string h = lowercase(host);
+  const std::size_t colon = h.rfind(':');
+  const bool has_port = colon != std::string::npos && h.find(']', colon) == std::string::npos;
+  const std::string name = has_port ? h.substr(0, colon) : h;
+  if ((has_port ? h.substr(colon + 1) : "80") != std::to_string(local_port)) return false;
+  std::string addr = lowercase(local_addr);
+  if (addr.rfind("::ffff:", 0) == 0 && addr.find('.') != std::string::npos) addr.erase(0, 7);
+  const bool loopback = addr.rfind("127.", 0) == 0 || addr == "::1";
+  return name == url_host(addr) || name == url_host(lowercase(served)) ||
+         (loopback && (name == "localhost" || name == "127.0.0.1" || name == "[::1]"));
+}
+
 struct Refusal {
   int status;
   std::string error;
 };
 
-// Why a request is refused before its body is read, if it is: a POST whose body is over
-// kMaxBodyBytes or has no Content-Length (a chunked one could be of any length).
-std::optional<Refusal> refusal(const httplib::Request& req) {
+// Why a request is refused before its body is read, if it is: a Host that is not this server
+// (DNS rebinding), an Origin that is not the page's own, a POST that is no JSON (a cross-site
+// form can send only form types without a CORS preflight, which is never granted), or a body
+// over kMaxBodyBytes or without a Content-Length.
+std::optional<Refusal> refusal(const httplib::Request& req, const std::string& served) {
+  if (req.get_header_value_count("Host") != 1 ||
+      !host_allowed(req.get_header_value("Host"), served, req.local_addr, req.local_port))
+    return Refusal{403, "Host " + echoed(req.get_header_value("Host")) +
+                            " is not this server; open the address stac label printed"};
+  const std::string self = "http://" + lowercase(req.get_header_value("Host"));
+  if (req.has_header("Origin") && lowercase(req.get_header_value("Origin")) != self)
+    return Refusal{403, "requests from " + echoed(req.get_header_value("Origin")) +
+                            " are refused; only the page at " + self + " may ask"};
   if (req.method != "POST") return std::nullopt;
+  std::string type = lowercase(req.get_header_value("Content-Type"));
+  type = type.substr(0, type.find(';'));
+  type.erase(type.find_last_not_of(" \t") + 1);
+  if (type != "application/json")
+    return Refusal{403, "a POST here is Content-Type: application/json"};
   const std::string length = req.get_header_value("Content-Length");
   if (req.has_header("Transfer-Encoding") || length.empty() ||
       length.find_first_not_of("0123456789") != std::string::npos)
@@ -126,8 +170,8 @@ class LabelServer {
   }
 
   void routes(httplib::Server& server) {
-    server.set_pre_routing_handler([](const httplib::Request& req, httplib::Response& res) {
-      const std::optional<Refusal> r = refusal(req);
+    server.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
+      const std::optional<Refusal> r = refusal(req, o_.address);
       if (!r) return httplib::Server::HandlerResponse::Unhandled;
       res.status = r->status;
       res.set_content(nlohmann::json{{"error", r->error}}.dump(), "application/json");

@@ -373,6 +373,69 @@ TEST(LabelCli, ABodyOverItsLimitIsRefusedAtOnceAndAnErrorQuotesAtMost80Character
   EXPECT_EQ(server.child->stop(SIGTERM, 20), 0) << server.child->log();
 }
 
+TEST(LabelCli, ARequestFromAnotherSiteOrByAnotherHostNameIsRefused) {
+  ServedCopy served("origin");
+  ASSERT_EQ(served.failure(), "");
+  const fs::path& state = served.state;
+  LabelServer& server = served.server;
+  const std::string port = std::to_string(server.port);
+  const auto send = [&](const std::string& text) {
+    return exchange("127.0.0.1", server.port, text);
+  };
+  // DNS rebinding: another site's name resolved to 127.0.0.1 reads nothing.
+  for (const std::string& host : {"attacker.example:" + port, std::string("attacker.example"),
+                                  "127.0.0.1:" + std::to_string(server.port + 1)}) {
+    const Reply r = send(request("GET", "/api/state", host));
+    EXPECT_EQ(r.status, 403) << host << ": " << r.head;
+    EXPECT_EQ(r.body.find("questions"), std::string::npos) << r.body;
+  }
+  EXPECT_EQ(send(request("GET", "/", "attacker.example:" + port)).status, 403);
+  for (const std::string& host : {"127.0.0.1:" + port, "localhost:" + port, "LOCALHOST:" + port})
+    EXPECT_EQ(send(request("GET", "/api/state", host)).status, 200) << host;
+
+  // Cross-site requests: what a form on another page can send (no CORS preflight), JSON from
+  // another origin. None saves an answer or starts a round.
+  const nlohmann::json q = stac::testing::read_json_lines(state / "queries.jsonl").at(0);
+  const std::string answer = nlohmann::json{
+      {"source", q["source"]},
+      {"track", q["track"]},
+      {"label", "background"}}.dump();
+  const std::size_t seeded = stac::testing::read_json_lines(state / "labels.jsonl").size();
+  const auto post = [&](const std::string& target, const std::string& type,
+                        const std::string& extra = "") {
+    return send(request("POST", target, server.host,
+                        "Content-Type: " + type +
+                            "\r\nContent-Length: " + std::to_string(answer.size()) + "\r\n" + extra,
+                        answer));
+  };
+  for (const std::string& type : std::vector<std::string>{
+           "text/plain", "application/x-www-form-urlencoded", "multipart/form-data; boundary=x"}) {
+    EXPECT_EQ(post("/api/answer", type).status, 403) << type;
+    EXPECT_EQ(post("/api/train", type).status, 403) << type;
+  }
+  EXPECT_EQ(send(request("POST", "/api/train", server.host, "Content-Length: 2\r\n", "{}")).status,
+            403);  // no Content-Type
+  for (const std::string& origin : {std::string("http://attacker.example"), std::string("null"),
+                                    "http://127.0.0.1:" + std::to_string(server.port + 1)}) {
+    EXPECT_EQ(post("/api/answer", "application/json", "Origin: " + origin + "\r\n").status, 403)
+        << origin;
+    EXPECT_EQ(post("/api/train", "application/json", "Origin: " + origin + "\r\n").status, 403)
+        << origin;
+  }
+  EXPECT_EQ(stac::testing::read_json_lines(state / "labels.jsonl").size(), seeded);
+  const nlohmann::json before = state_of(server);
+  ASSERT_TRUE(before.is_object());
+  EXPECT_EQ(before["training"], false);
+  EXPECT_FALSE(fs::exists(state / "label-round.log"));
+
+  // The page's own request (JSON, its own origin) is served.
+  const Reply own = post("/api/answer", "application/json; charset=utf-8",
+                         "Origin: http://" + server.host + "\r\n");
+  EXPECT_EQ(own.status, 200) << own.head << own.body;
+  EXPECT_EQ(stac::testing::read_json_lines(state / "labels.jsonl").size(), seeded + 1);
+  EXPECT_EQ(server.child->stop(SIGTERM, 20), 0) << server.child->log();
+}
+
 // The process ids whose parent is `parent`, and whether a process runs (a zombie does not).
 std::vector<pid_t> children_of(pid_t parent) {
   std::vector<pid_t> out;
