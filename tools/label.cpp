@@ -59,6 +59,17 @@ struct LabelOptions {
 constexpr std::size_t kMaxBodyBytes = std::size_t{64} * 1024;  // an answer is about 100 bytes
 constexpr std::size_t kMaxEchoedChars = 80;  // of a request's value in an error message
 
+// Served on every response: no other page may frame this one, nothing is sniffed, and no URL
+// leaves it as a Referer. The page's script and style are inline (tools/web/label.html).
+httplib::Headers security_headers() {
+  return {{"X-Frame-Options", "DENY"},
+          {"Content-Security-Policy",
+           "default-src 'self'; script-src 'self' 'unsafe-inline'; style-src 'self' "
+           "'unsafe-inline'; frame-ancestors 'none'; base-uri 'none'; form-action 'none'"},
+          {"X-Content-Type-Options", "nosniff"},
+          {"Referrer-Policy", "no-referrer"}};
+}
+
 // A value from a request as an error message may quote it: at most kMaxEchoedChars of it.
 std::string echoed(const std::string& text) {
   if (text.size() <= kMaxEchoedChars) return text;
@@ -416,6 +427,7 @@ int run_label(const LabelOptions& o) {
   // body is never taken for the next request.
   server.set_payload_max_length(kMaxBodyBytes);
   server.set_keep_alive_max_count(1);
+  server.set_default_headers(security_headers());
   labels.routes(server);
   const int port = o.port == 0 ? server.bind_to_any_port(o.address)
                                : (server.bind_to_port(o.address, o.port) ? o.port : -1);

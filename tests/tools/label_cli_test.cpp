@@ -436,6 +436,29 @@ TEST(LabelCli, ARequestFromAnotherSiteOrByAnotherHostNameIsRefused) {
   EXPECT_EQ(server.child->stop(SIGTERM, 20), 0) << server.child->log();
 }
 
+TEST(LabelCli, EveryResponseForbidsFramingSniffingAndReferrers) {
+  ServedCopy served("headers");
+  ASSERT_EQ(served.failure(), "");
+  LabelServer& server = served.server;
+  for (const std::string& text :
+       {request("GET", "/", server.host), request("GET", "/api/state", server.host),
+        request("GET", "/nothing", server.host), request("GET", "/api/track", server.host),
+        request("GET", "/", "attacker.example"),
+        json_post("/api/answer", server.host, "not json")}) {
+    const Reply r = exchange("127.0.0.1", server.port, text);
+    const std::string what = text.substr(0, text.find('\r')) + " -> " + std::to_string(r.status);
+    EXPECT_NE(r.status, 0) << what;
+    EXPECT_EQ(r.header("X-Frame-Options"), "DENY") << what;
+    EXPECT_NE(r.header("Content-Security-Policy").find("frame-ancestors 'none'"), std::string::npos)
+        << what;
+    EXPECT_NE(r.header("Content-Security-Policy").find("default-src 'self'"), std::string::npos)
+        << what;
+    EXPECT_EQ(r.header("X-Content-Type-Options"), "nosniff") << what;
+    EXPECT_EQ(r.header("Referrer-Policy"), "no-referrer") << what;
+  }
+  EXPECT_EQ(server.child->stop(SIGTERM, 20), 0) << server.child->log();
+}
+
 // The process ids whose parent is `parent`, and whether a process runs (a zombie does not).
 std::vector<pid_t> children_of(pid_t parent) {
   std::vector<pid_t> out;
