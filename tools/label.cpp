@@ -58,6 +58,9 @@ struct LabelOptions {
 // What one labeller's page needs, and no more (docs/learning.md "Limits"; issue 47).
 constexpr std::size_t kMaxBodyBytes = std::size_t{64} * 1024;  // an answer is about 100 bytes
 constexpr std::size_t kMaxEchoedChars = 80;  // of a request's value in an error message
+constexpr time_t kReadTimeoutS = 5;          // per read of a request, and per write of a reply
+constexpr time_t kIdleTimeoutS = 2;          // a connection that sends nothing is closed
+constexpr std::size_t kThreads = 32;         // requests served at once (slow ones included)
 
 // Served on every response: no other page may frame this one, nothing is sniffed, and no URL
 // leaves it as a Referer. The page's script and style are inline (tools/web/label.html).
@@ -423,10 +426,15 @@ int run_label(const LabelOptions& o) {
     const int yes = 1;
     ::setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
   });
-  // At most kMaxBodyBytes of a body. One request per connection: a refused request's unread
-  // body is never taken for the next request.
+  // The limits (kMaxBodyBytes and the rest; docs/learning.md "Limits"). One request per
+  // connection: a refused request's unread body is never taken for the next request, and no idle
+  // keep-alive connection holds one of the threads.
   server.set_payload_max_length(kMaxBodyBytes);
+  server.set_read_timeout(kReadTimeoutS, 0);
+  server.set_write_timeout(kReadTimeoutS, 0);
+  server.set_keep_alive_timeout(kIdleTimeoutS);
   server.set_keep_alive_max_count(1);
+  server.new_task_queue = [] { return new httplib::ThreadPool(kThreads); };
   server.set_default_headers(security_headers());
   labels.routes(server);
   const int port = o.port == 0 ? server.bind_to_any_port(o.address)

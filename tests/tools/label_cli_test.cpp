@@ -459,6 +459,39 @@ TEST(LabelCli, EveryResponseForbidsFramingSniffingAndReferrers) {
   EXPECT_EQ(server.child->stop(SIGTERM, 20), 0) << server.child->log();
 }
 
+TEST(LabelCli, IdleAndHalfSentConnectionsDoNotStarveThePage) {
+  ServedCopy served("slow");
+  ASSERT_EQ(served.failure(), "");
+  LabelServer& server = served.server;
+  // 20 connections that send nothing and 8 that send half a request head, then stall.
+  std::vector<int> silent, half;
+  for (int i = 0; i < 20; ++i) silent.push_back(connect_to("127.0.0.1", server.port));
+  for (int i = 0; i < 8; ++i) {
+    half.push_back(connect_to("127.0.0.1", server.port));
+    const std::string part = "GET /api/state HTTP/1.1\r\nHost: " + server.host + "\r\nAcc";
+    (void)::send(half.back(), part.data(), part.size(), MSG_NOSIGNAL);
+  }
+  for (const int fd : silent) ASSERT_GE(fd, 0);
+  for (const int fd : half) ASSERT_GE(fd, 0);
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  const Reply r = exchange("127.0.0.1", server.port, request("GET", "/api/state", server.host), 10);
+  EXPECT_EQ(r.status, 200) << r.head;
+  EXPECT_LT(r.seconds, 2.0);
+  // The server closes a connection that sends nothing after 2 s, one that stalls mid-head after
+  // 5 s (a read's timeout).
+  for (const int fd : silent) {
+    const Reply closed = read_reply(fd, 4);
+    EXPECT_LT(closed.seconds, 4.0);
+    ::close(fd);
+  }
+  for (const int fd : half) {
+    const Reply closed = read_reply(fd, 7);
+    EXPECT_LT(closed.seconds, 7.0);
+    ::close(fd);
+  }
+  EXPECT_EQ(server.child->stop(SIGTERM, 20), 0) << server.child->log();
+}
+
 // The process ids whose parent is `parent`, and whether a process runs (a zombie does not).
 std::vector<pid_t> children_of(pid_t parent) {
   std::vector<pid_t> out;
