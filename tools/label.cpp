@@ -440,7 +440,7 @@ int run_label(const LabelOptions& o) {
   const int port = o.port == 0 ? server.bind_to_any_port(o.address)
                                : (server.bind_to_port(o.address, o.port) ? o.port : -1);
   if (port < 0)
-    return fail("cannot listen on " + o.address + ":" + std::to_string(o.port) +
+    return fail("cannot listen on " + url_host(o.address) + ":" + std::to_string(o.port) +
                 " (in use, or not an address of this machine); choose another with --port or "
                 "--address");
   // SIGINT and SIGTERM end the server from a thread of their own (stop() is not
@@ -460,7 +460,7 @@ int run_label(const LabelOptions& o) {
       }
   });
   std::printf("stac label: serving %s on http://%s:%d/ (Ctrl-C to stop)\n", o.state.c_str(),
-              o.address.c_str(), port);
+              url_host(o.address).c_str(), port);
   std::fflush(stdout);
   const bool ok = server.listen_after_bind();
   serving.store(false);  // the stopper ends within a tick (when the server failed by itself)

@@ -551,4 +551,24 @@ TEST(LabelCli, AKilledLabellerLeavesNoRoundRunning) {
   if (!ended) ::kill(round, SIGKILL);
 }
 
+TEST(LabelCli, AnIPv6AddressIsPrintedInBracketsAndServed) {
+  const int probe = ::socket(AF_INET6, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  sockaddr_in6 loopback{};
+  loopback.sin6_family = AF_INET6;
+  loopback.sin6_addr = in6addr_loopback;
+  const bool has_ipv6 =
+      probe >= 0 && ::bind(probe, reinterpret_cast<sockaddr*>(&loopback), sizeof loopback) == 0;
+  if (probe >= 0) ::close(probe);
+  if (!has_ipv6) GTEST_SKIP() << "this machine has no IPv6 loopback (::1)";
+  ServedCopy served("ipv6", " --address ::1");
+  ASSERT_EQ(served.failure(), "");
+  LabelServer& server = served.server;
+  EXPECT_EQ(server.url, "http://[::1]:" + std::to_string(server.port) + "/");
+  const Reply r = exchange("::1", server.port, request("GET", "/api/state", server.host));
+  EXPECT_EQ(r.status, 200) << r.head;
+  EXPECT_EQ(exchange("::1", server.port, request("GET", "/api/state", "attacker.example")).status,
+            403);
+  EXPECT_EQ(server.child->stop(SIGTERM, 20), 0) << server.child->log();
+}
+
 }  // namespace
