@@ -481,12 +481,19 @@ void add_label_command(CLI::App& app) {
       "background and skip. Each answer is appended to DIR/labels.jsonl at once (fsynced). When\n"
       "every question is answered (or on \"train now\"), `stac induct --state DIR --rounds 1\n"
       "--requery` runs beside it: retrospection on the new labels, a round, new questions.\n"
-      "Run it from the folder `stac induct` ran in (the state names its datasets as given).");
+      "Run it from the folder `stac induct` ran in (the state names its datasets as given).\n"
+      "Limits (a page for one person; docs/learning.md): a request body of at most 64 KiB\n"
+      "(413); a POST only as application/json from the page's own origin and every request\n"
+      "with this server's address as its Host (403: another site's form or script, DNS\n"
+      "rebinding); one request per connection, closed when it sends nothing for 2 s or a\n"
+      "read or write stalls 5 s; 32 requests served at once; no other page may frame it.\n"
+      "A killed `stac label` ends the round it started (SIGTERM).");
   cmd->add_option("--state", o->state, "the state folder of `stac induct`")
       ->required()
       ->check(CLI::ExistingDirectory);
   cmd->add_option("--address", o->address,
-                  "address to serve on (127.0.0.1: this machine only; 0.0.0.0: every interface)")
+                  "address to serve on (127.0.0.1 or ::1: this machine only; 0.0.0.0: every "
+                  "interface, reached by an address, not a host name)")
       ->capture_default_str();
   cmd->add_option("--port", o->port, "TCP port (0: any free port, printed)")
       ->capture_default_str()
