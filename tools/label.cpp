@@ -55,6 +55,92 @@ struct LabelOptions {
   std::size_t warm_rounds = 200, reset_rounds = 1000;
 };
 
+// What one labeller's page needs, and no more (docs/learning.md "Limits"; issue 47).
+constexpr std::size_t kMaxBodyBytes = std::size_t{64} * 1024;  // an answer is about 100 bytes
+constexpr std::size_t kMaxEchoedChars = 80;  // of a request's value in an error message
+constexpr time_t kReadTimeoutS = 5;          // per read of a request, and per write of a reply
+constexpr time_t kIdleTimeoutS = 2;          // a connection that sends nothing is closed
+constexpr std::size_t kThreads = 32;         // requests served at once (slow ones included)
+
+// Served on every response: no other page may frame this one, nothing is sniffed, and no URL
+// leaves it as a Referer. The page's script and style are inline (tools/web/label.html).
+httplib::Headers security_headers() {
+  return {{"X-Frame-Options", "DENY"},
+          {"Content-Security-Policy",
+           "default-src 'self'; script-src 'self' 'unsafe-inline'; style-src 'self' "
+           "'unsafe-inline'; frame-ancestors 'none'; base-uri 'none'; form-action 'none'"},
+          {"X-Content-Type-Options", "nosniff"},
+          {"Referrer-Policy", "no-referrer"}};
+}
+
+// A value from a request as an error message may quote it: at most kMaxEchoedChars of it.
+std::string echoed(const std::string& text) {
+  if (text.size() <= kMaxEchoedChars) return text;
+  return text.substr(0, kMaxEchoedChars) + "... (" + std::to_string(text.size()) + " bytes)";
+}
+
+// An address as a URL names it: an IPv6 address in brackets.
+std::string url_host(const std::string& address) {
+  return address.find(':') == std::string::npos ? address : "[" + address + "]";
+}
+
+std::string lowercase(std::string text) {
+  std::transform(text.begin(), text.end(), text.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return text;
+}
+
+// The Host header's name for each way this connection's page may be reached: the address served
+// (--address, as printed), the address the connection came to (an IPv4 one also as IPv4-mapped
+// IPv6 gives it) and, on loopback, localhost and both loopback addresses; the port served. A
+// name of another site resolved to this machine (DNS rebinding) is none of them.
+bool host_allowed(const std::string& host, const std::string& served, const std::string& local_addr,
+                  int local_port) {
+  const std::string h = lowercase(host);
+  const std::size_t colon = h.rfind(':');
+  const bool has_port = colon != std::string::npos && h.find(']', colon) == std::string::npos;
+  const std::string name = has_port ? h.substr(0, colon) : h;
+  if ((has_port ? h.substr(colon + 1) : "80") != std::to_string(local_port)) return false;
+  std::string addr = lowercase(local_addr);
+  if (addr.rfind("::ffff:", 0) == 0 && addr.find('.') != std::string::npos) addr.erase(0, 7);
+  const bool loopback = addr.rfind("127.", 0) == 0 || addr == "::1";
+  return name == url_host(addr) || name == url_host(lowercase(served)) ||
+         (loopback && (name == "localhost" || name == "127.0.0.1" || name == "[::1]"));
+}
+
+struct Refusal {
+  int status;
+  std::string error;
+};
+
+// Why a request is refused before its body is read, if it is: a Host that is not this server
+// (DNS rebinding), an Origin that is not the page's own, a POST that is no JSON (a cross-site
+// form can send only form types without a CORS preflight, which is never granted), or a body
+// over kMaxBodyBytes or without a Content-Length.
+std::optional<Refusal> refusal(const httplib::Request& req, const std::string& served) {
+  if (req.get_header_value_count("Host") != 1 ||
+      !host_allowed(req.get_header_value("Host"), served, req.local_addr, req.local_port))
+    return Refusal{403, "Host " + echoed(req.get_header_value("Host")) +
+                            " is not this server; open the address stac label printed"};
+  const std::string self = "http://" + lowercase(req.get_header_value("Host"));
+  if (req.has_header("Origin") && lowercase(req.get_header_value("Origin")) != self)
+    return Refusal{403, "requests from " + echoed(req.get_header_value("Origin")) +
+                            " are refused; only the page at " + self + " may ask"};
+  if (req.method != "POST") return std::nullopt;
+  std::string type = lowercase(req.get_header_value("Content-Type"));
+  type = type.substr(0, type.find(';'));
+  type.erase(type.find_last_not_of(" \t") + 1);
+  if (type != "application/json")
+    return Refusal{403, "a POST here is Content-Type: application/json"};
+  const std::string length = req.get_header_value("Content-Length");
+  if (req.has_header("Transfer-Encoding") || length.empty() ||
+      length.find_first_not_of("0123456789") != std::string::npos)
+    return Refusal{411, "a POST here has a Content-Length (and no Transfer-Encoding)"};
+  if (length.size() > 12 || std::stoull(length) > kMaxBodyBytes)
+    return Refusal{413, "a body here is at most " + std::to_string(kMaxBodyBytes) + " bytes"};
+  return std::nullopt;
+}
+
 struct Question {
   std::string source;
   std::uint64_t track = 0;
@@ -98,6 +184,13 @@ class LabelServer {
   }
 
   void routes(httplib::Server& server) {
+    server.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
+      const std::optional<Refusal> r = refusal(req, o_.address);
+      if (!r) return httplib::Server::HandlerResponse::Unhandled;
+      res.status = r->status;
+      res.set_content(nlohmann::json{{"error", r->error}}.dump(), "application/json");
+      return httplib::Server::HandlerResponse::Handled;
+    });
     server.Get("/", [](const httplib::Request&, httplib::Response& res) {
       res.set_content(kLabelPage, "text/html; charset=utf-8");
     });
@@ -204,11 +297,13 @@ class LabelServer {
     char* end = nullptr;
     const unsigned long long track = std::strtoull(track_text.c_str(), &end, 10);
     if (track_text.empty() || end == nullptr || *end != '\0' || !asked(questions(), source, track))
-      return rt::make_error("no question about track " + track_text + " of " + source);
+      return rt::make_error("no question about track " + echoed(track_text) + " of " +
+                            echoed(source));
     auto d = dataset(source);
     if (!d) return rt::make_error(d.error().message);
     if (track >= (*d)->tracks.size())
-      return rt::make_error(source + " has " + std::to_string((*d)->tracks.size()) + " tracks");
+      return rt::make_error(echoed(source) + " has " + std::to_string((*d)->tracks.size()) +
+                            " tracks");
     const DatasetTrack& t = (*d)->tracks[track];
     nlohmann::json path = nlohmann::json::array(), snapshots = nlohmann::json::array();
     for (std::size_t k = 0; k + 1 < t.path.size(); k += 2)
@@ -246,12 +341,13 @@ class LabelServer {
     const std::string label = j["label"].get<std::string>();
     if (label != "background" && label != "skip" &&
         std::find(classes_.begin(), classes_.end(), label) == classes_.end())
-      return rt::make_error("label " + label + " is none of " + classification::joined(classes_) +
-                            ", background, skip");
+      return rt::make_error("label " + echoed(label) + " is none of " +
+                            classification::joined(classes_) + ", background, skip");
     // Each file read once per answer.
     const std::vector<Question> qs = questions();
     if (!asked(qs, source, track))
-      return rt::make_error("no question about track " + std::to_string(track) + " of " + source);
+      return rt::make_error("no question about track " + std::to_string(track) + " of " +
+                            echoed(source));
     auto answered = answers();
     if (answered.count({source, track}) != 0)
       return rt::make_error("track " + std::to_string(track) + " of " + source +
@@ -293,7 +389,8 @@ class LabelServer {
       args.emplace_back("--ask-confident");
       args.push_back(std::to_string(*o_.ask_confident));
     }
-    auto child = ChildProcess::start(args, dir_ / "label-round.log");
+    // A labeller killed by SIGKILL leaves no round writing the state behind it.
+    auto child = ChildProcess::start(args, dir_ / "label-round.log", OnParentDeath::kTerminate);
     if (!child) return rt::make_error("cannot start the round: " + child.error().message);
     round_.emplace(std::move(child).value());
     last_round_ = "round " + std::to_string(rounds_ + 1) + " running";
@@ -329,11 +426,21 @@ int run_label(const LabelOptions& o) {
     const int yes = 1;
     ::setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
   });
+  // The limits (kMaxBodyBytes and the rest; docs/learning.md "Limits"). One request per
+  // connection: a refused request's unread body is never taken for the next request, and no idle
+  // keep-alive connection holds one of the threads.
+  server.set_payload_max_length(kMaxBodyBytes);
+  server.set_read_timeout(kReadTimeoutS, 0);
+  server.set_write_timeout(kReadTimeoutS, 0);
+  server.set_keep_alive_timeout(kIdleTimeoutS);
+  server.set_keep_alive_max_count(1);
+  server.new_task_queue = [] { return new httplib::ThreadPool(kThreads); };
+  server.set_default_headers(security_headers());
   labels.routes(server);
   const int port = o.port == 0 ? server.bind_to_any_port(o.address)
                                : (server.bind_to_port(o.address, o.port) ? o.port : -1);
   if (port < 0)
-    return fail("cannot listen on " + o.address + ":" + std::to_string(o.port) +
+    return fail("cannot listen on " + url_host(o.address) + ":" + std::to_string(o.port) +
                 " (in use, or not an address of this machine); choose another with --port or "
                 "--address");
   // SIGINT and SIGTERM end the server from a thread of their own (stop() is not
@@ -353,7 +460,7 @@ int run_label(const LabelOptions& o) {
       }
   });
   std::printf("stac label: serving %s on http://%s:%d/ (Ctrl-C to stop)\n", o.state.c_str(),
-              o.address.c_str(), port);
+              url_host(o.address).c_str(), port);
   std::fflush(stdout);
   const bool ok = server.listen_after_bind();
   serving.store(false);  // the stopper ends within a tick (when the server failed by itself)
@@ -374,12 +481,19 @@ void add_label_command(CLI::App& app) {
       "background and skip. Each answer is appended to DIR/labels.jsonl at once (fsynced). When\n"
       "every question is answered (or on \"train now\"), `stac induct --state DIR --rounds 1\n"
       "--requery` runs beside it: retrospection on the new labels, a round, new questions.\n"
-      "Run it from the folder `stac induct` ran in (the state names its datasets as given).");
+      "Run it from the folder `stac induct` ran in (the state names its datasets as given).\n"
+      "Limits (a page for one person; docs/learning.md): a request body of at most 64 KiB\n"
+      "(413); a POST only as application/json from the page's own origin and every request\n"
+      "with this server's address as its Host (403: another site's form or script, DNS\n"
+      "rebinding); one request per connection, closed when it sends nothing for 2 s or a\n"
+      "read or write stalls 5 s; 32 requests served at once; no other page may frame it.\n"
+      "A killed `stac label` ends the round it started (SIGTERM).");
   cmd->add_option("--state", o->state, "the state folder of `stac induct`")
       ->required()
       ->check(CLI::ExistingDirectory);
   cmd->add_option("--address", o->address,
-                  "address to serve on (127.0.0.1: this machine only; 0.0.0.0: every interface)")
+                  "address to serve on (127.0.0.1 or ::1: this machine only; 0.0.0.0: every "
+                  "interface, reached by an address, not a host name)")
       ->capture_default_str();
   cmd->add_option("--port", o->port, "TCP port (0: any free port, printed)")
       ->capture_default_str()

@@ -19,6 +19,8 @@ try {
   const page = await browser.newPage();
   const errors = [];
   page.on("pageerror", (e) => errors.push(e.message));
+  // The server's Content-Security-Policy must let the page's own script and style run.
+  page.on("console", (m) => { if (/Content Security Policy/i.test(m.text())) errors.push(m.text()); });
   await page.goto(url);
   await page.waitForFunction(() => window.stacLabel && window.stacLabel.drawn > 0, { timeout: 30000 });
 
@@ -84,19 +86,23 @@ try {
     await page.waitForFunction((n) => window.stacLabel.state.answers > n, { timeout: 10000 }, before);
     seen.answers.push({ source: q.source, track: q.track, key });
     if (i === 0) {
-      // Refused: a second answer to the same track, and a label that is no class.
+      // Refused: a second answer to the same track, a label that is no class, and a POST that
+      // is no JSON (what a form on another site could send; issue 47).
       const again = await page.evaluate(async (q) => {
-        const post = async (label) => {
-          const r = await fetch("/api/answer", { method: "POST", body: JSON.stringify({ ...q, label }) });
+        const post = async (label, type = "application/json") => {
+          const r = await fetch("/api/answer", { method: "POST", headers: { "Content-Type": type },
+                                                 body: JSON.stringify({ ...q, label }) });
           return { status: r.status, error: (await r.json()).error };
         };
-        return [await post("car"), await post("lamppost")];
+        return [await post("car"), await post("lamppost"), await post("car", "text/plain")];
       }, { source: q.source, track: q.track });
       seen.refused = again;
       if (again[0].status !== 400 || !/answered already/.test(again[0].error))
         fail(`a second answer: ${JSON.stringify(again[0])}`);
       if (again[1].status !== 400 || !/lamppost is none of/.test(again[1].error))
         fail(`an unknown label: ${JSON.stringify(again[1])}`);
+      if (again[2].status !== 403 || !/application\/json/.test(again[2].error))
+        fail(`a POST of text/plain: ${JSON.stringify(again[2])}`);
     }
   }
   // The last answer started a round; its new questions replace the answered ones.

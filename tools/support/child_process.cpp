@@ -2,7 +2,7 @@
 
 #include <fcntl.h>
 #include <signal.h>
-#include <spawn.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -18,38 +18,71 @@ extern char** environ;
 namespace stac::tools {
 
 rt::Result<ChildProcess> ChildProcess::start(const std::vector<std::string>& args,
-                                             const std::filesystem::path& log) {
-  return start_program("/proc/self/exe", args, log);
+                                             const std::filesystem::path& log,
+                                             OnParentDeath on_parent_death) {
+  return start_program("/proc/self/exe", args, log, on_parent_death);
 }
 
 rt::Result<ChildProcess> ChildProcess::start_program(const std::filesystem::path& program,
                                                      const std::vector<std::string>& args,
-                                                     const std::filesystem::path& log) {
+                                                     const std::filesystem::path& log,
+                                                     OnParentDeath on_parent_death) {
+  const auto failed = [&](int error) {
+    return rt::make_error("starting stac" + (args.empty() ? "" : " " + args.front()) + ": " +
+                          std::strerror(error));
+  };
   std::vector<std::string> words{program.string()};
   words.insert(words.end(), args.begin(), args.end());
   std::vector<char*> argv;
   argv.reserve(words.size() + 1);
   for (std::string& w : words) argv.push_back(w.data());
   argv.push_back(nullptr);
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_adddup2(&fa, 1, 2);
-  // The child starts with no signal blocked, whatever this thread blocks (`stac label` blocks
-  // SIGINT and SIGTERM for its sigwait thread).
-  posix_spawnattr_t attr{};
-  posix_spawnattr_init(&attr);
-  sigset_t none{};
-  sigemptyset(&none);
-  posix_spawnattr_setsigmask(&attr, &none);
-  posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETSIGMASK);
-  pid_t pid = -1;
-  const int rc = posix_spawn(&pid, argv[0], &fa, &attr, argv.data(), environ);
-  posix_spawnattr_destroy(&attr);
-  posix_spawn_file_actions_destroy(&fa);
-  if (rc != 0) {
-    return rt::make_error("starting stac" + (args.empty() ? "" : " " + args.front()) + ": " +
-                          std::strerror(rc));
+  const int out = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (out < 0) return failed(errno);
+  // The child writes its errno here when it cannot exec; closed on exec, so EOF means started.
+  int report[2] = {-1, -1};
+  if (::pipe2(report, O_CLOEXEC) != 0) {
+    const int error = errno;
+    ::close(out);
+    return failed(error);
+  }
+  const pid_t parent = ::getpid();
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    // Only async-signal-safe calls until exec: this process may have other threads.
+    // The child starts with no signal blocked, whatever this thread blocks (`stac label` blocks
+    // SIGINT and SIGTERM for its sigwait thread).
+    sigset_t none{};
+    sigemptyset(&none);
+    int error = 0;
+    if (::sigprocmask(SIG_SETMASK, &none, nullptr) != 0) error = errno;
+    if (error == 0 && on_parent_death == OnParentDeath::kTerminate) {
+      if (::prctl(PR_SET_PDEATHSIG, SIGTERM) != 0) error = errno;
+      // A parent that ended before prctl sent no signal: getppid() is already another process.
+      else if (::getppid() != parent)
+        error = ESRCH;
+    }
+    if (error == 0 && (::dup2(out, 1) < 0 || ::dup2(out, 2) < 0)) error = errno;
+    if (error == 0) ::execve(argv[0], argv.data(), environ);
+    if (error == 0) error = errno;
+    (void)!::write(report[1], &error, sizeof error);
+    ::_exit(127);
+  }
+  const int fork_error = errno;
+  ::close(out);
+  ::close(report[1]);
+  if (pid < 0) {
+    ::close(report[0]);
+    return failed(fork_error);
+  }
+  int child_error = 0;
+  ssize_t n = 0;
+  do n = ::read(report[0], &child_error, sizeof child_error);
+  while (n < 0 && errno == EINTR);
+  ::close(report[0]);
+  if (n > 0) {
+    (void)::waitpid(pid, nullptr, 0);
+    return failed(child_error);
   }
   return ChildProcess(pid, log);
 }

@@ -1,7 +1,8 @@
 // Another `stac` command run as a child process of this one (the same binary, /proc/self/exe),
 // its stdout and stderr into a log file. Used by `stac demo` to run `stac run` and `stac replay`
-// exactly as a user would. The destructor kills (SIGKILL) and reaps a child still running, so no
-// error path leaves one behind.
+// exactly as a user would, and by `stac label` to run a round. The destructor kills (SIGKILL) and
+// reaps a child still running, so no error path leaves one behind; OnParentDeath::kTerminate also
+// covers the end no destructor sees (this process killed by SIGKILL).
 #pragma once
 
 #include <sys/types.h>
@@ -15,16 +16,26 @@
 
 namespace stac::tools {
 
+// What becomes of the child when this process ends without its destructor running.
+enum class OnParentDeath {
+  kKeepRunning,
+  // SIGTERM to the child (Linux PR_SET_PDEATHSIG). Linux sends it when the thread that started
+  // the child ends, so start it from a thread that lives as long as the process.
+  kTerminate,
+};
+
 class ChildProcess {
  public:
-  // Starts `stac args...` (this binary); an error when it cannot be spawned.
-  static rt::Result<ChildProcess> start(const std::vector<std::string>& args,
-                                        const std::filesystem::path& log);
+  // Starts `stac args...` (this binary); an error when it cannot be started (its errno's text).
+  static rt::Result<ChildProcess> start(
+      const std::vector<std::string>& args, const std::filesystem::path& log,
+      OnParentDeath on_parent_death = OnParentDeath::kKeepRunning);
   // Starts `program args...`, where program is a stac binary named by its path (tests, which
   // are not stac themselves).
-  static rt::Result<ChildProcess> start_program(const std::filesystem::path& program,
-                                                const std::vector<std::string>& args,
-                                                const std::filesystem::path& log);
+  static rt::Result<ChildProcess> start_program(
+      const std::filesystem::path& program, const std::vector<std::string>& args,
+      const std::filesystem::path& log,
+      OnParentDeath on_parent_death = OnParentDeath::kKeepRunning);
   ChildProcess(ChildProcess&& other) noexcept;
   ChildProcess& operator=(ChildProcess&&) = delete;
   ChildProcess(const ChildProcess&) = delete;
