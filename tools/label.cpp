@@ -172,8 +172,10 @@ class LabelServer {
                             " ... --unlabeled DATASET` first, it writes the questions");
     classes_ = s->classes;
     rounds_ = s->rounds;
-    // A torn last line is cut; a person's whole last answer without its newline is kept.
-    if (auto c = complete_or_cut_tail(dir_ / "labels.jsonl", is_answer_line); !c)
+    sources_ = s->sources;
+    // A torn last line is cut; a person's whole last answer without its newline is kept, and a
+    // whole JSON line that is no answer is refused naming it.
+    if (auto c = complete_or_cut_tail(dir_ / "labels.jsonl", is_answer_line, is_json_line); !c)
       return rt::make_error(c.error().message);
     if (questions().empty())
       std::fprintf(stderr,
@@ -249,7 +251,7 @@ class LabelServer {
     const auto code = round_->poll();
     if (!code) return;
     if (*code == 0) {
-      if (auto s = read_induction_state(dir_); s) rounds_ = s->rounds;
+      if (auto s = read_induction_state(dir_); s) rounds_ = s->rounds, sources_ = s->sources;
       last_round_ = "round " + std::to_string(rounds_) + " done";
     } else {
       last_round_ = "the round failed (exit " + std::to_string(*code) + "): " + round_->log_tail(3);
@@ -284,6 +286,12 @@ class LabelServer {
     if (auto it = datasets_.find(path); it != datasets_.end()) return &it->second;
     auto d = read_dataset(path);
     if (!d) return rt::make_error(d.error().message);
+    // The questions name its tracks by number: a dataset remade since the state read it would
+    // show other tracks under them (the state is only read here, never written).
+    InductionState read;
+    read.sources = sources_;
+    if (auto b = bind_source_dataset(read, path, d->checksum); !b)
+      return rt::make_error(b.error().message);
     return &datasets_.emplace(path, std::move(d).value()).first->second;
   }
 
@@ -404,6 +412,7 @@ class LabelServer {
   std::mutex mutex_;
   classification::ClassNames classes_;
   std::uint32_t rounds_ = 0;
+  std::vector<InductionSource> sources_;  // the state's, with the checksums of its datasets
   std::map<std::string, Dataset> datasets_;
   std::optional<ChildProcess> round_;
   std::string last_round_;
