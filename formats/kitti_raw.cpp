@@ -26,9 +26,16 @@ bool parse_kitti_time(const std::string& line, std::int64_t& ns) {
     return false;
   if (line.find_first_not_of(" \t\r", static_cast<std::size_t>(used)) != std::string::npos)
     return false;
-  if (y < 1970 || y > 2200 || mo < 1 || mo > 12 || d < 1 || d > 31 || h > 23 || mi > 59 ||
-      !(s >= 0 && s < 61))
+  if (y < 1970 || y > 2200 || mo < 1 || mo > 12 || h > 23 || mi > 59 || !(s >= 0 && s < 61))
     return false;
+  // A day past its month's end (Feb 30) or a second of 60 would roll into the next day or minute
+  // and be blamed on the next line ("not after the line before"): refused here, on their own
+  // line. A second of 60 is a leap second, only ever at the end of June or December (UTC).
+  const bool leap = (y % 4 == 0 && y % 100 != 0) || y % 400 == 0;
+  constexpr int kDays[12] = {31, 28, 31, 30, 31, 30, 31, 31, 30, 31, 30, 31};
+  const int last_day = kDays[mo - 1] + (mo == 2 && leap ? 1 : 0);
+  if (d < 1 || d > last_day) return false;
+  if (s >= 60 && !((mo == 6 || mo == 12) && d == last_day && h == 23 && mi == 59)) return false;
   std::tm t{};
   t.tm_year = y - 1900;
   t.tm_mon = mo - 1;
@@ -54,7 +61,8 @@ rt::Result<std::vector<std::int64_t>> read_kitti_times(const fs::path& file,
     std::int64_t ns = 0;
     if (!parse_kitti_time(line, ns))
       return rt::make_error(file.string() + ":" + std::to_string(n) + ": '" + line +
-                            "' is not a time (YYYY-MM-DD HH:MM:SS.fffffffff)");
+                            "' is not a time (YYYY-MM-DD HH:MM:SS.fffffffff, a day of its month, "
+                            "seconds under 60)");
     if (!out.empty() && ns <= out.back())
       return rt::make_error(file.string() + ":" + std::to_string(n) +
                             ": not after the line before (one " + what + " per line, in order)");

@@ -168,6 +168,33 @@ TEST(KittiOxts, ADrivesRecordsComeWithTheirTimesOrAreRefused) {
       << r.error().message;
 }
 
+// Issue 47: a day past its month's end or a second of 60 rolled into the next day or minute, and
+// the next line was blamed ("not after the line before"); each is refused on its own line now.
+TEST(KittiOxts, AnImpossibleDateIsRefusedOnItsOwnLine) {
+  std::int64_t ns = 0;
+  EXPECT_TRUE(parse_kitti_time("2012-02-29 10:00:00.0", ns));  // a leap year's
+  EXPECT_FALSE(parse_kitti_time("2011-02-29 10:00:00.0", ns));
+  EXPECT_FALSE(parse_kitti_time("2011-02-30 10:00:00.0", ns));
+  EXPECT_FALSE(parse_kitti_time("2011-04-31 10:00:00.0", ns));
+  EXPECT_FALSE(parse_kitti_time("2011-09-26 13:02:60.1", ns));
+  EXPECT_TRUE(parse_kitti_time("2016-12-31 23:59:60.5", ns));  // a leap second's place
+  EXPECT_TRUE(parse_kitti_time("2011-09-26 13:02:59.999999999", ns));
+  const fs::path drive = fresh("oxts_dates");
+  fs::create_directories(drive / "oxts" / "data");
+  for (int k = 0; k < 3; ++k)
+    std::ofstream(drive / "oxts" / "data" / ("000000000" + std::to_string(k) + ".txt"))
+        << kRecord << "\n";
+  std::ofstream(drive / "oxts" / "timestamps.txt") << "2011-09-26 13:02:59.964389445\n"
+                                                   << "2011-09-26 13:02:60.066013922\n"
+                                                   << "2011-09-26 13:03:00.167638399\n";
+  const auto r = read_kitti_oxts(drive);
+  ASSERT_FALSE(r.has_value());
+  EXPECT_NE(
+      r.error().message.find("timestamps.txt:2: '2011-09-26 13:02:60.066013922' is not a time"),
+      std::string::npos)
+      << r.error().message;
+}
+
 // Issue 47: a time jump, a record 1.1 km or 3 rad of yaw from its neighbour 0.1 s before, a file
 // of two records, and oxts/ without data/ were all taken (most scans then had no pose, written at
 // the origin, rc 0); each is refused naming the file and what is impossible.
