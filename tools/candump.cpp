@@ -35,9 +35,7 @@ int run_candump(const CandumpOptions& o) {
   const auto db = can::load_dbc(dbc_file);
   if (!db) return fail(db.error().message);
   auto decoder = can::OdometryDecoder::create(*db, config->signals);
-  if (!decoder)
-    return fail(dbc_file.string() + ": " + decoder.error().message +
-                " (see can: in the configuration)");
+  if (!decoder) return fail(decoder.error().message + " (see can: in the configuration)");
   auto reader = can::CandumpReader::open(o.in);
   if (!reader) return fail(reader.error().message);
   std::ofstream out(o.out, std::ios::trunc);
@@ -56,7 +54,11 @@ int run_candump(const CandumpOptions& o) {
     if (!*more) break;
     const can::OdometryUpdate u = decoder->decode(f);
     if (!u.has_speed && !u.has_yaw_rate) continue;
+    const std::uint64_t earlier_before = dr.out_of_order();
     dr.update(u);
+    // A frame earlier than the one before (the log's time ran back: logs joined, a clock set
+    // back) is not integrated; a row for it would show a pose and "ok" for a time already past.
+    if (dr.out_of_order() != earlier_before) continue;
     if (u.has_speed) {
       speed = u.speed_mps;
       have_speed = true;
@@ -91,6 +93,11 @@ int run_candump(const CandumpOptions& o) {
                 dc.implausible);
   if (dr.gaps() > 0)
     std::printf("candump: %" PRIu64 " intervals not integrated (input stale)\n", dr.gaps());
+  if (dr.out_of_order() > 0)
+    std::printf("candump: warning: %" PRIu64
+                " frames earlier than a frame before them (the log's time ran back: logs joined, "
+                "or the clock set back), not integrated and not written\n",
+                dr.out_of_order());
   if (rc.frames == 0)
     return fail(o.in + ": no CAN frame in the log (candump -l format: '(time) can0 123#DEADBEEF')");
   return 0;

@@ -148,6 +148,7 @@ class Parser {
       pos = nl + 1;
     }
     if (in_string) return rt::make_error(where() + "a quoted string is never closed");
+    db_.source = source_;
     return std::move(db_);
   }
 

@@ -60,6 +60,7 @@ struct Message {
 
 struct Database {
   std::vector<Message> messages;
+  std::string source;  // the file (or name) it was parsed from, for errors about its contents
 
   const Message* find(std::string_view message_name) const noexcept;
   const Message* find(std::uint32_t id, bool extended) const noexcept;

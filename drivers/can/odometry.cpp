@@ -8,16 +8,23 @@ namespace {
 
 rt::Result<OdometryDecoder::Channel> channel(const Database& db, const std::string& message,
                                              const std::string& signal, const char* what) {
+  // Errors name the DBC file: the message or signal may be the configuration's typo or the
+  // file's, and a garbage file holds no message at all.
+  const std::string dbc = db.source.empty() ? std::string("the DBC") : db.source;
   const Message* m = db.find(message);
-  if (m == nullptr)
-    return rt::make_error(std::string(what) + ": the DBC has no message '" + message + "'");
+  if (m == nullptr) {
+    return rt::make_error(dbc + ": " + what + ": no message '" + message + "'" +
+                          (db.messages.empty()
+                               ? " (it holds no message at all, no BO_ line: is it a DBC file?)"
+                               : ""));
+  }
   const Signal* s = m->find(signal);
   if (s == nullptr) {
-    return rt::make_error(std::string(what) + ": message '" + message + "' has no signal '" +
+    return rt::make_error(dbc + ": " + what + ": message '" + message + "' has no signal '" +
                           signal + "'");
   }
   if (s->multiplexer || s->multiplex_value >= 0) {
-    return rt::make_error(std::string(what) + ": signal '" + message + "." + signal +
+    return rt::make_error(dbc + ": " + what + ": signal '" + message + "." + signal +
                           "' is multiplexed; only plain signals can be mapped");
   }
   OdometryDecoder::Channel c;

@@ -92,6 +92,30 @@ TEST(CanCli, CandumpWritesSpeedYawRateAndTheDeadReckonedCircle) {
   EXPECT_NEAR(y, 2 * radius, 0.1);  // half way: across the circle
 }
 
+// Issue 47: a log whose time runs back 100 s was decoded with status ok on every row.
+TEST(CanCli, CandumpCountsFramesWhoseTimeRunsBackAndWritesNoRowForThem) {
+  const auto dir = std::filesystem::temp_directory_path() / "stac_can_cli_back";
+  std::filesystem::create_directories(dir);
+  const auto log = write_circle_log(dir);
+  const std::vector<std::string> lines = lines_of(log);
+  {
+    std::ofstream out(log, std::ios::app);
+    for (std::size_t i = 100; i < 130; ++i) {  // 30 frames again, 100 s earlier
+      const std::string& l = lines[i];
+      const double t = std::stod(l.substr(1));
+      char stamp[32];
+      std::snprintf(stamp, sizeof stamp, "(%.6f)", t - 100.0);
+      out << stamp << l.substr(l.find(')') + 1) << "\n";
+    }
+  }
+  const auto csv = dir / "odometry.csv";
+  const CliResult r = stac("candump --in " + log.string() + " --out " + csv.string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("20 frames earlier than a frame before them"), std::string::npos)
+      << r.output;                              // the 30 lines hold 10 speed and 10 yaw-rate frames
+  EXPECT_EQ(lines_of(csv).size(), 1u + 2000u);  // no row for them
+}
+
 TEST(CanCli, CandumpErrorsNameTheFileAndLineOrTheSignal) {
   const auto dir = std::filesystem::temp_directory_path() / "stac_can_cli_bad";
   std::filesystem::create_directories(dir);
@@ -106,7 +130,8 @@ TEST(CanCli, CandumpErrorsNameTheFileAndLineOrTheSignal) {
   const CliResult m = stac("candump --in " + log.string() + " --dbc " + dbc.string() + " --out " +
                            (dir / "x.csv").string());
   EXPECT_NE(m.code, 0);
-  EXPECT_NE(m.output.find("no message 'WheelSpeeds'"), std::string::npos) << m.output;
+  EXPECT_NE(m.output.find(dbc.string() + ": speed: no message 'WheelSpeeds'"), std::string::npos)
+      << m.output;
   // A folder given as the DBC (issue 31: it said the DBC had no message).
   const CliResult folder = stac("candump --in " + log.string() + " --dbc " + dir.string() +
                                 " --out " + (dir / "x.csv").string());

@@ -117,6 +117,18 @@ TEST(OdometryDecoder, SignAndUnitConversionsFromTheMap) {
   EXPECT_NE(no_sig.error().message.find("has no signal 'Nope'"), std::string::npos);
 }
 
+// Issue 47: a garbage DBC was reported as a missing message, without the file's name.
+TEST(OdometryDecoder, AFileWithoutMessagesIsNamedAndCalledSo) {
+  const auto db = parse_dbc("this is not a DBC file\n\x01\x02 at all\n", "odometry.dbc");
+  ASSERT_TRUE(db) << db.error().message;
+  const auto d = OdometryDecoder::create(*db, {"M", "V", "M", "W", 1.0});
+  ASSERT_FALSE(d);
+  EXPECT_NE(d.error().message.find("odometry.dbc: speed: no message 'M'"), std::string::npos)
+      << d.error().message;
+  EXPECT_NE(d.error().message.find("it holds no message at all"), std::string::npos)
+      << d.error().message;
+}
+
 TEST(OdometryDecoder, DecodingAllocatesNothing) {
   static_assert(noexcept(std::declval<OdometryDecoder&>().decode(Frame{})));
   const Database db = shipped_dbc();
