@@ -15,6 +15,7 @@
 #   --dry-run          print the sbatch commands and each task's command line, submit nothing
 #   --local            run the tasks and the merge here, one after the other, without Slurm (the
 #                      same steps a node runs: for a machine without a cluster, and the tests)
+# An option without its value, or an unknown one, stops it with rc 2 (1: a bad list, a failure).
 # Every option after -- goes to both sbatch calls (--partition, --time, --mem, --account...).
 # Prints the array job's id and the merge job's id; `squeue -u $USER` follows them, and
 # DIR/parts/NNNNN/log holds each task's output.
@@ -23,29 +24,40 @@
 # the captures, DIR and stac at the same paths (a shared file system).
 set -euo pipefail
 
-usage() { sed -n '2,24p' "$0" | sed 's/^# \{0,1\}//'; exit "${1:-2}"; }
+usage() { awk 'NR > 1 && !/^#/ { exit } NR > 1' "$0" | sed 's/^# \{0,1\}//'; exit 0; }
 die() { echo "slurm-dataset: $*" >&2; exit 1; }
+# A wrong command line: rc 2, nothing made.
+usage_error() { printf 'slurm-dataset: %s (--help: the usage)\n' "$*" >&2; exit 2; }
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 self=$here/$(basename "${BASH_SOURCE[0]}")
 
 mode=submit list="" out="" stac="" parallel="" dataset_args="" sbatch_extra=()
+# The value of option $1, the next word $2 (absent when $# is 1): refused when missing, empty, or
+# an option (a path that starts with - is written ./-name). --dataset-args takes options.
+value() {
+  (($# > 1)) || usage_error "$1 needs a value"
+  [[ -n $2 || $1 == --dataset-args ]] || usage_error "$1 needs a value, not an empty word"
+  [[ $1 == --dataset-args || $2 != -* ]] || usage_error "$1 needs a value, not the option '$2'"
+}
 while (($#)); do
   case $1 in
-    --list) list=$2; shift 2 ;;
-    --out) out=$2; shift 2 ;;
-    --stac) stac=$2; shift 2 ;;
-    --parallel) parallel=$2; shift 2 ;;
-    --dataset-args) dataset_args=$2; shift 2 ;;
+    --list) value "$@"; list=$2; shift 2 ;;
+    --out) value "$@"; out=$2; shift 2 ;;
+    --stac) value "$@"; stac=$2; shift 2 ;;
+    --parallel) value "$@"; parallel=$2; shift 2 ;;
+    --dataset-args) value "$@"; dataset_args=$2; shift 2 ;;
     --dry-run) mode=dry-run; shift ;;
     --local) mode=local; shift ;;
     --task) mode=task; shift ;;
     --merge) mode=merge; shift ;;
-    -h | --help) usage 0 ;;
+    -h | --help) usage ;;
     --) shift; sbatch_extra=("$@"); break ;;
-    *) echo "slurm-dataset: unknown option '$1'" >&2; usage ;;
+    *) usage_error "unknown option '$1'" ;;
   esac
 done
-[[ -n $out ]] || die "--out DIR is required (where the parts and the merged dataset go)"
+[[ -n $out ]] || usage_error "--out DIR is required (where the parts and the merged dataset go)"
+[[ -z $parallel || $parallel =~ ^[1-9][0-9]*$ ]] ||
+  usage_error "--parallel needs a positive number, not '$parallel'"
 
 # The list, as absolute "capture truth" lines: DIR/captures.txt once submitted.
 read_list() {
@@ -118,7 +130,7 @@ case $mode in
   merge) run_merge; exit 0 ;;
 esac
 
-[[ -n $list ]] || die "--list CAPTURES.txt is required"
+[[ -n $list ]] || usage_error "--list CAPTURES.txt is required"
 [[ -f $list ]] || die "no list file $list"
 captures=$(read_list "$list")
 n=$(grep -c . <<< "$captures" || true)
@@ -126,7 +138,6 @@ n=$(grep -c . <<< "$captures" || true)
 with_truth=$(awk 'NF == 2' <<< "$captures" | wc -l)
 ((with_truth == 0 || with_truth == n)) ||
   die "$list: $with_truth of $n captures have a truth file: all or none (labelled or unlabeled)"
-[[ -z $parallel || $parallel =~ ^[1-9][0-9]*$ ]] || die "--parallel must be a positive number"
 stac_path=$(find_stac)
 
 out=$(realpath -m "$out")

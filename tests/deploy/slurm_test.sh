@@ -5,6 +5,7 @@
 #   - a list naming a missing capture, or mixing labelled and unlabeled captures, is refused with
 #     the line named;
 #   - --local runs the tasks and the merge here: the merged dataset holds every part's tracks;
+#   - an option without its value, or an unknown one, is refused with rc 2, naming it (issue 47);
 #   - on a one-node Slurm cluster started here (munged, slurmctld and slurmd from Debian's
 #     slurm-wlm, on a private config, state folder and ports; root only), the real submission
 #     makes the same tracks.bin, byte for byte. Without slurm-wlm or root that part is skipped
@@ -68,6 +69,26 @@ a=$(tracks local/parts/00000/log) b=$(tracks local/parts/00001/log) all=$(tracks
 [[ -n $a && -n $b && -n $all ]] || fail "no track counts in the logs"
 ((a > 0 && b > 0 && all == a + b)) || fail "merged $all tracks from parts of $a and $b"
 echo "slurm_test: --local: $a + $b = $all tracks"
+
+# Options without their value, and unknown options: rc 2 and a message naming the option, before
+# anything is made (not bash's "unbound variable", not the next option taken as the value).
+refused() {  # refused OPTION ARGS...: slurm-dataset.sh ARGS exits 2, its error naming OPTION
+  local option=$1 rc=0 msg
+  shift
+  msg=$("$script" "$@" 2>&1 > /dev/null) || rc=$?
+  ((rc == 2)) || fail "slurm-dataset.sh $*: rc $rc, not 2: $msg"
+  [[ $msg == "slurm-dataset: "*"$option"* ]] || fail "slurm-dataset.sh $*: the error names no $option: $msg"
+}
+refused --list --out o --stac "$stac" --local --list
+refused --list --list --out o --stac "$stac" --local
+refused --out --list list.txt --stac "$stac" --local --out
+refused --out --list list.txt --out --local --stac "$stac"
+refused --stac --list list.txt --out o --local --stac
+refused --parallel --list list.txt --out o --dry-run --parallel
+refused --parallel --list list.txt --out o --parallel --dry-run
+refused --dataset-args --list list.txt --out o --dry-run --dataset-args
+refused --bogus --list list.txt --out o --dry-run --bogus
+[[ ! -e o && ! -e --local && ! -e --dry-run ]] || fail "a refused command line made a folder"
 
 # A one-node Slurm cluster, if it can be started here.
 for tool in munged slurmctld slurmd sbatch squeue scontrol; do
