@@ -3,9 +3,14 @@
 # a job array, then one job that joins the parts (`stac dataset --merge`) when all have succeeded.
 #
 # Usage: slurm-dataset.sh --list CAPTURES.txt --out DIR [options] [-- sbatch options...]
-#   --list FILE        one capture per line: `CAPTURE.pcap [TRUTH.jsonl]` (with a truth file the
-#                      tracks are labelled; all lines with one or all without). Blank lines and
-#                      lines starting with # are skipped. Relative paths: relative to FILE.
+#   --list FILE        one capture per line: `CAPTURE [TRUTH.jsonl]`, CAPTURE a .pcap or a KITTI
+#                      raw drive folder (with a truth file the tracks are labelled; all lines with
+#                      one or all without). A TAB separates capture and truth; without a TAB, a
+#                      line that names an existing capture is that capture (spaces and all), else
+#                      a space does (`a.pcap a.jsonl`: two paths without spaces; a line that reads
+#                      both ways is refused). Spaces around a path, CR line ends and a byte order
+#                      mark are dropped; blank lines and lines starting with # are skipped (write
+#                      ./#name for such a file). Relative paths: relative to FILE.
 #   --out DIR          DIR/parts/NNNNN/ (one dataset per capture, with its log), then DIR/tracks.bin
 #                      and DIR/manifest.json: the merged dataset (`stac train --data DIR`)
 #   --stac PATH        the stac executable the nodes run (default: `stac` on PATH, else this
@@ -15,6 +20,7 @@
 #   --dry-run          print the sbatch commands and each task's command line, submit nothing
 #   --local            run the tasks and the merge here, one after the other, without Slurm (the
 #                      same steps a node runs: for a machine without a cluster, and the tests)
+# An option without its value, or an unknown one, stops it with rc 2 (1: a bad list, a failure).
 # Every option after -- goes to both sbatch calls (--partition, --time, --mem, --account...).
 # Prints the array job's id and the merge job's id; `squeue -u $USER` follows them, and
 # DIR/parts/NNNNN/log holds each task's output.
@@ -23,46 +29,96 @@
 # the captures, DIR and stac at the same paths (a shared file system).
 set -euo pipefail
 
-usage() { sed -n '2,24p' "$0" | sed 's/^# \{0,1\}//'; exit "${1:-2}"; }
+usage() { awk 'NR > 1 && !/^#/ { exit } NR > 1' "$0" | sed 's/^# \{0,1\}//'; exit 0; }
 die() { echo "slurm-dataset: $*" >&2; exit 1; }
+# A wrong command line: rc 2, nothing made.
+usage_error() { printf 'slurm-dataset: %s (--help: the usage)\n' "$*" >&2; exit 2; }
+# Words as a shell reads them back: the dry run's and the logs' command lines.
+quoted() { local q; printf -v q '%q ' "$@"; echo "${q% }"; }
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 self=$here/$(basename "${BASH_SOURCE[0]}")
 
-mode=submit list="" out="" stac="" parallel="" dataset_args="" sbatch_extra=()
+mode=submit list="" out="" stac="" parallel="" dataset_args=() sbatch_extra=()
+# The value of option $1, the next word $2 (absent when $# is 1): refused when missing, empty, or
+# an option (a path that starts with - is written ./-name). --dataset-args takes options.
+value() {
+  (($# > 1)) || usage_error "$1 needs a value"
+  [[ -n $2 || $1 == --dataset-args ]] || usage_error "$1 needs a value, not an empty word"
+  [[ $1 == --dataset-args || $2 != -* ]] || usage_error "$1 needs a value, not the option '$2'"
+}
 while (($#)); do
   case $1 in
-    --list) list=$2; shift 2 ;;
-    --out) out=$2; shift 2 ;;
-    --stac) stac=$2; shift 2 ;;
-    --parallel) parallel=$2; shift 2 ;;
-    --dataset-args) dataset_args=$2; shift 2 ;;
+    --list) value "$@"; list=$2; shift 2 ;;
+    --out) value "$@"; out=$2; shift 2 ;;
+    --stac) value "$@"; stac=$2; shift 2 ;;
+    --parallel) value "$@"; parallel=$2; shift 2 ;;
+    # Words split at spaces (no glob), as on a command line.
+    --dataset-args) value "$@"; read -ra words <<< "$2"; dataset_args+=("${words[@]}"); shift 2 ;;
     --dry-run) mode=dry-run; shift ;;
     --local) mode=local; shift ;;
     --task) mode=task; shift ;;
     --merge) mode=merge; shift ;;
-    -h | --help) usage 0 ;;
+    -h | --help) usage ;;
     --) shift; sbatch_extra=("$@"); break ;;
-    *) echo "slurm-dataset: unknown option '$1'" >&2; usage ;;
+    *) usage_error "unknown option '$1'" ;;
   esac
 done
-[[ -n $out ]] || die "--out DIR is required (where the parts and the merged dataset go)"
+[[ -n $out ]] || usage_error "--out DIR is required (where the parts and the merged dataset go)"
+[[ -z $parallel || $parallel =~ ^[1-9][0-9]*$ ]] ||
+  usage_error "--parallel needs a positive number, not '$parallel'"
 
-# The list, as absolute "capture truth" lines: DIR/captures.txt once submitted.
+# $1 without the spaces (and CRs) around it.
+trim() {
+  local s=$1
+  s=${s#"${s%%[![:space:]]*}"}
+  printf '%s' "${s%"${s##*[![:space:]]}"}"
+}
+
+# A capture: a file (a pcap) or a KITTI raw drive folder (what `stac dataset --in` takes).
+is_capture() { [[ -f $1 || -d $1/velodyne_points/data ]]; }
+# Path $1 of the list, absolute: relative to the list's folder, $base.
+absolute() { if [[ $1 == /* ]]; then printf '%s' "$1"; else printf '%s/%s' "$base" "$1"; fi; }
+
+# The list, as absolute "capture<TAB>truth" lines: DIR/captures.txt once submitted.
 read_list() {
-  local file=$1 base n=0 line capture truth extra
+  local file=$1 base n=0 line capture truth whole fields
   base=$(cd "$(dirname "$file")" && pwd)
   while IFS= read -r line || [[ -n $line ]]; do
     n=$((n + 1))
+    ((n > 1)) || line=${line#$'\xef\xbb\xbf'}  # a byte order mark (Windows editors)
+    line=${line%$'\r'}
     [[ -z ${line//[[:space:]]/} || $line =~ ^[[:space:]]*# ]] && continue
-    read -r capture truth extra <<< "$line"
-    [[ -z ${extra:-} ]] || die "$file:$n: a line is 'CAPTURE [TRUTH]', not three fields"
-    [[ $capture == /* ]] || capture=$base/$capture
-    [[ -f $capture ]] || die "$file:$n: no capture $capture"
-    if [[ -n ${truth:-} ]]; then
-      [[ $truth == /* ]] || truth=$base/$truth
+    if [[ $line == *$'\t'* ]]; then  # CAPTURE<TAB>TRUTH: spaces inside the paths are theirs
+      capture=$(trim "${line%%$'\t'*}") truth=$(trim "${line#*$'\t'}")
+      [[ $truth != *$'\t'* ]] || die "$file:$n: a line is CAPTURE<TAB>TRUTH, not three fields"
+      [[ -n $capture ]] || die "$file:$n: no capture before the TAB"
+    else
+      # One path (spaces and all) if it names a capture, else `CAPTURE TRUTH` split at a space;
+      # refused when both would do.
+      whole=$(absolute "$(trim "$line")")
+      read -ra fields <<< "$line"
+      if ((${#fields[@]} == 2)) && is_capture "$whole" &&
+        is_capture "$(absolute "${fields[0]}")" && [[ -f $(absolute "${fields[1]}") ]]; then
+        die "$file:$n: '$(trim "$line")' is a capture, and a capture and its truth file: put a" \
+          "TAB after the capture (then its truth file, if any)"
+      elif is_capture "$whole" || ((${#fields[@]} == 1)); then
+        capture=$(trim "$line") truth=""
+      elif ((${#fields[@]} == 2)); then
+        capture=${fields[0]} truth=${fields[1]}
+      else
+        die "$file:$n: no capture '$(trim "$line")', and more than two words: put a TAB between" \
+          "the capture and its truth file when a path holds a space"
+      fi
+    fi
+    capture=$(absolute "$capture")
+    is_capture "$capture" || die "$file:$n: no capture $capture (a file, or a KITTI raw drive" \
+      "folder: one with velodyne_points/data)"
+    if [[ -n $truth ]]; then
+      truth=$(absolute "$truth")
       [[ -f $truth ]] || die "$file:$n: no truth file $truth"
     fi
-    echo "$capture${truth:+ $truth}"
+    [[ $capture$truth != *[$'\t\n']* ]] || die "$file:$n: a path with a TAB or a line break"
+    printf '%s%s\n' "$capture" "${truth:+$'\t'$truth}"
   done < "$file"
 }
 
@@ -83,16 +139,18 @@ find_stac() {
 # One task: line SLURM_ARRAY_TASK_ID of DIR/captures.txt into DIR/parts/NNNNN.
 run_task() {
   local id=${SLURM_ARRAY_TASK_ID:?--task runs inside a Slurm array job (SLURM_ARRAY_TASK_ID)}
-  local line capture truth part
+  local line capture truth part args cmd
   line=$(sed -n "$((id + 1))p" "$out/captures.txt")
   [[ -n $line ]] || die "task $id: $out/captures.txt has no line $((id + 1))"
-  read -r capture truth <<< "$line"
+  IFS=$'\t' read -r capture truth <<< "$line"
   part=$(printf '%s/parts/%05d' "$out" "$id")
   rm -rf "$part" && mkdir -p "$part"
-  local cmd=("$(cat "$out/stac.path")" dataset --in "$capture" ${truth:+--truth "$truth"} --out "$part")
-  # shellcheck disable=SC2206  # the extra options are words, as on a command line
-  cmd+=($(cat "$out/dataset-args"))
-  echo "task $id on $(hostname): ${cmd[*]}" > "$part/log"
+  cmd=("$(cat "$out/stac.path")" dataset --in "$capture")
+  [[ -z $truth ]] || cmd+=(--truth "$truth")
+  cmd+=(--out "$part")
+  mapfile -d '' -t args < "$out/dataset-args"
+  cmd+=("${args[@]}")
+  echo "task $id on $(hostname): $(quoted "${cmd[@]}")" > "$part/log"
   if ! "${cmd[@]}" >> "$part/log" 2>&1; then
     echo "slurm-dataset: task $id failed: $capture (log: $part/log)" >&2
     tail -5 "$part/log" >&2
@@ -107,7 +165,8 @@ run_merge() {
   n=$(wc -l < "$out/captures.txt")
   for ((k = 0; k < n; k++)); do
     part=$(printf '%s/parts/%05d' "$out" "$k")
-    [[ -f $part/done ]] || die "part $k ($(sed -n "$((k + 1))p" "$out/captures.txt")) is not done: see $part/log"
+    [[ -f $part/done ]] ||
+      die "part $k ($(sed -n "$((k + 1))p" "$out/captures.txt" | tr '\t' ' ')) is not done: see $part/log"
     parts+=(--merge "$part")
   done
   "$(cat "$out/stac.path")" dataset "${parts[@]}" --out "$out"
@@ -118,15 +177,14 @@ case $mode in
   merge) run_merge; exit 0 ;;
 esac
 
-[[ -n $list ]] || die "--list CAPTURES.txt is required"
+[[ -n $list ]] || usage_error "--list CAPTURES.txt is required"
 [[ -f $list ]] || die "no list file $list"
 captures=$(read_list "$list")
 n=$(grep -c . <<< "$captures" || true)
 ((n > 0)) || die "$list names no capture"
-with_truth=$(awk 'NF == 2' <<< "$captures" | wc -l)
+with_truth=$(grep -c $'\t' <<< "$captures" || true)
 ((with_truth == 0 || with_truth == n)) ||
   die "$list: $with_truth of $n captures have a truth file: all or none (labelled or unlabeled)"
-[[ -z $parallel || $parallel =~ ^[1-9][0-9]*$ ]] || die "--parallel must be a positive number"
 stac_path=$(find_stac)
 
 out=$(realpath -m "$out")
@@ -138,15 +196,18 @@ submit_merge=(sbatch --parsable --job-name=stac-dataset-merge --output="$out/mer
 
 if [[ $mode == dry-run ]]; then
   echo "$n captures -> $out"
-  echo "${submit_array[*]}"
-  echo "${submit_merge[*]/--parsable/--parsable --dependency=afterok:<array job>}"
+  quoted "${submit_array[@]}"
+  merge=$(quoted "${submit_merge[@]}")
+  echo "${merge/--parsable/--parsable --dependency=afterok:<array job>}"
   k=0
-  while read -r capture truth; do
-    printf 'task %d: %s dataset --in %s%s --out %s/parts/%05d%s\n' "$k" "$stac_path" "$capture" \
-      "${truth:+ --truth $truth}" "$out" "$k" "${dataset_args:+ $dataset_args}"
+  while IFS=$'\t' read -r capture truth; do
+    cmd=("$stac_path" dataset --in "$capture")
+    [[ -z $truth ]] || cmd+=(--truth "$truth")
+    cmd+=(--out "$(printf '%s/parts/%05d' "$out" "$k")" "${dataset_args[@]}")
+    echo "task $k: $(quoted "${cmd[@]}")"
     k=$((k + 1))
   done <<< "$captures"
-  echo "merge: $stac_path dataset --merge $out/parts/00000 ... --out $out"
+  echo "merge: $(quoted "$stac_path" dataset --merge "$out/parts/00000") ... --out $(quoted "$out")"
   exit 0
 fi
 
@@ -154,7 +215,9 @@ fi
 mkdir -p "$out"
 echo "$captures" > "$out/captures.txt"
 echo "$stac_path" > "$out/stac.path"
-echo "$dataset_args" > "$out/dataset-args"
+# NUL-separated words (printf of no word would write one empty word)
+: > "$out/dataset-args"
+((${#dataset_args[@]} == 0)) || printf '%s\0' "${dataset_args[@]}" > "$out/dataset-args"
 mkdir -p "$out/parts"
 
 if [[ $mode == local ]]; then

@@ -5,9 +5,16 @@
 #   - a list naming a missing capture, or mixing labelled and unlabeled captures, is refused with
 #     the line named;
 #   - --local runs the tasks and the merge here: the merged dataset holds every part's tracks;
+#   - what a hostile user gives it (issue 47): an option without its value or an unknown one is
+#     refused with rc 2, naming it; a list written on Windows (CRLF, a byte order mark) with
+#     comments, paths with spaces (the list's folder, the drives, --out) and a TAB between capture
+#     and truth runs as the plain list does; a line that could split two ways is refused; a KITTI
+#     raw drive folder (../shared/data/kitti-raw-seq, linked into a folder with a space) is a
+#     capture;
 #   - on a one-node Slurm cluster started here (munged, slurmctld and slurmd from Debian's
-#     slurm-wlm, on a private config, state folder and ports; root only), the real submission
-#     makes the same tracks.bin, byte for byte. Without slurm-wlm or root that part is skipped
+#     slurm-wlm, on a private config, state folder and ports; root only), the real submission of
+#     the Windows list with spaces, into a folder with a space, makes the same tracks.bin as
+#     --local, byte for byte. Without slurm-wlm or root that part is skipped
 #     and the test says so.
 # Usage: slurm_test.sh BUILD_DIR SOURCE_DIR
 set -euo pipefail
@@ -68,6 +75,83 @@ a=$(tracks local/parts/00000/log) b=$(tracks local/parts/00001/log) all=$(tracks
 [[ -n $a && -n $b && -n $all ]] || fail "no track counts in the logs"
 ((a > 0 && b > 0 && all == a + b)) || fail "merged $all tracks from parts of $a and $b"
 echo "slurm_test: --local: $a + $b = $all tracks"
+
+# Options without their value, and unknown options: rc 2 and a message naming the option, before
+# anything is made (not bash's "unbound variable", not the next option taken as the value).
+refused() {  # refused OPTION ARGS...: slurm-dataset.sh ARGS exits 2, its error naming OPTION
+  local option=$1 rc=0 msg
+  shift
+  msg=$("$script" "$@" 2>&1 > /dev/null) || rc=$?
+  ((rc == 2)) || fail "slurm-dataset.sh $*: rc $rc, not 2: $msg"
+  [[ $msg == "slurm-dataset: "*"$option"* ]] || fail "slurm-dataset.sh $*: the error names no $option: $msg"
+}
+refused --list --out o --stac "$stac" --local --list
+refused --list --list --out o --stac "$stac" --local
+refused --out --list list.txt --stac "$stac" --local --out
+refused --out --list list.txt --out --local --stac "$stac"
+refused --stac --list list.txt --out o --local --stac
+refused --parallel --list list.txt --out o --dry-run --parallel
+refused --parallel --list list.txt --out o --parallel --dry-run
+refused --dataset-args --list list.txt --out o --dry-run --dataset-args
+refused --bogus --list list.txt --out o --dry-run --bogus
+[[ ! -e o && ! -e --local && ! -e --dry-run ]] || fail "a refused command line made a folder"
+
+# A list with CRLF line ends runs as the same list with LF ones.
+printf '# two drives\r\nd1.pcap d1.truth.jsonl\r\n\r\nd2.pcap d2.truth.jsonl\r\n' > crlf.txt
+dry_crlf=$("$script" --list crlf.txt --out out --stac "$stac" --parallel 3 --dry-run -- --time=10) ||
+  fail "dry run of the CRLF list"
+[[ $dry_crlf == "$dry" ]] || fail "the CRLF list's dry run differs from the LF list's: $dry_crlf"
+
+# A list written on Windows (a byte order mark, CRLF), with comments, in a folder with a space,
+# naming drives with spaces: TAB between capture and truth, the old space where no path has one.
+mkdir "drives with space"
+cp d1.pcap "drives with space/d 1.pcap"
+cp d1.truth.jsonl "drives with space/d 1.truth.jsonl"
+printf '\xef\xbb\xbf# two drives\r\n\r\nd 1.pcap\td 1.truth.jsonl\r\n  # the other\r\n../d2.pcap ../d2.truth.jsonl\r\n' \
+  > "drives with space/my list.txt"
+dry=$("$script" --list "drives with space/my list.txt" --out "out dir" --stac "$stac" --dry-run) ||
+  fail "dry run of the Windows list with spaces"
+echo "$dry"
+q() { printf '%q' "$1"; }
+grep -qxF "task 0: $stac dataset --in $(q "$work/drives with space/d 1.pcap") --truth $(q "$work/drives with space/d 1.truth.jsonl") --out $(q "$work/out dir/parts/00000")" <<< "$dry" ||
+  fail "dry run of the Windows list: task 0's command"
+grep -qxF "task 1: $stac dataset --in $(q "$work/drives with space/../d2.pcap") --truth $(q "$work/drives with space/../d2.truth.jsonl") --out $(q "$work/out dir/parts/00001")" <<< "$dry" ||
+  fail "dry run of the Windows list: task 1's command"
+"$script" --list "drives with space/my list.txt" --out "out dir" --stac "$stac" --local > spaced.log 2>&1 ||
+  { cat spaced.log >&2; fail "--local on the Windows list with spaces"; }
+spaced=$(tracks spaced.log)
+[[ $spaced == "$all" ]] || fail "the Windows list with spaces merged ${spaced:-no} tracks, the plain list $all"
+grep -qF "\"$work/drives with space/d 1.pcap $work/drives with space/d 1.truth.jsonl\"" "out dir/manifest.json" ||
+  fail "the merged manifest names no $work/drives with space/d 1.pcap"
+echo "slurm_test: the Windows list with spaces: $spaced tracks, as the plain list"
+
+# Without a TAB, a line of spaces that names no file, and splits into more than capture and truth,
+# is ambiguous: refused, the line named.
+printf 'd 1.pcap d 1.truth.jsonl\n' > "drives with space/ambiguous.txt"
+if msg=$("$script" --list "drives with space/ambiguous.txt" --out bad --stac "$stac" --dry-run 2>&1); then
+  fail "an ambiguous line was accepted: $msg"
+fi
+[[ $msg == *"ambiguous.txt:1: "*TAB* ]] || fail "ambiguous line: $msg"
+
+# A KITTI raw drive folder is a capture (stac dataset --in takes one), beside a pcap whose name has
+# a space, alone on its line (no TAB needed: the whole line names the file).
+kitti=$src/../shared/data/kitti-raw-seq
+if [[ -d $kitti/velodyne_points/data ]]; then
+  ln -s "$(cd "$kitti" && pwd)" "drives with space/kitti-drive"
+  printf 'kitti-drive\nd 1.pcap\n' > "drives with space/unlabeled.txt"
+  "$script" --list "drives with space/unlabeled.txt" --out "unlabeled out" --stac "$stac" --local \
+    > unlabeled.log 2>&1 || { cat unlabeled.log >&2; fail "--local on a KITTI drive folder"; }
+  grep -qF "$work/drives with space/kitti-drive: 40 scans" "unlabeled out/parts/00000/log" ||
+    fail "part 0 is not the KITTI drive: $(cat "unlabeled out/parts/00000/log")"
+  unlabeled() { sed -n 's/^.*: \([0-9][0-9]*\) unlabeled tracks$/\1/p' "$1" | tail -1; }
+  k=$(unlabeled "unlabeled out/parts/00000/log") p=$(unlabeled "unlabeled out/parts/00001/log")
+  u=$(unlabeled unlabeled.log)
+  [[ -n $k && -n $p && -n $u ]] || fail "no unlabeled track counts in the logs"
+  ((k > 0 && u == k + p)) || fail "merged $u unlabeled tracks from the KITTI drive's $k and the pcap's $p"
+  echo "slurm_test: a KITTI drive folder: $k + $p = $u unlabeled tracks"
+else
+  echo "slurm_test: no $kitti (../shared/data beside the source tree): the KITTI drive part is skipped"
+fi
 
 # A one-node Slurm cluster, if it can be started here.
 for tool in munged slurmctld slurmd sbatch squeue scontrol; do
@@ -130,13 +214,14 @@ for _ in $(seq 1 30); do
   sleep 1
 done
 [[ $(sinfo -h -o %t) == idle ]] || { tail -20 "$cluster/slurmctld.log" >&2; fail "the node never came up: $(sinfo)"; }
-submitted=$("$script" --list list.txt --out cluster-out --stac "$stac" -- --time=10)
+submitted=$("$script" --list "drives with space/my list.txt" --out "cluster out" --stac "$stac" -- --time=10)
 echo "slurm_test: $submitted"
 for _ in $(seq 1 180); do
   [[ -z $(squeue -h) ]] && break
   sleep 1
 done
 [[ -z $(squeue -h) ]] || fail "jobs still queued after 180 s: $(squeue)"
-[[ -f cluster-out/tracks.bin ]] || { cat cluster-out/merge.out cluster-out/parts/*.out >&2 || true; fail "the cluster made no merged dataset"; }
-cmp cluster-out/tracks.bin local/tracks.bin || fail "the cluster's dataset differs from the local run's"
+[[ -f "cluster out/tracks.bin" ]] ||
+  { cat "cluster out/merge.out" "cluster out"/parts/*.out >&2 || true; fail "the cluster made no merged dataset"; }
+cmp "cluster out/tracks.bin" "out dir/tracks.bin" || fail "the cluster's dataset differs from the local run's"
 echo "slurm_test: the one-node cluster ran 2 tasks and the merge: the same $all tracks, byte for byte"
