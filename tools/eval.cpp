@@ -45,7 +45,7 @@ nlohmann::json clear_json(const ClearCounts& k, bool with_fp) {
     j["fp"] = k.fp;
     j["mota"] = k.mota();
   } else {
-    j["mota_without_fp"] = k.mota();  // tracks carry no class: false positives are not attributed
+    j["mota_without_fp"] = k.mota();  // false positives not attributed by class (EvalResult)
   }
   return j;
 }
@@ -92,8 +92,8 @@ nlohmann::json metrics_json(const EvalResult& r, const EvalConfig& c) {
   j["scans"] = {{"truth", r.truth_scans}, {"output", r.output_scans}, {"paired", r.paired_scans}};
   j["ignored_track_scans"] = r.ignored_tracks;
   for (const auto& [cls, k] : r.clear_by_class) {
-    j["by_class"][cls] = clear_json(k, false);
-    j["by_class"][cls].update(hota_json(r.hota_by_class.at(cls), false));
+    j["by_class"][cls] = clear_json(k, r.fp_by_class);
+    j["by_class"][cls].update(hota_json(r.hota_by_class.at(cls), r.fp_by_class));
   }
   for (const auto& [b, k] : r.clear_by_band) {
     j["by_range"][band_name(b, c)] = clear_json(k, true);
@@ -134,10 +134,13 @@ std::string summary_table(const EvalResult& r, const EvalConfig& c) {
     << fmt(r.hota.assa()) << " | " << seg(&r.segmentation) << " |\n";
   for (const auto& [cls, k] : r.clear_by_class) {
     const auto sk = r.segmentation_by_class.find(cls);
-    s << "| " << cls << " | " << k.gt << " | " << k.tp << " | " << k.fn << " | - | "
-      << k.id_switches << " | " << k.fragmentations << " | " << fmt(k.mota()) << "* | "
-      << fmt(k.motp()) << " | - | " << fmt(r.hota_by_class.at(cls).assa()) << " | "
-      << seg(sk == r.segmentation_by_class.end() ? nullptr : &sk->second) << " |\n";
+    const HotaCounts& hk = r.hota_by_class.at(cls);
+    s << "| " << cls << " | " << k.gt << " | " << k.tp << " | " << k.fn << " | "
+      << (r.fp_by_class ? std::to_string(k.fp) : std::string("-")) << " | " << k.id_switches
+      << " | " << k.fragmentations << " | " << fmt(k.mota()) << (r.fp_by_class ? "" : "*") << " | "
+      << fmt(k.motp()) << " | " << (r.fp_by_class ? fmt(hk.hota()) : std::string("-")) << " | "
+      << fmt(hk.assa()) << " | " << seg(sk == r.segmentation_by_class.end() ? nullptr : &sk->second)
+      << " |\n";
   }
   for (const auto& [b, k] : r.clear_by_band) {
     const auto sk = r.segmentation_by_band.find(b);
@@ -149,7 +152,14 @@ std::string summary_table(const EvalResult& r, const EvalConfig& c) {
       << (hk == r.hota_by_band.end() ? "-" : fmt(hk->second.assa())) << " | "
       << seg(sk == r.segmentation_by_band.end() ? nullptr : &sk->second) << " |\n";
   }
-  s << "\n*per class: MOTA without false positives (tracks carry no class yet).\n";
+  if (r.fp_by_class) {
+    s << "\nPer class: a false positive counts against the class its track was given (every "
+         "track scored is classified as an evaluated class).\n";
+  } else {
+    s << "\n*per class: MOTA without false positives: every track is scored, classified or not, "
+         "and an unclassified track's false positive belongs to no class (--tracklets scores "
+         "classified tracks only, and counts their false positives by class).\n";
+  }
   return s.str();
 }
 

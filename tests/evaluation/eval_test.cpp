@@ -156,6 +156,37 @@ TEST(Eval, GhostIsAFalsePositiveButTracksOnBackgroundAreIgnored) {
   EXPECT_NEAR(r.hota.hota(), std::sqrt(20.0 / 30.0), 1e-12);
 }
 
+// Issue 47: with only classified outputs scored (`eval --tracklets`), every false positive has
+// the class its track was given, and counts against that class; with every track scored, an
+// unclassified track's false positive belongs to no class and the per-class counts hold none.
+TEST(Eval, FalsePositivesCountAgainstTheirTracksClassWhenEveryOutputIsClassified) {
+  const auto truth = two_objects();
+  std::vector<TracksScan> out;
+  for (int k = 0; k < 10; ++k) {
+    std::vector<TrackRecord> tracks = {track(7, 10.0 + k, 5.0), track(9, 3.0 + 0.1 * k, -3.0),
+                                       track(20, -20.0, -20.0)};  // a ghost, called a pedestrian
+    for (auto& [t, cls] : {std::pair{&tracks[0], "car"}, std::pair{&tracks[1], "pedestrian"},
+                           std::pair{&tracks[2], "pedestrian"}}) {
+      t->classified = true;
+      t->cls = cls;
+    }
+    out.push_back(output_scan(k, tracks));
+  }
+  EvalConfig c;
+  c.classified_outputs_only = true;
+  const EvalResult r = evaluate(truth, out, c);
+  EXPECT_TRUE(r.fp_by_class);
+  EXPECT_EQ(r.clear.fp, 10u);
+  EXPECT_EQ(r.clear_by_class.at("pedestrian").fp, 10u);
+  EXPECT_EQ(r.clear_by_class.at("car").fp, 0u);
+  EXPECT_DOUBLE_EQ(r.clear_by_class.at("pedestrian").mota(), 1.0 - 10.0 / 10.0);
+  EXPECT_NEAR(r.hota_by_class.at("pedestrian").hota(), std::sqrt(10.0 / 20.0), 1e-12);
+  const EvalResult every = evaluate(truth, out, EvalConfig{});
+  EXPECT_FALSE(every.fp_by_class);
+  EXPECT_EQ(every.clear.fp, 10u);
+  EXPECT_EQ(every.clear_by_class.at("pedestrian").fp, 0u);
+}
+
 TEST(Eval, CoastingTracksCountOnlyWhenAsked) {
   const auto truth = two_objects();
   std::vector<TracksScan> out;

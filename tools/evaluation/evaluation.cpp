@@ -36,6 +36,9 @@ struct Frame {
   std::vector<double> sim;            // gt x trk
   std::vector<double> dist;           // gt x trk (m)
   std::vector<std::string> gt_class;  // per gt entry
+  // Per track entry: its class when false positives are attributed by class (every output is
+  // then classified as an evaluated class: classified_outputs_only), else empty.
+  std::vector<std::string> trk_class;
   std::vector<int> gt_band, trk_band;
 };
 
@@ -175,6 +178,7 @@ double SegCounts::under_rate() const {
 EvalResult evaluate(const std::vector<TruthScanRecord>& truth_in,
                     const std::vector<TracksScan>& tracks_in, const EvalConfig& c) {
   EvalResult r;
+  r.fp_by_class = c.classified_outputs_only;
   r.truth_scans = truth_in.size();
   r.output_scans = tracks_in.size();
 
@@ -305,6 +309,10 @@ EvalResult evaluate(const std::vector<TruthScanRecord>& truth_in,
           trk_index.try_emplace(t->id, static_cast<std::uint32_t>(trk_index.size()));
       f.trk.push_back(it->second);
       f.trk_band.push_back(band_of(range_of(t->x, t->y, ts->ego), c));
+      f.trk_class.push_back(c.classified_outputs_only && t->classified &&
+                                    is_tracked_class(c, t->cls)
+                                ? t->cls
+                                : std::string());
     }
     f.sim.resize(evaluated * kept.size());
     f.dist.resize(f.sim.size());
@@ -376,6 +384,7 @@ EvalResult evaluate(const std::vector<TruthScanRecord>& truth_in,
       if (trk_matched[i]) continue;
       ++r.clear.fp;
       ++r.clear_by_band[f.trk_band[i]].fp;
+      if (!f.trk_class[i].empty()) ++r.clear_by_class[f.trk_class[i]].fp;
     }
   }
 
@@ -449,6 +458,7 @@ EvalResult evaluate(const std::vector<TruthScanRecord>& truth_in,
         if (trk_matched[i]) continue;
         ++r.hota.fp[a];
         ++r.hota_by_band[f.trk_band[i]].fp[a];
+        if (!f.trk_class[i].empty()) ++r.hota_by_class[f.trk_class[i]].fp[a];
       }
     }
   }
@@ -460,6 +470,9 @@ EvalResult evaluate(const std::vector<TruthScanRecord>& truth_in,
     r.hota_by_class[std::string(e.cls)].ass_sum[e.alpha] += ass;
     r.hota_by_band[e.band].ass_sum[e.alpha] += ass;
   }
+  // A class may have its false positives in one count and none in the other: both hold it.
+  for (const auto& [cls, k] : r.clear_by_class) (void)r.hota_by_class[cls];
+  for (const auto& [cls, k] : r.hota_by_class) (void)r.clear_by_class[cls];
   return r;
 }
 

@@ -73,9 +73,14 @@ struct EvalResult {
   bool has_segment_truth = false;    // segments carried truth compositions
   ClearCounts clear;                 // tracked classes
   HotaCounts hota;
-  SegCounts segmentation;                                  // tracked classes
-  std::map<std::string, ClearCounts> clear_by_class;       // fp unattributed (tracks have no class)
-  std::map<std::string, HotaCounts> hota_by_class;         // fp unattributed
+  SegCounts segmentation;  // tracked classes
+  // Per truth class. False positives are attributed by the track's class only when every output
+  // scored is classified as an evaluated class (classified_outputs_only, `--tracklets`):
+  // fp_by_class. Otherwise an unclassified track's false positive belongs to no class, and the
+  // per-class counts hold none.
+  bool fp_by_class = false;
+  std::map<std::string, ClearCounts> clear_by_class;
+  std::map<std::string, HotaCounts> hota_by_class;
   std::map<std::string, SegCounts> segmentation_by_class;  // every class, background included
   std::map<int, ClearCounts> clear_by_band;  // band index b: [b * range_band_m, (b + 1) * ...)
   std::map<int, HotaCounts> hota_by_band;
