@@ -151,6 +151,11 @@ rt::Result<InductionState> read_induction_state(const std::filesystem::path& dir
   std::ifstream in(file, std::ios::binary);
   const std::vector<std::uint8_t> bytes{std::istreambuf_iterator<char>(in),
                                         std::istreambuf_iterator<char>()};
+  return parse_induction_state(bytes, name);
+}
+
+rt::Result<InductionState> parse_induction_state(std::span<const std::uint8_t> bytes,
+                                                 const std::string& name) {
   const auto bad = [&](const std::string& what) {
     return rt::make_error(name + ": " + what +
                           "; the state is damaged: restore the folder from a backup, or start a "

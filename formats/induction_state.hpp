@@ -67,6 +67,10 @@ inline constexpr std::uint32_t kInductionStateVersion = 3;
 
 // DIR/state.bin. Errors name the file and say what to do.
 rt::Result<InductionState> read_induction_state(const std::filesystem::path& dir);
+// The bytes of a state.bin, `name` naming them in errors (read_induction_state; the fuzzing
+// harness fuzz/induction_state_fuzz.cpp).
+rt::Result<InductionState> parse_induction_state(std::span<const std::uint8_t> bytes,
+                                                 const std::string& name);
 // Whether a line of labels.jsonl is a whole answer: a JSON object with "source" (a dataset path,
 // a string), "track" (its index, an unsigned number) and "label" (a string).
 bool is_answer_line(const std::string& line);

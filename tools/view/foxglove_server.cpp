@@ -17,6 +17,8 @@
 #include <websocketpp/config/asio_no_tls.hpp>
 #include <websocketpp/server.hpp>
 
+#include "tools/view/client_messages.hpp"
+
 namespace stac::view {
 namespace {
 
@@ -30,7 +32,7 @@ constexpr long kHandshakeTimeoutMs = 5000;
 
 struct Client {
   Handle handle;
-  std::map<std::uint32_t, std::size_t> subscriptions;  // the client's id -> channel
+  Subscriptions subscriptions;          // the client's id -> channel
   std::size_t record = kClientRecords;  // its ServerCounts::clients entry (none past the last)
 };
 
@@ -151,61 +153,10 @@ struct FoxgloveServer::Impl {
       status(h, 2, "stac view takes JSON text messages only (subscribe, unsubscribe)");
       return;
     }
-    const nlohmann::json j = nlohmann::json::parse(m->get_payload(), nullptr, false);
-    if (j.is_discarded() || !j.is_object() || !j.contains("op") || !j["op"].is_string()) {
-      status(h, 2, "not a JSON object with an \"op\"");
-      return;
-    }
-    const std::string op = j["op"].get<std::string>();
-    if (op == "subscribe" && j.contains("subscriptions") && j["subscriptions"].is_array()) {
-      for (const nlohmann::json& s : j["subscriptions"]) {
-        if (!s.is_object() || !s.contains("id") || !s.contains("channelId") ||
-            !s["id"].is_number_unsigned() || !s["channelId"].is_number_unsigned()) {
-          status(h, 2, "a subscription needs an unsigned \"id\" and \"channelId\"");
-          continue;
-        }
-        // Ids are 32-bit on the wire (a message's header); a larger one is refused, not cut.
-        const auto wide_id = s["id"].get<std::uint64_t>();
-        if (wide_id > std::numeric_limits<std::uint32_t>::max()) {
-          status(h, 2, "subscription id " + std::to_string(wide_id) + " is over 2^32-1");
-          continue;
-        }
-        const auto id = static_cast<std::uint32_t>(wide_id);
-        const auto channel = s["channelId"].get<std::uint64_t>();
-        if (channel == 0 || channel > channels.size()) {
-          status(h, 2, "no channel " + std::to_string(channel));
-          continue;
-        }
-        if (client.subscriptions.count(id) != 0) {
-          status(h, 2, "subscription id " + std::to_string(id) + " is in use");
-          continue;
-        }
-        // One subscription per channel and client (as Foxglove's own server): a client holds
-        // at most as many subscriptions as there are channels, and gets each message once.
-        bool already = false;
-        for (const auto& [other_id, other_channel] : client.subscriptions)
-          already = already || other_channel == channel - 1;
-        if (already) {
-          status(h, 2, "already subscribed to channel " + std::to_string(channel));
-          continue;
-        }
-        client.subscriptions[id] = static_cast<std::size_t>(channel - 1);
-        ++subscribers[channel - 1];
-      }
-    } else if (op == "unsubscribe" && j.contains("subscriptionIds") &&
-               j["subscriptionIds"].is_array()) {
-      for (const nlohmann::json& id : j["subscriptionIds"]) {
-        if (!id.is_number_unsigned() ||
-            id.get<std::uint64_t>() > std::numeric_limits<std::uint32_t>::max())
-          continue;
-        auto s = client.subscriptions.find(id.get<std::uint32_t>());
-        if (s == client.subscriptions.end()) continue;
-        --subscribers[s->second];
-        client.subscriptions.erase(s);
-      }
-    } else {
-      status(h, 2, "unsupported op '" + op + "' (stac view serves subscribe and unsubscribe)");
-    }
+    const ClientMessageEffect effect =
+        apply_client_message(m->get_payload(), channels.size(), client.subscriptions);
+    for (const auto& [channel, change] : effect.subscriber_changes) subscribers[channel] += change;
+    for (const std::string& e : effect.errors) status(h, 2, e);
   }
 
   // On the server thread: the message to each subscriber that keeps up.
