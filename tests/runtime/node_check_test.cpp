@@ -42,6 +42,13 @@ Checked check_with(const std::string& test,
   return c;
 }
 
+// A Cyclone XML file of `text` next to the test's configuration.
+std::string xml_file(const std::string& test, const std::string& text) {
+  const auto file = stac::testing::fresh_dir("stac_node_check_" + test + "_xml") / "cyclone.xml";
+  std::ofstream(file) << text;
+  return file.string();
+}
+
 TEST(NodeCheck, TheShippedConfigOnLoopbackIsComplete) {
   STAC_REQUIRE_SHARED_DATA(kYaml);
   const auto [config, r] = check_with("complete", {});
@@ -59,6 +66,49 @@ TEST(NodeCheck, ABindAddressTheUdpReceiverCannotParseIsNamed) {
             std::string::npos)
       << r.output;
   EXPECT_EQ(r.output.find("complete"), std::string::npos) << r.output;
+}
+
+TEST(NodeCheck, CycloneXmlCycloneCannotParseIsNamed) {
+  STAC_REQUIRE_SHARED_DATA(kYaml);
+  const std::string xml = xml_file("malformed", "<CycloneDDS><Domain><General>\n");
+  const auto [config, r] = check_with("malformed", {{"config_file", xml}});
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find(config.string() +
+                          ": 'dds.config_file': DDS domain 171: the Cyclone DDS "
+                          "configuration file://" +
+                          xml + " cannot be used (not Cyclone XML"),
+            std::string::npos)
+      << r.output;
+}
+
+TEST(NodeCheck, ACanInterfaceThisMachineDoesNotHaveIsNamed) {
+  STAC_REQUIRE_SHARED_DATA(kYaml);
+  const auto [config, r] =
+      check_with("can", {{"can", "true"}, {"transport", "socketcan"}, {"interface", "nosuchcan9"}});
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(
+      r.output.find(config.string() + ": 'can.interface' is 'nosuchcan9', which this "
+                                      "machine does not have: SocketCAN: no network "
+                                      "interface 'nosuchcan9' (list them with `ip link show`"),
+      std::string::npos)
+      << r.output;
+}
+
+TEST(NodeCheck, ACycloneInterfaceThisMachineDoesNotHaveIsNamed) {
+  STAC_REQUIRE_SHARED_DATA(kYaml);
+  std::ifstream in(std::filesystem::path(::stac::testing::source_dir()) /
+                   "config/dds/loopback.xml");
+  std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  const std::string lo = R"(name="lo")";
+  ASSERT_NE(text.find(lo), std::string::npos);
+  text.replace(text.find(lo), lo.size(), R"(name="nosuchif9")");
+  const std::string xml = xml_file("interface", text);
+  const auto [config, r] = check_with("interface", {{"config_file", xml}});
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("nosuchif9: does not match an available interface"), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find(config.string() + ": 'dds.config_file': "), std::string::npos)
+      << r.output;
 }
 
 }  // namespace
