@@ -7,7 +7,7 @@
 #include <string_view>
 #include <vector>
 
-#include "dds/identity.hpp"
+#include "dds/domain.hpp"
 #include "dds/idl_types.hpp"
 #include "perception/tracking/track.hpp"
 
@@ -328,20 +328,9 @@ class TypedPublisher final : public Publisher {
 
 template <bool Ros2>
 rt::Result<std::unique_ptr<Publisher>> make(const PublisherConfig& config) {
-  if (auto s = check_identity_keys(config.config_uri); !s)
-    return rt::Unexpected<rt::Error>{s.error()};
-  dds_entity_t domain = 0;
-  if (!config.config_uri.empty()) {
-    domain = dds_create_domain(config.domain_id, config.config_uri.c_str());
-    if (domain < 0) {
-      return dds_error("creating DDS domain " + std::to_string(config.domain_id) +
-                           " with configuration " + config.config_uri +
-                           " (is it Cyclone XML, with elements Cyclone knows (its parser says "
-                           "where, above; config/dds/loopback.xml is a working example), and is "
-                           "the domain not yet in use here?)",
-                       domain);
-    }
-  }
+  auto made = create_domain(config, ExistingDomain::kRefuse);
+  if (!made) return rt::Unexpected<rt::Error>{made.error()};
+  const dds_entity_t domain = *made;
   const dds_entity_t participant = dds_create_participant(config.domain_id, nullptr, nullptr);
   if (participant < 0) {
     if (domain > 0) dds_delete(domain);

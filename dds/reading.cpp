@@ -1,6 +1,6 @@
 #include "dds/reading.hpp"
 
-#include "dds/identity.hpp"
+#include "dds/domain.hpp"
 #include "dds/idl_types.hpp"
 
 namespace stac::dds {
@@ -27,23 +27,11 @@ const dds_topic_descriptor_t* descriptor(dds::Topic t) {
 }  // namespace
 
 rt::Result<std::unique_ptr<TopicReaders>> TopicReaders::create(const dds::PublisherConfig& c) {
-  if (c.domain_id > 230)
-    return rt::make_error("DDS domain " + std::to_string(c.domain_id) + ": must be 0..230");
-  if (auto s = dds::check_identity_keys(c.config_uri); !s)
-    return rt::Unexpected<rt::Error>{s.error()};
-  dds_entity_t domain = 0;
-  if (!c.config_uri.empty()) {
-    domain = dds_create_domain(c.domain_id, c.config_uri.c_str());
-    // Made already in this process (`stac demo --view`: the viewer's readers, then the demo's):
-    // this participant joins it, and the first TopicReaders, which deletes it, must go last.
-    if (domain == DDS_RETCODE_PRECONDITION_NOT_MET) domain = 0;
-    if (domain < 0)
-      return dds::dds_error("the Cyclone DDS configuration " + c.config_uri +
-                                " cannot be used (not Cyclone XML, or an element Cyclone does not "
-                                "know: its parser says where, above; config/dds/loopback.xml is "
-                                "a working example)",
-                            domain);
-  }
+  // Made already in this process (`stac demo --view`: the viewer's readers, then the demo's):
+  // this participant joins it, and the first TopicReaders, which deletes it, must go last.
+  auto made = dds::create_domain(c, dds::ExistingDomain::kJoin);
+  if (!made) return rt::Unexpected<rt::Error>{made.error()};
+  const dds_entity_t domain = *made;
   const dds_entity_t participant = dds_create_participant(c.domain_id, nullptr, nullptr);
   if (participant < 0) {
     if (domain > 0) dds_delete(domain);

@@ -6,9 +6,11 @@
 #include <cstdio>
 #include <thread>
 
+#include "dds/domain.hpp"
 #include "dds/idl_types.hpp"
 #include "drivers/can/dbc.hpp"
 #include "drivers/can/odometry.hpp"
+#include "drivers/can/socketcan.hpp"
 #include "drivers/velodyne/calibration.hpp"
 #include "formats/model_file.hpp"
 #include "rt/clock.hpp"
@@ -175,7 +177,8 @@ rt::Result<velodyne::Calibration> unit_calibration(const ComponentSettings& s) {
 
 }  // namespace
 
-rt::Result<std::string> check_component_files(const ComponentSettings& s) {
+rt::Result<std::string> check_component_files(const ComponentSettings& s,
+                                              const std::filesystem::path& config) {
   const settings::VelodyneSettings& vs = s.pipeline.velodyne;
   auto calibration = unit_calibration(s);
   if (!calibration) return rt::Unexpected<rt::Error>{calibration.error()};
@@ -194,8 +197,21 @@ rt::Result<std::string> check_component_files(const ComponentSettings& s) {
     auto decoder = can::OdometryDecoder::create(*db, s.can->signals);
     if (!decoder) return rt::Unexpected<rt::Error>{decoder.error()};
     line += ", CAN signals from " + s.can->dbc.string();
+    if (s.can->transport == can::Transport::kSocketCan) {
+      // The interface as SocketCanReader::open finds it.
+      if (auto i = can::interface_index(s.can->socketcan.interface); !i) {
+        return rt::make_error(config.string() + ": 'can.interface' is '" +
+                              s.can->socketcan.interface +
+                              "', which this machine does not have: " + i.error().message);
+      }
+      line += " on " + s.can->socketcan.interface;
+    }
   } else {
     line += ", CAN off";
+  }
+  // The domain as the publisher makes it: Cyclone parses the XML and finds its interfaces.
+  if (auto d = dds::check_domain(s.dds); !d) {
+    return rt::make_error(config.string() + ": 'dds.config_file': " + d.error().message);
   }
   return line;
 }

@@ -46,11 +46,14 @@ struct ComponentSettings {
 // classification, dds, run and, when run.can, can); the first error names file and key.
 rt::Result<ComponentSettings> load_component_settings(const std::filesystem::path& config);
 
-// `stac-node --check`: loads every file the settings name that Component::create would (the
-// calibration, the model and, with run.can, the DBC and its signals; the DDS XML was checked with
-// the settings) without opening
-// a socket or a DDS participant. Returns a line saying what was loaded, or the first error.
-rt::Result<std::string> check_component_files(const ComponentSettings& settings);
+// `stac-node --check` of the settings loaded from `config` (which parsing checked the addresses
+// of): loads every file Component::create would (the calibration, the model and, with run.can,
+// the DBC and its signals), finds the SocketCAN interface, and creates the DDS domain with the
+// Cyclone XML as the publisher does, then deletes it (Cyclone opens its sockets; no participant,
+// so nothing is announced). Returns a line saying what was loaded, or the first error, naming
+// `config` and the key.
+rt::Result<std::string> check_component_files(const ComponentSettings& settings,
+                                              const std::filesystem::path& config);
 
 // What a run did: counts by cause and latencies (ms), as the summary prints them.
 struct Summary {

@@ -27,8 +27,10 @@ int main(int argc, char** argv) try {
   bool check = false;
   app.add_flag(
       "--check", check,
-      "load the configuration and every file it names (calibration, model, DBC, DDS XML),\n"
-      "say what was loaded and exit: 0 when the service can start with it");
+      "load the configuration and every file it names (calibration, model, DBC), check its\n"
+      "addresses and the CAN interface, create the DDS domain with its Cyclone XML (and no\n"
+      "participant: nothing is announced), say what was loaded and exit: 0 when the service\n"
+      "can start with it");
   bool cpu_affinity = false;
   app.add_flag("--cpu-affinity", cpu_affinity,
                "print the CPUs the config pins threads to (run.<thread>_cpu), as systemd's\n"
@@ -56,7 +58,8 @@ int main(int argc, char** argv) try {
   }
   settings->name = "stac-node";
   if (check) {
-    auto files = stac::runtime::check_component_files(*settings);
+    auto files =
+        stac::runtime::check_component_files(*settings, stac::settings::config_path(config));
     if (!files) {
       std::fprintf(stderr, "stac-node: %s\n", files.error().message.c_str());
       return 1;

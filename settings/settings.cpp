@@ -4,6 +4,7 @@
 #include <cstdlib>
 #include <system_error>
 
+#include "drivers/io/datagram.hpp"
 #include "drivers/velodyne/calibration.hpp"
 #include "settings/build_tree.hpp"
 #include "settings/config_section.hpp"
@@ -97,6 +98,18 @@ rt::Result<VelodyneSettings> load_velodyne_settings(const std::filesystem::path&
              velodyne::traits(a.decoder.model).trailer != velodyne::TrailerKind::kGpsStatus) {
     return rt::make_error(file + ": 'velodyne.calibration: stream' needs an S2.1 or S3; the " +
                           model + " sends no calibration in its packets");
+  }
+  // Parsed as the UDP receiver parses them at start-up (io::parse_ipv4).
+  if (std::uint32_t ip = 0; !io::parse_ipv4(s.bind_address.c_str(), ip)) {
+    return v.error("bind_address", "is '" + s.bind_address +
+                                       "'; give a dotted IPv4 address of this machine (0.0.0.0: "
+                                       "every interface)");
+  }
+  if (std::uint32_t ip = 0;
+      !s.sender_address.empty() && !io::parse_ipv4(s.sender_address.c_str(), ip)) {
+    return v.error("sender_address", "is '" + s.sender_address +
+                                         "'; give the sensor's dotted IPv4 address, or \"\" "
+                                         "to accept any sender");
   }
   if (port <= 0 || port > 65535) return rt::make_error(file + ": 'velodyne.port' must be 1..65535");
   s.port = static_cast<std::uint16_t>(port);

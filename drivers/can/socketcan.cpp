@@ -26,8 +26,7 @@ std::string errno_text(int e) {
 
 }  // namespace
 
-rt::Result<SocketCanReader> SocketCanReader::open(const SocketCanConfig& config) {
-  const std::string& name = config.interface;
+rt::Result<unsigned> interface_index(const std::string& name) {
   if (name.empty() || name.size() >= IFNAMSIZ) {
     return rt::make_error("SocketCAN: interface name '" + name + "' must have 1.." +
                           std::to_string(IFNAMSIZ - 1) + " characters");
@@ -38,6 +37,14 @@ rt::Result<SocketCanReader> SocketCanReader::open(const SocketCanConfig& config)
                           "' (list them with `ip link show`; a virtual bus for tests: "
                           "`ip link add dev vcan0 type vcan && ip link set vcan0 up`)");
   }
+  return index;
+}
+
+rt::Result<SocketCanReader> SocketCanReader::open(const SocketCanConfig& config) {
+  const std::string& name = config.interface;
+  auto found = interface_index(name);
+  if (!found) return rt::Unexpected<rt::Error>{found.error()};
+  const unsigned index = *found;
   rt::UniqueFd fd(::socket(PF_CAN, SOCK_RAW | SOCK_CLOEXEC, CAN_RAW));
   if (!fd) {
     const int e = errno;

@@ -33,6 +33,10 @@ struct SocketCanCounters {
   std::uint64_t no_kernel_stamp = 0;  // stamped with CLOCK_REALTIME instead
 };
 
+// The index of network interface `name` (if_nametoindex), as open() finds it. Errors: a name of
+// 0 or more than 15 characters, no such interface (names it and how to list or create one).
+rt::Result<unsigned> interface_index(const std::string& name);
+
 class SocketCanReader {
  public:
   static constexpr int kStopped = -1;

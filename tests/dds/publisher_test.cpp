@@ -367,7 +367,9 @@ TEST(DdsPublisher, StartUpErrorsNameWhatToFix) {
   auto p = Publisher::create(c);
   ASSERT_FALSE(p);
   EXPECT_NE(
-      p.error().message.find("creating DDS domain 107 with configuration file:///nonexistent"),
+      p.error().message.find(
+          "DDS domain 107: the Cyclone DDS configuration file:///nonexistent/stac/cyclone.xml "
+          "cannot be used"),
       std::string::npos)
       << p.error().message;
   c.domain_id = 999;

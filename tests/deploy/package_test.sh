@@ -4,7 +4,8 @@
 #   package_test.sh contents BUILD_DIR         what dpkg-deb shows: files, Depends, conffiles
 #   package_test.sh install BUILD_DIR          dpkg -i into a copy-on-write overlay of this
 #       machine (a private mount namespace: nothing reaches the real system), then stac --version,
-#       stac-node --check of the installed /etc/stac, systemd-analyze verify of the unit, an
+#       stac-node --check of the installed /etc/stac (vehicle.xml's eth1 refused where there is
+#       none; complete with loopback.xml), systemd-analyze verify of the unit, an
 #       upgrade that keeps the user's edit of a conffile, and a purge that leaves nothing: every
 #       file the overlay holds afterwards is dpkg's own bookkeeping. Needs root and overlayfs;
 #       skipped (77) without them.
@@ -88,9 +89,22 @@ entry=$(getent passwd stac) || fail "postinst made no user stac"
 getent group stac > /dev/null || fail "postinst made no group stac"
 v=$(stac --version); [[ $v == "stac ${VERSION} (git "* ]] || fail "stac --version: $v"
 v=$(stac-node --version); [[ $v == "stac-node ${VERSION} (git "* ]] || fail "stac-node --version: $v"
-# The installed binaries read /etc/stac/stac.yaml by default, and everything it names is there.
-check=$(stac-node --check 2>&1) || fail "stac-node --check: $check"
-[[ $check == *"/etc/stac/stac.yaml is complete: calibration /usr/share/stac/calib/"* ]] ||
+# The installed binaries read /etc/stac/stac.yaml by default. Its dds/vehicle.xml names the
+# vehicle's port (eth1, to be edited): --check makes the DDS domain as the start does and refuses
+# it where there is no such interface. Each check runs in a network namespace of its own (only
+# loopback), so nothing Cyclone opens reaches a network.
+check=$(unshare -n sh -c 'ip link set lo up && stac-node --check' 2>&1) &&
+  fail "stac-node --check accepted an interface the namespace does not have: $check"
+[[ $check == *"eth1: does not match an available interface"* &&
+   $check == *"/etc/stac/stac.yaml: 'dds.config_file': DDS domain 0: "* ]] ||
+  fail "stac-node --check: $check"
+echo "package_test: stac-node --check refuses eth1 where there is none"
+# With the loopback XML instead, everything the installed configuration names is there.
+sed 's|^  config_file: dds/vehicle.xml |  config_file: /etc/stac/dds/loopback.xml|' \
+  /etc/stac/stac.yaml > /tmp/stac-loopback.yaml
+check=$(unshare -n sh -c 'ip link set lo up && stac-node --check --config /tmp/stac-loopback.yaml' 2>&1) ||
+  fail "stac-node --check: $check"
+[[ $check == *"/tmp/stac-loopback.yaml is complete: calibration /usr/share/stac/calib/"* ]] ||
   fail "stac-node --check: $check"
 echo "package_test: $check"
 if command -v systemd-analyze > /dev/null; then
