@@ -71,7 +71,9 @@ struct Reader {
       return {};
     }
     std::vector<float> v(n);
-    std::memcpy(v.data(), b.data() + at, n * sizeof(float));
+    // An empty vector's data() may be null, which memcpy must not be given even for 0 bytes
+    // (found by induction_state_fuzz).
+    if (n != 0) std::memcpy(v.data(), b.data() + at, n * sizeof(float));
     at += n * sizeof(float);
     return v;
   }
