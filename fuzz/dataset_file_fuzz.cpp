@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "formats/dataset_file.hpp"
+#include "fuzz/binary_file.hpp"
 #include "perception/classification/holistic.hpp"
 #include "perception/classification/model.hpp"
 #include "perception/descriptors/descriptors.hpp"
@@ -16,11 +17,6 @@
 namespace {
 
 constexpr std::size_t kHeaderBytes = 8 + 4 * 4 + 8 * 3;
-
-template <class T>
-void put_at(std::vector<std::uint8_t>& b, std::size_t at, T v) {
-  std::memcpy(b.data() + at, &v, sizeof v);
-}
 
 }  // namespace
 
@@ -36,13 +32,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   std::uint32_t version = 0;
   std::memcpy(&version, b.data() + 8, 4);
   if (version < 2 || version > formats::kDatasetFormatVersion)
-    put_at(b, 8, formats::kDatasetFormatVersion);
-  put_at(b, 12, static_cast<std::uint32_t>(descriptors::kDimensions));
-  put_at(b, 16, static_cast<std::uint32_t>(classification::kHolisticDimensions));
-  put_at(b, 24, classification::layout_hash(classification::segment_layout()));
-  put_at(b, 32, classification::layout_hash(classification::holistic_layout()));
-  put_at(b, b.size() - 8,
-         classification::fnv1a64(std::span<const std::uint8_t>(b).first(b.size() - 8)));
+    fuzz::put_at(b, 8, formats::kDatasetFormatVersion);
+  fuzz::put_at(b, 12, static_cast<std::uint32_t>(descriptors::kDimensions));
+  fuzz::put_at(b, 16, static_cast<std::uint32_t>(classification::kHolisticDimensions));
+  fuzz::put_at(b, 24, classification::layout_hash(classification::segment_layout()));
+  fuzz::put_at(b, 32, classification::layout_hash(classification::holistic_layout()));
+  fuzz::recompute_checksum(b);
   (void)formats::parse_dataset(b, "fuzz");
   return 0;
 }

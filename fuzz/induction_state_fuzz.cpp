@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "formats/induction_state.hpp"
+#include "fuzz/binary_file.hpp"
 #include "perception/classification/holistic.hpp"
 #include "perception/classification/model.hpp"
 #include "perception/descriptors/descriptors.hpp"
@@ -18,11 +19,6 @@
 namespace {
 
 constexpr std::size_t kHeaderBytes = 8 + 3 * 4;
-
-template <class T>
-void put_at(std::vector<std::uint8_t>& b, std::size_t at, T v) {
-  std::memcpy(b.data() + at, &v, sizeof v);
-}
 
 }  // namespace
 
@@ -41,11 +37,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   std::memcpy(b.data(), magic, sizeof magic);
   std::uint32_t version = 0;
   std::memcpy(&version, b.data() + 8, 4);
-  put_at(b, 8, static_cast<std::uint32_t>(1 + version % formats::kInductionStateVersion));
-  put_at(b, 12, static_cast<std::uint32_t>(descriptors::kDimensions));
-  put_at(b, 16, static_cast<std::uint32_t>(classification::kHolisticDimensions));
-  put_at(b, b.size() - 8,
-         classification::fnv1a64(std::span<const std::uint8_t>(b).first(b.size() - 8)));
+  fuzz::put_at(b, 8, static_cast<std::uint32_t>(1 + version % formats::kInductionStateVersion));
+  fuzz::put_at(b, 12, static_cast<std::uint32_t>(descriptors::kDimensions));
+  fuzz::put_at(b, 16, static_cast<std::uint32_t>(classification::kHolisticDimensions));
+  fuzz::recompute_checksum(b);
   (void)formats::parse_induction_state(b, "fuzz");
   return 0;
 }

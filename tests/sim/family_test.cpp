@@ -237,6 +237,15 @@ TEST_P(FamilyModel, DualReturnPairsLastThenStrongest) {
   EXPECT_EQ(assembler.counters().invalid_block, 0u);
 }
 
+// An assembler of model `m` that keeps every return (no range cut).
+velodyne::ScanAssemblerConfig every_return(Model m) {
+  velodyne::ScanAssemblerConfig ac;
+  ac.decoder.model = m;
+  ac.decoder.min_range_m = 0.0f;
+  ac.decoder.max_range_m = 250.0f;
+  return ac;
+}
+
 // The scan assembler frames a model's packets into whole turns with every point, and counts
 // packets whose bytes name another model (decoded as configured: the configuration forces it).
 TEST_P(FamilyModel, AssemblerFramesTurnsAndCountsAnotherModelsPackets) {
@@ -245,10 +254,7 @@ TEST_P(FamilyModel, AssemblerFramesTurnsAndCountsAnotherModelsPackets) {
   const velodyne::Calibration cal = load_for(m);
   const auto run = family_run(m, cal, 3, 0.45);
   ASSERT_TRUE(run);
-  velodyne::ScanAssemblerConfig ac;
-  ac.decoder.model = m;
-  ac.decoder.min_range_m = 0.0f;
-  ac.decoder.max_range_m = 250.0f;
+  const velodyne::ScanAssemblerConfig ac = every_return(m);
   velodyne::ScanAssembler assembler(cal, ac);
   velodyne::Scan scan(velodyne::scan_capacity(ac));
   assembler.begin(scan);
@@ -287,10 +293,7 @@ TEST_P(FamilyModel, WithTheModelFromThePacketsAnotherKnownModelsPacketsAreDroppe
   const velodyne::Calibration cal = load_for(m);
   const auto run = family_run(m, cal, 3, 0.45);
   ASSERT_TRUE(run);
-  velodyne::ScanAssemblerConfig ac;
-  ac.decoder.model = m;
-  ac.decoder.min_range_m = 0.0f;
-  ac.decoder.max_range_m = 250.0f;
+  velodyne::ScanAssemblerConfig ac = every_return(m);
   ac.drop_other_models = true;
   velodyne::ScanAssembler assembler(cal, ac);
   velodyne::Scan scan(velodyne::scan_capacity(ac));
