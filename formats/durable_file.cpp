@@ -133,6 +133,11 @@ rt::Result<bool> complete_or_cut_tail(const std::filesystem::path& path,
   return true;
 }
 
+rt::Status write_text_durably(const std::filesystem::path& path, const std::string& text) {
+  return write_file_durably(
+      path, std::span(reinterpret_cast<const std::uint8_t*>(text.data()), text.size()));
+}
+
 rt::Status append_line_durably(const std::filesystem::path& path, const std::string& line) {
   const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
   if (fd < 0)

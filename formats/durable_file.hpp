@@ -17,6 +17,8 @@ namespace stac::formats {
 // `bytes` to `path` through PATH.tmp: written, fsynced, renamed over `path`, the folder fsynced.
 rt::Status write_file_durably(const std::filesystem::path& path,
                               std::span<const std::uint8_t> bytes);
+// Text (a report, a metrics file) to `path` the same way.
+rt::Status write_text_durably(const std::filesystem::path& path, const std::string& text);
 // One line (a '\n' is added) appended to `path` and fsynced before returning. A torn last line
 // (a kill during an earlier append, never acknowledged) is cut off first.
 rt::Status append_line_durably(const std::filesystem::path& path, const std::string& line);

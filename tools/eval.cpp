@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "formats/durable_file.hpp"
 #include "tools/commands.hpp"
 #include "tools/eval_classes.hpp"
 #include "tools/evaluation/evaluation.hpp"
@@ -169,11 +170,10 @@ int write_report(const std::filesystem::path& dir, const EvalResult& r, const Ev
   std::filesystem::create_directories(dir, ec);
   if (ec) return fail(dir.string() + ": cannot create the report folder: " + ec.message());
   {
-    std::ofstream m(dir / "metrics.json");
     nlohmann::json j = metrics_json(r, c);
     j["frames"] = frames;
-    m << j.dump(2) << "\n";
-    if (!m) return fail((dir / "metrics.json").string() + ": cannot write");
+    if (auto w = formats::write_text_durably(dir / "metrics.json", j.dump(2) + "\n"); !w)
+      return fail(w.error().message);
   }
   std::vector<std::string> bands;
   std::vector<std::vector<double>> band_values(2);
@@ -205,7 +205,7 @@ int write_report(const std::filesystem::path& dir, const EvalResult& r, const Ev
       !saved) {
     return fail(saved.error().message);
   }
-  std::ofstream md(dir / "report.md");
+  std::ostringstream md;
   md << "# STAC evaluation\n\n"
      << "- truth: `" << (o.tracklets.empty() ? o.truth : o.tracklets) << "` (" << r.truth_scans
      << " scans)\n"
@@ -244,7 +244,8 @@ int write_report(const std::filesystem::path& dir, const EvalResult& r, const Ev
     md << "\n";
   }
   md << "![MOTA and HOTA by range](range.png)\n\n![Per class](classes.png)\n";
-  if (!md) return fail((dir / "report.md").string() + ": cannot write");
+  if (auto w = formats::write_text_durably(dir / "report.md", md.str()); !w)
+    return fail(w.error().message);
   return 0;
 }
 

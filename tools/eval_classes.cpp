@@ -8,6 +8,7 @@
 #include <span>
 
 #include "formats/dataset_file.hpp"
+#include "formats/durable_file.hpp"
 #include "formats/model_file.hpp"
 #include "perception/classification/holistic.hpp"
 #include "perception/classification/model.hpp"
@@ -231,14 +232,10 @@ int run_class_eval(const ClassEvalOptions& o) {
     std::error_code ec;
     std::filesystem::create_directories(dir, ec);
     if (ec) return fail(o.report + ": cannot create the report folder (" + ec.message() + ")");
-    std::ofstream js(dir / "metrics.json");
-    js << metrics.dump(2) << '\n';
-    js.close();
-    if (!js) return fail((dir / "metrics.json").string() + ": cannot write");
-    std::ofstream csv(dir / "tracks.csv");
-    csv << per_track;
-    csv.close();
-    if (!csv) return fail((dir / "tracks.csv").string() + ": cannot write");
+    if (auto w = formats::write_text_durably(dir / "metrics.json", metrics.dump(2) + "\n"); !w)
+      return fail(w.error().message);
+    if (auto w = formats::write_text_durably(dir / "tracks.csv", per_track); !w)
+      return fail(w.error().message);
     if (auto r = save_confusion(tracks[kAdbf], names, "Track-wise confusion, ADBF",
                                 dir / "confusion.png");
         !r) {

@@ -10,9 +10,11 @@
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
 #include <vector>
 
+#include "formats/durable_file.hpp"
 #include "formats/kitti_files.hpp"
 #include "formats/model_file.hpp"
 #include "perception/classification/track_classifier.hpp"
@@ -259,7 +261,7 @@ int run_kitti_objects(const KittiObjectsOptions& o) {
       all.objects > 0 ? static_cast<double>(all.track_right) / all.objects : 0.0;
 
   if (!o.report.empty()) {
-    std::ofstream csv(report / "objects.csv");
+    std::ostringstream csv;
     csv << "frame,type,expected_class,range_m,occluded,points,segment_points,best_segment_inside,"
            "best_segment_points,status,segment_class,track_class";
     for (const std::string& n : names) csv << ',' << n << "_log_odds";
@@ -277,9 +279,10 @@ int run_kitti_objects(const KittiObjectsOptions& o) {
       }
       csv << '\n';
     }
-    std::ofstream js(report / "metrics.json");
-    js << metrics.dump(2) << '\n';
-    if (!csv || !js) return fail(o.report + ": cannot write the report");
+    if (auto w = formats::write_text_durably(report / "objects.csv", csv.str()); !w)
+      return fail(w.error().message);
+    if (auto w = formats::write_text_durably(report / "metrics.json", metrics.dump(2) + "\n"); !w)
+      return fail(w.error().message);
     std::printf("report: %s/objects.csv, metrics.json, frame_*.png\n", o.report.c_str());
   }
   return 0;

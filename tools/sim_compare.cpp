@@ -8,10 +8,12 @@
 #include <fstream>
 #include <memory>
 #include <numbers>
+#include <sstream>
 
 #include "drivers/io/pcap_reader.hpp"
 #include "drivers/velodyne/scan_stream.hpp"
 #include "formats/capture_input.hpp"
+#include "formats/durable_file.hpp"
 #include "formats/kitti_files.hpp"
 #include "formats/kitti_raw.hpp"
 #include "settings/build_tree.hpp"
@@ -352,7 +354,7 @@ int run_compare(const CompareOptions& o) {
 
   // Report.
   const std::filesystem::path dir(o.report);
-  std::ofstream json(dir / "realism.json");
+  std::ostringstream json;
   json << "{\"sim_capture\":\"" << o.sim << "\",\"kitti_scans\":" << files->size()
        << ",\"rules\":{\"mount_height_m\":" << fmt(o.mount_height_m)
        << ",\"ground_below_z_m\":" << fmt(-o.mount_height_m + o.ground_margin_m)
@@ -361,10 +363,10 @@ int run_compare(const CompareOptions& o) {
        << ",\"intensity_bins\":" << kIntensityBins << "}"
        << ",\"sim\":" << json_stats(sim, sim_rings) << ",\"kitti\":" << json_stats(real, real_rings)
        << "}\n";
-  json.close();
-  if (!json) return fail((dir / "realism.json").string() + ": write failed");
+  if (auto w = formats::write_text_durably(dir / "realism.json", json.str()); !w)
+    return fail(w.error().message);
 
-  std::ofstream md(dir / "realism.md");
+  std::ostringstream md;
   md << "# Simulated vs real HDL-64E scans\n\n"
      << "Simulated: " << sim.scans << " complete scans decoded from `" << o.sim
      << "`. Real: " << files->size() << " KITTI scans from `" << o.kitti << "`.\n"
@@ -404,8 +406,8 @@ int run_compare(const CompareOptions& o) {
         "ring](points_per_ring.png)\n![ring "
         "elevation](ring_elevation.png)\n![range](range_histogram.png)\n"
      << "![intensity](intensity_histogram.png)\n![bird's-eye](birds_eye_side_by_side.png)\n";
-  md.close();
-  if (!md) return fail((dir / "realism.md").string() + ": write failed");
+  if (auto w = formats::write_text_durably(dir / "realism.md", md.str()); !w)
+    return fail(w.error().message);
 
   auto series = [](const std::string& name, auto first, std::size_t n, double x0, double dx) {
     ChartSeries s;
