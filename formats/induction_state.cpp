@@ -269,9 +269,9 @@ bool is_json_line(const std::string& line) {
   return nlohmann::json::accept(line);
 }
 
-rt::Status bind_source_dataset(InductionState& state, const std::string& path,
+rt::Status bind_source_dataset(std::vector<InductionSource>& sources, const std::string& path,
                                std::uint64_t checksum) {
-  for (InductionSource& src : state.sources) {
+  for (InductionSource& src : sources) {
     if (src.path != path) continue;
     if (src.dataset_checksum == 0) {
       src.dataset_checksum = checksum;

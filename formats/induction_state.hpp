@@ -79,10 +79,10 @@ bool is_answer_line(const std::string& line);
 bool is_json_line(const std::string& line);
 rt::Status write_induction_state(const std::filesystem::path& dir, const InductionState& state);
 
-// The dataset read at `path` (its tracks.bin's `checksum`) checked against the state's source of
-// that path: an error when the state read other contents there (the dataset was remade), naming
-// both checksums and what to do; a source not read before learns the checksum.
-rt::Status bind_source_dataset(InductionState& state, const std::string& path,
+// The dataset read at `path` (its tracks.bin's `checksum`) checked against the source of that path
+// among a state's `sources`: an error when the state read other contents there (the dataset was
+// remade), naming both checksums and what to do; a source not read before learns the checksum.
+rt::Status bind_source_dataset(std::vector<InductionSource>& sources, const std::string& path,
                                std::uint64_t checksum);
 
 }  // namespace stac::formats

@@ -148,7 +148,7 @@ rt::Result<const Dataset*> Inductor::dataset(const std::string& path) {
   if (auto it = datasets_.find(path); it != datasets_.end()) return &it->second;
   auto d = read_dataset(path);
   if (!d) return rt::make_error(d.error().message);
-  if (auto b = bind_source_dataset(s_, path, d->checksum); !b)
+  if (auto b = bind_source_dataset(s_.sources, path, d->checksum); !b)
     return rt::make_error(b.error().message);
   // Labels map by name: every class of the state must be one of the dataset's; its other
   // classes are background here (1-vs-all: not any taught class). Unlabeled data has no classes.
@@ -173,7 +173,7 @@ rt::Result<std::uint32_t> Inductor::source_index(const std::string& path, Source
     }
   s_.sources.push_back({path, role});
   if (auto it = datasets_.find(path); it != datasets_.end())  // read before it became a source
-    if (auto b = bind_source_dataset(s_, path, it->second.checksum); !b)
+    if (auto b = bind_source_dataset(s_.sources, path, it->second.checksum); !b)
       return rt::make_error(b.error().message);
   return static_cast<std::uint32_t>(s_.sources.size() - 1);
 }

@@ -287,10 +287,8 @@ class LabelServer {
     auto d = read_dataset(path);
     if (!d) return rt::make_error(d.error().message);
     // The questions name its tracks by number: a dataset remade since the state read it would
-    // show other tracks under them (the state is only read here, never written).
-    InductionState read;
-    read.sources = sources_;
-    if (auto b = bind_source_dataset(read, path, d->checksum); !b)
+    // show other tracks under them (sources_ is this server's copy; the state is never written).
+    if (auto b = bind_source_dataset(sources_, path, d->checksum); !b)
       return rt::make_error(b.error().message);
     return &datasets_.emplace(path, std::move(d).value()).first->second;
   }

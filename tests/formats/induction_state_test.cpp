@@ -71,24 +71,24 @@ TEST(InductionStateFile, ASourceKeepsItsDatasetsChecksumAndRefusesOtherContents)
   s.classes = {"car"};
   s.sources.push_back({"drive_a", SourceRole::kUnlabeled});
   s.sources.push_back({"drive_b", SourceRole::kLabels});
-  ASSERT_TRUE(bind_source_dataset(s, "drive_a", 0x1234));
+  ASSERT_TRUE(bind_source_dataset(s.sources, "drive_a", 0x1234));
   ASSERT_TRUE(write_induction_state(dir, s));
   auto back = read_induction_state(dir);
   ASSERT_TRUE(back) << back.error().message;
   ASSERT_EQ(back->sources.size(), 2u);
   EXPECT_EQ(back->sources[0].dataset_checksum, 0x1234u);
   EXPECT_EQ(back->sources[1].dataset_checksum, 0u);
-  EXPECT_TRUE(bind_source_dataset(*back, "drive_a", 0x1234));
-  const auto other = bind_source_dataset(*back, "drive_a", 0x9999);
+  EXPECT_TRUE(bind_source_dataset(back->sources, "drive_a", 0x1234));
+  const auto other = bind_source_dataset(back->sources, "drive_a", 0x9999);
   ASSERT_FALSE(other);
   EXPECT_NE(other.error().message.find("drive_a: not the dataset this state read there"),
             std::string::npos)
       << other.error().message;
   EXPECT_NE(other.error().message.find("0000000000009999"), std::string::npos);
   EXPECT_NE(other.error().message.find("0000000000001234"), std::string::npos);
-  EXPECT_TRUE(bind_source_dataset(*back, "drive_b", 0x5555));
+  EXPECT_TRUE(bind_source_dataset(back->sources, "drive_b", 0x5555));
   EXPECT_EQ(back->sources[1].dataset_checksum, 0x5555u);
-  EXPECT_TRUE(bind_source_dataset(*back, "not_a_source", 0x1));  // nothing to check against
+  EXPECT_TRUE(bind_source_dataset(back->sources, "not_a_source", 0x1));  // nothing to check against
   std::filesystem::remove_all(dir);
 }
 

@@ -7,7 +7,6 @@
 #include <atomic>
 #include <chrono>
 #include <functional>
-#include <limits>
 #include <map>
 #include <mutex>
 #include <nlohmann/json.hpp>
