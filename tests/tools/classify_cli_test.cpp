@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "formats/dataset_file.hpp"
+#include "shared_drives.hpp"
 #include "stac_cli.hpp"
 #include "test_paths.hpp"
 #include "tools/evaluation/tracks_jsonl.hpp"
@@ -42,10 +43,12 @@ class ClassifyCli : public ::testing::Test {
          {std::pair<std::string, std::string>{"train", "--scenario urban --seed 1 --duration 10"},
           {"test", "--scenario urban --seed 2 --duration 5"},
           {"empty", "--scenario empty --seed 3 --duration 4"}}) {
-      const std::string base = (*dir_ / name).string();
-      const CliResult sim =
-          stac("sim " + args + " --out " + base + ".pcap --truth " + base + ".jsonl");
-      ASSERT_EQ(sim.code, 0) << sim.output;
+      // Shared with the other test programs (tests/shared_drives.hpp), linked in as NAME.pcap
+      // and NAME.jsonl.
+      const auto sim = stac::testing::shared_sim(args);
+      ASSERT_TRUE(sim) << sim.error;
+      for (const char* ext : {".pcap", ".jsonl"})
+        std::filesystem::create_symlink(sim.path + ext, *dir_ / (name + ext));
     }
   }
   static void TearDownTestSuite() {

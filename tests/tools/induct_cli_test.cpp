@@ -18,6 +18,7 @@
 #include "formats/induction_state.hpp"
 #include "formats/model_file.hpp"
 #include "json_lines.hpp"
+#include "shared_drives.hpp"
 #include "stac_cli.hpp"
 #include "test_paths.hpp"
 
@@ -36,41 +37,53 @@ std::string read_text(const fs::path& p) {
 
 class InductCli : public ::testing::Test {
  protected:
+  // The drives and their datasets are shared with the other test programs
+  // (tests/shared_drives.hpp); what a test writes goes in its own folder.
   static void SetUpTestSuite() {
     dir_ = new fs::path(stac::testing::fresh_dir("stac_induct_cli_" + std::to_string(::getpid())));
+    drives_ = new std::map<std::string, std::string>;
     for (const auto& [name, args] :
          {std::pair<std::string, std::string>{"labels", "--scenario urban --seed 1 --duration 8"},
           {"chunk1", "--scenario urban --seed 4 --duration 6"},
           {"chunk2", "--scenario urban --seed 5 --duration 6"},
           {"test", "--scenario urban --seed 2 --duration 5"},
           {"empty", "--scenario empty --seed 3 --duration 4"}}) {
-      const std::string base = (*dir_ / name).string();
-      const CliResult sim =
-          stac("sim " + args + " --out " + base + ".pcap --truth " + base + ".jsonl");
-      ASSERT_EQ(sim.code, 0) << sim.output;
-      const CliResult data =
-          stac("dataset --in " + base + ".pcap --truth " + base + ".jsonl --out " + base + "_data");
-      ASSERT_EQ(data.code, 0) << data.output;
+      const auto sim = stac::testing::shared_sim(args);
+      ASSERT_TRUE(sim) << sim.error;
+      const auto data = stac::testing::shared_dataset(args, true);
+      ASSERT_TRUE(data) << data.error;
+      (*drives_)[name] = sim.path;
+      (*drives_)[name + "_data"] = data.path;
     }
   }
   static void TearDownTestSuite() {
     fs::remove_all(*dir_);
     delete dir_;
+    delete drives_;
   }
+  // This test's own file NAME.
   static std::string at(const std::string& name) { return (*dir_ / name).string(); }
+  // A shared drive's capture (NAME.pcap) or dataset (NAME_data).
+  static std::string in(const std::string& name) {
+    const auto pcap = name.rfind(".pcap");
+    if (pcap != std::string::npos) return drives_->at(name.substr(0, pcap)) + ".pcap";
+    return drives_->at(name);
+  }
   // The whole first command of a state: classes, B0, 3 labels per class, two chunks, the oracle.
   static std::string first_run(const std::string& state) {
     return "induct --state " + at(state) + " --classes car,pedestrian,bicyclist --background " +
-           at("empty_data") + " --labels " + at("labels_data") +
-           " --labels-per-class 3 --unlabeled " + at("chunk1_data") + " --unlabeled " +
-           at("chunk2_data") + " --oracle --ask 2 --warm-rounds 40 --reset-rounds 120";
+           in("empty_data") + " --labels " + in("labels_data") +
+           " --labels-per-class 3 --unlabeled " + in("chunk1_data") + " --unlabeled " +
+           in("chunk2_data") + " --oracle --ask 2 --warm-rounds 40 --reset-rounds 120";
   }
   static fs::path* dir_;
+  static std::map<std::string, std::string>* drives_;
 };
 fs::path* InductCli::dir_ = nullptr;
+std::map<std::string, std::string>* InductCli::drives_ = nullptr;
 
 TEST_F(InductCli, OracleRoundsTeachAModelThatEvalAndProcessTake) {
-  const CliResult r = stac(first_run("state") + " --eval " + at("test_data"));
+  const CliResult r = stac(first_run("state") + " --eval " + in("test_data"));
   ASSERT_EQ(r.code, 0) << r.output;
   EXPECT_NE(r.output.find("round 2:"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("retrospection"), std::string::npos) << r.output;
@@ -104,10 +117,10 @@ TEST_F(InductCli, OracleRoundsTeachAModelThatEvalAndProcessTake) {
     EXPECT_TRUE(fs::is_regular_file(at("state") + f)) << f;
 
   // The model is a normal model file.
-  const CliResult eval = stac("eval --classes --data " + at("test_data") + " --model " +
+  const CliResult eval = stac("eval --classes --data " + in("test_data") + " --model " +
                               at("state") + "/model.stacmodel");
   EXPECT_EQ(eval.code, 0) << eval.output;
-  const CliResult process = stac("process " + at("test.pcap") + " --model " + at("state") +
+  const CliResult process = stac("process " + in("test.pcap") + " --model " + at("state") +
                                  "/model.stacmodel --tracks " + at("tracks.jsonl"));
   EXPECT_EQ(process.code, 0) << process.output;
 
@@ -124,7 +137,7 @@ TEST_F(InductCli, OracleRoundsTeachAModelThatEvalAndProcessTake) {
   }  // released: the runs below take it
   // A chunk already taken is not taken twice; a new round on the buffer is.
   const CliResult again = stac("induct --state " + at("state") + " --unlabeled " +
-                               at("chunk1_data") + " --rounds 1 --warm-rounds 40");
+                               in("chunk1_data") + " --rounds 1 --warm-rounds 40");
   ASSERT_EQ(again.code, 0) << again.output;
   EXPECT_NE(again.output.find("taken in an earlier run, skipped"), std::string::npos)
       << again.output;
@@ -136,13 +149,13 @@ TEST_F(InductCli, OracleRoundsTeachAModelThatEvalAndProcessTake) {
   // Issue 47: answers written by hand. Tracks of the first chunk nobody answered yet:
   std::set<std::uint64_t> answered;
   for (const auto& a : stac::testing::read_json_lines(at("state") + "/labels.jsonl"))
-    if (a["source"] == at("chunk1_data")) answered.insert(a["track"].get<std::uint64_t>());
+    if (a["source"] == in("chunk1_data")) answered.insert(a["track"].get<std::uint64_t>());
   std::vector<std::uint64_t> fresh;
   for (std::uint64_t k = 0; fresh.size() < 2 && k < 1000; ++k)
     if (answered.count(k) == 0) fresh.push_back(k);
   ASSERT_EQ(fresh.size(), 2u);
   const auto answer = [&](std::uint64_t track) {
-    return "{\"source\": \"" + at("chunk1_data") + "\", \"track\": " + std::to_string(track) +
+    return "{\"source\": \"" + in("chunk1_data") + "\", \"track\": " + std::to_string(track) +
            ", \"label\": \"background\"}";
   };
   const auto labels_now = [&] {
@@ -211,7 +224,7 @@ TEST_F(InductCli, AKillAtAnyMomentLosesAtMostTheRoundInProgress) {
 TEST_F(InductCli, UnlabeledDrivesAreChunksAndBackgroundButNeverLabels) {
   // `stac dataset` without --truth: tracks without labels.
   for (const char* name : {"chunk1", "empty"}) {
-    const CliResult d = stac("dataset --in " + at(std::string(name) + ".pcap") + " --out " +
+    const CliResult d = stac("dataset --in " + in(std::string(name) + ".pcap") + " --out " +
                              at(std::string(name) + "_unl"));
     ASSERT_EQ(d.code, 0) << d.output;
     EXPECT_NE(d.output.find("unlabeled tracks"), std::string::npos) << d.output;
@@ -224,7 +237,7 @@ TEST_F(InductCli, UnlabeledDrivesAreChunksAndBackgroundButNeverLabels) {
   EXPECT_NE(eval.code, 0);
   const std::string start = "induct --state " + at("unl") +
                             " --classes car,pedestrian,bicyclist --background " + at("empty_unl") +
-                            " --labels " + at("labels_data") +
+                            " --labels " + in("labels_data") +
                             " --labels-per-class 3 --warm-rounds 40 --reset-rounds 120 ";
   // Neither the oracle nor --labels can read labels that are not there.
   CliResult r = stac(start + "--unlabeled " + at("chunk1_unl") + " --oracle");
@@ -263,7 +276,7 @@ TEST_F(InductCli, UnlabeledDrivesAreChunksAndBackgroundButNeverLabels) {
 TEST_F(InductCli, BadInputsAreRefusedNamingTheFileAndNoAnswerIsLost) {
   // No state yet and no classes; settings of an existing state; a bad number; a capture given
   // as a dataset.
-  CliResult r = stac("induct --state " + at("bad") + " --unlabeled " + at("chunk1_data"));
+  CliResult r = stac("induct --state " + at("bad") + " --unlabeled " + in("chunk1_data"));
   EXPECT_NE(r.code, 0);
   EXPECT_NE(r.output.find("--classes"), std::string::npos) << r.output;
   r = stac("induct --state " + at("bad") + " --classes car,car");
@@ -272,14 +285,14 @@ TEST_F(InductCli, BadInputsAreRefusedNamingTheFileAndNoAnswerIsLost) {
   EXPECT_NE(r.code, 0);
   EXPECT_NE(r.output.find("--eps"), std::string::npos) << r.output;
   r = stac("induct --state " + at("bad") + " --classes car,pedestrian,bicyclist --unlabeled " +
-           at("test.pcap"));
+           in("test.pcap"));
   EXPECT_NE(r.code, 0);
-  EXPECT_NE(r.output.find(at("test.pcap") + ": a file, not a dataset folder"), std::string::npos)
+  EXPECT_NE(r.output.find(in("test.pcap") + ": a file, not a dataset folder"), std::string::npos)
       << r.output;
-  EXPECT_EQ(r.output.find("--out " + at("test.pcap")), std::string::npos)
+  EXPECT_EQ(r.output.find("--out " + in("test.pcap")), std::string::npos)
       << "advises writing a dataset into the capture's path: " << r.output;
   r = stac("induct --state " + at("bad") + " --classes car,pedestrian,bicyclist --background " +
-           at("empty_data") + " --labels " + at("labels_data") + " --labels-per-class 2");
+           in("empty_data") + " --labels " + in("labels_data") + " --labels-per-class 2");
   ASSERT_EQ(r.code, 0) << r.output;
   r = stac("induct --state " + at("bad") + " --classes car --dual");
   EXPECT_NE(r.code, 0);
@@ -291,9 +304,9 @@ TEST_F(InductCli, BadInputsAreRefusedNamingTheFileAndNoAnswerIsLost) {
   EXPECT_NE(r.output.find("--dual on (the state's: off)"), std::string::npos) << r.output;
   EXPECT_EQ(r.output.find("--eps 0"), std::string::npos) << r.output;
   // B0 (every track background) is not unlabeled data too.
-  r = stac("induct --state " + at("bad") + " --unlabeled " + at("empty_data"));
+  r = stac("induct --state " + at("bad") + " --unlabeled " + in("empty_data"));
   EXPECT_NE(r.code, 0);
-  EXPECT_NE(r.output.find(at("empty_data") + ": this state read it as B0"), std::string::npos)
+  EXPECT_NE(r.output.find(in("empty_data") + ": this state read it as B0"), std::string::npos)
       << r.output;
 
   // A whole JSON last line without its newline that is not an answer was written by a person,
@@ -302,7 +315,7 @@ TEST_F(InductCli, BadInputsAreRefusedNamingTheFileAndNoAnswerIsLost) {
   const std::string kept = read_text(answers);
   {
     std::ofstream out(answers, std::ios::app);
-    out << R"({"source": ")" << at("labels_data") << R"(", "track": 1, "lable": "car"})";
+    out << R"({"source": ")" << in("labels_data") << R"(", "track": 1, "lable": "car"})";
   }
   const std::string with_wrong = read_text(answers);
   r = stac("induct --state " + at("bad") + " --rounds 1");
@@ -347,15 +360,15 @@ TEST_F(InductCli, BadInputsAreRefusedNamingTheFileAndNoAnswerIsLost) {
 // restored are taken again.
 TEST_F(InductCli, ADatasetRemadeAtTheSamePathIsRefusedNotReadAsTheSameTracks) {
   const fs::path remade = at("remade_data");
-  fs::copy(at("chunk1_data"), remade, fs::copy_options::recursive);
+  fs::copy(in("chunk1_data"), remade, fs::copy_options::recursive);
   const std::string state = "--state " + at("remade");
   CliResult r = stac("induct " + state + " --classes car,pedestrian,bicyclist --background " +
-                     at("empty_data") + " --labels " + at("labels_data") +
+                     in("empty_data") + " --labels " + in("labels_data") +
                      " --labels-per-class 2 --unlabeled " + remade.string() +
                      " --oracle --ask 1 --warm-rounds 10 --reset-rounds 20");
   ASSERT_EQ(r.code, 0) << r.output;
   fs::remove_all(remade);
-  fs::copy(at("chunk2_data"), remade, fs::copy_options::recursive);
+  fs::copy(in("chunk2_data"), remade, fs::copy_options::recursive);
   r = stac("induct " + state + " --requery");
   EXPECT_NE(r.code, 0) << r.output;
   EXPECT_NE(r.output.find(remade.string() + ": not the dataset this state read there"),
@@ -363,7 +376,7 @@ TEST_F(InductCli, ADatasetRemadeAtTheSamePathIsRefusedNotReadAsTheSameTracks) {
       << r.output;
   EXPECT_NE(r.output.find("start a new state"), std::string::npos) << r.output;
   fs::remove_all(remade);
-  fs::copy(at("chunk1_data"), remade, fs::copy_options::recursive);
+  fs::copy(in("chunk1_data"), remade, fs::copy_options::recursive);
   r = stac("induct " + state + " --requery");
   EXPECT_EQ(r.code, 0) << r.output;
 }
@@ -375,19 +388,16 @@ TEST(InductNewClass, ATreeClassIsTaughtBesideTheDefaultClassesWhichStayAsTheyAre
   const fs::path dir =
       stac::testing::fresh_dir("stac_induct_new_class_" + std::to_string(::getpid()));
   const auto at = [&](const std::string& name) { return (dir / name).string(); };
+  std::map<std::string, std::string> data;  // shared drives' datasets (tests/shared_drives.hpp)
   for (const auto& [name, args] :
        {std::pair<std::string, std::string>{"labels", "--scenario urban --seed 1 --duration 8"},
         {"chunk", "--scenario urban --seed 4 --duration 6"},
         {"test", "--scenario urban --seed 2 --duration 5"},
         {"empty", "--scenario empty --seed 3 --duration 4 --without tree"}}) {
-    const std::string base = at(name);
-    const CliResult sim =
-        stac("sim " + args + " --out " + base + ".pcap --truth " + base + ".jsonl");
-    ASSERT_EQ(sim.code, 0) << sim.output;
-    const CliResult data = stac("dataset --class tree --in " + base + ".pcap --truth " + base +
-                                ".jsonl --out " + base + "_data");
-    ASSERT_EQ(data.code, 0) << data.output;
-    std::ifstream in(base + "_data/manifest.json");
+    const auto made = stac::testing::shared_dataset(args, true, "--class tree");
+    ASSERT_TRUE(made) << made.error;
+    data[name] = made.path;
+    std::ifstream in(made.path + "/manifest.json");
     const nlohmann::json manifest = nlohmann::json::parse(in);
     if (name == "empty") {
       EXPECT_EQ(manifest["tracks_per_class"]["tree"].get<int>(), 0) << manifest.dump();
@@ -399,9 +409,9 @@ TEST(InductNewClass, ATreeClassIsTaughtBesideTheDefaultClassesWhichStayAsTheyAre
       (fs::path(::stac::testing::source_dir()) / "config/models/stac_default.stacmodel").string();
   const std::string command =
       "induct --state " + at("state") + " --model " + model + " --add-classes tree --background " +
-      at("empty_data") + " --labels " + at("labels_data") + " --labels-per-class 3 --unlabeled " +
-      at("chunk_data") + " --oracle --ask 2 --warm-rounds 40 --reset-rounds 120 --eval " +
-      at("test_data");
+      data.at("empty") + " --labels " + data.at("labels") + " --labels-per-class 3 --unlabeled " +
+      data.at("chunk") + " --oracle --ask 2 --warm-rounds 40 --reset-rounds 120 --eval " +
+      data.at("test");
   const CliResult r = stac(command);
   ASSERT_EQ(r.code, 0) << r.output;
 
@@ -434,7 +444,7 @@ TEST(InductNewClass, ATreeClassIsTaughtBesideTheDefaultClassesWhichStayAsTheyAre
   EXPECT_GT(tree_cells, 10u);
   // The first labels are trees and background only: nothing is taught about the kept classes.
   for (const auto& a : stac::testing::read_json_lines(at("state") + "/labels.jsonl")) {
-    if (a["source"] != at("labels_data")) continue;
+    if (a["source"] != data.at("labels")) continue;
     const std::string label = a["label"].get<std::string>();
     EXPECT_TRUE(label == "tree" || label == "background") << a.dump();
   }
@@ -444,7 +454,7 @@ TEST(InductNewClass, ATreeClassIsTaughtBesideTheDefaultClassesWhichStayAsTheyAre
   // Scored on the tree-labelled drive: by the new model with four classes, by the default
   // model with its three (trees are background to it).
   for (const std::string& m : {at("state") + "/model.stacmodel", model}) {
-    const CliResult eval = stac("eval --classes --data " + at("test_data") + " --model " + m);
+    const CliResult eval = stac("eval --classes --data " + data.at("test") + " --model " + m);
     EXPECT_EQ(eval.code, 0) << eval.output;
   }
   // --add-classes needs the model it adds to, names that are new, and a new state.

@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "json_lines.hpp"
+#include "shared_drives.hpp"
 #include "stac_cli.hpp"
 #include "test_paths.hpp"
 #include "tools/support/child_process.hpp"
@@ -160,42 +161,35 @@ std::string json_post(const std::string& target, const std::string& host, const 
                  body);
 }
 
-// A state `stac induct` made from short simulated drives (the test's own copy, the datasets
-// shared), made once per test program.
-fs::path state_copy(const std::string& name) {
-  static const fs::path made = [] {
-    const fs::path dir =
-        stac::testing::fresh_dir("stac_label_limits_" + std::to_string(::getpid()));
-    const auto at = [&](const std::string& n) { return (dir / n).string(); };
-    for (const auto& [n, args] :
-         {std::pair<std::string, std::string>{"drive", "--scenario urban --seed 1 --duration 4"},
-          {"empty", "--scenario empty --seed 3 --duration 3"}}) {
-      const CliResult sim =
-          stac("sim " + args + " --out " + at(n) + ".pcap --truth " + at(n) + ".jsonl");
-      EXPECT_EQ(sim.code, 0) << sim.output;
-    }
+// A state `stac induct` made from short simulated drives, shared by the test programs
+// (tests/shared_drives.hpp); each test serves its own copy NAME.
+const fs::path& shared_state() {
+  static const fs::path shared = [] {
+    const std::string drive = "--scenario urban --seed 1 --duration 4";
     // The drive twice: labelled (the first labels) and as a user has it (the questions).
-    for (const auto& [n, truth] : {std::pair<std::string, std::string>{"labels", "drive"},
-                                   {"chunk", ""},
-                                   {"empty", "empty"}}) {
-      const CliResult data = stac("dataset --in " + at(n == "empty" ? "empty" : "drive") + ".pcap" +
-                                  (truth.empty() ? "" : " --truth " + at(truth) + ".jsonl") +
-                                  " --out " + at(n) + "_data");
-      EXPECT_EQ(data.code, 0) << data.output;
-    }
-    const CliResult induct = stac(
-        "induct --state " + at("state") + " --classes car,pedestrian,bicyclist --background " +
-        at("empty_data") + " --labels " + at("labels_data") + " --labels-per-class 2 --unlabeled " +
-        at("chunk_data") + " --ask 2 --warm-rounds 30 --reset-rounds 80");
-    EXPECT_EQ(induct.code, 0) << induct.output;
-    return dir;
+    const auto labels = stac::testing::shared_dataset(drive, true);
+    const auto chunk = stac::testing::shared_dataset(drive, false);
+    const auto empty =
+        stac::testing::shared_dataset("--scenario empty --seed 3 --duration 3", true);
+    for (const auto* made : {&labels, &chunk, &empty}) EXPECT_TRUE(*made) << made->error;
+    const auto state = stac::testing::shared_run(
+        "induct --state {out}/state --classes car,pedestrian,bicyclist --background " + empty.path +
+        " --labels " + labels.path + " --labels-per-class 2 --unlabeled " + chunk.path +
+        " --ask 2 --warm-rounds 30 --reset-rounds 80");
+    EXPECT_TRUE(state) << state.error;
+    return fs::path(state.path) / "state";
   }();
+  return shared;
+}
+fs::path state_copy(const std::string& name) {
+  static const fs::path copies =
+      stac::testing::fresh_dir("stac_label_limits_" + std::to_string(::getpid()));
   static const struct Cleanup {
-    ~Cleanup() { fs::remove_all(made); }
+    ~Cleanup() { fs::remove_all(copies); }
   } cleanup;
-  const fs::path copy = made / name;
+  const fs::path copy = copies / name;
   fs::remove_all(copy);
-  fs::copy(made / "state", copy, fs::copy_options::recursive);
+  fs::copy(shared_state(), copy, fs::copy_options::recursive);
   return copy;
 }
 
@@ -217,24 +211,21 @@ struct ServedCopy {
 TEST(LabelCli, APersonAnswersInABrowserAndTheAnswersTrainARoundWithNewQuestions) {
   const fs::path dir = stac::testing::fresh_dir("stac_label_cli_" + std::to_string(::getpid()));
   const auto at = [&](const std::string& name) { return (dir / name).string(); };
+  std::map<std::string, std::string> data;  // shared drives' datasets (tests/shared_drives.hpp)
   for (const auto& [name, args] :
        {std::pair<std::string, std::string>{"labels", "--scenario urban --seed 1 --duration 8"},
         {"chunk", "--scenario urban --seed 4 --duration 6"},
         {"empty", "--scenario empty --seed 3 --duration 4"}}) {
-    const CliResult sim =
-        stac("sim " + args + " --out " + at(name) + ".pcap --truth " + at(name) + ".jsonl");
-    ASSERT_EQ(sim.code, 0) << sim.output;
     // The chunk as a user has it: no truth.
-    const CliResult data = stac("dataset --in " + at(name) + ".pcap" +
-                                (name == "chunk" ? "" : " --truth " + at(name) + ".jsonl") +
-                                " --out " + at(name) + "_data");
-    ASSERT_EQ(data.code, 0) << data.output;
+    const auto made = stac::testing::shared_dataset(args, name != "chunk");
+    ASSERT_TRUE(made) << made.error;
+    data[name] = made.path;
   }
   const std::string state = at("state");
   const CliResult induct = stac(
       "induct --state " + state + " --classes car,pedestrian,bicyclist --background " +
-      at("empty_data") + " --labels " + at("labels_data") + " --labels-per-class 2 --unlabeled " +
-      at("chunk_data") + " --ask 2 --warm-rounds 30 --reset-rounds 80");
+      data.at("empty") + " --labels " + data.at("labels") + " --labels-per-class 2 --unlabeled " +
+      data.at("chunk") + " --ask 2 --warm-rounds 30 --reset-rounds 80");
   ASSERT_EQ(induct.code, 0) << induct.output;
   const auto questions = stac::testing::read_json_lines(state + "/queries.jsonl");
   ASSERT_GE(questions.size(), 2u);
@@ -367,7 +358,7 @@ TEST(LabelCli, ABodyOverItsLimitIsRefusedAtOnceAndAnErrorQuotesAtMost80Character
   EXPECT_EQ(track.status, 400) << track.head;
   EXPECT_LT(track.body.size(), 300u) << track.body.substr(0, 300);
   EXPECT_EQ(stac::testing::read_json_lines(state / "labels.jsonl").size(),
-            stac::testing::read_json_lines(state.parent_path() / "state" / "labels.jsonl").size());
+            stac::testing::read_json_lines(shared_state() / "labels.jsonl").size());
   // The server still serves.
   EXPECT_TRUE(state_of(server).is_object()) << server.child->log();
   EXPECT_EQ(server.child->stop(SIGTERM, 20), 0) << server.child->log();
