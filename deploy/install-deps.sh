@@ -18,7 +18,7 @@ packages=(
   clang-format clang-tidy  # .ci/check-style (STYLE.md rule 14)
   clang-14 libclang-rt-14-dev  # fuzz/: libFuzzer harnesses with ASan + UBSan (fuzz/run.sh)
   libcpp-httplib-dev  # stac label: the local web page of group induction
-  libwebsocketpp-dev libasio-dev  # stac view: the Foxglove WebSocket server (tools/view)
+  libwebsocketpp-dev libasio-dev  # stac view: the Foxglove WebSocket server (view)
   chromium  # tests/web: stac label's page tested in a real headless browser
   slurm-wlm  # tests/deploy: deploy/slurm-dataset.sh on a one-node cluster the test starts
 )

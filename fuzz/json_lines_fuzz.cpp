@@ -3,11 +3,11 @@
 #include <cstdint>
 #include <string_view>
 
-#include "tools/evaluation/tracks_jsonl.hpp"
+#include "evaluation/tracks_jsonl.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string_view line(reinterpret_cast<const char*>(data), size);
-  (void)stac::tools::parse_tracks_line(line);
-  (void)stac::tools::parse_truth_line(line);
+  (void)stac::evaluation::parse_tracks_line(line);
+  (void)stac::evaluation::parse_truth_line(line);
   return 0;
 }

@@ -1,4 +1,4 @@
-// What a Foxglove client sends `stac view` (tools/view/client_messages.hpp): the input is split at
+// What a Foxglove client sends `stac view` (view/client_messages.hpp): the input is split at
 // '\n' into messages applied in turn to one client's subscriptions on a 4-channel server. Beyond
 // the sanitizers, the server's limits are checked after every message: one subscription per
 // channel (so never more than 4), every channel real, the subscriber changes adding up to the
@@ -9,7 +9,7 @@
 #include <cstdlib>
 #include <string>
 
-#include "tools/view/client_messages.hpp"
+#include "view/client_messages.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace stac::view;

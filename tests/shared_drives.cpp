@@ -11,6 +11,7 @@
 #include <fstream>
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "stac_cli.hpp"
 #include "test_paths.hpp"
@@ -35,12 +36,17 @@ std::uint64_t fnv1a(const std::string& s) {
   return h;
 }
 
-// An exclusive flock on PATH, held until destroyed (a killed test releases it too).
+// An exclusive flock on PATH (waiting for it when WAIT), held until destroyed (a killed test
+// releases it too).
 class Lock {
  public:
-  explicit Lock(const fs::path& path)
+  explicit Lock(const fs::path& path, bool wait = true)
       : fd_(::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644)) {
-    if (fd_ >= 0) ::flock(fd_, LOCK_EX);
+    if (fd_ >= 0 && ::flock(fd_, wait ? LOCK_EX : LOCK_EX | LOCK_NB) != 0) {
+      busy_ = true;
+      ::close(fd_);
+      fd_ = -1;
+    }
   }
   ~Lock() {
     if (fd_ >= 0) ::close(fd_);
@@ -48,9 +54,11 @@ class Lock {
   Lock(const Lock&) = delete;
   Lock& operator=(const Lock&) = delete;
   [[nodiscard]] bool held() const { return fd_ >= 0; }
+  [[nodiscard]] bool busy() const { return busy_; }  // another process holds it (not WAIT)
 
  private:
   int fd_;
+  bool busy_ = false;
 };
 
 // BINARY_DIR/test-drives/STAMP, STAMP naming this `stac` (size and modification time); made on
@@ -78,10 +86,15 @@ const fs::path& drives_root() {
   return root;
 }
 
-// The folder for KEY, made by MAKE(folder) once: "" when it is there, else why not.
-Shared once(const std::string& key, const std::function<std::string(const fs::path&)>& make) {
+constexpr const char* kBusy = "busy";  // once(..., false): another test is making it
+
+// The folder for KEY, made by MAKE(folder) once: "" when it is there, else why not. Without WAIT,
+// a folder another test is making is left to it (the error kBusy).
+Shared once(const std::string& key, const std::function<std::string(const fs::path&)>& make,
+            bool wait) {
   const fs::path dir = drives_root() / hex(fnv1a(key));
-  const Lock lock(dir.string() + ".lock");
+  const Lock lock(dir.string() + ".lock", wait);
+  if (lock.busy()) return {"", kBusy};
   if (!lock.held()) return {"", "cannot open the lock file beside " + dir.string()};
   if (fs::exists(dir / "made")) return {dir.string(), ""};
   fs::remove_all(dir);  // a run killed half-way
@@ -99,31 +112,71 @@ std::string run(const std::string& args) {
 
 }  // namespace
 
+std::vector<Shared> shared_runs(const std::vector<std::string>& runs) {
+  std::vector<Shared> made(runs.size());
+  // Those no other test is making first, then the rest, waiting for them: two tests that need the
+  // same drives make them side by side instead of one waiting for the other to make them all.
+  for (const bool wait : {false, true}) {
+    for (std::size_t i = 0; i < runs.size(); ++i) {
+      if (wait && made[i].error != kBusy) continue;
+      made[i] = once(
+          runs[i],
+          [&](const fs::path& d) {
+            std::string command = runs[i];
+            for (auto at = command.find("{out}"); at != std::string::npos;
+                 at = command.find("{out}"))
+              command.replace(at, 5, d.string());
+            return run(command);
+          },
+          wait);
+    }
+  }
+  return made;
+}
+
 Shared shared_run(const std::string& args) {
-  return once(args, [&](const fs::path& d) {
-    std::string command = args;
-    for (auto at = command.find("{out}"); at != std::string::npos; at = command.find("{out}"))
-      command.replace(at, 5, d.string());
-    return run(command);
-  });
+  return shared_runs({args}).front();
+}
+
+std::vector<Shared> shared_sims(const std::vector<std::string>& sims) {
+  std::vector<std::string> runs;
+  for (const std::string& args : sims)
+    runs.push_back("sim " + args + " --out {out}/drive.pcap --truth {out}/drive.jsonl");
+  std::vector<Shared> made = shared_runs(runs);
+  for (Shared& m : made)
+    if (m) m.path = (fs::path(m.path) / "drive").string();
+  return made;
 }
 
 Shared shared_sim(const std::string& sim_args) {
-  const Shared dir =
-      shared_run("sim " + sim_args + " --out {out}/drive.pcap --truth {out}/drive.jsonl");
-  if (!dir) return dir;
-  return {(fs::path(dir.path) / "drive").string(), ""};
+  return shared_sims({sim_args}).front();
+}
+
+std::vector<Shared> shared_datasets(const std::vector<SharedDataset>& datasets) {
+  std::vector<std::string> sims;
+  for (const SharedDataset& d : datasets) sims.push_back(d.sim_args);
+  std::vector<Shared> made = shared_sims(sims);
+  std::vector<std::string> runs;
+  std::vector<std::size_t> of;  // the dataset each run makes
+  for (std::size_t i = 0; i < datasets.size(); ++i) {
+    if (!made[i]) continue;
+    const std::string& drive = made[i].path;
+    runs.push_back("dataset --in " + drive + ".pcap" +
+                   (datasets[i].with_truth ? " --truth " + drive + ".jsonl" : "") + " " +
+                   datasets[i].dataset_args + " --out {out}/data");
+    of.push_back(i);
+  }
+  const std::vector<Shared> folders = shared_runs(runs);
+  for (std::size_t k = 0; k < folders.size(); ++k) {
+    made[of[k]] = folders[k];
+    if (folders[k]) made[of[k]].path = (fs::path(folders[k].path) / "data").string();
+  }
+  return made;
 }
 
 Shared shared_dataset(const std::string& sim_args, bool with_truth,
                       const std::string& dataset_args) {
-  const Shared drive = shared_sim(sim_args);
-  if (!drive) return drive;
-  const Shared dir = shared_run("dataset --in " + drive.path + ".pcap" +
-                                (with_truth ? " --truth " + drive.path + ".jsonl" : "") + " " +
-                                dataset_args + " --out {out}/data");
-  if (!dir) return dir;
-  return {(fs::path(dir.path) / "data").string(), ""};
+  return shared_datasets({{sim_args, with_truth, dataset_args}}).front();
 }
 
 }  // namespace stac::testing

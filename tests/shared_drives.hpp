@@ -10,6 +10,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 namespace stac::testing {
 
@@ -29,8 +30,18 @@ Shared shared_sim(const std::string& sim_args);
 Shared shared_dataset(const std::string& sim_args, bool with_truth,
                       const std::string& dataset_args = "");
 
+// Several at once: those no other test is making first, then the others (waiting for them).
+std::vector<Shared> shared_sims(const std::vector<std::string>& sims);
+struct SharedDataset {
+  std::string sim_args;
+  bool with_truth = true;
+  std::string dataset_args;
+};
+std::vector<Shared> shared_datasets(const std::vector<SharedDataset>& datasets);
+
 // The folder OUT of `stac ARGS`, every "{out}" in ARGS replaced by OUT (a state `stac induct` made
 // from shared datasets, say). ARGS is the key: they must name every input.
 Shared shared_run(const std::string& args);
+std::vector<Shared> shared_runs(const std::vector<std::string>& runs);
 
 }  // namespace stac::testing

@@ -14,6 +14,7 @@
 
 #include "drivers/io/pcap_reader.hpp"
 #include "drivers/velodyne/scan_stream.hpp"
+#include "evaluation/truth_composition.hpp"
 #include "formats/capture_input.hpp"
 #include "formats/capture_poses.hpp"
 #include "formats/dataset_file.hpp"
@@ -22,7 +23,6 @@
 #include "settings/settings.hpp"
 #include "sim/world.hpp"
 #include "tools/commands.hpp"
-#include "tools/evaluation/truth_composition.hpp"
 #include "tools/status.hpp"
 #include "tools/support/progress.hpp"
 
@@ -147,7 +147,7 @@ class Builder : public classification::TrackClassifier::Observer {
     }
     truth_.clear();
     if (out_.labelled) {
-      auto t = read_truth_file(o.truth[k]);
+      auto t = evaluation::read_truth_file(o.truth[k]);
       if (!t) return rt::Unexpected<rt::Error>{t.error()};
       truth_ = std::move(*t);
       if (truth_.empty()) return rt::make_error(o.truth[k] + ": no truth scans");
@@ -169,7 +169,8 @@ class Builder : public classification::TrackClassifier::Observer {
 
     source_ = static_cast<std::uint32_t>(out_.sources.size());
     out_.sources.push_back(out_.labelled ? in + " " + o.truth[k] : in);
-    const pipeline::PipelineConfig pc = offline_pipeline_config(*settings, nullptr, true);
+    const pipeline::PipelineConfig pc =
+        evaluation::offline_pipeline_config(*settings, nullptr, true);
     pipeline::ScanPipeline pipeline(pc);
     pipeline.classifier()->set_observer(this);
     pipeline::ScanResult result = pipeline.make_result();
@@ -223,11 +224,12 @@ class Builder : public classification::TrackClassifier::Observer {
   void handle(const velodyne::Scan& scan, const pipeline::ScanResult& result) {
     ++counts_.scans;
     // The truth scan of this scan (as `stac process`), and its segments' composition.
-    const TruthScanRecord* ts =
-        truth_.empty() ? nullptr : nearest_truth_scan(truth_, truth_next_, result.stamp_ns);
-    records_.assign(result.segments.segments.size(), SegmentRecord{});
+    const evaluation::TruthScanRecord* ts =
+        truth_.empty() ? nullptr
+                       : evaluation::nearest_truth_scan(truth_, truth_next_, result.stamp_ns);
+    records_.assign(result.segments.segments.size(), evaluation::SegmentRecord{});
     if (ts != nullptr) {
-      truth_composition(*ts, scan, result.segments, result.world_T_sensor, records_);
+      evaluation::truth_composition(*ts, scan, result.segments, result.world_T_sensor, records_);
       ++counts_.truth_matched;
     }
 
@@ -251,7 +253,7 @@ class Builder : public classification::TrackClassifier::Observer {
       ClassIndex object_class = kBackground;
       for (const auto& [truth_id, n] : records_[si].truth) {
         ClassIndex c = kBackground;
-        for (const TruthObjectRecord& obj : ts->objects) {
+        for (const evaluation::TruthObjectRecord& obj : ts->objects) {
           if (static_cast<std::int64_t>(obj.id) == truth_id) c = class_of(out_.classes, obj.cls);
         }
         b.class_points[c == kBackground ? out_.classes.size() : c] += n;
@@ -304,12 +306,12 @@ class Builder : public classification::TrackClassifier::Observer {
   }
 
   Dataset& out_;
-  std::vector<TruthScanRecord> truth_;
+  std::vector<evaluation::TruthScanRecord> truth_;
   std::size_t truth_next_ = 0;
   std::uint32_t source_ = 0;
   RunCounts counts_;
   std::map<std::uint64_t, TrackBuild> live_;
-  std::vector<SegmentRecord> records_;
+  std::vector<evaluation::SegmentRecord> records_;
   std::set<std::uint64_t> updated_, current_;  // updated this scan; reported this scan
 };
 

@@ -10,9 +10,9 @@
 #include "drivers/velodyne/scan_stream.hpp"
 #include "formats/capture_input.hpp"
 #include "formats/scan_writers.hpp"
+#include "pictures/birds_eye.hpp"
 #include "settings/settings.hpp"
 #include "tools/commands.hpp"
-#include "tools/pictures/birds_eye.hpp"
 #include "tools/status.hpp"
 #include "tools/support/cli_checks.hpp"
 #include "tools/support/progress.hpp"
@@ -59,8 +59,8 @@ int run_decode(const DecodeOptions& o) {
   if (!reader) return fail(reader.error().message);
 
   velodyne::ScanStream stream(*calibration, s.assembler, 2);
-  std::optional<BirdsEye> picture;
-  if (!o.png.empty()) picture.emplace(BirdsEyeOptions{});
+  std::optional<pictures::BirdsEye> picture;
+  if (!o.png.empty()) picture.emplace(pictures::BirdsEyeOptions{});
   std::uint64_t scans = 0, complete = 0, points = 0;
   Progress progress("decode", static_cast<double>(std::filesystem::file_size(o.in)));
   auto drain = [&]() -> rt::Status {

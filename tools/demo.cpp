@@ -3,7 +3,7 @@
 // HDL-64E's UDP packets and the Applanix TCP stream at the recorded pace) into the live component
 // (`stac run`, Cyclone on config/dds/loopback.xml), both run as child processes exactly as a user
 // would run them; this process subscribes to the DDS topics, prints a line per scan as the tracks
-// arrive, and at the end a summary and pictures (tools/pictures/demo_pictures.hpp).
+// arrive, and at the end a summary and pictures (pictures/demo_pictures.hpp).
 #include <arpa/inet.h>
 #include <netinet/in.h>
 #include <sys/socket.h>
@@ -27,14 +27,14 @@
 #include "dds/idl_types.hpp"
 #include "dds/reading.hpp"
 #include "formats/capture_scans.hpp"
+#include "pictures/demo_pictures.hpp"
 #include "rt/unique_fd.hpp"
 #include "settings/dds_settings.hpp"
 #include "settings/settings.hpp"
 #include "tools/commands.hpp"
-#include "tools/pictures/demo_pictures.hpp"
 #include "tools/sim.hpp"
 #include "tools/support/child_process.hpp"
-#include "tools/view/view_bridge.hpp"
+#include "view/view_bridge.hpp"
 
 namespace stac::tools {
 
@@ -112,7 +112,7 @@ class DriveWatch {
     if (scans.empty()) first_stamp_s_ = t;
     latency_ms.push_back(static_cast<double>(now - info.source_timestamp) * 1e-6);
     scans.push_back(s.scan_index);
-    last_ = ScanView{};
+    last_ = pictures::ScanView{};
     last_.scan_index = s.scan_index;
     std::uint32_t confirmed = 0;
     std::vector<const typename T::TrackedObject*> shown;
@@ -193,8 +193,8 @@ class DriveWatch {
   }
 
   // The last scan's view: its tracks, the segments and the vehicle's pose that came last.
-  [[nodiscard]] DriveView view() const {
-    DriveView v;
+  [[nodiscard]] pictures::DriveView view() const {
+    pictures::DriveView v;
     v.last = last_;
     v.segments = segments_;
     v.ego_x = static_cast<float>(ego_x_);
@@ -215,18 +215,19 @@ class DriveWatch {
 
  private:
   double first_stamp_s_ = 0, ego_x_ = 0, ego_y_ = 0, ego_yaw_ = 0;
-  ScanView last_;
-  std::vector<BoxView> segments_;
-  std::vector<PointM> ego_path_;
-  std::map<std::uint64_t, std::vector<PointM>> paths_;
+  pictures::ScanView last_;
+  std::vector<pictures::BoxView> segments_;
+  std::vector<pictures::PointM> ego_path_;
+  std::map<std::uint64_t, std::vector<pictures::PointM>> paths_;
   std::map<std::uint64_t, std::string> classes_;  // each confirmed track's latest class
   std::vector<std::string> pending_;
 };
 
 // The points of complete scan `index` of the capture (the scan stac run published as that index
 // when no packet was lost), in the vehicle frame (the sensor's extrinsics; not deskewed).
-rt::Result<std::vector<Point3M>> last_scan_points(const std::string& config,
-                                                  const std::string& pcap, std::uint64_t index) {
+rt::Result<std::vector<pictures::Point3M>> last_scan_points(const std::string& config,
+                                                            const std::string& pcap,
+                                                            std::uint64_t index) {
   auto vs = load_velodyne_settings(config);
   if (!vs) return rt::Unexpected<rt::Error>{vs.error()};
   auto es = load_ego_settings(config);
@@ -234,7 +235,7 @@ rt::Result<std::vector<Point3M>> last_scan_points(const std::string& config,
   auto calibration = velodyne::load_calibration(vs->calibration);
   if (!calibration) return rt::Unexpected<rt::Error>{calibration.error()};
   const Eigen::Isometry3f vehicle_T_sensor = es->deskew.vehicle_T_sensor.cast<float>();
-  std::vector<Point3M> points;
+  std::vector<pictures::Point3M> points;
   std::uint64_t k = 0;
   auto n = for_each_complete_scan(pcap, *calibration, *vs, [&](const velodyne::Scan& scan) {
     if (k++ < index) return true;
@@ -393,16 +394,17 @@ int watch_drive(const DemoOptions& o, const std::filesystem::path& dir, const st
       u(w.deadline_misses), drops.empty() ? " none" : drops.c_str(), u(current), u(late),
       percentile(w.end_to_end_ms, 0.5), percentile(w.end_to_end_ms, 0.99), w.end_to_end_ms.size(),
       percentile(w.latency_ms, 0.5), percentile(w.latency_ms, 0.99), percentile(w.latency_ms, 1.0));
-  DriveView view = w.view();
+  pictures::DriveView view = w.view();
   if (auto p = last_scan_points(config, pcap, view.last.scan_index); p) {
     view.points = std::move(*p);
   } else {
     std::fprintf(stderr, "stac demo: warning: no points in the picture: %s\n",
                  p.error().message.c_str());
   }
-  for (auto [name, picture] : {std::pair{"demo_last_scan.png", DrivePicture::kLastScan},
-                               {"demo_tracks.png", DrivePicture::kWholeDrive}}) {
-    if (auto d = draw_drive(view, picture, dir / name); !d) return fail(d.error().message);
+  for (auto [name, picture] : {std::pair{"demo_last_scan.png", pictures::DrivePicture::kLastScan},
+                               {"demo_tracks.png", pictures::DrivePicture::kWholeDrive}}) {
+    if (auto d = pictures::draw_drive(view, picture, dir / name); !d)
+      return fail(d.error().message);
     std::printf("  picture     %s\n", (dir / name).c_str());
   }
   std::fflush(stdout);
@@ -467,7 +469,7 @@ int run_demo(const DemoOptions& o) {
   // 1. The drive: pcap (HDL-64E UDP + the Applanix TCP stream) and its truth.
   std::fprintf(stderr, "stac demo: 1/4 simulating a %.0f s urban drive (seed %llu)\n", o.seconds,
                static_cast<unsigned long long>(o.seed));
-  SimOptions sim;
+  sim::DriveOptions sim;
   sim.scenario = "urban";
   sim.seed = o.seed;
   sim.duration_s = o.seconds;

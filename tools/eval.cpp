@@ -6,13 +6,13 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "evaluation/evaluation.hpp"
+#include "evaluation/frames.hpp"
+#include "evaluation/tracklet_truth.hpp"
 #include "formats/durable_file.hpp"
+#include "pictures/drawing.hpp"
 #include "tools/commands.hpp"
 #include "tools/eval_classes.hpp"
-#include "tools/evaluation/evaluation.hpp"
-#include "tools/evaluation/frames.hpp"
-#include "tools/evaluation/tracklet_truth.hpp"
-#include "tools/pictures/drawing.hpp"
 #include "tools/support/progress.hpp"
 
 namespace stac::tools {
@@ -21,19 +21,19 @@ namespace {
 struct EvalOptions {
   std::string truth, tracks, report;
   std::string tracklets, drive, config_file;  // --tracklets: KITTI raw labels instead of --truth
-  EvalConfig config;
+  evaluation::EvalConfig config;
   bool classes = false;
   ClassEvalOptions class_options;
 };
 
-std::string band_name(int b, const EvalConfig& c) {
+std::string band_name(int b, const evaluation::EvalConfig& c) {
   char buf[48];
   std::snprintf(buf, sizeof(buf), "%g-%g", b * c.range_band_m,
                 std::min((b + 1) * c.range_band_m, c.max_range_m));
   return buf;
 }
 
-nlohmann::json clear_json(const ClearCounts& k, bool with_fp) {
+nlohmann::json clear_json(const evaluation::ClearCounts& k, bool with_fp) {
   nlohmann::json j = {{"gt", k.gt},
                       {"tp", k.tp},
                       {"fn", k.fn},
@@ -51,7 +51,7 @@ nlohmann::json clear_json(const ClearCounts& k, bool with_fp) {
   return j;
 }
 
-nlohmann::json hota_json(const HotaCounts& k, bool with_fp) {
+nlohmann::json hota_json(const evaluation::HotaCounts& k, bool with_fp) {
   nlohmann::json j = {{"assa", k.assa()}, {"detre", k.detre()}, {"loca", k.loca()}};
   if (with_fp) {
     j["hota"] = k.hota();
@@ -60,7 +60,7 @@ nlohmann::json hota_json(const HotaCounts& k, bool with_fp) {
   return j;
 }
 
-nlohmann::json seg_json(const SegCounts& k) {
+nlohmann::json seg_json(const evaluation::SegCounts& k) {
   return {{"objects", k.objects},
           {"unsegmented", k.unsegmented},
           {"over", k.over},
@@ -69,7 +69,7 @@ nlohmann::json seg_json(const SegCounts& k) {
           {"under_segmentation", k.under_rate()}};
 }
 
-nlohmann::json metrics_json(const EvalResult& r, const EvalConfig& c) {
+nlohmann::json metrics_json(const evaluation::EvalResult& r, const evaluation::EvalConfig& c) {
   nlohmann::json j;
   j["mota"] = r.clear.mota();
   j["motp"] = r.clear.motp();
@@ -120,12 +120,12 @@ std::string fmt(double v) {
   return buf;
 }
 
-std::string summary_table(const EvalResult& r, const EvalConfig& c) {
+std::string summary_table(const evaluation::EvalResult& r, const evaluation::EvalConfig& c) {
   std::ostringstream s;
   s << "| group | GT | TP | FN | FP | IDSW | Frag | MOTA | MOTP | HOTA | AssA | under-seg | "
        "over-seg |\n"
     << "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
-  auto seg = [&](const SegCounts* k) {
+  auto seg = [&](const evaluation::SegCounts* k) {
     if (!r.has_segment_truth || k == nullptr) return std::string("n/a | n/a");
     return fmt(k->under_rate()) + " | " + fmt(k->over_rate());
   };
@@ -135,7 +135,7 @@ std::string summary_table(const EvalResult& r, const EvalConfig& c) {
     << fmt(r.hota.assa()) << " | " << seg(&r.segmentation) << " |\n";
   for (const auto& [cls, k] : r.clear_by_class) {
     const auto sk = r.segmentation_by_class.find(cls);
-    const HotaCounts& hk = r.hota_by_class.at(cls);
+    const evaluation::HotaCounts& hk = r.hota_by_class.at(cls);
     s << "| " << cls << " | " << k.gt << " | " << k.tp << " | " << k.fn << " | "
       << (r.fp_by_class ? std::to_string(k.fp) : std::string("-")) << " | " << k.id_switches
       << " | " << k.fragmentations << " | " << fmt(k.mota()) << (r.fp_by_class ? "" : "*") << " | "
@@ -164,8 +164,8 @@ std::string summary_table(const EvalResult& r, const EvalConfig& c) {
   return s.str();
 }
 
-int write_report(const std::filesystem::path& dir, const EvalResult& r, const EvalConfig& c,
-                 const EvalOptions& o, const std::string& frames) {
+int write_report(const std::filesystem::path& dir, const evaluation::EvalResult& r,
+                 const evaluation::EvalConfig& c, const EvalOptions& o, const std::string& frames) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec) return fail(dir.string() + ": cannot create the report folder: " + ec.message());
@@ -194,14 +194,14 @@ int write_report(const std::filesystem::path& dir, const EvalResult& r, const Ev
     class_values[2].push_back(seg ? sk->second.under_rate() : NAN);
     class_values[3].push_back(seg ? sk->second.over_rate() : NAN);
   }
-  if (auto saved = save_bar_chart(dir / "range.png", "MOTA and HOTA by range band", bands,
-                                  {"MOTA", "HOTA"}, band_values, 0.0);
+  if (auto saved = pictures::save_bar_chart(dir / "range.png", "MOTA and HOTA by range band", bands,
+                                            {"MOTA", "HOTA"}, band_values, 0.0);
       !saved) {
     return fail(saved.error().message);
   }
-  if (auto saved = save_bar_chart(dir / "classes.png",
-                                  "Per class: recall, AssA, under- and over-segmentation", classes,
-                                  {"recall", "AssA", "under-seg", "over-seg"}, class_values, 0.0);
+  if (auto saved = pictures::save_bar_chart(
+          dir / "classes.png", "Per class: recall, AssA, under- and over-segmentation", classes,
+          {"recall", "AssA", "under-seg", "over-seg"}, class_values, 0.0);
       !saved) {
     return fail(saved.error().message);
   }
@@ -250,14 +250,15 @@ int write_report(const std::filesystem::path& dir, const EvalResult& r, const Ev
 }
 
 int run_eval(const EvalOptions& o) {
-  EvalConfig c = o.config;
+  evaluation::EvalConfig c = o.config;
   c.classified_outputs_only = !o.tracklets.empty();
   if (!(c.max_range_m > 0)) return fail("--max-range must be positive");
   std::error_code ec;
   const double total = static_cast<double>(std::filesystem::file_size(o.truth, ec)) +
                        static_cast<double>(std::filesystem::file_size(o.tracks, ec));
   Progress progress("eval: reading", ec ? 0.0 : total);
-  rt::Result<std::vector<TruthScanRecord>> truth = std::vector<TruthScanRecord>{};
+  rt::Result<std::vector<evaluation::TruthScanRecord>> truth =
+      std::vector<evaluation::TruthScanRecord>{};
   if (!o.tracklets.empty()) {
     // KITTI raw labels, placed in the world by their drive's poses (its folder by default).
     const std::filesystem::path drive = o.drive.empty()
@@ -265,22 +266,22 @@ int run_eval(const EvalOptions& o) {
                                             : std::filesystem::path(o.drive);
     auto ego = settings::load_ego_settings(settings::config_path(o.config_file));
     if (!ego) return fail(ego.error().message);
-    truth = truth_from_tracklets(o.tracklets, drive.empty() ? "." : drive, *ego);
+    truth = evaluation::truth_from_tracklets(o.tracklets, drive.empty() ? "." : drive, *ego);
   } else {
-    truth =
-        read_truth_file(o.truth, [&](std::uint64_t b) { progress.update(static_cast<double>(b)); });
+    truth = evaluation::read_truth_file(
+        o.truth, [&](std::uint64_t b) { progress.update(static_cast<double>(b)); });
   }
   if (!truth) return fail(truth.error().message);
   double done = ec ? 0.0 : static_cast<double>(std::filesystem::file_size(o.truth, ec));
-  auto tracks = read_tracks_file(
+  auto tracks = evaluation::read_tracks_file(
       o.tracks, [&](std::uint64_t b) { progress.update(done + static_cast<double>(b)); });
   if (!tracks) return fail(tracks.error().message);
   progress.finish();
   const std::string& truth_name = o.tracklets.empty() ? o.truth : o.tracklets;
   if (c.classified_outputs_only) {
     bool any = false;
-    for (const TracksScan& scan : *tracks)
-      for (const TrackRecord& t : scan.tracks) any = any || t.classified;
+    for (const evaluation::TracksScan& scan : *tracks)
+      for (const evaluation::TrackRecord& t : scan.tracks) any = any || t.classified;
     if (!any)
       std::fprintf(stderr,
                    "stac eval: note: no track of %s carries a class, so none can be a false "
@@ -289,9 +290,9 @@ int run_eval(const EvalOptions& o) {
   }
   if (truth->empty()) return fail(truth_name + ": no scans");
   // The truth in the tracks' frame, or a refusal that says what to do.
-  auto frames = truth_in_tracks_frame(*truth, *tracks);
+  auto frames = evaluation::truth_in_tracks_frame(*truth, *tracks);
   if (!frames) return fail(o.tracks + " against " + truth_name + ": " + frames.error().message);
-  const EvalResult r = evaluate(*truth, *tracks, c);
+  const evaluation::EvalResult r = evaluation::evaluate(*truth, *tracks, c);
   if (r.paired_scans == 0) {
     return fail("no scan of " + o.tracks + " matches a scan of " + truth_name +
                 " by time: are they from the same run?");

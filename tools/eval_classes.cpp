@@ -12,9 +12,9 @@
 #include "formats/model_file.hpp"
 #include "perception/classification/holistic.hpp"
 #include "perception/classification/model.hpp"
+#include "pictures/chart.hpp"
+#include "pictures/drawing.hpp"
 #include "tools/commands.hpp"
-#include "tools/pictures/chart.hpp"
-#include "tools/pictures/drawing.hpp"
 #include "tools/support/progress.hpp"
 
 namespace stac::tools {
@@ -74,7 +74,7 @@ struct Scored {
 };
 
 // Precision-recall points of one class by sweeping the threshold over the scores.
-void pr_curve(std::vector<Scored> s, ChartSeries& out) {
+void pr_curve(std::vector<Scored> s, pictures::ChartSeries& out) {
   std::sort(s.begin(), s.end(), [](const Scored& a, const Scored& b) { return a.score > b.score; });
   std::size_t positives = 0;
   for (const Scored& x : s) positives += x.positive ? 1 : 0;
@@ -98,7 +98,7 @@ rt::Status save_confusion(const Tally& t, const ClassNames& names, const std::st
     counts.emplace_back(t.confusion[i].begin(),
                         t.confusion[i].begin() + static_cast<long>(t.labels));
   }
-  return save_confusion_matrix(png, title, labels, counts);
+  return pictures::save_confusion_matrix(png, title, labels, counts);
 }
 
 }  // namespace
@@ -120,7 +120,8 @@ int run_class_eval(const ClassEvalOptions& o) {
       return fail(c.error().message);
     if (auto a = append_dataset(data, std::move(*d), dir); !a) return fail(a.error().message);
   }
-  if (data.tracks.empty()) return fail("the datasets hold no track: nothing to evaluate");
+  if (data.tracks.empty())
+    return fail("the datasets hold no track: nothing to evaluation::evaluate");
   const LogOdds prior = m.holistic.model().prior;
   const auto predict = [classes](const LogOdds& l) { return classification::predict(l, classes); };
   // The tables count consistent tracks (kMaxOffLabelFraction, the thesis's protocol); every
@@ -241,14 +242,14 @@ int run_class_eval(const ClassEvalOptions& o) {
         !r) {
       return fail(r.error().message);
     }
-    Chart chart{
+    pictures::Chart chart{
         "Precision-recall, ADBF track-wise (1-vs-all)", "recall", "precision", {}, 800, 420};
     for (std::size_t c = 0; c < classes; ++c) {
-      ChartSeries s{names[c], {}, {}};
+      pictures::ChartSeries s{names[c], {}, {}};
       pr_curve(scores[c], s);
       if (!s.x.empty()) chart.series.push_back(std::move(s));
     }
-    if (auto r = save_chart(chart, dir / "pr.png"); !r) return fail(r.error().message);
+    if (auto r = pictures::save_chart(chart, dir / "pr.png"); !r) return fail(r.error().message);
     std::printf("report: %s/metrics.json, tracks.csv, confusion.png, pr.png\n", o.report.c_str());
   }
   return 0;

@@ -19,9 +19,9 @@
 #include "formats/model_file.hpp"
 #include "perception/classification/track_classifier.hpp"
 #include "perception/segmentation/segmenter.hpp"
+#include "pictures/birds_eye.hpp"
 #include "settings/settings.hpp"
 #include "tools/commands.hpp"
-#include "tools/pictures/birds_eye.hpp"
 #include "tools/support/cli_checks.hpp"
 
 namespace stac::tools {
@@ -141,11 +141,11 @@ int run_kitti_objects(const KittiObjectsOptions& o) {
       rect[i] = *rect_T_velo * Eigen::Vector3d(v[4 * i], v[4 * i + 1], v[4 * i + 2]);
     const Eigen::Isometry3d velo_T_rect = rect_T_velo->inverse();
 
-    BirdsEye picture(
-        BirdsEyeOptions{.range_m = o.max_range_m + 5, .size_px = 1000, .height_bar = false});
+    pictures::BirdsEye picture(pictures::BirdsEyeOptions{
+        .range_m = o.max_range_m + 5, .size_px = 1000, .height_bar = false});
     for (std::size_t i = 0; i < n; ++i) {
       picture.add_point(v[4 * i], v[4 * i + 1],
-                        owner[i] < 0 ? Bgr{80, 80, 80} : Bgr{200, 200, 200});
+                        owner[i] < 0 ? pictures::Bgr{80, 80, 80} : pictures::Bgr{200, 200, 200});
     }
     for (const KittiObject& obj : *labels) {
       const Eigen::Vector3d centre_rect = obj.bottom_centre - Eigen::Vector3d(0, obj.height / 2, 0);
@@ -195,9 +195,9 @@ int run_kitti_objects(const KittiObjectsOptions& o) {
       }
       r.status = status_of(r);
       const double yaw = -obj.rotation_y - M_PI / 2;  // about the velodyne's z
-      const Bgr colour = r.status == "segmented"   ? Bgr{80, 220, 80}
-                         : r.status == "no points" ? Bgr{120, 120, 120}
-                                                   : Bgr{60, 60, 240};
+      const pictures::Bgr colour = r.status == "segmented"   ? pictures::Bgr{80, 220, 80}
+                                   : r.status == "no points" ? pictures::Bgr{120, 120, 120}
+                                                             : pictures::Bgr{60, 60, 240};
       picture.add_box(static_cast<float>(c.x()), static_cast<float>(c.y()),
                       static_cast<float>(obj.length), static_cast<float>(obj.width),
                       static_cast<float>(yaw), colour);

@@ -5,10 +5,10 @@
 #include <exception>
 #include <new>
 
+#include "pictures/drawing.hpp"
 #include "settings/settings.hpp"
 #include "stac_version.hpp"
 #include "tools/commands.hpp"
-#include "tools/pictures/drawing.hpp"
 #include "tools/support/cli_checks.hpp"
 
 namespace stac::tools {
@@ -21,8 +21,9 @@ int fail(const std::string& message) {
 CLI::Option* needs_pictures(CLI::Option* option) {
   return option->check(CLI::Validator(
       [](const std::string&) -> std::string {
-        if (pictures_built()) return "";
-        return std::string("this stac was built without pictures (") + kWithoutPicturesHint + ")";
+        if (pictures::pictures_built()) return "";
+        return std::string("this stac was built without pictures (") +
+               pictures::kWithoutPicturesHint + ")";
       },
       "", "pictures"));
 }

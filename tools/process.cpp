@@ -17,17 +17,17 @@
 #include "dds/scan_publishing.hpp"
 #include "drivers/io/pcap_reader.hpp"
 #include "drivers/velodyne/scan_stream.hpp"
+#include "evaluation/tracks_jsonl.hpp"
+#include "evaluation/truth_composition.hpp"
 #include "formats/capture_input.hpp"
 #include "formats/capture_poses.hpp"
 #include "formats/kitti_raw.hpp"
 #include "formats/model_file.hpp"
+#include "pictures/birds_eye.hpp"
 #include "pipeline/scan_pipeline.hpp"
 #include "settings/dds_settings.hpp"
 #include "settings/settings.hpp"
 #include "tools/commands.hpp"
-#include "tools/evaluation/tracks_jsonl.hpp"
-#include "tools/evaluation/truth_composition.hpp"
-#include "tools/pictures/birds_eye.hpp"
 #include "tools/status.hpp"
 #include "tools/support/cli_checks.hpp"
 #include "tools/support/progress.hpp"
@@ -100,7 +100,7 @@ void print_stats(const std::vector<Stage>& stages) {
 rt::Status save_scan_picture(const std::filesystem::path& png, const velodyne::Scan& scan,
                              const pipeline::ScanResult& r,
                              const classification::ClassNames& classes, const std::string& legend) {
-  BirdsEye view(BirdsEyeOptions{});
+  pictures::BirdsEye view(pictures::BirdsEyeOptions{});
   const Eigen::Isometry3d vehicle_T_world = r.world_T_vehicle_start.inverse();
   const Eigen::Isometry3d vehicle_T_sensor = vehicle_T_world * r.world_T_sensor;
   const double yaw0 = pipeline::yaw_of(r.world_T_vehicle_start.linear());
@@ -109,7 +109,8 @@ rt::Status save_scan_picture(const std::filesystem::path& png, const velodyne::S
     view.add_point(static_cast<float>(v.x()), static_cast<float>(v.y()),
                    static_cast<float>(v.z() - vehicle_T_sensor.translation().z()));
   }
-  const auto box = [&](double x, double y, double length, double width, double yaw, Bgr colour) {
+  const auto box = [&](double x, double y, double length, double width, double yaw,
+                       pictures::Bgr colour) {
     Eigen::Vector3d c = vehicle_T_world * Eigen::Vector3d(x, y, 0);
     view.add_box(static_cast<float>(c.x()), static_cast<float>(c.y()), static_cast<float>(length),
                  static_cast<float>(width), static_cast<float>(yaw - yaw0), colour);
@@ -117,13 +118,14 @@ rt::Status save_scan_picture(const std::filesystem::path& png, const velodyne::S
   };
   for (std::size_t i = 0; i < r.segments.segments.size(); ++i) {
     const pipeline::WorldBox b = r.world_box(i);
-    (void)box(b.x, b.y, b.length, b.width, b.yaw, Bgr{150, 150, 150});
+    (void)box(b.x, b.y, b.length, b.width, b.yaw, pictures::Bgr{150, 150, 150});
   }
   for (std::size_t i = 0; i < r.tracked.tracks.size(); ++i) {
     const tracking::Track& t = r.tracked.tracks[i];
     if (t.state == tracking::TrackState::kTentative) continue;
     const bool confirmed = t.state == tracking::TrackState::kConfirmed;
-    const Bgr colour = confirmed ? Bgr{0, 140, 255} : Bgr{255, 120, 0};
+    const pictures::Bgr colour =
+        confirmed ? pictures::Bgr{0, 140, 255} : pictures::Bgr{255, 120, 0};
     const Eigen::Vector3d c = box(t.position.x(), t.position.y(), t.length, t.width, t.yaw, colour);
     // Named when the class is one of the model's (background tracks only boxed: a street holds
     // many).
@@ -164,9 +166,9 @@ int run_process(const ProcessOptions& o) {
   }
 
   // The truth (for segmentation metrics) and the frame it is written in.
-  std::vector<TruthScanRecord> truth;
+  std::vector<evaluation::TruthScanRecord> truth;
   if (!o.truth.empty()) {
-    auto t = read_truth_file(o.truth);
+    auto t = evaluation::read_truth_file(o.truth);
     if (!t) return fail(t.error().message);
     truth = std::move(*t);
     if (!truth.empty() && truth.front().origin && !ego_settings.origin) {
@@ -211,18 +213,18 @@ int run_process(const ProcessOptions& o) {
   if (!out) return fail(o.tracks + ": cannot create the tracks file");
 
   // The frame the tracks are written in (recorded on every line, so stac eval can compare).
-  TracksFrame frame = TracksFrame::kVehicle;
+  evaluation::TracksFrame frame = evaluation::TracksFrame::kVehicle;
   std::array<double, 3> frame_origin{};
   if (poses && poses->frame->anchored()) {
     const ego::Geodetic g = poses->frame->origin();
-    frame = TracksFrame::kEnu;
+    frame = evaluation::TracksFrame::kEnu;
     frame_origin = {g.lat_deg, g.lon_deg, g.alt_m};
   }
 
   // Everything the per-scan loop uses is allocated here.
   std::optional<velodyne::ScanStream> stream;
   if (calibration) stream.emplace(*calibration, vs.assembler, 2);
-  pipeline::PipelineConfig pc = offline_pipeline_config(*settings, *model);
+  pipeline::PipelineConfig pc = evaluation::offline_pipeline_config(*settings, *model);
   // The classification in stac run's two steps, one right after the other (the same classes as
   // in one): the tracks it publishes, then the others and the accumulated clouds.
   pc.split_classification = true;
@@ -287,7 +289,7 @@ int run_process(const ProcessOptions& o) {
 
     // The record (outside the timed stages).
     const Eigen::Isometry3d& start = result.world_T_vehicle_start;
-    TracksScan rec;
+    evaluation::TracksScan rec;
     rec.frame = frame;
     rec.origin = frame_origin;
     rec.scan = result.sequence;
@@ -310,7 +312,8 @@ int run_process(const ProcessOptions& o) {
                          false};
     }
     for (std::size_t i = 0; i < result.tracked.tracks.size(); ++i) {
-      TrackRecord& r = rec.tracks.emplace_back(track_record(result.tracked.tracks[i]));
+      evaluation::TrackRecord& r =
+          rec.tracks.emplace_back(evaluation::track_record(result.tracked.tracks[i]));
       if (i < result.classes.size() && result.classes[i].classified) {
         const classification::TrackClass& c = result.classes[i];
         r.classified = true;
@@ -320,13 +323,15 @@ int run_process(const ProcessOptions& o) {
       }
     }
     if (!truth.empty()) {
-      if (const TruthScanRecord* ts = nearest_truth_scan(truth, truth_next, result.stamp_ns)) {
-        truth_composition(*ts, scan, result.segments, result.world_T_sensor, rec.segments);
+      if (const evaluation::TruthScanRecord* ts =
+              evaluation::nearest_truth_scan(truth, truth_next, result.stamp_ns)) {
+        evaluation::truth_composition(*ts, scan, result.segments, result.world_T_sensor,
+                                      rec.segments);
         ++truth_matched;
       }
     }
     line.clear();
-    append_json_line(rec, line);
+    evaluation::append_json_line(rec, line);
     out << line;
     if (!o.pictures.empty() && picture_error.empty()) {
       char name[32];

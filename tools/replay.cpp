@@ -9,11 +9,11 @@
 #include <thread>
 #include <vector>
 
+#include "replay/can_replay.hpp"
+#include "replay/tcp_replay.hpp"
+#include "replay/udp_replay.hpp"
 #include "rt/clock.hpp"
 #include "tools/commands.hpp"
-#include "tools/replay/can_replay.hpp"
-#include "tools/replay/tcp_replay.hpp"
-#include "tools/replay/udp_replay.hpp"
 #include "tools/support/cli_checks.hpp"
 
 namespace stac::tools {
@@ -32,7 +32,7 @@ struct ReplayOptions {
   std::string tcp_listen = "127.0.0.1";
   bool no_tcp = false;
   bool wait_tcp = false;
-  std::string faults;   // --faults: tools/replay/faults.hpp
+  std::string faults;   // --faults: replay/faults.hpp
   std::string can_log;  // --can: a candump log sent as cannelloni datagrams
   int can_port = 20000;
 };
@@ -58,7 +58,7 @@ std::string rate_text(double rate) {
 
 // first_due_ns: when the first datagram was due on the shared clock; the schedule is printed
 // from there (as for a UDP replay alone).
-void print_report(const ReplayOptions& o, const io::ReplayPlan& plan, io::ReplayReport r,
+void print_report(const ReplayOptions& o, const replay::ReplayPlan& plan, replay::ReplayReport r,
                   std::int64_t first_due_ns) {
   r.elapsed_ns -= first_due_ns;
   if (!o.fast) r.scheduled_ns -= first_due_ns;
@@ -92,7 +92,7 @@ void print_report(const ReplayOptions& o, const io::ReplayPlan& plan, io::Replay
                  static_cast<double>(r.error_p99_ns) * 1e-3,
                  static_cast<double>(r.error_max_ns) * 1e-3);
   }
-  if (r.faults) std::fprintf(stderr, "  %s\n", io::summary(*r.faults).c_str());
+  if (r.faults) std::fprintf(stderr, "  %s\n", replay::summary(*r.faults).c_str());
   if (r.send_failures > 0) {
     std::fprintf(
         stderr,
@@ -105,9 +105,9 @@ void print_report(const ReplayOptions& o, const io::ReplayPlan& plan, io::Replay
   }
 }
 
-void print_tcp_report(const ReplayOptions& o, const io::TcpReplay& t, io::TcpReplayReport r,
+void print_tcp_report(const ReplayOptions& o, const replay::TcpReplay& t, replay::TcpReplayReport r,
                       std::uint16_t port, std::int64_t first_due_ns) {
-  const io::TcpReplayPlan& plan = t.plan();
+  const replay::TcpReplayPlan& plan = t.plan();
   r.elapsed_ns = std::max<std::int64_t>(0, r.elapsed_ns - first_due_ns);  // 0: nothing written
   if (!o.fast) r.scheduled_ns -= first_due_ns;
   const double elapsed_s = static_cast<double>(r.elapsed_ns) * 1e-9;
@@ -140,7 +140,7 @@ void print_tcp_report(const ReplayOptions& o, const io::TcpReplay& t, io::TcpRep
                  static_cast<double>(r.error_p99_ns) * 1e-3,
                  static_cast<double>(r.error_max_ns) * 1e-3);
   }
-  if (r.faults) std::fprintf(stderr, "  %s\n", io::summary(*r.faults).c_str());
+  if (r.faults) std::fprintf(stderr, "  %s\n", replay::summary(*r.faults).c_str());
 }
 
 // --tcp-port values: "P" or "P:L" (serve captured port P on listen port L, 0: any free one).
@@ -179,22 +179,22 @@ int run_replay(const ReplayOptions& o) {
       if (!asked) return fail(asked.error().message);
       serve = *asked;
     } else {
-      auto found = io::TcpReplay::server_ports(o.in);
+      auto found = replay::TcpReplay::server_ports(o.in);
       if (!found) return fail(found.error().message);
       for (std::uint16_t p : *found) serve.push_back(TcpServe{p, std::nullopt, false});
     }
   }
-  std::vector<io::TcpReplay> tcp;
+  std::vector<replay::TcpReplay> tcp;
   std::vector<std::uint16_t> tcp_port_of;
   for (const TcpServe& s : serve) {
-    io::TcpReplayConfig tc;
+    replay::TcpReplayConfig tc;
     tc.server_port = s.port;
     tc.listen_address = o.tcp_listen;
     tc.listen_port = s.listen_port;
     tc.rate = o.rate;
     tc.fast = o.fast;
     tc.loops = o.forever ? 0 : o.loops;
-    auto t = io::TcpReplay::open(o.in, tc);
+    auto t = replay::TcpReplay::open(o.in, tc);
     if (!t && s.asked) return fail(t.error().message);
     if (!t) {
       std::fprintf(stderr,
@@ -207,7 +207,7 @@ int run_replay(const ReplayOptions& o) {
     tcp_port_of.push_back(s.port);
   }
 
-  io::ReplayConfig c;
+  replay::ReplayConfig c;
   c.address = o.to;
   if (o.port > 0) c.port = static_cast<std::uint16_t>(o.port);
   if (o.filter_port > 0) c.filter_port = static_cast<std::uint16_t>(o.filter_port);
@@ -215,10 +215,10 @@ int run_replay(const ReplayOptions& o) {
   c.fast = o.fast;
   c.loops = o.forever ? 0 : o.loops;
   c.allow_empty = !tcp.empty() && o.filter_port <= 0;  // a TCP-only capture
-  std::optional<io::StreamFaultPlan> stream_faults;
-  io::TimeSpan can_silence;
+  std::optional<replay::StreamFaultPlan> stream_faults;
+  replay::TimeSpan can_silence;
   if (!o.faults.empty()) {
-    auto plan = io::parse_fault_plan(o.faults);
+    auto plan = replay::parse_fault_plan(o.faults);
     if (!plan) return fail(plan.error().message);
     if (plan->any()) c.faults = *plan;
     if (plan->ins.any()) {
@@ -235,23 +235,23 @@ int run_replay(const ReplayOptions& o) {
     }
     can_silence = plan->can_silence;
   }
-  auto replay = io::UdpReplay::open(o.in, c);
+  auto replay = replay::UdpReplay::open(o.in, c);
   if (!replay) return fail(replay.error().message);
-  const io::ReplayPlan& plan = replay->plan();
+  const replay::ReplayPlan& plan = replay->plan();
   if (stream_faults) {  // in the same capture time as the datagrams' faults
     for (auto& t : tcp)
       t.inject(*stream_faults, plan.packets > 0 ? plan.first_stamp_ns : t.plan().first_stamp_ns);
   }
-  std::optional<io::CanReplay> can;
+  std::optional<replay::CanReplay> can;
   if (!o.can_log.empty()) {
-    io::CanReplayConfig cc;
+    replay::CanReplayConfig cc;
     cc.address = o.to;
     cc.port = static_cast<std::uint16_t>(o.can_port);
     cc.fast = o.fast;
     cc.loops = o.forever ? 0 : o.loops;
     cc.silence = can_silence;
     cc.origin_ns = plan.packets > 0 ? plan.first_stamp_ns : 0;
-    auto opened = io::CanReplay::open(o.can_log, cc);
+    auto opened = replay::CanReplay::open(o.can_log, cc);
     if (!opened) return fail(opened.error().message);
     can.emplace(std::move(*opened));
     if (plan.packets == 0) {
@@ -277,7 +277,7 @@ int run_replay(const ReplayOptions& o) {
                  static_cast<double>(plan.span_ns) * 1e-9, ports.c_str());
   }
   for (std::size_t i = 0; i < tcp.size(); ++i) {
-    const io::TcpReplayPlan& tp = tcp[i].plan();
+    const replay::TcpReplayPlan& tp = tcp[i].plan();
     std::fprintf(
         stderr,
         "stac replay: TCP stream of port %u: %llu bytes in %llu segments over %.3f s "
@@ -304,7 +304,7 @@ int run_replay(const ReplayOptions& o) {
     }
   }
   // One clock for all: the capture's earliest stream byte or datagram is due 2 ms from now.
-  io::ReplayClock clock;
+  replay::ReplayClock clock;
   clock.rate = o.fast ? 1.0 : o.rate;
   std::vector<std::pair<std::int64_t, std::int64_t>> firsts;  // (first stamp, pass period)
   if (plan.packets > 0) firsts.emplace_back(plan.first_stamp_ns, plan.pass_period_ns);
@@ -324,14 +324,15 @@ int run_replay(const ReplayOptions& o) {
                                                                        : clock.first_stamp_ns)) *
                    1e-9);
 
-  std::vector<rt::Result<io::TcpReplayReport>> tcp_reports(tcp.size(), rt::make_error("not run"));
+  std::vector<rt::Result<replay::TcpReplayReport>> tcp_reports(tcp.size(),
+                                                               rt::make_error("not run"));
   std::vector<std::thread> threads;
   for (std::size_t i = 0; i < tcp.size(); ++i) {
     threads.emplace_back([&, i] { tcp_reports[i] = tcp[i].run(g_stop, &clock); });
   }
-  io::CanReplayReport can_report;
+  replay::CanReplayReport can_report;
   if (can) threads.emplace_back([&] { can_report = can->run(g_stop, clock); });
-  rt::Result<io::ReplayReport> report = io::ReplayReport{};
+  rt::Result<replay::ReplayReport> report = replay::ReplayReport{};
   if (plan.packets > 0) report = replay->run(g_stop, &clock);
   for (auto& t : threads) t.join();
   sigaction(SIGINT, &old_int, nullptr);

@@ -16,9 +16,9 @@
 #include "formats/capture_scans.hpp"
 #include "formats/kitti_files.hpp"
 #include "perception/segmentation/segmenter.hpp"
+#include "pictures/birds_eye.hpp"
 #include "settings/settings.hpp"
 #include "tools/commands.hpp"
-#include "tools/pictures/birds_eye.hpp"
 #include "tools/status.hpp"
 #include "tools/support/cli_checks.hpp"
 
@@ -74,8 +74,8 @@ int report(const SegmentOptions& o, const segmentation::SegmenterConfig& config,
   }
   const auto& k = out.counters;
   if (!o.png.empty()) {
-    BirdsEye picture(
-        BirdsEyeOptions{.range_m = o.view_range_m, .size_px = 1000, .height_bar = false});
+    pictures::BirdsEye picture(
+        pictures::BirdsEyeOptions{.range_m = o.view_range_m, .size_px = 1000, .height_bar = false});
     std::vector<int> owner(points.count, -1);
     for (std::size_t i = 0; i < out.segments.size(); ++i) {
       for (const std::uint32_t p : out.indices(out.segments[i])) owner[p] = static_cast<int>(i);
@@ -83,17 +83,17 @@ int report(const SegmentOptions& o, const segmentation::SegmenterConfig& config,
     for (std::size_t i = 0; i < points.count; ++i) {
       float x, y, z;
       points.read(i, x, y, z);
-      if (owner[i] < 0) picture.add_point(x, y, Bgr{90, 90, 90});
+      if (owner[i] < 0) picture.add_point(x, y, pictures::Bgr{90, 90, 90});
     }
     for (std::size_t i = 0; i < points.count; ++i) {
       float x, y, z;
       points.read(i, x, y, z);
       if (owner[i] >= 0)
-        picture.add_point(x, y, segment_colour(static_cast<std::size_t>(owner[i])));
+        picture.add_point(x, y, pictures::segment_colour(static_cast<std::size_t>(owner[i])));
     }
     for (std::size_t i = 0; i < out.segments.size(); ++i) {
       const auto& b = out.segments[i].box;
-      const Bgr c = segment_colour(i);
+      const pictures::Bgr c = pictures::segment_colour(i);
       picture.add_box(b.cx, b.cy, std::max(b.length, 0.1f), std::max(b.width, 0.1f), b.yaw, c);
     }
     picture.add_legend(what);

@@ -16,11 +16,11 @@
 #include "formats/durable_file.hpp"
 #include "formats/kitti_files.hpp"
 #include "formats/kitti_raw.hpp"
+#include "pictures/birds_eye.hpp"
+#include "pictures/chart.hpp"
 #include "settings/build_tree.hpp"
 #include "settings/settings.hpp"
 #include "tools/commands.hpp"
-#include "tools/pictures/birds_eye.hpp"
-#include "tools/pictures/chart.hpp"
 #include "tools/support/cli_checks.hpp"
 
 namespace stac::tools {
@@ -263,19 +263,19 @@ std::string difference(double sim, double real, bool relative) {
 rt::Status draw_pair(const std::vector<P>& sim, const std::string& sim_label,
                      const std::vector<P>& real, const std::string& real_label,
                      const std::filesystem::path& dir) {
-  BirdsEyeOptions bo;
+  pictures::BirdsEyeOptions bo;
   bo.range_m = 40.0;
   bo.size_px = 520;
   const std::filesystem::path a = dir / "birds_eye_sim.png", b = dir / "birds_eye_kitti.png";
   for (int k = 0; k < 2; ++k) {
-    BirdsEye pic(bo);
+    pictures::BirdsEye pic(bo);
     const auto& pts = k == 0 ? sim : real;
     for (const P& p : pts) pic.add_point(p.x, p.y, p.z);
     pic.add_legend(k == 0 ? sim_label : real_label);
     pic.add_legend(std::to_string(pts.size()) + " points");
     if (auto r = pic.save(k == 0 ? a : b); !r) return r;
   }
-  return save_side_by_side(a, b, dir / "birds_eye_side_by_side.png");
+  return pictures::save_side_by_side(a, b, dir / "birds_eye_side_by_side.png");
 }
 
 int run_compare(const CompareOptions& o) {
@@ -410,7 +410,7 @@ int run_compare(const CompareOptions& o) {
     return fail(w.error().message);
 
   auto series = [](const std::string& name, auto first, std::size_t n, double x0, double dx) {
-    ChartSeries s;
+    pictures::ChartSeries s;
     s.name = name;
     for (std::size_t i = 0; i < n; ++i) {
       s.x.push_back(x0 + dx * static_cast<double>(i));
@@ -418,39 +418,40 @@ int run_compare(const CompareOptions& o) {
     }
     return s;
   };
-  Chart rings{
+  pictures::Chart rings{
       "Points per ring (mean per scan), ring 0 = lowest beam", "ring", "points", {}, 640, 340};
   rings.series = {series("stac sim", sim.ring_points.begin(), kRings, 0, 1),
                   series("KITTI", real.ring_points.begin(), kRings, 0, 1)};
-  Chart per_scan{
+  pictures::Chart per_scan{
       "Points per scan, in scan order (KITTI: its scans)", "scan", "points", {}, 640, 340};
   per_scan.series = {
       series("stac sim", sim.per_scan_points.begin(), sim.per_scan_points.size(), 0, 1),
       series("KITTI", real.per_scan_points.begin(), real.per_scan_points.size(), 0, 1)};
-  Chart elevation{"Elevation of each ring (median, deg)", "ring", "deg + 25", {}, 640, 340};
+  pictures::Chart elevation{
+      "Elevation of each ring (median, deg)", "ring", "deg + 25", {}, 640, 340};
   elevation.series = {series("stac sim", sim.ring_elevation.begin(), kRings, 0, 1),
                       series("KITTI", real.ring_elevation.begin(), kRings, 0, 1)};
   for (auto& ser : elevation.series) {
     for (double& y : ser.y) y += 25.0;  // the chart's y axis starts at 0
   }
-  Chart range{
+  pictures::Chart range{
       "Range histogram (fraction of points per 2 m)", "range (m)", "fraction", {}, 640, 340};
   range.series = {
       series("stac sim", sim.range_hist.begin(), kRangeBins, kRangeBinM / 2, kRangeBinM),
       series("KITTI", real.range_hist.begin(), kRangeBins, kRangeBinM / 2, kRangeBinM)};
-  Chart inten{"Intensity histogram (KITTI reflectance vs HDL-64E byte / 255)",
-              "intensity (0..1)",
-              "fraction",
-              {},
-              640,
-              340};
+  pictures::Chart inten{"Intensity histogram (KITTI reflectance vs HDL-64E byte / 255)",
+                        "intensity (0..1)",
+                        "fraction",
+                        {},
+                        640,
+                        340};
   inten.series = {series("stac sim", sim.intensity_hist.begin(), kIntensityBins, 0.025, 0.05),
                   series("KITTI", real.intensity_hist.begin(), kIntensityBins, 0.025, 0.05)};
   for (auto [chart, name] :
        {std::pair{&rings, "points_per_ring.png"}, std::pair{&per_scan, "points_per_scan.png"},
         std::pair{&elevation, "ring_elevation.png"}, std::pair{&range, "range_histogram.png"},
         std::pair{&inten, "intensity_histogram.png"}}) {
-    if (auto r = save_chart(*chart, dir / name); !r) return fail(r.error().message);
+    if (auto r = pictures::save_chart(*chart, dir / name); !r) return fail(r.error().message);
   }
   if (auto r = draw_pair(sim_pic, "stac sim, scan " + std::to_string(pic_scan), real_pic,
                          "KITTI " + files->front().filename().string(), dir);

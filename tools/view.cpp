@@ -10,7 +10,7 @@
 #include "settings/settings.hpp"
 #include "tools/commands.hpp"
 #include "tools/support/cli_checks.hpp"
-#include "tools/view/view_bridge.hpp"
+#include "view/view_bridge.hpp"
 
 namespace stac::tools {
 using namespace stac::settings;

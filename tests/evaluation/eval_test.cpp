@@ -11,14 +11,14 @@
 
 #include "drivers/velodyne/calibration.hpp"
 #include "ego/local_frame.hpp"
+#include "evaluation/evaluation.hpp"
+#include "evaluation/frames.hpp"
+#include "evaluation/tracks_jsonl.hpp"
 #include "perception/tracking/tracker.hpp"
 #include "shared_data.hpp"
 #include "sim/run.hpp"
-#include "tools/evaluation/evaluation.hpp"
-#include "tools/evaluation/frames.hpp"
-#include "tools/evaluation/tracks_jsonl.hpp"
 
-namespace stac::tools {
+namespace stac::evaluation {
 namespace {
 
 constexpr std::int64_t kStart = 1'767'268'800'000'000'000;
@@ -657,9 +657,9 @@ TEST(TracksJsonl, InconsistentFilesAreRefusedNamingLineAndWhat) {
 }
 
 }  // namespace
-}  // namespace stac::tools
+}  // namespace stac::evaluation
 
-namespace stac::tools {
+namespace stac::evaluation {
 namespace {
 
 // The tracker on the simulator's urban drive, fed the truth boxes of every object that returned
@@ -744,4 +744,4 @@ TEST(EvalEndToEnd, TrackerOnSimulatedUrbanTruthTracksWell) {
 }
 
 }  // namespace
-}  // namespace stac::tools
+}  // namespace stac::evaluation

@@ -22,7 +22,7 @@
 #include "rt/testing/alloc_counter.hpp"
 #include "settings/settings.hpp"
 #include "shared_data.hpp"
-#include "stac_cli.hpp"
+#include "sim/drive_writer.hpp"
 
 namespace stac::pipeline {
 namespace {
@@ -42,10 +42,15 @@ Fixture decoded_drive(const std::string& name) {
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   const std::string pcap = (dir / "run.pcap").string();
-  const auto sim = stac::testing::stac("sim --scenario urban --seed 5 --duration 1 --calib " +
-                                       stac::testing::shared_data(kYaml).string() + " --out " +
-                                       pcap + " --truth " + (dir / "truth.jsonl").string());
-  EXPECT_EQ(sim.code, 0) << sim.output;
+  sim::DriveOptions drive;
+  drive.scenario = "urban";
+  drive.seed = 5;
+  drive.duration_s = 1.0;
+  drive.out = pcap;
+  drive.truth = (dir / "truth.jsonl").string();
+  drive.calib = stac::testing::shared_data(kYaml).string();
+  const auto sim = sim::write_drive(drive);
+  EXPECT_TRUE(sim) << sim.error().message;
   const std::filesystem::path config = settings::default_config_path();
   f.velodyne = *settings::load_velodyne_settings(config);
   const settings::EgoSettings ego = *settings::load_ego_settings(config);

@@ -12,13 +12,15 @@
 #include "drivers/can/cannelloni.hpp"
 #include "drivers/io/pcap_writer.hpp"
 #include "drivers/io/udp_receiver.hpp"
+#include "replay/can_replay.hpp"
+#include "replay/faults.hpp"
+#include "replay/udp_replay.hpp"
 #include "rt/clock.hpp"
-#include "tools/replay/can_replay.hpp"
-#include "tools/replay/faults.hpp"
-#include "tools/replay/udp_replay.hpp"
 
-namespace stac::io {
+namespace stac::replay {
 namespace {
+
+using namespace io;  // the captures, receivers and senders the replays are tested with
 
 using Bytes = std::vector<std::uint8_t>;
 
@@ -413,4 +415,4 @@ TEST(CanReplay, AMalformedLogIsRefusedNamingItsLine) {
 }
 
 }  // namespace
-}  // namespace stac::io
+}  // namespace stac::replay

@@ -1,4 +1,4 @@
-#include "tools/replay/tcp_replay.hpp"
+#include "replay/tcp_replay.hpp"
 
 #include <arpa/inet.h>
 #include <gtest/gtest.h>
@@ -15,11 +15,13 @@
 
 #include "drivers/io/pcap_writer.hpp"
 #include "drivers/io/udp_receiver.hpp"
+#include "replay/udp_replay.hpp"
 #include "rt/clock.hpp"
-#include "tools/replay/udp_replay.hpp"
 
-namespace stac::io {
+namespace stac::replay {
 namespace {
+
+using namespace io;  // the captures, receivers and senders the replays are tested with
 
 // Move-only; a move never throws (the descriptors go with the object).
 static_assert(std::is_nothrow_move_constructible_v<TcpReplay> &&
@@ -391,4 +393,4 @@ TEST(TcpReplay, SharesOneClockWithTheUdpReplay) {
 }
 
 }  // namespace
-}  // namespace stac::io
+}  // namespace stac::replay

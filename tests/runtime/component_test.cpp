@@ -11,10 +11,11 @@
 
 #include "dds/dds_test_support.hpp"
 #include "dds/idl_types.hpp"
+#include "replay/udp_replay.hpp"
 #include "shared_data.hpp"
+#include "sim/drive_writer.hpp"
 #include "stac_cli.hpp"
 #include "test_paths.hpp"
-#include "tools/replay/udp_replay.hpp"
 
 namespace stac::runtime {
 namespace {
@@ -45,10 +46,15 @@ TEST(Component, RunsAReplayedDriveInOneProcessAndPublishesEveryScan) {
   STAC_REQUIRE_SHARED_DATA(kYaml);
   const auto dir = stac::testing::fresh_dir("stac_component");
   const std::string pcap = (dir / "drive.pcap").string();
-  const auto sim = stac::testing::stac("sim --scenario urban --seed 4 --duration 2 --calib " +
-                                       stac::testing::shared_data(kYaml).string() + " --out " +
-                                       pcap + " --truth " + (dir / "truth.jsonl").string());
-  ASSERT_EQ(sim.code, 0) << sim.output;
+  sim::DriveOptions drive;
+  drive.scenario = "urban";
+  drive.seed = 4;
+  drive.duration_s = 2.0;
+  drive.out = pcap;
+  drive.truth = (dir / "truth.jsonl").string();
+  drive.calib = stac::testing::shared_data(kYaml).string();
+  const auto sim = sim::write_drive(drive);
+  ASSERT_TRUE(sim) << sim.error().message;
 
   constexpr std::uint32_t kDomain = 151;
   auto component = Component::create(loopback_settings(kDomain, ""));
@@ -70,9 +76,9 @@ TEST(Component, RunsAReplayedDriveInOneProcessAndPublishesEveryScan) {
   ASSERT_GT(matched.current_count, 0u) << "the component's writer never matched";
   std::thread run([&] { (*component)->run(); });
 
-  io::ReplayConfig rc;
+  replay::ReplayConfig rc;
   rc.port = (*component)->lidar_port();
-  auto replay = io::UdpReplay::open(pcap, rc);
+  auto replay = replay::UdpReplay::open(pcap, rc);
   ASSERT_TRUE(replay.has_value()) << replay.error().message;
   std::atomic<bool> never{false};
   auto sent = replay->run(never);

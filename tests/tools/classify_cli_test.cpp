@@ -13,11 +13,11 @@
 #include <string>
 #include <vector>
 
+#include "evaluation/tracks_jsonl.hpp"
 #include "formats/dataset_file.hpp"
 #include "shared_drives.hpp"
 #include "stac_cli.hpp"
 #include "test_paths.hpp"
-#include "tools/evaluation/tracks_jsonl.hpp"
 
 namespace {
 
@@ -39,16 +39,16 @@ class ClassifyCli : public ::testing::Test {
     // The training drive is 10 s: with 5 s (about 90 tracks, 30% of them held out for the
     // ADBF's weights) the ADBF's margin over the prior moved between 0.17 and 0.23 with a
     // single background track more or less (2026-12-04); with 10 s it is 0.27-0.30.
-    for (const auto& [name, args] :
-         {std::pair<std::string, std::string>{"train", "--scenario urban --seed 1 --duration 10"},
-          {"test", "--scenario urban --seed 2 --duration 5"},
-          {"empty", "--scenario empty --seed 3 --duration 4"}}) {
-      // Shared with the other test programs (tests/shared_drives.hpp), linked in as NAME.pcap
-      // and NAME.jsonl.
-      const auto sim = stac::testing::shared_sim(args);
-      ASSERT_TRUE(sim) << sim.error;
+    // Shared with the other test programs (tests/shared_drives.hpp), linked in as NAME.pcap and
+    // NAME.jsonl.
+    const std::vector<std::string> names = {"train", "test", "empty"};
+    const auto sims = stac::testing::shared_sims({"--scenario urban --seed 1 --duration 10",
+                                                  "--scenario urban --seed 2 --duration 5",
+                                                  "--scenario empty --seed 3 --duration 4"});
+    for (std::size_t i = 0; i < names.size(); ++i) {
+      ASSERT_TRUE(sims[i]) << sims[i].error;
       for (const char* ext : {".pcap", ".jsonl"})
-        std::filesystem::create_symlink(sim.path + ext, *dir_ / (name + ext));
+        std::filesystem::create_symlink(sims[i].path + ext, *dir_ / (names[i] + ext));
     }
   }
   static void TearDownTestSuite() {
@@ -141,12 +141,12 @@ TEST_F(ClassifyCli, DatasetTrainEvalBeatsThePriorOnAHeldOutDrive) {
                                  at("test.tracks.jsonl") + " --model " + at("model.stac"));
   ASSERT_EQ(process.code, 0) << process.output;
   EXPECT_NE(process.output.find("classify"), std::string::npos) << process.output;
-  auto scans = stac::tools::read_tracks_file(at("test.tracks.jsonl"));
+  auto scans = stac::evaluation::read_tracks_file(at("test.tracks.jsonl"));
   ASSERT_TRUE(scans) << scans.error().message;
   std::map<std::string, int> classes;
   std::size_t tracks = 0, classified = 0;
-  for (const stac::tools::TracksScan& scan : *scans) {
-    for (const stac::tools::TrackRecord& t : scan.tracks) {
+  for (const stac::evaluation::TracksScan& scan : *scans) {
+    for (const stac::evaluation::TrackRecord& t : scan.tracks) {
       ++tracks;
       // Offline nothing waits for a deadline: a track updated with a segment is classified in
       // that scan's record, a tentative one in its first scan too.
@@ -164,8 +164,8 @@ TEST_F(ClassifyCli, DatasetTrainEvalBeatsThePriorOnAHeldOutDrive) {
   EXPECT_GT(classified, tracks / 2);
   // The class at each dataset track's last update is the ADBF track-wise prediction of eval.
   std::map<std::uint64_t, std::string> last;
-  for (const stac::tools::TracksScan& scan : *scans) {
-    for (const stac::tools::TrackRecord& t : scan.tracks) {
+  for (const stac::evaluation::TracksScan& scan : *scans) {
+    for (const stac::evaluation::TrackRecord& t : scan.tracks) {
       if (t.segment >= 0 && t.classified) last[t.id] = t.cls;
     }
   }
@@ -257,11 +257,11 @@ TEST_F(ClassifyCli, ExtraClassesFromTheDatasetGoThroughTrainEvalAndProcess) {
   const CliResult process = stac("process " + at("test.pcap") + " --tracks " +
                                  at("test5.tracks.jsonl") + " --model " + at("model5.stac"));
   ASSERT_EQ(process.code, 0) << process.output;
-  auto scans = stac::tools::read_tracks_file(at("test5.tracks.jsonl"));
+  auto scans = stac::evaluation::read_tracks_file(at("test5.tracks.jsonl"));
   ASSERT_TRUE(scans) << scans.error().message;
   std::map<std::string, int> seen;
-  for (const stac::tools::TracksScan& scan : *scans) {
-    for (const stac::tools::TrackRecord& t : scan.tracks) {
+  for (const stac::evaluation::TracksScan& scan : *scans) {
+    for (const stac::evaluation::TrackRecord& t : scan.tracks) {
       if (!t.classified) continue;
       ASSERT_EQ(t.log_odds.size(), 5u);
       ++seen[t.cls];

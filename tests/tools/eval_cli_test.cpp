@@ -6,9 +6,9 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "evaluation/tracks_jsonl.hpp"
 #include "sim/run.hpp"
 #include "stac_cli.hpp"
-#include "tools/evaluation/tracks_jsonl.hpp"
 
 namespace stac::tools {
 namespace {
@@ -38,27 +38,27 @@ void write_run(const std::filesystem::path& dir, bool id_switch) {
         {2, sim::ObjectClass::kPedestrian, -6, -2, 0.9, 0.6, 0.6, 1.8, 0, 0, 0, 60, 0});
     truth << sim::to_json(t) << "\n";
 
-    TracksScan o;
+    evaluation::TracksScan o;
     o.scan = static_cast<std::uint64_t>(k);
     o.stamp_ns = t.start_ns;
-    SegmentRecord car;
+    evaluation::SegmentRecord car;
     car.id = 0;
     car.points = 460;
     car.has_truth = true;
     car.truth = {{1, 460}};
-    SegmentRecord ped;
+    evaluation::SegmentRecord ped;
     ped.id = 1;
     ped.points = 100;
     ped.has_truth = true;
     ped.truth = {{1, 40}, {2, 60}};
     o.segments = {car, ped};
-    TrackRecord a;
+    evaluation::TrackRecord a;
     a.id = id_switch && k >= 10 ? 8 : 3;
     a.state = "confirmed";
     a.x = cx;
     a.y = 4;
     a.segment = 0;
-    TrackRecord b;
+    evaluation::TrackRecord b;
     b.id = 4;
     b.state = "confirmed";
     b.x = -6;
@@ -66,7 +66,7 @@ void write_run(const std::filesystem::path& dir, bool id_switch) {
     b.segment = 1;
     o.tracks = {a, b};
     std::string line;
-    append_json_line(o, line);
+    evaluation::append_json_line(o, line);
     tracks << line;
   }
 }

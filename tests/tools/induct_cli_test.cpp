@@ -42,18 +42,21 @@ class InductCli : public ::testing::Test {
   static void SetUpTestSuite() {
     dir_ = new fs::path(stac::testing::fresh_dir("stac_induct_cli_" + std::to_string(::getpid())));
     drives_ = new std::map<std::string, std::string>;
-    for (const auto& [name, args] :
-         {std::pair<std::string, std::string>{"labels", "--scenario urban --seed 1 --duration 8"},
-          {"chunk1", "--scenario urban --seed 4 --duration 6"},
-          {"chunk2", "--scenario urban --seed 5 --duration 6"},
-          {"test", "--scenario urban --seed 2 --duration 5"},
-          {"empty", "--scenario empty --seed 3 --duration 4"}}) {
-      const auto sim = stac::testing::shared_sim(args);
+    const std::vector<std::pair<std::string, std::string>> drives = {
+        {"labels", "--scenario urban --seed 1 --duration 8"},
+        {"chunk1", "--scenario urban --seed 4 --duration 6"},
+        {"chunk2", "--scenario urban --seed 5 --duration 6"},
+        {"test", "--scenario urban --seed 2 --duration 5"},
+        {"empty", "--scenario empty --seed 3 --duration 4"}};
+    std::vector<stac::testing::SharedDataset> wanted;
+    for (const auto& [name, args] : drives) wanted.push_back({args, true, ""});
+    const auto data = stac::testing::shared_datasets(wanted);
+    for (std::size_t i = 0; i < drives.size(); ++i) {
+      ASSERT_TRUE(data[i]) << data[i].error;
+      const auto sim = stac::testing::shared_sim(drives[i].second);  // made: returns at once
       ASSERT_TRUE(sim) << sim.error;
-      const auto data = stac::testing::shared_dataset(args, true);
-      ASSERT_TRUE(data) << data.error;
-      (*drives_)[name] = sim.path;
-      (*drives_)[name + "_data"] = data.path;
+      (*drives_)[drives[i].first] = sim.path;
+      (*drives_)[drives[i].first + "_data"] = data[i].path;
     }
   }
   static void TearDownTestSuite() {
@@ -389,15 +392,19 @@ TEST(InductNewClass, ATreeClassIsTaughtBesideTheDefaultClassesWhichStayAsTheyAre
       stac::testing::fresh_dir("stac_induct_new_class_" + std::to_string(::getpid()));
   const auto at = [&](const std::string& name) { return (dir / name).string(); };
   std::map<std::string, std::string> data;  // shared drives' datasets (tests/shared_drives.hpp)
-  for (const auto& [name, args] :
-       {std::pair<std::string, std::string>{"labels", "--scenario urban --seed 1 --duration 8"},
-        {"chunk", "--scenario urban --seed 4 --duration 6"},
-        {"test", "--scenario urban --seed 2 --duration 5"},
-        {"empty", "--scenario empty --seed 3 --duration 4 --without tree"}}) {
-    const auto made = stac::testing::shared_dataset(args, true, "--class tree");
-    ASSERT_TRUE(made) << made.error;
-    data[name] = made.path;
-    std::ifstream in(made.path + "/manifest.json");
+  const std::vector<std::pair<std::string, std::string>> drives = {
+      {"labels", "--scenario urban --seed 1 --duration 8"},
+      {"chunk", "--scenario urban --seed 4 --duration 6"},
+      {"test", "--scenario urban --seed 2 --duration 5"},
+      {"empty", "--scenario empty --seed 3 --duration 4 --without tree"}};
+  std::vector<stac::testing::SharedDataset> wanted;
+  for (const auto& [name, args] : drives) wanted.push_back({args, true, "--class tree"});
+  const auto made = stac::testing::shared_datasets(wanted);
+  for (std::size_t i = 0; i < drives.size(); ++i) {
+    const std::string& name = drives[i].first;
+    ASSERT_TRUE(made[i]) << made[i].error;
+    data[name] = made[i].path;
+    std::ifstream in(made[i].path + "/manifest.json");
     const nlohmann::json manifest = nlohmann::json::parse(in);
     if (name == "empty") {
       EXPECT_EQ(manifest["tracks_per_class"]["tree"].get<int>(), 0) << manifest.dump();

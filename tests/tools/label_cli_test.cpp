@@ -167,11 +167,14 @@ const fs::path& shared_state() {
   static const fs::path shared = [] {
     const std::string drive = "--scenario urban --seed 1 --duration 4";
     // The drive twice: labelled (the first labels) and as a user has it (the questions).
-    const auto labels = stac::testing::shared_dataset(drive, true);
-    const auto chunk = stac::testing::shared_dataset(drive, false);
-    const auto empty =
-        stac::testing::shared_dataset("--scenario empty --seed 3 --duration 3", true);
-    for (const auto* made : {&labels, &chunk, &empty}) EXPECT_TRUE(*made) << made->error;
+    const auto made =
+        stac::testing::shared_datasets({{drive, true, ""},
+                                        {drive, false, ""},
+                                        {"--scenario empty --seed 3 --duration 3", true, ""}});
+    for (const auto& m : made) EXPECT_TRUE(m) << m.error;
+    const auto& labels = made[0];
+    const auto& chunk = made[1];
+    const auto& empty = made[2];
     const auto state = stac::testing::shared_run(
         "induct --state {out}/state --classes car,pedestrian,bicyclist --background " + empty.path +
         " --labels " + labels.path + " --labels-per-class 2 --unlabeled " + chunk.path +
@@ -211,16 +214,14 @@ struct ServedCopy {
 TEST(LabelCli, APersonAnswersInABrowserAndTheAnswersTrainARoundWithNewQuestions) {
   const fs::path dir = stac::testing::fresh_dir("stac_label_cli_" + std::to_string(::getpid()));
   const auto at = [&](const std::string& name) { return (dir / name).string(); };
-  std::map<std::string, std::string> data;  // shared drives' datasets (tests/shared_drives.hpp)
-  for (const auto& [name, args] :
-       {std::pair<std::string, std::string>{"labels", "--scenario urban --seed 1 --duration 8"},
-        {"chunk", "--scenario urban --seed 4 --duration 6"},
-        {"empty", "--scenario empty --seed 3 --duration 4"}}) {
-    // The chunk as a user has it: no truth.
-    const auto made = stac::testing::shared_dataset(args, name != "chunk");
-    ASSERT_TRUE(made) << made.error;
-    data[name] = made.path;
-  }
+  // Shared drives' datasets (tests/shared_drives.hpp); the chunk as a user has it: no truth.
+  const auto made =
+      stac::testing::shared_datasets({{"--scenario urban --seed 1 --duration 8", true, ""},
+                                      {"--scenario urban --seed 4 --duration 6", false, ""},
+                                      {"--scenario empty --seed 3 --duration 4", true, ""}});
+  for (const auto& m : made) ASSERT_TRUE(m) << m.error;
+  const std::map<std::string, std::string> data = {
+      {"labels", made[0].path}, {"chunk", made[1].path}, {"empty", made[2].path}};
   const std::string state = at("state");
   const CliResult induct = stac(
       "induct --state " + state + " --classes car,pedestrian,bicyclist --background " +

@@ -12,14 +12,14 @@
 #include <string>
 #include <vector>
 
+#include "evaluation/tracklet_truth.hpp"
+#include "evaluation/tracks_jsonl.hpp"
 #include "formats/dataset_file.hpp"
 #include "formats/kitti_raw.hpp"
 #include "settings/settings.hpp"
 #include "shared_data.hpp"
 #include "stac_cli.hpp"
 #include "test_paths.hpp"
-#include "tools/evaluation/tracklet_truth.hpp"
-#include "tools/evaluation/tracks_jsonl.hpp"
 
 namespace stac::tools {
 namespace {
@@ -48,27 +48,27 @@ TEST(ProcessCli, SimulatedDriveGivesOneLinePerScanWithSegmentsTracksAndTruthThat
                            "0 scans without a pose", "segment", "track", "median", "p99"}) {
     EXPECT_NE(p.output.find(word), std::string::npos) << word << " missing from:\n" << p.output;
   }
-  auto out = read_tracks_file(tracks);
+  auto out = evaluation::read_tracks_file(tracks);
   ASSERT_TRUE(out) << out.error().message;
-  auto truth_scans = read_truth_file(truth);
+  auto truth_scans = evaluation::read_truth_file(truth);
   ASSERT_TRUE(truth_scans) << truth_scans.error().message;
   ASSERT_GE(out->size(), 17u);  // 2 s at 10 Hz, complete scans only
   std::size_t segments = 0, with_truth = 0, confirmed = 0;
-  for (const TracksScan& s : *out) {
-    for (const SegmentRecord& seg : s.segments) {
+  for (const evaluation::TracksScan& s : *out) {
+    for (const evaluation::SegmentRecord& seg : s.segments) {
       ++segments;
       with_truth += seg.has_truth ? 1 : 0;
       std::uint32_t n = 0;
       for (const auto& [id, count] : seg.truth) n += count;
       EXPECT_EQ(n, seg.points);  // every point of a segment is accounted for
     }
-    for (const TrackRecord& t : s.tracks) confirmed += t.state == "confirmed" ? 1 : 0;
+    for (const evaluation::TrackRecord& t : s.tracks) confirmed += t.state == "confirmed" ? 1 : 0;
   }
   EXPECT_GT(segments, 100u);
   EXPECT_EQ(with_truth, segments);
   EXPECT_GT(confirmed, 50u);
   // The ego of each scan is where the truth says (same world frame, rebuilt from the INS stream).
-  const TruthScanRecord* t0 = nullptr;
+  const evaluation::TruthScanRecord* t0 = nullptr;
   for (const auto& t : *truth_scans) {
     if (std::llabs(t.stamp_ns - out->front().stamp_ns) < 1'000'000) t0 = &t;
   }
@@ -86,7 +86,7 @@ TEST(ProcessCli, SimulatedDriveGivesOneLinePerScanWithSegmentsTracksAndTruthThat
       stac("process " + pcap + " --no-deskew --tracks " + (dir / "parked.jsonl").string());
   ASSERT_EQ(parked.code, 0) << parked.output;
   EXPECT_NE(parked.output.find("parked sensor"), std::string::npos) << parked.output;
-  auto parked_out = read_tracks_file(dir / "parked.jsonl");
+  auto parked_out = evaluation::read_tracks_file(dir / "parked.jsonl");
   ASSERT_TRUE(parked_out);
   EXPECT_EQ(parked_out->size(), out->size());
 }
@@ -107,7 +107,7 @@ TEST(ProcessCli, TracksRecordTheirFrameAndEvalBringsTheTruthIntoItOrRefuses) {
                  at("urban.pcap") + " --truth " + at("urban.jsonl"))
                 .code,
             0);
-  auto truth = read_truth_file(at("urban.jsonl"));
+  auto truth = evaluation::read_truth_file(at("urban.jsonl"));
   ASSERT_TRUE(truth && !truth->empty() && truth->front().origin);
 
   // With --truth: the truth's origin. Without: the first pose's, metres away from it.
@@ -116,12 +116,12 @@ TEST(ProcessCli, TracksRecordTheirFrameAndEvalBringsTheTruthIntoItOrRefuses) {
   ASSERT_EQ(p.code, 0) << p.output;
   p = stac("process " + at("urban.pcap") + " --tracks " + at("own.jsonl"));
   ASSERT_EQ(p.code, 0) << p.output;
-  auto same = read_tracks_file(at("same.jsonl"));
-  auto own = read_tracks_file(at("own.jsonl"));
+  auto same = evaluation::read_tracks_file(at("same.jsonl"));
+  auto own = evaluation::read_tracks_file(at("own.jsonl"));
   ASSERT_TRUE(same && own && !same->empty() && own->size() == same->size());
-  EXPECT_EQ(same->front().frame, TracksFrame::kEnu);
+  EXPECT_EQ(same->front().frame, evaluation::TracksFrame::kEnu);
   EXPECT_EQ(same->front().origin, *truth->front().origin);
-  EXPECT_EQ(own->front().frame, TracksFrame::kEnu);
+  EXPECT_EQ(own->front().frame, evaluation::TracksFrame::kEnu);
   EXPECT_NE(own->front().origin, *truth->front().origin);
 
   CliResult e = stac("eval --truth " + at("urban.jsonl") + " --tracks " + at("same.jsonl") +
@@ -142,9 +142,9 @@ TEST(ProcessCli, TracksRecordTheirFrameAndEvalBringsTheTruthIntoItOrRefuses) {
   // No pose on a moving vehicle: refused, saying what to do.
   p = stac("process " + at("urban.pcap") + " --no-deskew --tracks " + at("vehicle.jsonl"));
   ASSERT_EQ(p.code, 0) << p.output;
-  auto vehicle = read_tracks_file(at("vehicle.jsonl"));
+  auto vehicle = evaluation::read_tracks_file(at("vehicle.jsonl"));
   ASSERT_TRUE(vehicle && !vehicle->empty());
-  EXPECT_EQ(vehicle->front().frame, TracksFrame::kVehicle);
+  EXPECT_EQ(vehicle->front().frame, evaluation::TracksFrame::kVehicle);
   e = stac("eval --truth " + at("urban.jsonl") + " --tracks " + at("vehicle.jsonl"));
   EXPECT_NE(e.code, 0);
   EXPECT_NE(e.output.find("the ego moves in the truth"), std::string::npos) << e.output;
@@ -187,16 +187,16 @@ TEST(ProcessCli, KittiRawDriveRunsParkedWithAPictureOfEachScanOrPosedByItsOxts) 
         "no oxts/ in the drive: parked sensor", "40 complete scans", "pictures    40 in"}) {
     EXPECT_NE(p.output.find(said), std::string::npos) << said << " missing from\n" << p.output;
   }
-  auto tracks = read_tracks_file(dir / "t.jsonl");
+  auto tracks = evaluation::read_tracks_file(dir / "t.jsonl");
   ASSERT_TRUE(tracks) << tracks.error().message;
   ASSERT_EQ(tracks->size(), 40u);
   std::size_t confirmed = 0, segments = 0;
   for (std::size_t k = 0; k < tracks->size(); ++k) {
-    const TracksScan& t = (*tracks)[k];
-    EXPECT_EQ(t.frame, TracksFrame::kVehicle);
+    const evaluation::TracksScan& t = (*tracks)[k];
+    EXPECT_EQ(t.frame, evaluation::TracksFrame::kVehicle);
     EXPECT_EQ(t.stamp_ns, 1'000'000'000 + static_cast<std::int64_t>(k) * 100'000'000);
     segments += t.segments.size();
-    for (const TrackRecord& r : t.tracks) confirmed += r.state == "confirmed" ? 1 : 0;
+    for (const evaluation::TrackRecord& r : t.tracks) confirmed += r.state == "confirmed" ? 1 : 0;
   }
   EXPECT_GT(segments, 40u * 30u);  // a dense street: dozens of segments a scan
   EXPECT_GT(confirmed, 40u * 10u);
@@ -226,7 +226,7 @@ TEST(ProcessCli, KittiRawDriveRunsParkedWithAPictureOfEachScanOrPosedByItsOxts) 
   ASSERT_EQ(p.code, 0) << p.output;
   EXPECT_NE(p.output.find("times from velodyne_points/timestamps.txt"), std::string::npos)
       << p.output;
-  auto timed = read_tracks_file(dir / "d.jsonl");
+  auto timed = evaluation::read_tracks_file(dir / "d.jsonl");
   ASSERT_TRUE(timed && timed->size() == 3u);
   EXPECT_NEAR(static_cast<double>(timed->front().stamp_ns - 1'317'042'145'964'389'445), 0.0,
               1000.0);
@@ -260,12 +260,12 @@ TEST(ProcessCli, KittiRawDriveRunsParkedWithAPictureOfEachScanOrPosedByItsOxts) 
         "sensor mounting from " + (dir / "calib_imu_to_velo.txt").string()}) {
     EXPECT_NE(p.output.find(said), std::string::npos) << said << " missing from\n" << p.output;
   }
-  auto posed = read_tracks_file(dir / "posed.jsonl");
-  auto parked = read_tracks_file(dir / "d.jsonl");
+  auto posed = evaluation::read_tracks_file(dir / "posed.jsonl");
+  auto parked = evaluation::read_tracks_file(dir / "d.jsonl");
   ASSERT_TRUE(posed && parked && posed->size() == 3u && parked->size() == 3u);
   for (std::size_t k = 0; k < 3; ++k) {
-    const TracksScan& t = (*posed)[k];
-    EXPECT_EQ(t.frame, TracksFrame::kEnu);
+    const evaluation::TracksScan& t = (*posed)[k];
+    EXPECT_EQ(t.frame, evaluation::TracksFrame::kEnu);
     EXPECT_NEAR(t.origin[0], 49.0, 1e-9);
     EXPECT_NEAR(t.ego.x, 0.0, 0.01);
     EXPECT_NEAR(t.ego.y, static_cast<double>(k), 0.01);  // 1 m north a scan
@@ -273,8 +273,8 @@ TEST(ProcessCli, KittiRawDriveRunsParkedWithAPictureOfEachScanOrPosedByItsOxts) 
   }
   // The first scan's segments: the vehicle's (parked with the config's mounting, the sensor
   // 1.73 m up) turned to face north and moved by the drive's mounting.
-  const TracksScan& a = (*posed)[0];
-  const TracksScan& b = (*parked)[0];
+  const evaluation::TracksScan& a = (*posed)[0];
+  const evaluation::TracksScan& b = (*parked)[0];
   ASSERT_EQ(a.segments.size(), b.segments.size());
   ASSERT_FALSE(a.segments.empty());
   for (std::size_t i = 0; i < a.segments.size(); i += 7) {
@@ -382,8 +382,8 @@ TEST(ProcessCli, ASimulatedDriveThroughPcapAndThroughKittiRawTracksTheSame) {
     ASSERT_TRUE(ego) << ego.error().message;
     const auto velocities = [&] {
       std::vector<double> v;
-      auto truth =
-          stac::tools::truth_from_tracklets(dir / "drive/tracklet_labels.xml", dir / "drive", *ego);
+      auto truth = stac::evaluation::truth_from_tracklets(dir / "drive/tracklet_labels.xml",
+                                                          dir / "drive", *ego);
       EXPECT_TRUE(truth) << truth.error().message;
       if (truth)
         for (const auto& scan : *truth)

@@ -1,4 +1,4 @@
-// The Foxglove messages of tools/view: base64, the point cloud's bytes, a track's entity, paths.
+// The Foxglove messages of view: base64, the point cloud's bytes, a track's entity, paths.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "dds/idl_types.hpp"
-#include "tools/view/foxglove_messages.hpp"
+#include "view/foxglove_messages.hpp"
 
 namespace stac::view {
 namespace {

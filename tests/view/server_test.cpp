@@ -15,7 +15,7 @@
 #include <thread>
 #include <vector>
 
-#include "tools/view/foxglove_server.hpp"
+#include "view/foxglove_server.hpp"
 
 namespace stac::view {
 namespace {

@@ -18,6 +18,11 @@ class Progress {
   Progress(const Progress&) = delete;
   Progress& operator=(const Progress&) = delete;
 
+  // For a job that learns its size as it goes (stac induct: the chunks not yet taken).
+  void set_total(double total) {
+    total_ = total;
+    enabled_ = isatty(STDERR_FILENO) != 0 && total_ > 0;
+  }
   void update(double done) {
     if (!enabled_) return;
     const auto now = std::chrono::steady_clock::now();
