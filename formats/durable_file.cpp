@@ -9,6 +9,8 @@
 #include <fstream>
 #include <iterator>
 
+#include "rt/formatted.hpp"
+
 namespace stac::formats {
 namespace {
 
@@ -124,8 +126,7 @@ rt::Result<bool> complete_or_cut_tail(const std::filesystem::path& path,
         std::count(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>(), '\n'));
     return rt::make_error(path.string() + ":" + std::to_string(lines + 1) +
                           ": the last line is complete but not a valid record (" +
-                          (last.size() > 80 ? last.substr(0, 80) + "..." : last) +
-                          "); fix or delete that line");
+                          rt::echoed(last) + "); fix or delete that line");
   }
   auto cut = cut_tail(fd, path);
   ::close(fd);

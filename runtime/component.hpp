@@ -97,6 +97,9 @@ struct Summary {
   std::vector<Latency> latencies;  // each health stage, then end-to-end
 };
 void print_summary(const Summary& summary, const std::string& name, std::FILE* out);
+// The same summary as JSON (every count of print_summary's, grouped as it groups them), for
+// programs that read it (`stac run --summary-json`, `stac demo`) instead of parsing the text.
+std::string summary_json(const Summary& summary);
 
 class Component {
  public:

@@ -1,5 +1,6 @@
 // The summary a run prints when it ends (docs/run.md "Summary").
 #include <cstdio>
+#include <nlohmann/json.hpp>
 
 #include "runtime/component.hpp"
 
@@ -78,6 +79,88 @@ void print_summary(const Summary& s, const std::string& name, std::FILE* out) {
   for (const Summary::Latency& l : s.latencies) {
     std::fprintf(out, "  %-12s %9.3f %9.3f %9.3f\n", l.name, l.p50_ms, l.p99_ms, l.max_ms);
   }
+}
+
+std::string summary_json(const Summary& s) {
+  nlohmann::json latencies = nlohmann::json::array();
+  for (const Summary::Latency& l : s.latencies)
+    latencies.push_back(
+        {{"stage", l.name}, {"p50_ms", l.p50_ms}, {"p99_ms", l.p99_ms}, {"max_ms", l.max_ms}});
+  nlohmann::json inputs = nlohmann::json::array();
+  for (const Summary::Input& i : s.inputs)
+    if (i.name[0] != '\0')
+      inputs.push_back({{"input", i.name}, {"state", i.state}, {"stalls", i.stalls}});
+  nlohmann::json j = {
+      {"elapsed_s", s.elapsed_s},
+      {"stop_requested", s.stop_requested},
+      {"packets",
+       {{"received", s.received},
+        {"kernel_drops", s.kernel_drops},
+        {"truncated", s.truncated},
+        {"receive_errors", s.receive_errors},
+        {"lost", s.packets_lost},
+        {"wrong_size", s.wrong_size},
+        {"invalid_block", s.invalid_block},
+        {"duplicates", s.duplicates},
+        {"other_model", s.other_model},
+        {"late_firings", s.late_firings}}},
+      {"scans",
+       {{"received", s.scans},
+        {"published", s.published},
+        {"incomplete", s.incomplete},
+        {"below_completeness", s.below_completeness},
+        {"min_completeness", s.min_completeness},
+        {"scan_slots_full", s.scan_slots_full},
+        {"result_slots_full", s.result_slots_full},
+        {"publish_errors", s.publish_errors}}},
+      {"tracks",
+       {{"pool_overflow", s.pool_overflow}, {"dropped_detections", s.dropped_detections}}},
+      {"model",
+       {{"loaded", s.has_model},
+        {"hash", s.model_hash},
+        {"refused", s.model_refused},
+        {"reloads", s.model_reloads}}},
+      {"classes",
+       {{"classifier", s.has_classifier},
+        {"current", s.classes_current},
+        {"late", s.classes_late},
+        {"budget_ms", s.classify_budget_ms}}},
+      {"ego",
+       {{"ins", s.has_ins},
+        {"ins_fixes", s.ins_fixes},
+        {"dead_reckoned", s.dead_reckoned},
+        {"without_pose", s.without_pose},
+        {"poses_rejected", s.poses_rejected},
+        {"ins_impossible", s.ins_impossible},
+        {"time_jumps", s.time_jumps},
+        {"backward_jumps", s.backward_jumps},
+        {"ins_bad_checksum", s.ins_bad_checksum},
+        {"ins_bad_framing", s.ins_bad_framing},
+        {"ins_malformed", s.ins_malformed},
+        {"ins_garbage_bytes", s.ins_garbage_bytes},
+        {"ins_connect_failures", s.ins_connect_failures},
+        {"ins_disconnects", s.ins_disconnects}}},
+      {"can",
+       {{"configured", s.has_can},
+        {"description", s.can_description},
+        {"frames", s.can.frames},
+        {"updates", s.can.updates},
+        {"not_mapped", s.can.not_mapped},
+        {"kernel_drops", s.can.kernel_drops},
+        {"overflows", s.can.overflows},
+        {"can_fd", s.can.can_fd},
+        {"malformed", s.can.malformed},
+        {"lost", s.can.lost},
+        {"other_channel", s.can.other_channel},
+        {"read_errors", s.can.read_errors},
+        {"ring_full", s.can_ring_full}}},
+      {"inputs", inputs},
+      {"deadline",
+       {{"deadline_ms", s.deadline_ms},
+        {"misses", s.deadline_misses},
+        {"scans", s.deadline_scans}}},
+      {"latencies", latencies}};
+  return j.dump(2) + "\n";
 }
 
 }  // namespace stac::runtime

@@ -17,13 +17,14 @@
 #include "evaluation/truth_composition.hpp"
 #include "formats/capture_input.hpp"
 #include "formats/capture_poses.hpp"
+#include "formats/capture_sensor.hpp"
 #include "formats/dataset_file.hpp"
 #include "formats/kitti_raw.hpp"
+#include "formats/recorded_drive.hpp"
 #include "pipeline/scan_pipeline.hpp"
 #include "settings/settings.hpp"
 #include "sim/world.hpp"
 #include "tools/commands.hpp"
-#include "tools/status.hpp"
 #include "tools/support/progress.hpp"
 
 namespace stac::tools {
@@ -127,24 +128,7 @@ class Builder : public classification::TrackClassifier::Observer {
     const std::string& in = o.in[k];
     auto settings = load_pipeline_settings(config_path(o.config));
     if (!settings) return rt::Unexpected<rt::Error>{settings.error()};
-    VelodyneSettings& vs = settings->velodyne;
     EgoSettings& ego_settings = settings->ego;
-    if (!o.calib.empty())
-      vs.calibration =
-          o.calib == "stream" ? std::filesystem::path{} : std::filesystem::path(o.calib);
-    // A KITTI raw drive folder, or a capture.
-    std::optional<KittiRawDrive> drive;
-    if (is_kitti_raw_drive(in)) {
-      auto d = open_kitti_raw_drive(in);
-      if (!d) return rt::Unexpected<rt::Error>{d.error()};
-      drive = std::move(*d);
-    }
-    std::optional<velodyne::Calibration> calibration;
-    if (!drive) {
-      auto c = capture_sensor(vs, in, !o.calib.empty());
-      if (!c) return rt::Unexpected<rt::Error>{c.error()};
-      calibration = std::move(*c);
-    }
     truth_.clear();
     if (out_.labelled) {
       auto t = evaluation::read_truth_file(o.truth[k]);
@@ -156,16 +140,9 @@ class Builder : public classification::TrackClassifier::Observer {
       const auto& g = *truth_.front().origin;
       ego_settings.origin = ego::Geodetic{g[0], g[1], g[2]};
     }
-    std::optional<CapturePoses> poses;
-    if (!o.no_deskew && !drive) {
-      auto p = load_capture_poses(in, ego_settings);
-      if (!p) return rt::Unexpected<rt::Error>{p.error()};
-      poses = std::move(*p);
-    } else if (!o.no_deskew && drive->has_oxts) {  // its OXTS records, and its mounting
-      auto p = load_kitti_raw_poses(in, ego_settings);
-      if (!p) return rt::Unexpected<rt::Error>{p.error()};
-      poses = std::move(*p);
-    }
+    // A KITTI raw drive folder (its OXTS records, and its mounting), or a capture.
+    auto recorded = RecordedDrive::open(in, *settings, {o.calib, "", !o.no_deskew});
+    if (!recorded) return rt::Unexpected<rt::Error>{recorded.error()};
 
     source_ = static_cast<std::uint32_t>(out_.sources.size());
     out_.sources.push_back(out_.labelled ? in + " " + o.truth[k] : in);
@@ -176,40 +153,20 @@ class Builder : public classification::TrackClassifier::Observer {
     pipeline::ScanResult result = pipeline.make_result();
     counts_ = {};
     truth_next_ = 0;
-    const std::string name = "dataset " + std::filesystem::path(in).filename().string();
-    if (drive) {
-      velodyne::Scan scan(drive->max_points);  // the one scan, reused
-      Progress progress(name, static_cast<double>(drive->scans.size()));
-      for (std::size_t i = 0; i < drive->scans.size(); ++i) {
-        auto c = load_kitti_drive_scan(*drive, i, scan);
-        if (!c) return rt::Unexpected<rt::Error>{c.error()};
-        pipeline.process(scan, poses ? poses->history.get() : nullptr, result);
-        handle(scan, result);
-        progress.update(static_cast<double>(i + 1));
-      }
-      progress.finish();
-    } else {
-      auto reader =
-          io::PcapReader::open(in, io::PcapFilter{.udp_dst_port = vs.port, .udp_src_port = {}});
-      if (!reader) return rt::Unexpected<rt::Error>{reader.error()};
-      velodyne::ScanStream stream(*calibration, vs.assembler, 2);
-      Progress progress(name, static_cast<double>(std::filesystem::file_size(in)));
-      io::Datagram d;
-      while (reader->next(d)) {
-        if (stream.add_packet(d.payload, d.stamp_ns)) {
-          while (velodyne::Scan* scan = stream.take()) {
-            if (scan->header.complete()) {
-              pipeline.process(*scan, poses ? poses->history.get() : nullptr, result);
-              handle(*scan, result);
-            }
-            stream.release();
-          }
-        }
-        progress.update(static_cast<double>(reader->bytes_read()));
-      }
-      progress.finish();
-      if (!reader->error().empty()) return rt::make_error(capture_breaks_off(reader->error()));
-    }
+    Progress progress("dataset " + std::filesystem::path(in).filename().string(), 1.0);
+    auto read = recorded->for_each_scan(
+        [&](velodyne::Scan& scan, std::int64_t) {
+          pipeline.process(scan, recorded->pose_history(), result);
+          handle(scan, result);
+        },
+        [&](double done, double total) {
+          progress.set_total(total);
+          progress.update(done);
+        });
+    progress.finish();
+    if (!read) return rt::Unexpected<rt::Error>{read.error()};
+    if (!recorded->capture_error().empty())
+      return rt::make_error(capture_breaks_off(recorded->capture_error()));
     for (auto& [id, b] : live_) finish(b);
     live_.clear();
     if (counts_.scans == 0) return rt::make_error(in + ": no complete scan in the capture");

@@ -9,11 +9,11 @@
 #include "drivers/io/pcap_reader.hpp"
 #include "drivers/velodyne/scan_stream.hpp"
 #include "formats/capture_input.hpp"
+#include "formats/capture_sensor.hpp"
 #include "formats/scan_writers.hpp"
 #include "pictures/birds_eye.hpp"
 #include "settings/settings.hpp"
 #include "tools/commands.hpp"
-#include "tools/status.hpp"
 #include "tools/support/cli_checks.hpp"
 #include "tools/support/progress.hpp"
 

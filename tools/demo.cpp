@@ -16,10 +16,11 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <mutex>
+#include <nlohmann/json.hpp>
 #include <optional>
-#include <regex>
 #include <set>
 #include <type_traits>
 #include <vector>
@@ -86,13 +87,6 @@ rt::Result<std::uint16_t> loopback_port(int type, int wanted, const char* option
   }
   (void)::getsockname(fd.get(), reinterpret_cast<sockaddr*>(&a), &len);
   return ntohs(a.sin_port);
-}
-
-// A number of stac run's summary, e.g. "(\d+) published,"; nullopt when absent.
-std::optional<std::uint64_t> summary_number(const std::string& log, const char* pattern) {
-  std::smatch m;
-  if (!std::regex_search(log, m, std::regex(pattern))) return std::nullopt;
-  return std::stoull(m[1].str());
 }
 
 double percentile(std::vector<double> v, double q) {
@@ -296,7 +290,8 @@ int watch_drive(const DemoOptions& o, const std::filesystem::path& dir, const st
   auto run = ChildProcess::start(
       {"run", "--config", config, "--dds-config", loopback_xml, "--domain", domain, "--bind",
        "127.0.0.1", "--port", std::to_string(ports.udp), "--ins", "tcp", "--ins-address",
-       "127.0.0.1", "--ins-port", std::to_string(ports.tcp)},
+       "127.0.0.1", "--ins-port", std::to_string(ports.tcp), "--summary-json",
+       (dir / "run_summary.json").string()},
       dir / "run.log");
   if (!run) return fail(run.error().message);
   std::fprintf(stderr,
@@ -357,8 +352,19 @@ int watch_drive(const DemoOptions& o, const std::filesystem::path& dir, const st
   if (run_code != 0)
     return run_failed("stac run did not stop cleanly (exit " + std::to_string(run_code) + ")");
 
-  // 4. The summary and the pictures.
-  const std::uint64_t published = summary_number(run_log, R"((\d+) published,)").value_or(0);
+  // 4. The summary (as data: --summary-json) and the pictures.
+  nlohmann::json summary;
+  {
+    std::ifstream in(dir / "run_summary.json");
+    summary = nlohmann::json::parse(in, nullptr, false);
+  }
+  if (summary.is_discarded() || !summary.is_object())
+    return run_failed("stac run wrote no summary to " + (dir / "run_summary.json").string());
+  const auto summary_count = [&](const char* group, const char* key) {
+    const nlohmann::json& g = summary.value(group, nlohmann::json::object());
+    return g.value(key, std::uint64_t{0});
+  };
+  const std::uint64_t published = summary_count("scans", "published");
   std::set<std::uint64_t> arrived_indices;  // of 0..published-1
   for (std::uint64_t i : w.scans)
     if (i < published) arrived_indices.insert(i);
@@ -373,10 +379,8 @@ int watch_drive(const DemoOptions& o, const std::filesystem::path& dir, const st
     if (count > 0 && cause != "classification.late")
       drops += " " + cause + "=" + std::to_string(count);
   // Published tracks classified before their scan's publication, and those left for after it.
-  const std::uint64_t current =
-      summary_number(run_log, R"((\d+) published tracks classified before publication)")
-          .value_or(0);
-  const std::uint64_t late = summary_number(run_log, R"((\d+) after it \(run)").value_or(0);
+  const std::uint64_t current = summary_count("classes", "current");
+  const std::uint64_t late = summary_count("classes", "late");
   std::printf(
       "\nSTAC demo: %.0f s simulated urban drive (seed %llu) -> loopback UDP + INS -> stac run -> "
       "DDS\n"

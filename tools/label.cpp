@@ -33,6 +33,7 @@
 #include "formats/durable_file.hpp"
 #include "formats/induction_state.hpp"
 #include "label_page.hpp"
+#include "rt/formatted.hpp"
 #include "tools/commands.hpp"
 #include "tools/support/child_process.hpp"
 
@@ -57,10 +58,9 @@ struct LabelOptions {
 
 // What one labeller's page needs, and no more (docs/learning.md "Limits"; issue 47).
 constexpr std::size_t kMaxBodyBytes = std::size_t{64} * 1024;  // an answer is about 100 bytes
-constexpr std::size_t kMaxEchoedChars = 80;  // of a request's value in an error message
-constexpr time_t kReadTimeoutS = 5;          // per read of a request, and per write of a reply
-constexpr time_t kIdleTimeoutS = 2;          // a connection that sends nothing is closed
-constexpr std::size_t kThreads = 32;         // requests served at once (slow ones included)
+constexpr time_t kReadTimeoutS = 5;   // per read of a request, and per write of a reply
+constexpr time_t kIdleTimeoutS = 2;   // a connection that sends nothing is closed
+constexpr std::size_t kThreads = 32;  // requests served at once (slow ones included)
 
 // Served on every response: no other page may frame this one, nothing is sniffed, and no URL
 // leaves it as a Referer. The page's script and style are inline (tools/web/label.html).
@@ -73,11 +73,7 @@ httplib::Headers security_headers() {
           {"Referrer-Policy", "no-referrer"}};
 }
 
-// A value from a request as an error message may quote it: at most kMaxEchoedChars of it.
-std::string echoed(const std::string& text) {
-  if (text.size() <= kMaxEchoedChars) return text;
-  return text.substr(0, kMaxEchoedChars) + "... (" + std::to_string(text.size()) + " bytes)";
-}
+using rt::echoed;  // a value from a request, as an error message quotes it
 
 // An address as a URL names it: an IPv6 address in brackets.
 std::string url_host(const std::string& address) {

@@ -21,14 +21,15 @@
 #include "evaluation/truth_composition.hpp"
 #include "formats/capture_input.hpp"
 #include "formats/capture_poses.hpp"
+#include "formats/capture_sensor.hpp"
 #include "formats/kitti_raw.hpp"
 #include "formats/model_file.hpp"
+#include "formats/recorded_drive.hpp"
 #include "pictures/birds_eye.hpp"
 #include "pipeline/scan_pipeline.hpp"
 #include "settings/dds_settings.hpp"
 #include "settings/settings.hpp"
 #include "tools/commands.hpp"
-#include "tools/status.hpp"
 #include "tools/support/cli_checks.hpp"
 #include "tools/support/progress.hpp"
 
@@ -147,23 +148,6 @@ int run_process(const ProcessOptions& o) {
   if (!settings) return fail(settings.error().message);
   VelodyneSettings& vs = settings->velodyne;
   EgoSettings& ego_settings = settings->ego;
-  // A KITTI raw drive folder, or a capture.
-  std::optional<KittiRawDrive> drive;
-  if (is_kitti_raw_drive(o.in)) {
-    auto d = open_kitti_raw_drive(o.in);
-    if (!d) return fail(d.error().message);
-    drive = std::move(*d);
-  }
-  if (!o.calib.empty())
-    vs.calibration = o.calib == "stream" ? std::filesystem::path{} : std::filesystem::path(o.calib);
-  if (auto m = apply_sensor_option(vs, o.sensor, !o.calib.empty()); !m)
-    return fail("--sensor: " + m.error().message);
-  std::optional<velodyne::Calibration> calibration;
-  if (!drive) {
-    auto c = capture_sensor(vs, o.in, !o.calib.empty());
-    if (!c) return fail(c.error().message);
-    calibration = std::move(*c);
-  }
 
   // The truth (for segmentation metrics) and the frame it is written in.
   std::vector<evaluation::TruthScanRecord> truth;
@@ -181,25 +165,11 @@ int run_process(const ProcessOptions& o) {
     if (!g) return fail(g.error().message);
     ego_settings.origin = *g;
   }
-  std::optional<CapturePoses> poses;
-  if (!o.no_deskew && !drive) {
-    auto p = load_capture_poses(o.in, ego_settings);
-    if (!p) return fail(p.error().message);
-    poses = std::move(*p);
-  } else if (!o.no_deskew && drive->has_oxts) {
-    // The OXTS records are its INS, its calib_imu_to_velo.txt the mounting.
-    auto p = load_kitti_raw_poses(o.in, ego_settings);
-    if (!p) return fail(p.error().message);
-    poses = std::move(*p);
-  }
-
-  std::optional<io::PcapReader> reader;
-  if (!drive) {
-    auto r =
-        io::PcapReader::open(o.in, io::PcapFilter{.udp_dst_port = vs.port, .udp_src_port = {}});
-    if (!r) return fail(r.error().message);
-    reader.emplace(std::move(*r));
-  }
+  // A KITTI raw drive folder, or a capture: its sensor, calibration and poses.
+  auto recorded = RecordedDrive::open(o.in, *settings, {o.calib, o.sensor, !o.no_deskew});
+  if (!recorded) return fail(recorded.error().message);
+  const KittiRawDrive* drive = recorded->kitti();
+  const CapturePoses* poses = recorded->poses();
   if (!o.pictures.empty()) {
     std::error_code ec;
     std::filesystem::create_directories(o.pictures, ec);
@@ -222,8 +192,6 @@ int run_process(const ProcessOptions& o) {
   }
 
   // Everything the per-scan loop uses is allocated here.
-  std::optional<velodyne::ScanStream> stream;
-  if (calibration) stream.emplace(*calibration, vs.assembler, 2);
   pipeline::PipelineConfig pc = evaluation::offline_pipeline_config(*settings, *model);
   // The classification in stac run's two steps, one right after the other (the same classes as
   // in one): the tracks it publishes, then the others and the accumulated clouds.
@@ -263,7 +231,7 @@ int run_process(const ProcessOptions& o) {
   std::string picture_error;
 
   auto handle = [&](velodyne::Scan& scan) {
-    pipeline.process(scan, poses ? poses->history.get() : nullptr, result);
+    pipeline.process(scan, recorded->pose_history(), result);
     const std::int64_t finish_start = cpu_ns();
     pipeline.finish_scan(scan);
     const std::int64_t finish_ns = cpu_ns() - finish_start;
@@ -357,41 +325,26 @@ int run_process(const ProcessOptions& o) {
     ++scans;
   };
 
-  KittiScanCounts kitti_points;
-  if (drive) {
-    velodyne::Scan kitti_scan(drive->max_points);  // the one scan, reused
-    Progress progress("process", static_cast<double>(drive->scans.size()));
-    for (std::size_t i = 0; i < drive->scans.size(); ++i) {
-      const std::int64_t c0 = cpu_ns();
-      auto c = load_kitti_drive_scan(*drive, i, kitti_scan);
-      if (!c) return fail(c.error().message);
-      decode_ns += cpu_ns() - c0;
-      kitti_points.points += c->points;
-      kitti_points.refused += c->refused;
-      handle(kitti_scan);
-      progress.update(static_cast<double>(i + 1));
-    }
+  {
+    Progress progress("process", 1.0);
+    auto read = recorded->for_each_scan(
+        [&](velodyne::Scan& scan, std::int64_t ns) {
+          decode_ns += ns;
+          handle(scan);
+        },
+        [&](double done, double total) {
+          progress.set_total(total);
+          progress.update(done);
+        });
     progress.finish();
-  } else {
-    Progress progress("process", static_cast<double>(std::filesystem::file_size(o.in)));
-    io::Datagram d;
-    while (reader->next(d)) {
-      const std::int64_t c0 = cpu_ns();
-      const bool closed = stream->add_packet(d.payload, d.stamp_ns);
-      decode_ns += cpu_ns() - c0;
-      if (closed) {
-        while (velodyne::Scan* scan = stream->take()) {
-          if (scan->header.complete()) handle(*scan);
-          stream->release();
-        }
-      }
-      progress.update(static_cast<double>(reader->bytes_read()));
-    }
-    progress.finish();
+    if (!read) return fail(read.error().message);
   }
   out.close();
   if (!out) return fail(o.tracks + ": write failed");
-  const std::string capture_error = reader ? reader->error() : std::string();
+  const std::string capture_error = recorded->capture_error();
+  const io::PcapReader* reader = recorded->reader();
+  const velodyne::ScanStream* stream = recorded->stream();
+  const KittiScanCounts& kitti_points = recorded->kitti_points();
 
   std::fprintf(stderr, "stac process: %s -> %s: %llu complete scans\n", o.in.c_str(),
                o.tracks.c_str(), static_cast<unsigned long long>(scans));

@@ -4,10 +4,11 @@
 #include <filesystem>
 #include <string>
 
+#include "formats/capture_sensor.hpp"
+#include "formats/durable_file.hpp"
 #include "runtime/component.hpp"
 #include "settings/dds_settings.hpp"
 #include "tools/commands.hpp"
-#include "tools/status.hpp"
 #include "tools/support/cli_checks.hpp"
 
 namespace stac::tools {
@@ -17,6 +18,7 @@ namespace {
 
 struct RunOptions {
   std::string config, calib, ins, ins_address, bind, model, dds_config, sensor;
+  std::string summary_json;  // --summary-json: the summary as JSON too
   double seconds = 0;
   std::uint64_t scans = 0;
   int domain = -1, port = -1, ins_port = -1, point_cloud_stride = -1;
@@ -29,7 +31,7 @@ int run_live(const RunOptions& o) {
   VelodyneSettings& vs = s.pipeline.velodyne;
   // Command-line overrides.
   if (!o.calib.empty()) vs.calibration = o.calib;
-  if (auto m = apply_sensor_option(vs, o.sensor, !o.calib.empty()); !m)
+  if (auto m = formats::apply_sensor_option(vs, o.sensor, !o.calib.empty()); !m)
     return fail("--sensor: " + m.error().message);
   if (o.port >= 0) vs.port = static_cast<std::uint16_t>(o.port);
   if (!o.bind.empty()) vs.bind_address = o.bind;
@@ -49,7 +51,12 @@ int run_live(const RunOptions& o) {
   auto component = runtime::Component::create(s);
   if (!component) return fail(component.error().message);
   runtime::run_with_signals(**component);
-  runtime::print_summary((*component)->summary(), s.name, stderr);
+  const runtime::Summary summary = (*component)->summary();
+  runtime::print_summary(summary, s.name, stderr);
+  if (!o.summary_json.empty()) {
+    if (auto w = formats::write_text_durably(o.summary_json, runtime::summary_json(summary)); !w)
+      return fail("--summary-json: " + w.error().message);
+  }
   return 0;
 }
 
@@ -77,6 +84,9 @@ void add_run_command(CLI::App& app) {
       ->check(finite_range(0.001, 1e9));
   cmd->add_option("--scans", o->scans, "stop after this many scans are published")
       ->check(finite_range(1, 1e12));
+  cmd->add_option("--summary-json", o->summary_json,
+                  "also write the summary printed at the end to this file, as JSON (the same "
+                  "counts, for programs: stac demo reads it)");
   cmd->add_option("--domain", o->domain, "DDS domain (default: dds.domain_id)")
       ->check(CLI::Range(0, 230));
   cmd->add_option("--point-cloud-stride", o->point_cloud_stride,

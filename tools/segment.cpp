@@ -14,12 +14,12 @@
 
 #include "drivers/velodyne/scan_stream.hpp"
 #include "formats/capture_scans.hpp"
+#include "formats/capture_sensor.hpp"
 #include "formats/kitti_files.hpp"
 #include "perception/segmentation/segmenter.hpp"
 #include "pictures/birds_eye.hpp"
 #include "settings/settings.hpp"
 #include "tools/commands.hpp"
-#include "tools/status.hpp"
 #include "tools/support/cli_checks.hpp"
 
 namespace stac::tools {

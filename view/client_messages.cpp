@@ -3,15 +3,9 @@
 #include <limits>
 #include <nlohmann/json.hpp>
 
+#include "rt/formatted.hpp"
+
 namespace stac::view {
-namespace {
-
-std::string quoted(const std::string& text) {
-  return text.size() > 80 ? text.substr(0, 80) + "..." : text;
-}
-
-}  // namespace
-
 ClientMessageEffect apply_client_message(const std::string& payload, std::size_t channels,
                                          Subscriptions& subscriptions) {
   ClientMessageEffect out;
@@ -75,7 +69,7 @@ ClientMessageEffect apply_client_message(const std::string& payload, std::size_t
       subscriptions.erase(s);
     }
   } else {
-    error("unsupported op '" + quoted(op) + "' (stac view serves subscribe and unsubscribe)");
+    error("unsupported op '" + rt::echoed(op) + "' (stac view serves subscribe and unsubscribe)");
   }
   if (more > 0) out.errors.push_back("... and " + std::to_string(more) + " more refused");
   return out;

@@ -15,6 +15,7 @@
 #include <fstream>
 #include <functional>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <regex>
 #include <set>
@@ -178,7 +179,8 @@ TEST(RunCli, ReplayedDriveGivesOneTrackedObjectsSamplePerScanAndHealthThatAgrees
   ASSERT_TRUE(udp != 0 && tcp != 0);
   Child run("run --point-cloud-stride 8 --domain " + std::to_string(kDomain) +
                 " --bind 127.0.0.1 --port " + std::to_string(udp) +
-                " --ins tcp --ins-address 127.0.0.1 --ins-port " + std::to_string(tcp),
+                " --ins tcp --ins-address 127.0.0.1 --ins-port " + std::to_string(tcp) +
+                " --summary-json " + (dir / "summary.json").string(),
             dir / "run.log");
   ASSERT_TRUE(run.started());
   for (int i = 0; i < 2000 && !(tracked.matched() && health.matched() && cloud.matched()); ++i)
@@ -247,6 +249,18 @@ TEST(RunCli, ReplayedDriveGivesOneTrackedObjectsSamplePerScanAndHealthThatAgrees
   const std::uint64_t misses = summary_number(out, R"((\d+) misses of)");
   const std::uint64_t results_full = summary_number(out, R"(result slots full (\d+))");
   EXPECT_EQ(received, published + results_full) << out;
+  {  // --summary-json: the same counts as data (what stac demo reads)
+    std::ifstream in(dir / "summary.json");
+    const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+    ASSERT_TRUE(j.is_object()) << "no JSON summary";
+    EXPECT_TRUE(j["stop_requested"].get<bool>());
+    EXPECT_EQ(j["scans"]["received"].get<std::uint64_t>(), received);
+    EXPECT_EQ(j["scans"]["published"].get<std::uint64_t>(), published);
+    EXPECT_EQ(j["scans"]["result_slots_full"].get<std::uint64_t>(), results_full);
+    EXPECT_EQ(j["deadline"]["misses"].get<std::uint64_t>(), misses);
+    EXPECT_GT(j["ego"]["ins_fixes"].get<std::uint64_t>(), 0u);
+    EXPECT_FALSE(j["latencies"].empty());
+  }
   // 3 s at 10 Hz: ~28 scans, unless packets were lost, which must then be counted. On a busy
   // machine a scan may arrive incomplete (a late packet) or find the slots full: counted too.
   const std::uint64_t incomplete = summary_number(out, R"((\d+) incomplete \(not processed\))");

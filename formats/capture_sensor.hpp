@@ -1,16 +1,18 @@
-// Reading the HDL-64E S2.1/S3 status cycle out of a capture: for `stac status` and for
-// `--calib stream` (the calibration the unit sends instead of a file).
+// The sensor of a capture, for the commands that decode one: which model its packets name, and
+// the calibration to decode them with (a file, or the one an HDL-64E S2.1/S3 sends in its status
+// bytes: `--calib stream`); `stac status` reads the status cycle with it.
 #pragma once
 
 #include <cstdint>
 #include <filesystem>
+#include <string>
 
 #include "drivers/io/pcap_reader.hpp"
 #include "drivers/velodyne/status.hpp"
 #include "rt/expected.hpp"
 #include "settings/settings.hpp"
 
-namespace stac::tools {
+namespace stac::formats {
 
 struct CaptureStatus {
   velodyne::StatusDecoder status;
@@ -54,4 +56,4 @@ rt::Result<velodyne::Calibration> capture_sensor(settings::VelodyneSettings& set
                                                  const std::filesystem::path& capture,
                                                  bool calibration_given);
 
-}  // namespace stac::tools
+}  // namespace stac::formats

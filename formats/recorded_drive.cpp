@@ -1,0 +1,100 @@
+#include "formats/recorded_drive.hpp"
+
+#include <time.h>
+
+#include <utility>
+
+#include "formats/capture_sensor.hpp"
+
+namespace stac::formats {
+namespace {
+
+// CPU time of this thread (ns): decoding's cost on one core, whatever else the machine does.
+std::int64_t cpu_ns() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<std::int64_t>(t.tv_sec) * 1'000'000'000 + t.tv_nsec;
+}
+
+}  // namespace
+
+rt::Result<RecordedDrive> RecordedDrive::open(const std::filesystem::path& in,
+                                              settings::PipelineSettings& settings,
+                                              const RecordedDriveOptions& options) {
+  settings::VelodyneSettings& vs = settings.velodyne;
+  RecordedDrive d;
+  d.in_ = in;
+  if (is_kitti_raw_drive(in)) {
+    auto k = open_kitti_raw_drive(in);
+    if (!k) return rt::Unexpected<rt::Error>{k.error()};
+    d.kitti_ = std::move(*k);
+  }
+  if (!options.calib.empty())
+    vs.calibration =
+        options.calib == "stream" ? std::filesystem::path{} : std::filesystem::path(options.calib);
+  if (auto m = apply_sensor_option(vs, options.sensor, !options.calib.empty()); !m)
+    return rt::make_error("--sensor: " + m.error().message);
+  std::optional<velodyne::Calibration> calibration;
+  if (!d.kitti_) {
+    auto c = capture_sensor(vs, in, !options.calib.empty());
+    if (!c) return rt::Unexpected<rt::Error>{c.error()};
+    calibration = std::move(*c);
+  }
+  if (options.deskew && !d.kitti_) {
+    auto p = load_capture_poses(in, settings.ego);
+    if (!p) return rt::Unexpected<rt::Error>{p.error()};
+    d.poses_ = std::move(*p);
+  } else if (options.deskew && d.kitti_->has_oxts) {
+    // The OXTS records are its INS, its calib_imu_to_velo.txt the mounting.
+    auto p = load_kitti_raw_poses(in, settings.ego);
+    if (!p) return rt::Unexpected<rt::Error>{p.error()};
+    d.poses_ = std::move(*p);
+  }
+  if (!d.kitti_) {
+    auto r = io::PcapReader::open(in, io::PcapFilter{.udp_dst_port = vs.port, .udp_src_port = {}});
+    if (!r) return rt::Unexpected<rt::Error>{r.error()};
+    d.reader_.emplace(std::move(*r));
+    d.stream_ = std::make_unique<velodyne::ScanStream>(*calibration, vs.assembler, 2);
+  }
+  return d;
+}
+
+rt::Status RecordedDrive::for_each_scan(
+    const std::function<void(velodyne::Scan&, std::int64_t)>& on_scan,
+    const std::function<void(double, double)>& progress) {
+  if (kitti_) {
+    velodyne::Scan scan(kitti_->max_points);  // the one scan, reused
+    const auto n = static_cast<double>(kitti_->scans.size());
+    for (std::size_t i = 0; i < kitti_->scans.size(); ++i) {
+      const std::int64_t c0 = cpu_ns();
+      auto c = load_kitti_drive_scan(*kitti_, i, scan);
+      if (!c) return rt::Unexpected<rt::Error>{c.error()};
+      kitti_points_.points += c->points;
+      kitti_points_.refused += c->refused;
+      on_scan(scan, cpu_ns() - c0);
+      progress(static_cast<double>(i + 1), n);
+    }
+    return {};
+  }
+  const auto size = static_cast<double>(std::filesystem::file_size(in_));
+  std::int64_t decode_ns = 0;  // since the last scan handed on
+  io::Datagram d;
+  while (reader_->next(d)) {
+    const std::int64_t c0 = cpu_ns();
+    const bool closed = stream_->add_packet(d.payload, d.stamp_ns);
+    decode_ns += cpu_ns() - c0;
+    if (closed) {
+      while (velodyne::Scan* scan = stream_->take()) {
+        if (scan->header.complete()) {
+          on_scan(*scan, decode_ns);
+          decode_ns = 0;
+        }
+        stream_->release();
+      }
+    }
+    progress(static_cast<double>(reader_->bytes_read()), size);
+  }
+  return {};
+}
+
+}  // namespace stac::formats
