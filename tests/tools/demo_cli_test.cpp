@@ -64,8 +64,11 @@ TEST(DemoCli, ShortDriveGivesALinePerPublishedScanWithTracksASummaryThatAgreesAn
   const std::vector<ScanLine> lines = scan_lines(out);
   const std::uint64_t published = number(out, R"((\d+) published,)");  // stac run's own summary
   ASSERT_EQ(lines.size(), published) << out;
-  // 3 s at 10 Hz: ~28 complete scans, unless packets were lost, which must then be counted.
-  EXPECT_TRUE(published >= 20u || number(out, R"((\d+) dropped by the kernel)") > 0) << out;
+  // 3 s at 10 Hz: ~28 complete scans, unless packets were lost, which must then be counted; a
+  // scan perception had no room for (it falls behind under a sanitizer) is counted as a drop.
+  const std::uint64_t slots_full = number(out, R"(scan slots full (\d+))");
+  EXPECT_TRUE(published + slots_full >= 20u || number(out, R"((\d+) dropped by the kernel)") > 0)
+      << out;
   const std::regex shown(
       R"(\| #\d+ (unknown|car|pedestrian|bicyclist|background) \(-?[0-9.]+, -?[0-9.]+\) [0-9.]+ m/s)");
   for (std::size_t i = 0; i < lines.size(); ++i) {
