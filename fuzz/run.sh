@@ -42,7 +42,7 @@ jobs=${JOBS:-$(nproc)}
 targets=(velodyne_stream_fuzz applanix_stream_fuzz can_text_fuzz model_file_fuzz json_lines_fuzz
          config_files_fuzz pcap_file_fuzz dataset_file_fuzz gs_usb_frame_fuzz candump_file_fuzz
          velodyne_status_fuzz cannelloni_fuzz kitti_text_fuzz velodyne_position_fuzz
-         calibration_xml_fuzz view_client_fuzz induction_state_fuzz)
+         calibration_xml_fuzz view_client_fuzz induction_state_fuzz label_http_fuzz)
 
 # fuzz/options/TARGET.options: more libFuzzer flags, one a line (blank lines and # comments
 # skipped), appended to the array named by $2. Not in --regress, which replays every seed whole.
