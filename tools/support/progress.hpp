@@ -37,6 +37,7 @@ class Progress {
     std::fflush(stderr);
     drawn_ = true;
   }
+  [[nodiscard]] const std::string& label() const noexcept { return label_; }
   void finish() {
     if (drawn_) std::fprintf(stderr, "\r%*s\r", 60 + static_cast<int>(label_.size()), "");
     drawn_ = false;
