@@ -4,6 +4,7 @@
 
 #include <utility>
 
+#include "formats/capture_input.hpp"
 #include "formats/capture_sensor.hpp"
 
 namespace stac::formats {
@@ -28,6 +29,11 @@ rt::Result<RecordedDrive> RecordedDrive::open(const std::filesystem::path& in,
     auto k = open_kitti_raw_drive(in);
     if (!k) return rt::Unexpected<rt::Error>{k.error()};
     d.kitti_ = std::move(*k);
+  } else if (std::filesystem::is_directory(in)) {
+    return rt::make_error(in.string() +
+                          ": a folder but not a KITTI raw drive (it has no "
+                          "velodyne_points/data/ of NNNNNNNNNN.bin scans); give a capture or a "
+                          "drive folder");
   }
   if (!options.calib.empty())
     vs.calibration =
@@ -55,13 +61,17 @@ rt::Result<RecordedDrive> RecordedDrive::open(const std::filesystem::path& in,
     if (!r) return rt::Unexpected<rt::Error>{r.error()};
     d.reader_.emplace(std::move(*r));
     d.stream_ = std::make_unique<velodyne::ScanStream>(*calibration, vs.assembler, 2);
+    d.port_ = vs.port;
   }
   return d;
 }
 
 rt::Status RecordedDrive::for_each_scan(
-    const std::function<void(velodyne::Scan&, std::int64_t)>& on_scan,
+    const std::function<bool(velodyne::Scan&, std::int64_t)>& on_scan,
     const std::function<void(double, double)>& progress) {
+  const auto report = [&](double done, double total) {
+    if (progress) progress(done, total);
+  };
   if (kitti_) {
     velodyne::Scan scan(kitti_->max_points);  // the one scan, reused
     const auto n = static_cast<double>(kitti_->scans.size());
@@ -71,30 +81,40 @@ rt::Status RecordedDrive::for_each_scan(
       if (!c) return rt::Unexpected<rt::Error>{c.error()};
       kitti_points_.points += c->points;
       kitti_points_.refused += c->refused;
-      on_scan(scan, cpu_ns() - c0);
-      progress(static_cast<double>(i + 1), n);
+      ++scans_;
+      const bool more = on_scan(scan, cpu_ns() - c0);
+      report(static_cast<double>(i + 1), n);
+      if (!more) return {};
     }
     return {};
   }
   const auto size = static_cast<double>(std::filesystem::file_size(in_));
   std::int64_t decode_ns = 0;  // since the last scan handed on
   io::Datagram d;
-  while (reader_->next(d)) {
+  bool more = true;
+  while (more && reader_->next(d)) {
     const std::int64_t c0 = cpu_ns();
     const bool closed = stream_->add_packet(d.payload, d.stamp_ns);
     decode_ns += cpu_ns() - c0;
     if (closed) {
       while (velodyne::Scan* scan = stream_->take()) {
-        if (scan->header.complete()) {
-          on_scan(*scan, decode_ns);
+        if (more && scan->header.complete()) {
+          ++scans_;
+          more = on_scan(*scan, decode_ns);
           decode_ns = 0;
         }
         stream_->release();
       }
     }
-    progress(static_cast<double>(reader_->bytes_read()), size);
+    report(static_cast<double>(reader_->bytes_read()), size);
   }
   return {};
+}
+
+std::string RecordedDrive::nothing_decoded() const {
+  if (!reader_) return in_.string() + ": no scan in the drive";
+  return nothing_decoded_reason(in_.string(), reader_->counters(), stream_->assembler().counters(),
+                                port_);
 }
 
 }  // namespace stac::formats

@@ -1,7 +1,8 @@
 // The complete scans of a recorded drive, whichever way it was recorded: a capture (the Velodyne's
 // packets, decoded with the sensor's calibration; poses from the INS stream beside them) or a
 // KITTI raw drive folder (velodyne_points; poses from its OXTS records and calib_imu_to_velo.txt).
-// What `stac process` and `stac dataset` read, through one loop (issue 51).
+// What `stac process`, `stac dataset`, `stac segment` and `stac demo` read, through one loop
+// (issue 51).
 #pragma once
 
 #include <cstdint>
@@ -35,11 +36,16 @@ class RecordedDrive {
                                         settings::PipelineSettings& settings,
                                         const RecordedDriveOptions& options);
 
-  // Calls ON_SCAN with each complete scan in order and the CPU time its decoding took (ns);
-  // PROGRESS with how far it is (done of total, in the drive's own unit). Stops at the first error
-  // (a KITTI scan that cannot be read); a capture cut short is not one (capture_error()).
-  rt::Status for_each_scan(const std::function<void(velodyne::Scan&, std::int64_t)>& on_scan,
-                           const std::function<void(double, double)>& progress);
+  // Calls ON_SCAN with each complete scan in order and the CPU time its decoding took (ns), until
+  // it returns false; PROGRESS (when given) with how far it is (done of total, in the drive's own
+  // unit). Stops at the first error (a KITTI scan that cannot be read); a capture cut short is
+  // not one (capture_error()). scans() counts the complete scans passed on.
+  rt::Status for_each_scan(const std::function<bool(velodyne::Scan&, std::int64_t)>& on_scan,
+                           const std::function<void(double, double)>& progress = {});
+  [[nodiscard]] std::uint64_t scans() const { return scans_; }
+  // Why a capture gave no complete scan, for an error message (its reader's and assembler's
+  // counts: nothing on the port, all truncated, ...).
+  [[nodiscard]] std::string nothing_decoded() const;
 
   [[nodiscard]] const CapturePoses* poses() const { return poses_ ? &*poses_ : nullptr; }
   [[nodiscard]] ego::PoseHistory* pose_history() const {
@@ -60,6 +66,8 @@ class RecordedDrive {
   std::optional<io::PcapReader> reader_;
   std::unique_ptr<velodyne::ScanStream> stream_;
   KittiScanCounts kitti_points_;
+  std::uint64_t scans_ = 0;
+  std::uint16_t port_ = 0;
 };
 
 }  // namespace stac::formats

@@ -160,6 +160,7 @@ class Builder : public classification::TrackClassifier::Observer {
         [&](velodyne::Scan& scan, std::int64_t) {
           pipeline.process(scan, recorded->pose_history(), result);
           handle(scan, result);
+          return true;
         },
         [&](double done, double total) {
           if (output.progress) output.progress(progress_label, done, total);

@@ -329,6 +329,7 @@ rt::Status run_process_job(const ProcessJobOptions& o, const ProcessJobOutput& o
         [&](velodyne::Scan& scan, std::int64_t ns) {
           decode_ns += ns;
           handle(scan);
+          return true;
         },
         [&](double done, double total) {
           if (output.progress) output.progress(done, total);

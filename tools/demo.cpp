@@ -27,7 +27,7 @@
 
 #include "dds/idl_types.hpp"
 #include "dds/reading.hpp"
-#include "formats/capture_scans.hpp"
+#include "formats/recorded_drive.hpp"
 #include "pictures/demo_pictures.hpp"
 #include "rt/unique_fd.hpp"
 #include "settings/dds_settings.hpp"
@@ -222,17 +222,14 @@ class DriveWatch {
 rt::Result<std::vector<pictures::Point3M>> last_scan_points(const std::string& config,
                                                             const std::string& pcap,
                                                             std::uint64_t index) {
-  auto vs = load_velodyne_settings(config);
-  if (!vs) return rt::Unexpected<rt::Error>{vs.error()};
-  auto es = load_ego_settings(config);
-  if (!es) return rt::Unexpected<rt::Error>{es.error()};
-  auto calibration = velodyne::load_calibration(vs->calibration);
-  if (!calibration) return rt::Unexpected<rt::Error>{calibration.error()};
-  const Eigen::Isometry3f vehicle_T_sensor = es->deskew.vehicle_T_sensor.cast<float>();
+  auto settings = load_pipeline_settings(config);
+  if (!settings) return rt::Unexpected<rt::Error>{settings.error()};
+  const Eigen::Isometry3f vehicle_T_sensor = settings->ego.deskew.vehicle_T_sensor.cast<float>();
+  auto drive = formats::RecordedDrive::open(pcap, *settings, {"", "", false});
+  if (!drive) return rt::Unexpected<rt::Error>{drive.error()};
   std::vector<pictures::Point3M> points;
-  std::uint64_t k = 0;
-  auto n = for_each_complete_scan(pcap, *calibration, *vs, [&](const velodyne::Scan& scan) {
-    if (k++ < index) return true;
+  auto read = drive->for_each_scan([&](velodyne::Scan& scan, std::int64_t) {
+    if (drive->scans() - 1 < index) return true;
     points.reserve(scan.points.size());
     for (const velodyne::Point& p : scan.points) {
       const Eigen::Vector3f v = vehicle_T_sensor * Eigen::Vector3f(p.x, p.y, p.z);
@@ -240,7 +237,8 @@ rt::Result<std::vector<pictures::Point3M>> last_scan_points(const std::string& c
     }
     return false;
   });
-  if (!n) return rt::Unexpected<rt::Error>{n.error()};
+  if (!read) return rt::Unexpected<rt::Error>{read.error()};
+  if (drive->scans() == 0) return rt::make_error(drive->nothing_decoded());
   if (points.empty())
     return rt::make_error(pcap + " holds no complete scan " + std::to_string(index));
   return points;

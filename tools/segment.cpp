@@ -1,5 +1,5 @@
-// stac segment: one scan (a KITTI .bin, or scan N of a pcap capture) -> segments (csv, picture,
-// summary on stderr).
+// stac segment: one scan (a KITTI .bin, or scan N of a pcap capture or a KITTI raw drive folder) ->
+// segments (csv, picture, summary on stderr).
 #include <time.h>
 
 #include <algorithm>
@@ -13,9 +13,8 @@
 #include <vector>
 
 #include "drivers/velodyne/scan_stream.hpp"
-#include "formats/capture_scans.hpp"
-#include "formats/capture_sensor.hpp"
 #include "formats/kitti_files.hpp"
+#include "formats/recorded_drive.hpp"
 #include "perception/segmentation/segmenter.hpp"
 #include "pictures/birds_eye.hpp"
 #include "settings/settings.hpp"
@@ -132,21 +131,16 @@ int report(const SegmentOptions& o, const segmentation::SegmenterConfig& config,
   return 0;
 }
 
-// Decodes the capture with the project's driver up to complete scan `o.scan` and segments it.
-int segment_capture(const SegmentOptions& o, const segmentation::SegmenterConfig& config) {
-  auto settings = load_velodyne_settings(config_path(o.config));
+// Scan `o.scan` of a recorded drive (a capture, decoded with the project's driver, or a KITTI raw
+// drive folder; formats/recorded_drive.hpp), segmented as it was recorded (no deskew).
+int segment_drive(const SegmentOptions& o, const segmentation::SegmenterConfig& config) {
+  auto settings = load_pipeline_settings(config_path(o.config));
   if (!settings) return fail(settings.error().message);
-  auto& s = *settings;
-  if (!o.calib.empty())
-    s.calibration = o.calib == "stream" ? std::filesystem::path{} : std::filesystem::path(o.calib);
-  auto calibration = s.calibration.empty()
-                         ? stream_calibration(o.in, s.port, s.assembler.decoder.model)
-                         : velodyne::load_calibration(s.calibration);
-  if (!calibration) return fail(calibration.error().message);
+  auto drive = RecordedDrive::open(o.in, *settings, {o.calib, "", false});
+  if (!drive) return fail(drive.error().message);
   std::optional<int> code;
-  std::uint64_t n_seen = 0;
-  auto complete = for_each_complete_scan(o.in, *calibration, s, [&](const velodyne::Scan& scan) {
-    if (static_cast<int>(n_seen++) != o.scan) return true;
+  auto read = drive->for_each_scan([&](velodyne::Scan& scan, std::int64_t) {
+    if (drive->scans() - 1 != static_cast<std::uint64_t>(o.scan)) return true;
     const segmentation::PointView view{&scan.points.data()->x, scan.points.size(),
                                        sizeof(velodyne::Point)};
     code = report(o, config, view,
@@ -154,9 +148,10 @@ int segment_capture(const SegmentOptions& o, const segmentation::SegmenterConfig
                       std::to_string(scan.header.sequence) + ")");
     return false;
   });
-  if (!complete) return fail(complete.error().message);
+  if (!read) return fail(read.error().message);
   if (code) return *code;
-  return fail(o.in + ": holds " + std::to_string(*complete) + " complete scans; --scan " +
+  if (drive->scans() == 0) return fail(drive->nothing_decoded());
+  return fail(o.in + ": holds " + std::to_string(drive->scans()) + " complete scans; --scan " +
               std::to_string(o.scan) + " is not among them (scans count from 0)");
 }
 
@@ -181,7 +176,7 @@ int run_segment(const SegmentOptions& o) {
   if (!config) return fail(config.error().message);
   if (o.scan < 0) return fail("--scan must be >= 0");
   if (o.view_range_m <= 0) return fail("--view-range must be > 0");
-  if (is_capture(o.in)) return segment_capture(o, *config);
+  if (is_capture(o.in) || std::filesystem::is_directory(o.in)) return segment_drive(o, *config);
   auto cloud = load_kitti_scan(o.in);
   if (!cloud) return fail(cloud.error().message);
   const segmentation::PointView view{cloud->data(), cloud->size() / 4, 4 * sizeof(float)};
@@ -203,14 +198,15 @@ void add_segment_command(CLI::App& app) {
       "csv: one row per segment: id,points,centroid_x,centroid_y,centroid_z,box_x,box_y,length,\n"
       "width,height,yaw (rad, from x, counter-clockwise),z_min,z_max (m, sensor frame).");
   cmd->add_option("--in", o->in,
-                  "KITTI .bin scan, or a pcap/pcapng capture (told apart by their first bytes)")
+                  "KITTI .bin scan, a pcap/pcapng capture (told apart by their first bytes), or a "
+                  "KITTI raw drive folder")
       ->required()
-      ->check(CLI::ExistingFile);
+      ->check(CLI::ExistingPath);
   cmd->add_option("--out", o->out, "write the segments as csv");
   needs_pictures(cmd->add_option("--png", o->png,
                                  "draw the scan from above with the segments coloured and boxed"));
   cmd->add_option("--config", o->config, stac::settings::kConfigOptionHelp);
-  cmd->add_option("--scan", o->scan, "pcap: which complete scan to segment, from 0 (default 0)");
+  cmd->add_option("--scan", o->scan, "a capture or drive folder: which complete scan to segment, from 0 (default 0)");
   cmd->add_option("--calib", o->calib,
                   "pcap: calibration file or 'stream' (default: the config's)");
   cmd->add_option("--view-range", o->view_range_m, "picture: half width in metres (default 50)")

@@ -99,6 +99,33 @@ TEST(SegmentCli, SimulatedCaptureIsDecodedAndSegmented) {
   }
 }
 
+// A KITTI raw drive folder is read as `stac process` reads it (formats::RecordedDrive): its scan N
+// is the folder's Nth .bin file, segmented alike; a folder that is no drive is named as such.
+TEST(SegmentCli, ScanNOfAKittiRawDriveFolderIsItsNthScanFile) {
+  STAC_REQUIRE_SHARED_DATA("kitti-raw-seq/velodyne_points/data/0000000003.bin");
+  const std::string drive = stac::testing::shared_data("kitti-raw-seq").string();
+  const CliResult folder = stac("segment --in " + drive + " --scan 3");
+  ASSERT_EQ(folder.code, 0) << folder.output;
+  EXPECT_NE(folder.output.find("kitti-raw-seq scan 3"), std::string::npos) << folder.output;
+  const CliResult file = stac("segment --in " + drive + "/velodyne_points/data/0000000003.bin");
+  ASSERT_EQ(file.code, 0) << file.output;
+  EXPECT_EQ(summary_number(folder.output, "segments   "),
+            summary_number(file.output, "segments   "))
+      << folder.output << file.output;
+  EXPECT_GT(summary_number(folder.output, "segments   "), 10) << folder.output;
+
+  const CliResult past = stac("segment --in " + drive + " --scan 40");
+  EXPECT_EQ(past.code, 1);
+  EXPECT_NE(past.output.find("holds 40 complete scans; --scan 40 is not among them"),
+            std::string::npos)
+      << past.output;
+  const auto empty = fresh_dir("no_drive");
+  const CliResult not_drive = stac("segment --in " + empty.string());
+  EXPECT_EQ(not_drive.code, 1);
+  EXPECT_NE(not_drive.output.find("a folder but not a KITTI raw drive"), std::string::npos)
+      << not_drive.output;
+}
+
 TEST(SegmentCli, RejectsAFileThatIsNotAKittiScan) {
   const auto dir = fresh_dir("notscan");
   std::ofstream(dir / "odd.bin") << "seventeen bytes!!";
