@@ -23,6 +23,7 @@
 #include "settings/settings.hpp"
 #include "shared_data.hpp"
 #include "sim/drive_writer.hpp"
+#include "stac_cli.hpp"
 
 namespace stac::pipeline {
 namespace {
@@ -140,9 +141,13 @@ std::shared_ptr<const classification::TrackClassifierModel> made_up_model() {
 
 TEST(ScanPipeline, PerceptionLoopWithHandoverMakesNoAllocationOver1000ScansAfterWarmUp) {
   STAC_REQUIRE_SHARED_DATA(kYaml);
+  // 1000 scans after 20 of warm-up; 300 under a sanitizer, which looks for memory errors in the
+  // loop (the operator new count still applies) at a tenth of the speed: what 1000 would add is
+  // a minute of CI, and the same code run again (issue 51).
+  constexpr std::size_t kScans = stac::testing::kSanitizerBuild ? 320 : 1020;
   Fixture f = decoded_drive("alloc");
   ASSERT_GE(f.scans.size(), 5u);
-  const std::unique_ptr<ego::PoseHistory> poses = straight_drive(f, 1020);
+  const std::unique_ptr<ego::PoseHistory> poses = straight_drive(f, kScans);
   f.config.model = made_up_model();  // classification on, in two steps (as stac run)
   f.config.split_classification = true;
   f.config.cloud_stride = 8;  // and the point cloud for viewers, as stac run makes it
@@ -178,16 +183,17 @@ TEST(ScanPipeline, PerceptionLoopWithHandoverMakesNoAllocationOver1000ScansAfter
   };
   for (std::size_t i = 0; i < 20; ++i) step(i);  // warm-up: the tracker's pool fills
   rt::testing::AllocationCounter counter;
-  for (std::size_t i = 20; i < 1020; ++i) step(i);
+  for (std::size_t i = 20; i < kScans; ++i) step(i);
   counter.stop();
   stop.store(true, std::memory_order_release);
   consumer.join();
 
   EXPECT_EQ(counter.allocations(), 0u) << counter.bytes() << " bytes";
-  EXPECT_EQ(deskewed, 1020u);  // every scan went through deskew with a pose
+  EXPECT_EQ(deskewed, kScans);  // every scan went through deskew with a pose
   EXPECT_EQ(pipeline.scans_without_pose(), 0u);
   EXPECT_GT(consumed.load(), 0u);
-  EXPECT_EQ(results.published() + results.dropped(), 1020u);  // every result handed over or counted
+  EXPECT_EQ(results.published() + results.dropped(),
+            kScans);  // every result handed over or counted
   EXPECT_GT(tracks_seen.load(), 0u);
   EXPECT_GT(classified.load(), 0u);
   EXPECT_GT(cloud_points.load(), 0u);
