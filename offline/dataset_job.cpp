@@ -36,13 +36,6 @@ namespace {
 
 using classification::ClassIndex;
 
-void say(const DatasetJobOutput& output, const std::string& text) {
-  if (output.text) output.text(text);
-}
-void tell(const DatasetJobOutput& output, const std::string& text) {
-  if (output.result) output.result(text);
-}
-
 using classification::kBackground;
 
 // The thesis's dataset rule (REFERENCE.md §5).
@@ -125,8 +118,7 @@ class Builder : public classification::TrackClassifier::Observer {
     updated_.insert(track.id);
   }
 
-  rt::Result<RunCounts> run(const DatasetJobOptions& o, std::size_t k,
-                            const DatasetJobOutput& output) {
+  rt::Result<RunCounts> run(const DatasetJobOptions& o, std::size_t k, const JobOutput& output) {
     const std::string& in = o.in[k];
     auto settings = load_pipeline_settings(config_path(o.config));
     if (!settings) return rt::Unexpected<rt::Error>{settings.error()};
@@ -162,9 +154,7 @@ class Builder : public classification::TrackClassifier::Observer {
           handle(scan, result);
           return true;
         },
-        [&](double done, double total) {
-          if (output.progress) output.progress(progress_label, done, total);
-        });
+        [&](double done, double total) { output.advance(progress_label, done, total); });
     if (!read) return rt::Unexpected<rt::Error>{read.error()};
     if (!recorded->capture_error().empty())
       return rt::make_error(capture_breaks_off(recorded->capture_error()));
@@ -275,7 +265,7 @@ class Builder : public classification::TrackClassifier::Observer {
 
 // Writes `data` to `out` and prints a line of counts per class.
 rt::Status write_and_summarize(const std::string& dir, const Dataset& data,
-                               const DatasetJobOutput& output) {
+                               const JobOutput& output) {
   if (auto w = write_dataset(dir, data); !w) return rt::make_error(w.error().message);
   const std::size_t classes_n = data.classes.size();
   std::vector<std::size_t> per(classes_n + 1, 0);  // per class, then background
@@ -288,17 +278,17 @@ rt::Status write_and_summarize(const std::string& dir, const Dataset& data,
   for (std::size_t c = 0; c < classes_n; ++c)
     listed += data.classes[c] + " " + std::to_string(per[c]) + ", ";
   if (!data.labelled) {
-    tell(output, rt::formatted("%s: %zu unlabeled tracks\n", dir.c_str(), data.tracks.size()));
+    output.tell(rt::formatted("%s: %zu unlabeled tracks\n", dir.c_str(), data.tracks.size()));
     return {};
   }
-  tell(output, rt::formatted("%s: %zu tracks (%sbackground %zu; %zu inconsistent)\n", dir.c_str(),
-                             data.tracks.size(), listed.c_str(), per[classes_n], inconsistent));
+  output.tell(rt::formatted("%s: %zu tracks (%sbackground %zu; %zu inconsistent)\n", dir.c_str(),
+                            data.tracks.size(), listed.c_str(), per[classes_n], inconsistent));
   return {};
 }
 
 // --merge: the datasets one after the other (their sources renumbered) in one, as the Slurm
 // job array's last step does with one dataset per capture (deploy/slurm-dataset.sh).
-rt::Status run_merge(const DatasetJobOptions& o, const DatasetJobOutput& output) {
+rt::Status run_merge(const DatasetJobOptions& o, const JobOutput& output) {
   if (!o.in.empty() || !o.truth.empty())
     return rt::make_error("--merge joins datasets: give no --in or --truth");
   // One folder given twice would double its tracks, and --out among the inputs would replace an
@@ -323,14 +313,14 @@ rt::Status run_merge(const DatasetJobOptions& o, const DatasetJobOutput& output)
       return rt::make_error(a.error().message);
     }
   }
-  say(output, rt::formatted("stac dataset: merged %zu datasets (%zu sources)\n", o.merge.size(),
-                            data.sources.size()));
+  output.say(rt::formatted("stac dataset: merged %zu datasets (%zu sources)\n", o.merge.size(),
+                           data.sources.size()));
   return write_and_summarize(o.out, data, output);
 }
 
 }  // namespace
 
-rt::Status run_dataset_job(const DatasetJobOptions& o, const DatasetJobOutput& output) {
+rt::Status run_dataset_job(const DatasetJobOptions& o, const JobOutput& output) {
   if (!o.merge.empty()) return run_merge(o, output);
   if (o.in.empty())
     return rt::make_error("give the captures (--in), or the datasets to join (--merge)");
@@ -348,14 +338,13 @@ rt::Status run_dataset_job(const DatasetJobOptions& o, const DatasetJobOutput& o
   for (std::size_t k = 0; k < o.in.size(); ++k) {
     auto r = builder.run(o, k, output);
     if (!r) return rt::make_error(r.error().message);
-    say(output,
-        rt::formatted(
-            "stac dataset: %s: %llu scans, %llu tracks, %llu kept (>= %u segments, one over "
-            "%u points), %llu of them inconsistent (over 10%% of segments tracking or "
-            "under-segmentation errors)\n",
-            o.in[k].c_str(), static_cast<unsigned long long>(r->scans),
-            static_cast<unsigned long long>(r->tracks), static_cast<unsigned long long>(r->kept),
-            kMinSegments, kMinLargestSegment, static_cast<unsigned long long>(r->inconsistent)));
+    output.say(rt::formatted(
+        "stac dataset: %s: %llu scans, %llu tracks, %llu kept (>= %u segments, one over "
+        "%u points), %llu of them inconsistent (over 10%% of segments tracking or "
+        "under-segmentation errors)\n",
+        o.in[k].c_str(), static_cast<unsigned long long>(r->scans),
+        static_cast<unsigned long long>(r->tracks), static_cast<unsigned long long>(r->kept),
+        kMinSegments, kMinLargestSegment, static_cast<unsigned long long>(r->inconsistent)));
   }
   return write_and_summarize(o.out, data, output);
 }

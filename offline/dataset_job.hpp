@@ -1,12 +1,13 @@
 // The dataset job (`stac dataset`): track descriptors from drives, labelled by their truth (for
 // `stac train` and `stac eval --classes`) or unlabeled (for `stac induct`), written as a dataset
-// folder (formats/dataset_file.hpp); or datasets made apart joined into one (--merge).
+// folder (formats/dataset_file.hpp); or datasets made apart joined into one (--merge). Its text:
+// each drive's counts; its result: the dataset written; its progress: each drive read.
 #pragma once
 
-#include <functional>
 #include <string>
 #include <vector>
 
+#include "offline/job_output.hpp"
 #include "rt/expected.hpp"
 
 namespace stac::offline {
@@ -21,14 +22,7 @@ struct DatasetJobOptions {
   bool no_deskew = false;
 };
 
-struct DatasetJobOutput {
-  std::function<void(const std::string&)> text;    // what it did, whole lines (a person's)
-  std::function<void(const std::string&)> result;  // the dataset written and its counts
-  // The drive being read (its label, e.g. "dataset drive.pcap") and how far.
-  std::function<void(const std::string& label, double done, double total)> progress;
-};
-
 // Runs the job; an error says what to fix (an option, a file).
-rt::Status run_dataset_job(const DatasetJobOptions& options, const DatasetJobOutput& output = {});
+rt::Status run_dataset_job(const DatasetJobOptions& options, const JobOutput& output = {});
 
 }  // namespace stac::offline

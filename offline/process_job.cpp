@@ -137,10 +137,8 @@ rt::Status save_scan_picture(const std::filesystem::path& png, const velodyne::S
 
 }  // namespace
 
-rt::Status run_process_job(const ProcessJobOptions& o, const ProcessJobOutput& output) {
-  const auto say = [&](const std::string& text) {
-    if (output.text) output.text(text);
-  };
+rt::Status run_process_job(const ProcessJobOptions& o, const JobOutput& output) {
+  const auto say = [&](const std::string& text) { output.say(text); };
   const std::filesystem::path config = config_path(o.config);
   auto settings = load_pipeline_settings(config);
   if (!settings) return rt::make_error(settings.error().message);
@@ -331,9 +329,7 @@ rt::Status run_process_job(const ProcessJobOptions& o, const ProcessJobOutput& o
           handle(scan);
           return true;
         },
-        [&](double done, double total) {
-          if (output.progress) output.progress(done, total);
-        });
+        [&](double done, double total) { output.advance("process", done, total); });
     if (!read) return rt::make_error(read.error().message);
   }
   out.close();

@@ -5,9 +5,9 @@
 // the results published on DDS on request, and a summary with per-stage CPU time statistics.
 #pragma once
 
-#include <functional>
 #include <string>
 
+#include "offline/job_output.hpp"
 #include "rt/expected.hpp"
 
 namespace stac::offline {
@@ -31,12 +31,8 @@ struct ProcessJobOptions {
   double dds_wait_s = 0;        // wait up to this long for a reader before the first scan
 };
 
-struct ProcessJobOutput {
-  std::function<void(const std::string&)> text;  // the summary (and DDS errors), whole lines
-  std::function<void(double done, double total)> progress;  // the input read so far
-};
-
 // Runs the job; an error says what to fix (after the summary when the run itself went through).
-rt::Status run_process_job(const ProcessJobOptions& options, const ProcessJobOutput& output = {});
+// Its text: the summary (and DDS errors); its progress: the input read ("process").
+rt::Status run_process_job(const ProcessJobOptions& options, const JobOutput& output = {});
 
 }  // namespace stac::offline

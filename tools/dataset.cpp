@@ -2,13 +2,12 @@
 // (offline/dataset_job.hpp): the options, a progress bar per drive, the counts.
 #include <cstdio>
 #include <memory>
-#include <optional>
 #include <string>
 
 #include "offline/dataset_job.hpp"
 #include "settings/settings.hpp"
 #include "tools/commands.hpp"
-#include "tools/support/progress.hpp"
+#include "tools/support/terminal_output.hpp"
 
 namespace stac::tools {
 
@@ -51,26 +50,9 @@ void add_dataset_command(CLI::App& app) {
   cmd->add_flag("--no-deskew", o->no_deskew,
                 "ignore the INS stream: no deskew, sensor frame = world");
   cmd->callback([o] {
-    std::optional<Progress> progress;  // one bar per drive
-    const auto finish_progress = [&] {
-      if (progress) progress->finish();
-    };
-    const rt::Status done =
-        offline::run_dataset_job(*o, {[&](const std::string& text) {
-                                        finish_progress();
-                                        std::fputs(text.c_str(), stderr);
-                                      },
-                                      [&](const std::string& text) {
-                                        finish_progress();
-                                        std::fputs(text.c_str(), stdout);
-                                      },
-                                      [&](const std::string& label, double read, double total) {
-                                        if (!progress || progress->label() != label)
-                                          progress.emplace(label, total);
-                                        progress->set_total(total);
-                                        progress->update(read);
-                                      }});
-    finish_progress();
+    TerminalOutput terminal;
+    const rt::Status done = offline::run_dataset_job(*o, terminal.output());
+    terminal.finish();
     if (!done) throw CLI::RuntimeError(fail(done.error().message));
   });
 }

@@ -8,7 +8,7 @@
 #include "settings/settings.hpp"
 #include "tools/commands.hpp"
 #include "tools/support/cli_checks.hpp"
-#include "tools/support/progress.hpp"
+#include "tools/support/terminal_output.hpp"
 
 namespace stac::tools {
 
@@ -72,16 +72,9 @@ void add_process_command(CLI::App& app) {
          "the first scan")
       ->check(finite_range(0, 86'400));
   cmd->callback([o] {
-    Progress progress("process", 1.0);
-    const rt::Status done = offline::run_process_job(*o, {[&](const std::string& text) {
-                                                            progress.finish();
-                                                            std::fputs(text.c_str(), stderr);
-                                                          },
-                                                          [&](double read, double total) {
-                                                            progress.set_total(total);
-                                                            progress.update(read);
-                                                          }});
-    progress.finish();
+    TerminalOutput terminal;
+    const rt::Status done = offline::run_process_job(*o, terminal.output());
+    terminal.finish();
     if (!done) throw CLI::RuntimeError(fail(done.error().message));
   });
 }

@@ -1,4 +1,6 @@
-#include "tools/eval_classes.hpp"
+// The classification evaluation job (class_eval_job.hpp): each track of the datasets through the
+// model's filters, tallied as the thesis's Table 1.2, and the report written.
+#include "offline/class_eval_job.hpp"
 
 #include <algorithm>
 #include <array>
@@ -14,10 +16,9 @@
 #include "perception/classification/model.hpp"
 #include "pictures/chart.hpp"
 #include "pictures/drawing.hpp"
-#include "tools/commands.hpp"
-#include "tools/support/progress.hpp"
+#include "rt/formatted.hpp"
 
-namespace stac::tools {
+namespace stac::offline {
 
 using namespace stac::formats;
 namespace {
@@ -103,9 +104,9 @@ rt::Status save_confusion(const Tally& t, const ClassNames& names, const std::st
 
 }  // namespace
 
-int run_class_eval(const ClassEvalOptions& o) {
+rt::Status run_class_eval_job(const ClassEvalJobOptions& o, const JobOutput& output) {
   auto model = read_model_file(o.model);
-  if (!model) return fail(model.error().message);
+  if (!model) return rt::make_error(model.error().message);
   // Labels map by name onto the model's classes: each must be one of a dataset's, whose other
   // classes count as background (a model without `pole` scored on drives labelled with poles).
   const classification::TrackClassifierModel& m = *model;
@@ -115,13 +116,14 @@ int run_class_eval(const ClassEvalOptions& o) {
   data.classes = names;
   for (const std::string& dir : o.data) {
     auto d = read_labelled_dataset(dir, "stac eval --classes");
-    if (!d) return fail(d.error().message);
+    if (!d) return rt::make_error(d.error().message);
     if (auto c = map_classes(*d, names, dir + " (for the classes of " + o.model + ")"); !c)
-      return fail(c.error().message);
-    if (auto a = append_dataset(data, std::move(*d), dir); !a) return fail(a.error().message);
+      return rt::make_error(c.error().message);
+    if (auto a = append_dataset(data, std::move(*d), dir); !a)
+      return rt::make_error(a.error().message);
   }
   if (data.tracks.empty())
-    return fail("the datasets hold no track: nothing to evaluation::evaluate");
+    return rt::make_error("the datasets hold no track: nothing to evaluation::evaluate");
   const LogOdds prior = m.holistic.model().prior;
   const auto predict = [classes](const LogOdds& l) { return classification::predict(l, classes); };
   // The tables count consistent tracks (kMaxOffLabelFraction, the thesis's protocol); every
@@ -136,7 +138,6 @@ int run_class_eval(const ClassEvalOptions& o) {
   std::string per_track = "source,track_id,label,adbf_class,";
   for (const std::string& n : names) per_track += n + "_log_odds,";
   per_track += "segments,max_speed_mps,box_length_m,box_width_m,box_height_m,consistent\n";
-  Progress progress("eval: classifying", static_cast<double>(data.tracks.size()));
   std::size_t done = 0;
   for (const DatasetTrack& t : data.tracks) {
     const bool counted = consistent(t);
@@ -148,7 +149,7 @@ int run_class_eval(const ClassEvalOptions& o) {
       LogOdds hs{}, hh{};
       if (!classification::add_segment(m, seg, evidence, hs) || !m.holistic.classify(hol, hh) ||
           !classification::track_log_odds(m, evidence, hol, out[kAdbf])) {
-        return fail(
+        return rt::make_error(
             "descriptor sizes differ from the model's (dataset and model of different builds?)");
       }
       out[kNormalized] = classification::normalized_dbf(evidence, hh);
@@ -183,9 +184,9 @@ int run_class_eval(const ClassEvalOptions& o) {
     for (std::size_t c = 0; c < classes && counted; ++c) {
       scores[c].push_back({out[kAdbf][c], t.label == c});
     }
-    progress.update(static_cast<double>(++done));
+    output.advance("eval: classifying", static_cast<double>(++done),
+                static_cast<double>(data.tracks.size()));
   }
-  progress.finish();
 
   const std::uint64_t inconsistent = all_tracks.total() - tracks[kAdbf].total();
   nlohmann::json metrics = {{"track_accuracy", tracks[kAdbf].accuracy()},
@@ -194,32 +195,33 @@ int run_class_eval(const ClassEvalOptions& o) {
                             {"segments", segments[kAdbf].total()},
                             {"inconsistent_tracks", inconsistent},
                             {"all_tracks.track_accuracy", all_tracks.accuracy()}};
-  std::printf(
+  output.tell(rt::formatted(
       "stac eval --classes: %llu tracks, %llu segments (%llu inconsistent tracks left out); "
       "model %s\n",
       static_cast<unsigned long long>(tracks[kAdbf].total()),
       static_cast<unsigned long long>(segments[kAdbf].total()),
-      static_cast<unsigned long long>(inconsistent), o.model.c_str());
-  std::printf("%-8s %-15s", "", "filter");
+      static_cast<unsigned long long>(inconsistent), o.model.c_str()));
+  output.tell(rt::formatted("%-8s %-15s", "", "filter"));
   for (const std::string& n : names)
-    std::printf(" %*s", std::max(9, static_cast<int>(n.size())), n.c_str());
-  std::printf(" %8s\n", "overall");
+    output.tell(rt::formatted(" %*s", std::max(9, static_cast<int>(n.size())), n.c_str()));
+  output.tell(rt::formatted(" %8s\n", "overall"));
   for (int wise = 0; wise < 2; ++wise) {
     const auto& tallies = wise == 0 ? tracks : segments;
     const char* w = wise == 0 ? "track" : "segment";
     for (std::size_t f = 0; f < kFilters; ++f) {
-      std::printf("%-8s %-15s", w, kFilterNames[f]);
+      output.tell(rt::formatted("%-8s %-15s", w, kFilterNames[f]));
       for (std::size_t c = 0; c < classes; ++c) {
         const double a = tallies[f].one_vs_all(c);
-        std::printf(" %*.3f", std::max(9, static_cast<int>(names[c].size())), a);
+        output.tell(rt::formatted(" %*.3f", std::max(9, static_cast<int>(names[c].size())), a));
         metrics[std::string(w) + "." + kFilterNames[f] + "." + names[c]] = a;
       }
-      std::printf(" %8.3f\n", tallies[f].accuracy());
+      output.tell(rt::formatted(" %8.3f\n", tallies[f].accuracy()));
       metrics[std::string(w) + "." + kFilterNames[f] + ".overall"] = tallies[f].accuracy();
     }
   }
-  std::printf("every track, the inconsistent ones too: ADBF track-wise %.3f (%llu tracks)\n",
-              all_tracks.accuracy(), static_cast<unsigned long long>(all_tracks.total()));
+  output.tell(
+      rt::formatted("every track, the inconsistent ones too: ADBF track-wise %.3f (%llu tracks)\n",
+                    all_tracks.accuracy(), static_cast<unsigned long long>(all_tracks.total())));
   nlohmann::json confusion = nlohmann::json::array();
   for (std::size_t i = 0; i < tracks[kAdbf].labels; ++i) {
     const auto& row = tracks[kAdbf].confusion[i];
@@ -232,15 +234,16 @@ int run_class_eval(const ClassEvalOptions& o) {
     const std::filesystem::path dir = o.report;
     std::error_code ec;
     std::filesystem::create_directories(dir, ec);
-    if (ec) return fail(o.report + ": cannot create the report folder (" + ec.message() + ")");
+    if (ec)
+      return rt::make_error(o.report + ": cannot create the report folder (" + ec.message() + ")");
     if (auto w = formats::write_text_durably(dir / "metrics.json", metrics.dump(2) + "\n"); !w)
-      return fail(w.error().message);
+      return rt::make_error(w.error().message);
     if (auto w = formats::write_text_durably(dir / "tracks.csv", per_track); !w)
-      return fail(w.error().message);
+      return rt::make_error(w.error().message);
     if (auto r = save_confusion(tracks[kAdbf], names, "Track-wise confusion, ADBF",
                                 dir / "confusion.png");
         !r) {
-      return fail(r.error().message);
+      return rt::make_error(r.error().message);
     }
     pictures::Chart chart{
         "Precision-recall, ADBF track-wise (1-vs-all)", "recall", "precision", {}, 800, 420};
@@ -249,10 +252,12 @@ int run_class_eval(const ClassEvalOptions& o) {
       pr_curve(scores[c], s);
       if (!s.x.empty()) chart.series.push_back(std::move(s));
     }
-    if (auto r = pictures::save_chart(chart, dir / "pr.png"); !r) return fail(r.error().message);
-    std::printf("report: %s/metrics.json, tracks.csv, confusion.png, pr.png\n", o.report.c_str());
+    if (auto r = pictures::save_chart(chart, dir / "pr.png"); !r)
+      return rt::make_error(r.error().message);
+    output.tell(rt::formatted("report: %s/metrics.json, tracks.csv, confusion.png, pr.png\n",
+                           o.report.c_str()));
   }
-  return 0;
+  return {};
 }
 
-}  // namespace stac::tools
+}  // namespace stac::offline
