@@ -59,7 +59,7 @@ void print_report(const Say& say, const SessionOptions& o, const ReplayPlan& pla
       static_cast<unsigned long long>(r.send_failures), pps, mbps, recorded_pps, recorded_mbps,
       o.fast ? "--fast" : rate_text(o.rate).c_str()));
   if (o.fast) {
-    say(rt::formatted("  pacing     none (--fast)\n"));
+    say("  pacing     none (--fast)\n");
   } else {
     say(rt::formatted(
         "  schedule   %.6f s scheduled for the last packet, %.6f s taken\n"
@@ -104,7 +104,7 @@ void print_tcp_report(const Say& say, const SessionOptions& o, const TcpReplay& 
       static_cast<unsigned long long>(r.disconnects), static_cast<unsigned long long>(r.stalls),
       sps, mbps, recorded_mbps, o.fast ? "--fast" : rate_text(o.rate).c_str()));
   if (o.fast) {
-    say(rt::formatted("  pacing     none (--fast)\n"));
+    say("  pacing     none (--fast)\n");
   } else if (r.error_max_ns >= 0) {
     say(rt::formatted(
         "  schedule   %.6f s scheduled for the last segment, %.6f s taken\n"
