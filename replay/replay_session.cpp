@@ -70,8 +70,7 @@ void print_report(const Say& say, const SessionOptions& o, const ReplayPlan& pla
   }
   if (r.faults) say(rt::formatted("  %s\n", summary(*r.faults).c_str()));
   if (r.send_failures > 0) {
-    say(rt::formatted(
-        "  note       send failures on loopback usually mean nothing listens on the port\n"));
+    say("  note       send failures on loopback usually mean nothing listens on the port\n");
   }
   if (r.stamps_backwards > 0) {
     say(rt::formatted(
