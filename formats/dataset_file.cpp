@@ -72,6 +72,19 @@ struct Reader {
 
 }  // namespace
 
+std::string source_of(const std::string& capture, const std::string& truth) {
+  if (truth.empty()) return capture;
+  std::string source = capture;
+  source.push_back('\0');
+  return source + truth;
+}
+
+SourceFiles source_files(const std::string& source) {
+  const std::size_t nul = source.find('\0');
+  if (nul == std::string::npos) return {source, {}};
+  return {source.substr(0, nul), source.substr(nul + 1)};
+}
+
 rt::Status write_dataset(const std::filesystem::path& dir, const Dataset& data) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
@@ -137,12 +150,21 @@ rt::Status write_dataset(const std::filesystem::path& dir, const Dataset& data) 
   char checksum_hex[17];
   std::snprintf(checksum_hex, sizeof(checksum_hex), "%016llx",
                 static_cast<unsigned long long>(checksum));
+  // Each source's files by name: {"capture": ..., "truth": ...} (no truth: unlabeled, or a
+  // source of an older dataset whose two paths were joined by a space).
+  nlohmann::json sources = nlohmann::json::array();
+  for (const std::string& source : data.sources) {
+    const SourceFiles files = source_files(source);
+    nlohmann::json entry = {{"capture", files.capture}};
+    if (!files.truth.empty()) entry["truth"] = files.truth;
+    sources.push_back(std::move(entry));
+  }
   const nlohmann::json manifest = {{"format", "stac-dataset"},
                                    {"tracks_bin_checksum_fnv1a64", checksum_hex},
                                    {"version", kDatasetFormatVersion},
                                    {"labelled", data.labelled},
                                    {"classes", data.classes},
-                                   {"sources", data.sources},
+                                   {"sources", sources},
                                    {"tracks", data.tracks.size()},
                                    {"segments", total_segments},
                                    {"tracks_per_class", classes},

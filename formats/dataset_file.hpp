@@ -47,13 +47,23 @@ struct Dataset {
   // False: made without truth (`stac dataset` without --truth): every label is a placeholder
   // (background); only `stac induct --unlabeled` takes it.
   bool labelled = true;
-  std::vector<std::string> sources;  // "capture truth" of each run
+  std::vector<std::string> sources;  // each run's files (source_of(); source_files())
   std::vector<DatasetTrack> tracks;
   // Read: tracks.bin's checksum (its last 8 bytes), which names this dataset's contents (a state
   // of `stac induct` keeps it, so a dataset remade at the same path is not taken for the one it
   // read). Not written: write_dataset computes its own.
   std::uint64_t checksum = 0;
 };
+
+// A run's source as Dataset::sources keeps it: its capture (or drive folder) and, for labelled
+// tracks, its truth file, apart by a NUL (which no path holds; stored as one string, so datasets
+// of earlier builds read as they were). Datasets made before 2026-12-08 joined the two with a
+// space, which a path may hold: such a source reads back whole as its capture.
+std::string source_of(const std::string& capture, const std::string& truth);
+struct SourceFiles {
+  std::string capture, truth;  // truth empty: unlabeled, or a source of an older dataset
+};
+SourceFiles source_files(const std::string& source);
 
 // Version 5 adds each track's path and point snapshots; version 4 says whether the tracks are
 // labelled; version 3 stores the class names (version 2: the default three, background label 3).

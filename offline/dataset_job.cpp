@@ -139,7 +139,7 @@ class Builder : public classification::TrackClassifier::Observer {
     if (!recorded) return rt::Unexpected<rt::Error>{recorded.error()};
 
     source_ = static_cast<std::uint32_t>(out_.sources.size());
-    out_.sources.push_back(out_.labelled ? in + " " + o.truth[k] : in);
+    out_.sources.push_back(source_of(in, out_.labelled ? o.truth[k] : std::string()));
     const pipeline::PipelineConfig pc =
         evaluation::offline_pipeline_config(*settings, nullptr, true);
     pipeline::ScanPipeline pipeline(pc);

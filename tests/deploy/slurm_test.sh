@@ -121,8 +121,12 @@ grep -qxF "task 1: $stac dataset --in $(q "$work/drives with space/../d2.pcap") 
   { cat spaced.log >&2; fail "--local on the Windows list with spaces"; }
 spaced=$(tracks spaced.log)
 [[ $spaced == "$all" ]] || fail "the Windows list with spaces merged ${spaced:-no} tracks, the plain list $all"
-grep -qF "\"$work/drives with space/d 1.pcap $work/drives with space/d 1.truth.jsonl\"" "out dir/manifest.json" ||
-  fail "the merged manifest names no $work/drives with space/d 1.pcap"
+python3 - "out dir/manifest.json" "$work/drives with space/d 1.pcap" "$work/drives with space/d 1.truth.jsonl" <<'PY' ||
+import json, sys
+sources = json.load(open(sys.argv[1]))["sources"]
+sys.exit(0 if {"capture": sys.argv[2], "truth": sys.argv[3]} in sources else 1)
+PY
+  fail "the merged manifest names no capture $work/drives with space/d 1.pcap with its truth"
 echo "slurm_test: the Windows list with spaces: $spaced tracks, as the plain list"
 
 # Without a TAB, a line of spaces that names no file, and splits into more than capture and truth,

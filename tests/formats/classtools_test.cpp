@@ -117,6 +117,35 @@ TEST(ModelFile, RoundTripsAndRefusesMissingTruncatedCorruptAndFolders) {
   EXPECT_FALSE(write_model_file(dir / "no" / "such" / "m.stac", model));
 }
 
+// A run's capture and truth are kept apart, spaces in their paths and all, in tracks.bin and in
+// manifest.json (issue 47: they were joined by a space, so "a b.pcap c.jsonl" could not be told
+// apart); an older dataset's joined source reads back whole.
+TEST(DatasetFile, EachSourceKeepsItsCaptureAndTruthApartWhateverTheirNames) {
+  const auto dir = fresh_dir("stac_dataset_sources");
+  Dataset d = synthetic_dataset(2);
+  d.sources = {source_of("drives with space/d 1.pcap", "drives with space/d 1.truth.jsonl"),
+               source_of("kitti drive/2011_09_26_drive_0005_sync", ""), "old.pcap old.truth.jsonl"};
+  d.tracks[1].source = 2;
+  ASSERT_TRUE(write_dataset(dir / "a", d));
+  auto back = read_dataset(dir / "a");
+  ASSERT_TRUE(back) << back.error().message;
+  ASSERT_EQ(back->sources.size(), 3u);
+  EXPECT_EQ(source_files(back->sources[0]).capture, "drives with space/d 1.pcap");
+  EXPECT_EQ(source_files(back->sources[0]).truth, "drives with space/d 1.truth.jsonl");
+  EXPECT_EQ(source_files(back->sources[1]).capture, "kitti drive/2011_09_26_drive_0005_sync");
+  EXPECT_EQ(source_files(back->sources[1]).truth, "");
+  EXPECT_EQ(source_files(back->sources[2]).capture, "old.pcap old.truth.jsonl");
+
+  std::ifstream manifest_file(dir / "a" / "manifest.json");
+  const nlohmann::json sources = nlohmann::json::parse(manifest_file).at("sources");
+  ASSERT_EQ(sources.size(), 3u);
+  EXPECT_EQ(sources[0], (nlohmann::json{{"capture", "drives with space/d 1.pcap"},
+                                        {"truth", "drives with space/d 1.truth.jsonl"}}));
+  EXPECT_EQ(sources[1], (nlohmann::json{{"capture", "kitti drive/2011_09_26_drive_0005_sync"}}));
+  EXPECT_EQ(sources[2], (nlohmann::json{{"capture", "old.pcap old.truth.jsonl"}}));
+  std::filesystem::remove_all(dir);
+}
+
 TEST(DatasetFile, RoundTripsAppendsAndRefusesMissingTruncatedAndCorrupt) {
   const auto dir = fresh_dir("stac_dataset_file");
   Dataset d = synthetic_dataset(6);
