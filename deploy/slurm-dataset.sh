@@ -16,7 +16,10 @@
 #   --stac PATH        the stac executable the nodes run (default: `stac` on PATH, else this
 #                      source tree's build/tools/stac)
 #   --parallel N       at most N tasks at once (sbatch --array=...%N; default: no limit)
-#   --dataset-args "A" more options for every `stac dataset` (e.g. "--class pole --no-deskew")
+#   --dataset-args "A" more options for every `stac dataset` (e.g. "--class pole --no-deskew"),
+#                      split at spaces
+#   --dataset-arg W    one more word for every `stac dataset`, spaces and all (repeatable, in
+#                      order with --dataset-args: --dataset-arg --config --dataset-arg "my c.yaml")
 #   --dry-run          print the sbatch commands and each task's command line, submit nothing
 #   --local            run the tasks and the merge here, one after the other, without Slurm (the
 #                      same steps a node runs: for a machine without a cluster, and the tests)
@@ -40,11 +43,12 @@ self=$here/$(basename "${BASH_SOURCE[0]}")
 
 mode=submit list="" out="" stac="" parallel="" dataset_args=() sbatch_extra=()
 # The value of option $1, the next word $2 (absent when $# is 1): refused when missing, empty, or
-# an option (a path that starts with - is written ./-name). --dataset-args takes options.
+# an option (a path that starts with - is written ./-name). --dataset-args and --dataset-arg take
+# options.
 value() {
   (($# > 1)) || usage_error "$1 needs a value"
   [[ -n $2 || $1 == --dataset-args ]] || usage_error "$1 needs a value, not an empty word"
-  [[ $1 == --dataset-args || $2 != -* ]] || usage_error "$1 needs a value, not the option '$2'"
+  [[ $1 == --dataset-arg* || $2 != -* ]] || usage_error "$1 needs a value, not the option '$2'"
 }
 while (($#)); do
   case $1 in
@@ -54,6 +58,8 @@ while (($#)); do
     --parallel) value "$@"; parallel=$2; shift 2 ;;
     # Words split at spaces (no glob), as on a command line.
     --dataset-args) value "$@"; read -ra words <<< "$2"; dataset_args+=("${words[@]}"); shift 2 ;;
+    # One word as given.
+    --dataset-arg) value "$@"; dataset_args+=("$2"); shift 2 ;;
     --dry-run) mode=dry-run; shift ;;
     --local) mode=local; shift ;;
     --task) mode=task; shift ;;

@@ -93,8 +93,15 @@ refused --stac --list list.txt --out o --local --stac
 refused --parallel --list list.txt --out o --dry-run --parallel
 refused --parallel --list list.txt --out o --parallel --dry-run
 refused --dataset-args --list list.txt --out o --dry-run --dataset-args
+refused --dataset-arg --list list.txt --out o --dry-run --dataset-arg
 refused --bogus --list list.txt --out o --dry-run --bogus
 [[ ! -e o && ! -e --local && ! -e --dry-run ]] || fail "a refused command line made a folder"
+
+# A value with spaces for every `stac dataset`: --dataset-arg words, in order with --dataset-args.
+dry_args=$("$script" --list list.txt --out out --stac "$stac" --dry-run --dataset-args "--no-deskew" \
+  --dataset-arg --config --dataset-arg "my config.yaml") || fail "dry run with --dataset-arg"
+grep -qF -- "--no-deskew --config my\ config.yaml" <<< "$dry_args" ||
+  fail "--dataset-arg: the value with a space is not one word: $dry_args"
 
 # A list with CRLF line ends runs as the same list with LF ones.
 printf '# two drives\r\nd1.pcap d1.truth.jsonl\r\n\r\nd2.pcap d2.truth.jsonl\r\n' > crlf.txt
