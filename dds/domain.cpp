@@ -43,6 +43,21 @@ rt::Status check_domain(const PublisherConfig& config) {
   }
   auto domain = create_domain(c, ExistingDomain::kRefuse);
   if (!domain) return rt::Unexpected<rt::Error>{domain.error()};
+  // With DDS Security, a participant for a moment: Cyclone checks the identity, permissions and
+  // governance against their CAs only when it makes one (the start would fail there).
+  if (uses_security(c.config_uri)) {
+    const dds_entity_t participant = dds_create_participant(c.domain_id, nullptr, nullptr);
+    if (participant < 0) {
+      dds_delete(*domain);
+      return dds_error("DDS domain " + std::to_string(c.domain_id) +
+                           ": DDS Security: " + c.config_uri +
+                           " gives an identity, permissions or governance Cyclone refuses (a "
+                           "certificate or document its CA did not sign, a key it cannot read: "
+                           "Cyclone says which, above)",
+                       participant);
+    }
+    dds_delete(participant);
+  }
   dds_delete(*domain);
   return {};
 }

@@ -25,7 +25,9 @@ enum class ExistingDomain {
 rt::Result<dds_entity_t> create_domain(const PublisherConfig& config, ExistingDomain existing);
 
 // `stac-node --check`: creates the domain as the start does (with config_uri, else
-// $CYCLONEDDS_URI, else Cyclone's defaults) and deletes it again, without a participant.
+// $CYCLONEDDS_URI, else Cyclone's defaults) and deletes it again; without a participant, unless
+// the configuration sets up DDS Security: then one is made and deleted at once (only that shows
+// whether Cyclone takes the identity, and it is what the start would make).
 rt::Status check_domain(const PublisherConfig& config);
 
 }  // namespace stac::dds

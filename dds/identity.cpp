@@ -13,6 +13,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <memory>
 #include <vector>
@@ -110,7 +111,14 @@ rt::Status check_xml(const std::string& xml, const std::string& source) {
 
 }  // namespace
 
-rt::Status check_identity_keys(const std::string& config_uri) {
+namespace {
+
+// Calls fn(xml, source) for each Cyclone configuration of `config_uri` (as given to
+// dds_create_domain; empty: the environment's CYCLONEDDS_URI) this process can read, until fn
+// returns an error. What cannot be read is left to Cyclone, which says why.
+rt::Status for_each_config(
+    const std::string& config_uri,
+    const std::function<rt::Status(const std::string&, const std::string&)>& fn) {
   std::string uri = config_uri;
   if (uri.empty()) {
     const char* env = std::getenv("CYCLONEDDS_URI");
@@ -118,7 +126,7 @@ rt::Status check_identity_keys(const std::string& config_uri) {
   }
   const std::string trimmed_uri = trimmed(uri.c_str());
   if (trimmed_uri.empty()) return {};
-  if (trimmed_uri.front() == '<') return check_xml(trimmed_uri, "the configuration given inline");
+  if (trimmed_uri.front() == '<') return fn(trimmed_uri, "the configuration given inline");
   // A list of files, as Cyclone takes it (comma-separated).
   std::size_t start = 0;
   while (start <= trimmed_uri.size()) {
@@ -134,9 +142,30 @@ rt::Status check_identity_keys(const std::string& config_uri) {
     std::ifstream in(item);
     if (!in) continue;  // Cyclone says the file is missing
     const std::string xml{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-    if (auto s = check_xml(xml, item); !s) return s;
+    if (auto s = fn(xml, item); !s) return s;
   }
   return {};
+}
+
+}  // namespace
+
+rt::Status check_identity_keys(const std::string& config_uri) {
+  return for_each_config(config_uri, check_xml);
+}
+
+bool uses_security(const std::string& config_uri) {
+  bool secure = false;
+  (void)for_each_config(config_uri, [&](const std::string& xml, const std::string&) -> rt::Status {
+    tinyxml2::XMLDocument doc;
+    if (doc.Parse(xml.c_str(), xml.size()) != tinyxml2::XML_SUCCESS) return {};
+    std::vector<const tinyxml2::XMLElement*> auths;
+    for (const tinyxml2::XMLElement* root = doc.FirstChildElement(); root != nullptr;
+         root = root->NextSiblingElement())
+      find_authentications(*root, auths);
+    secure = secure || !auths.empty();
+    return {};
+  });
+  return secure;
 }
 
 }  // namespace stac::dds

@@ -18,4 +18,9 @@ namespace stac::dds {
 // with its own message.
 [[nodiscard]] rt::Status check_identity_keys(const std::string& config_uri);
 
+// Whether a configuration of `config_uri` (read as above) sets up DDS Security (an
+// <Authentication>): then only a participant shows whether Cyclone takes the identity (a
+// certificate its CA did not sign, permissions or governance not signed by theirs).
+[[nodiscard]] bool uses_security(const std::string& config_uri);
+
 }  // namespace stac::dds

@@ -1,14 +1,21 @@
 #include "runtime/component.hpp"
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
 #include <pthread.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
+#include <cerrno>
 #include <csignal>
 #include <cstdio>
+#include <cstring>
 #include <thread>
 
 #include "dds/domain.hpp"
 #include "dds/idl_types.hpp"
 #include "drivers/can/dbc.hpp"
+#include "drivers/can/gs_usb_device.hpp"
 #include "drivers/can/odometry.hpp"
 #include "drivers/can/socketcan.hpp"
 #include "drivers/velodyne/calibration.hpp"
@@ -177,9 +184,34 @@ rt::Result<velodyne::Calibration> unit_calibration(const ComponentSettings& s) {
 
 }  // namespace
 
+namespace {
+
+// Whether this machine has the IPv4 address the Velodyne receiver binds (0.0.0.0: every one): a
+// UDP socket bound to it on port 0, so a running service's port is left alone.
+rt::Status check_bind_address(const std::string& address) {
+  sockaddr_in at{};
+  at.sin_family = AF_INET;
+  if (inet_pton(AF_INET, address.c_str(), &at.sin_addr) != 1)
+    return rt::make_error("not a dotted IPv4 address");
+  const int fd = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+  if (fd < 0) return rt::make_error(std::string("no UDP socket: ") + std::strerror(errno));
+  const int bound = ::bind(fd, reinterpret_cast<const sockaddr*>(&at), sizeof(at));
+  const int error = errno;
+  ::close(fd);
+  if (bound != 0) return rt::make_error(std::strerror(error));
+  return {};
+}
+
+}  // namespace
+
 rt::Result<std::string> check_component_files(const ComponentSettings& s,
                                               const std::filesystem::path& config) {
   const settings::VelodyneSettings& vs = s.pipeline.velodyne;
+  if (auto b = check_bind_address(vs.bind_address); !b) {
+    return rt::make_error(config.string() + ": 'velodyne.bind_address' is '" + vs.bind_address +
+                          "', which this machine cannot receive on (" + b.error().message +
+                          "); give one of its addresses (`ip -4 addr`), or 0.0.0.0 for all");
+  }
   auto calibration = unit_calibration(s);
   if (!calibration) return rt::Unexpected<rt::Error>{calibration.error()};
   auto model = formats::job_model(s.model, s.pipeline.classification.model);
@@ -205,6 +237,13 @@ rt::Result<std::string> check_component_files(const ComponentSettings& s,
                               "', which this machine does not have: " + i.error().message);
       }
       line += " on " + s.can->socketcan.interface;
+    } else if (s.can->transport == can::Transport::kGsUsb) {
+      // The adapter as GsUsbDevice::open finds it (opened for a moment, not claimed).
+      if (auto present = can::GsUsbDevice::check_present(); !present) {
+        return rt::make_error(config.string() +
+                              ": 'can.transport' is gs_usb: " + present.error().message);
+      }
+      line += " on a gs_usb adapter";
     }
   } else {
     line += ", CAN off";

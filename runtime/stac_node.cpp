@@ -28,9 +28,10 @@ int main(int argc, char** argv) try {
   app.add_flag(
       "--check", check,
       "load the configuration and every file it names (calibration, model, DBC), check its\n"
-      "addresses and the CAN interface, create the DDS domain with its Cyclone XML (and no\n"
-      "participant: nothing is announced), say what was loaded and exit: 0 when the service\n"
-      "can start with it");
+      "addresses (one this machine has) and the CAN interface, create the DDS domain with its\n"
+      "Cyclone XML (and no participant: nothing is announced; with DDS Security one, deleted at\n"
+      "once, as only that shows whether Cyclone takes the identity), say what was loaded and\n"
+      "exit: 0 when the service can start with it");
   bool cpu_affinity = false;
   app.add_flag("--cpu-affinity", cpu_affinity,
                "print the CPUs the config pins threads to (run.<thread>_cpu), as systemd's\n"

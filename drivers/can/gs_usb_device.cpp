@@ -41,6 +41,28 @@ int control(libusb_device_handle* h, std::uint8_t type, gs_usb::Request request,
 
 }  // namespace
 
+rt::Status GsUsbDevice::check_present() {
+  const std::string what = "gs_usb (" + id_text() + "): ";
+  libusb_context* context = nullptr;
+  if (const int rc = libusb_init(&context); rc != 0) {
+    return rt::make_error(what + "libusb_init failed (" + usb_error(rc) +
+                          "); is /dev/bus/usb available?");
+  }
+  libusb_device_handle* handle =
+      libusb_open_device_with_vid_pid(context, gs_usb::kVendorId, gs_usb::kProductId);
+  if (handle != nullptr) libusb_close(handle);
+  libusb_exit(context);
+  if (handle == nullptr) {
+    return rt::make_error(what +
+                          "no gs_usb/candleLight adapter found, or no permission to open it: "
+                          "check `lsusb -d " +
+                          id_text() +
+                          "` and a udev rule granting access "
+                          "(deploy/60-stac-gs-usb.rules, docs/can.md)");
+  }
+  return {};
+}
+
 rt::Result<GsUsbDevice> GsUsbDevice::open(const GsUsbConfig& config) {
   GsUsbDevice d;
   d.config_ = config;

@@ -43,6 +43,10 @@ class GsUsbDevice {
   // Errors say what failed and what to do: no adapter present (VID:PID, lsusb), no permission
   // (udev rule), interface busy, bitrate not reachable with the adapter's clock, channel absent.
   static rt::Result<GsUsbDevice> open(const GsUsbConfig& config);
+  // Whether open() would find an adapter this process may open (`stac-node --check`): the
+  // device looked up and opened for a moment, its interface left unclaimed, so a service that
+  // holds it goes on undisturbed. The same errors as open() for a missing adapter or permission.
+  static rt::Status check_present();
   GsUsbDevice(GsUsbDevice&&) noexcept;
   GsUsbDevice(const GsUsbDevice&) = delete;
   GsUsbDevice& operator=(const GsUsbDevice&) = delete;

@@ -14,6 +14,7 @@
 #include <thread>
 #include <vector>
 
+#include "dds/domain.hpp"
 #include "dds/identity.hpp"
 #include "dds/publisher.hpp"
 #include "dds_test_support.hpp"
@@ -248,6 +249,27 @@ TEST_F(DdsSecurity, APrivateKeyThatIsNotTheCertificatesIsRefusedAtStart) {
   EXPECT_TRUE(good) << good.error().message;
   EXPECT_FALSE(check_identity_keys(read_file(xml("mismatched"))));
   EXPECT_TRUE(check_identity_keys(read_file(xml("stac"))));
+}
+
+// `stac-node --check` (check_domain) refuses what only a participant shows: a certificate its CA
+// did not sign (issue 47: it said "complete"); the right identity passes, and a configuration
+// without Security makes no participant.
+TEST_F(DdsSecurity, TheCheckMakesAParticipantToRefuseAnIdentityCycloneRefuses) {
+  testing::loopback_uri();
+  PublisherConfig tampered;
+  tampered.domain_id = 156;
+  tampered.config_uri = "file://" + xml("tampered");
+  EXPECT_TRUE(uses_security(tampered.config_uri));
+  const rt::Status refused = check_domain(tampered);
+  ASSERT_FALSE(refused) << "the check took a tampered certificate";
+  EXPECT_NE(refused.error().message.find("DDS Security: file://" + xml("tampered")),
+            std::string::npos)
+      << refused.error().message;
+  PublisherConfig good = tampered;
+  good.domain_id = 157;
+  good.config_uri = "file://" + xml("stac");
+  EXPECT_TRUE(check_domain(good));
+  EXPECT_FALSE(uses_security(testing::loopback_uri()));
 }
 
 }  // namespace

@@ -68,6 +68,22 @@ TEST(NodeCheck, ABindAddressTheUdpReceiverCannotParseIsNamed) {
   EXPECT_EQ(r.output.find("complete"), std::string::npos) << r.output;
 }
 
+// 192.0.2.1 (TEST-NET-1, RFC 5737) is an address no machine here has: the receiver could parse it
+// but not bind it, so the service could not start.
+TEST(NodeCheck, ABindAddressThisMachineDoesNotHaveIsNamed) {
+  STAC_REQUIRE_SHARED_DATA(kYaml);
+  const auto [config, r] = check_with("bind_absent", {{"bind_address", "192.0.2.1"}});
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find(config.string() + ": 'velodyne.bind_address' is '192.0.2.1', which "
+                                            "this machine cannot receive on (Cannot assign "
+                                            "requested address)"),
+            std::string::npos)
+      << r.output;
+  const auto [loopback_config, loopback] =
+      check_with("bind_loopback", {{"bind_address", "127.0.0.1"}});
+  EXPECT_EQ(loopback.code, 0) << loopback.output;
+}
+
 TEST(NodeCheck, CycloneXmlCycloneCannotParseIsNamed) {
   STAC_REQUIRE_SHARED_DATA(kYaml);
   const std::string xml = xml_file("malformed", "<CycloneDDS><Domain><General>\n");
@@ -92,6 +108,17 @@ TEST(NodeCheck, ACanInterfaceThisMachineDoesNotHaveIsNamed) {
                                       "interface 'nosuchcan9' (list them with `ip link show`"),
       std::string::npos)
       << r.output;
+}
+
+// No gs_usb adapter is plugged into a test machine: the check says so as the start would.
+TEST(NodeCheck, AGsUsbAdapterThatIsNotPluggedInIsNamed) {
+  STAC_REQUIRE_SHARED_DATA(kYaml);
+  const auto [config, r] = check_with("gs_usb", {{"can", "true"}, {"transport", "gs_usb"}});
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find(config.string() + ": 'can.transport' is gs_usb: gs_usb (1d50:606f): "),
+            std::string::npos)
+      << r.output;
+  EXPECT_EQ(r.output.find("complete"), std::string::npos) << r.output;
 }
 
 TEST(NodeCheck, ACycloneInterfaceThisMachineDoesNotHaveIsNamed) {
