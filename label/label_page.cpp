@@ -3,14 +3,18 @@
 #include "label/label_page.hpp"
 
 #include <fcntl.h>
+#include <netdb.h>
+#include <poll.h>
 #include <pthread.h>
 #include <sys/file.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cctype>
+#include <cerrno>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
@@ -418,6 +422,107 @@ void LabelPage::serve_on(httplib::Server& server) {
   state_->routes(server);
 }
 
+namespace {
+
+// One connection's bytes as httplib reads them, with a budget: cpp-httplib 0.11.4 (Debian 12's)
+// reads a request line or a header line whole before it checks its length, and any number of
+// header lines, so an endless line would cost memory until the client stops. Here the
+// connection (one request: keep-alive is off) ends when kMaxRequestBytes are read.
+class BoundedSocketStream final : public httplib::Stream {
+ public:
+  BoundedSocketStream(int fd, int read_timeout_ms, int write_timeout_ms)
+      : fd_(fd), read_timeout_ms_(read_timeout_ms), write_timeout_ms_(write_timeout_ms) {}
+
+  bool is_readable() const override { return wait(POLLIN, read_timeout_ms_); }
+  bool is_writable() const override { return wait(POLLOUT, write_timeout_ms_); }
+  ssize_t read(char* ptr, size_t size) override {
+    if (at_ == end_) {
+      if (left_ == 0 || !is_readable()) return -1;  // over the budget, or stalled: the end
+      const ssize_t n = recv_some(buffer_.data(), std::min(buffer_.size(), left_));
+      if (n <= 0) return n;
+      left_ -= static_cast<std::size_t>(n);
+      at_ = 0;
+      end_ = static_cast<std::size_t>(n);
+    }
+    const std::size_t n = std::min(size, end_ - at_);
+    std::copy_n(buffer_.data() + at_, n, ptr);
+    at_ += n;
+    return static_cast<ssize_t>(n);
+  }
+  ssize_t write(const char* ptr, size_t size) override {
+    if (!is_writable()) return -1;
+    ssize_t n = 0;
+    do {
+      n = ::send(fd_, ptr, size, MSG_NOSIGNAL);
+    } while (n < 0 && errno == EINTR);
+    return n;
+  }
+  void get_remote_ip_and_port(std::string& ip, int& port) const override {
+    sockaddr_storage a{};
+    socklen_t size = sizeof(a);
+    if (::getpeername(fd_, reinterpret_cast<sockaddr*>(&a), &size) == 0) numeric(a, size, ip, port);
+  }
+  void get_local_ip_and_port(std::string& ip, int& port) const override {
+    sockaddr_storage a{};
+    socklen_t size = sizeof(a);
+    if (::getsockname(fd_, reinterpret_cast<sockaddr*>(&a), &size) == 0) numeric(a, size, ip, port);
+  }
+  socket_t socket() const override { return fd_; }
+
+ private:
+  bool wait(short events, int timeout_ms) const {
+    pollfd p{fd_, events, 0};
+    int n = 0;
+    do {
+      n = ::poll(&p, 1, timeout_ms);
+    } while (n < 0 && errno == EINTR);
+    return n > 0;
+  }
+  ssize_t recv_some(char* into, std::size_t size) const {
+    ssize_t n = 0;
+    do {
+      n = ::recv(fd_, into, size, 0);
+    } while (n < 0 && errno == EINTR);
+    return n;
+  }
+  // The address as httplib gives it (getnameinfo, numeric: an IPv4 client of an IPv6 socket as
+  // ::ffff:a.b.c.d).
+  static void numeric(const sockaddr_storage& a, socklen_t size, std::string& ip, int& port) {
+    std::array<char, NI_MAXHOST> host{};
+    if (::getnameinfo(reinterpret_cast<const sockaddr*>(&a), size, host.data(), host.size(),
+                      nullptr, 0, NI_NUMERICHOST) == 0)
+      ip = host.data();
+    port = a.ss_family == AF_INET6 ? ntohs(reinterpret_cast<const sockaddr_in6&>(a).sin6_port)
+                                   : ntohs(reinterpret_cast<const sockaddr_in&>(a).sin_port);
+  }
+
+  int fd_;
+  int read_timeout_ms_, write_timeout_ms_;
+  std::size_t left_ = kMaxRequestBytes;
+  std::array<char, 4096> buffer_{};
+  std::size_t at_ = 0, end_ = 0;
+};
+
+// httplib's server with each connection read through a BoundedSocketStream: one request, after
+// at most kIdleTimeoutS of silence, then the connection closed.
+class BoundedServer final : public httplib::Server {
+  bool process_and_close_socket(socket_t sock) override {
+    bool served = false;
+    pollfd p{sock, POLLIN, 0};
+    if (::poll(&p, 1, static_cast<int>(keep_alive_timeout_sec_) * 1000) > 0) {
+      BoundedSocketStream stream(sock, static_cast<int>(read_timeout_sec_) * 1000,
+                                 static_cast<int>(write_timeout_sec_) * 1000);
+      bool closed = false;
+      served = process_request(stream, true, closed, {});
+    }
+    ::shutdown(sock, SHUT_RDWR);
+    ::close(sock);
+    return served;
+  }
+};
+
+}  // namespace
+
 rt::Status serve(const PageOptions& options, StartRound start_round,
                  const std::function<void(const std::string& url)>& on_listening) {
   // One server per state: a second one would ask the same questions and start rounds beside
@@ -435,7 +540,7 @@ rt::Status serve(const PageOptions& options, StartRound start_round,
   } unlock{lock};
   LabelPage page(options, std::move(start_round));
   if (auto r = page.open(); !r) return r;
-  httplib::Server server;
+  BoundedServer server;
   page.serve_on(server);
   const int port = options.port == 0
                        ? server.bind_to_any_port(options.address)

@@ -41,6 +41,9 @@ inline constexpr std::size_t kMaxBodyBytes = std::size_t{64} * 1024;  // an answ
 inline constexpr int kReadTimeoutS = 5;      // per read of a request, and per write of a reply
 inline constexpr int kIdleTimeoutS = 2;      // a connection that sends nothing is closed
 inline constexpr std::size_t kThreads = 32;  // requests served at once (slow ones included)
+// What one connection may send in all (its request line, headers and body), read by serve()'s
+// server: an endless line ends there (cpp-httplib 0.11.4 reads a line whole before it checks it).
+inline constexpr std::size_t kMaxRequestBytes = kMaxBodyBytes + std::size_t{32} * 1024;
 
 // A round of `stac induct` running beside the page.
 class Round {

@@ -365,6 +365,56 @@ TEST(LabelCli, ABodyOverItsLimitIsRefusedAtOnceAndAnErrorQuotesAtMost80Character
   EXPECT_EQ(server.child->stop(SIGTERM, 20), 0) << server.child->log();
 }
 
+// A process's peak resident memory (kB, /proc/PID/status VmHWM); 0 when it cannot be read.
+long peak_kb(pid_t pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/status");
+  for (std::string line; std::getline(in, line);)
+    if (line.rfind("VmHWM:", 0) == 0) return std::stol(line.substr(6));
+  return 0;
+}
+
+// cpp-httplib 0.11.4 reads a request line or a header line whole before it checks its length: an
+// endless one (and endless header lines) cost the server memory until the client stopped (a
+// 100 MB line: 130 MB more resident). The connection now ends after label::kMaxRequestBytes.
+TEST(LabelCli, AnEndlessRequestLineOrHeadEndsTheConnectionAndCostsNoMemory) {
+  ServedCopy served("endless");
+  ASSERT_EQ(served.failure(), "");
+  LabelServer& server = served.server;
+  ASSERT_TRUE(state_of(server).is_object()) << server.child->log();
+  const long before = peak_kb(server.child->pid());
+  ASSERT_GT(before, 0);
+  // Sends up to `total` bytes of `unit` after `start`; how many went before the server closed.
+  const auto flood = [&](const std::string& start, const std::string& unit, std::size_t total) {
+    const int fd = connect_to("127.0.0.1", server.port);
+    EXPECT_GE(fd, 0);
+    std::size_t sent = static_cast<std::size_t>(
+        std::max<ssize_t>(0, ::send(fd, start.data(), start.size(), MSG_NOSIGNAL)));
+    std::string chunk;
+    while (chunk.size() < 65536) chunk += unit;
+    while (sent < total) {
+      const ssize_t n = ::send(fd, chunk.data(), chunk.size(), MSG_NOSIGNAL);
+      if (n <= 0) break;
+      sent += static_cast<std::size_t>(n);
+    }
+    ::close(fd);
+    return sent;
+  };
+  constexpr std::size_t kFlood = std::size_t{64} << 20;  // 64 MB
+  EXPECT_LT(flood("GET /", "a", kFlood), kFlood / 4) << "an endless request line was read on";
+  EXPECT_LT(flood("GET /api/state HTTP/1.1\r\nHost: " + server.host + "\r\nX-Long: ", "b", kFlood),
+            kFlood / 4)
+      << "an endless header line was read on";
+  EXPECT_LT(flood("GET /api/state HTTP/1.1\r\nHost: " + server.host + "\r\n", "X-A: b\r\n", kFlood),
+            kFlood / 4)
+      << "endless header lines were read on";
+  const long after = peak_kb(server.child->pid());
+  EXPECT_LT(after - before, 20'000)
+      << "peak resident memory grew from " << before << " kB to " << after << " kB";
+  // The page still serves.
+  EXPECT_TRUE(state_of(server).is_object()) << server.child->log();
+  EXPECT_EQ(server.child->stop(SIGTERM, 20), 0) << server.child->log();
+}
+
 TEST(LabelCli, ARequestFromAnotherSiteOrByAnotherHostNameIsRefused) {
   ServedCopy served("origin");
   ASSERT_EQ(served.failure(), "");
