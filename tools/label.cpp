@@ -50,10 +50,11 @@ void add_label_command(CLI::App& app) {
       "--requery` runs beside it: retrospection on the new labels, a round, new questions.\n"
       "Run it from the folder `stac induct` ran in (the state names its datasets as given).\n"
       "Limits (a page for one person; docs/learning.md): a request body of at most 64 KiB\n"
-      "(413), a connection of at most 96 KiB in all; a POST only as application/json from the page's own origin and every request\n"
-      "with this server's address as its Host (403: another site's form or script, DNS\n"
-      "rebinding); one request per connection, closed when it sends nothing for 2 s or a\n"
-      "read or write stalls 5 s; 32 requests served at once; no other page may frame it.\n"
+      "(413), a connection of at most 96 KiB in all; a POST only as application/json from\n"
+      "the page's own origin and every request with this server's address as its Host\n"
+      "(403: another site's form or script, DNS rebinding); one request per connection,\n"
+      "closed when it sends nothing for 2 s or a read or write stalls 5 s; 32 requests\n"
+      "served at once; no other page may frame it.\n"
       "A killed `stac label` ends the round it started (SIGTERM).");
   cmd->add_option("--state", o->state, "the state folder of `stac induct`")
       ->required()
