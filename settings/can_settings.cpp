@@ -8,7 +8,6 @@
 namespace stac::settings {
 
 rt::Result<can::CanConfig> load_can_settings(const std::filesystem::path& config_file) {
-  const std::string file = config_file.string();
   auto section = ConfigSection::open(config_file, "can");
   if (!section) return rt::Unexpected<rt::Error>{section.error()};
   const ConfigSection& c = *section;
@@ -43,33 +42,31 @@ rt::Result<can::CanConfig> load_can_settings(const std::filesystem::path& config
   } else if (transport == "cannelloni") {
     cfg.transport = Transport::kCannelloni;
   } else {
-    return rt::make_error(file + ": 'can.transport' is '" + transport +
-                          "'; use socketcan, gs_usb or cannelloni");
+    return c.error("transport", "is '" + transport + "'; use socketcan, gs_usb or cannelloni");
   }
   if (std::uint32_t address = 0; !io::parse_ipv4(cfg.cannelloni.bind_address.c_str(), address)) {
-    return rt::make_error(file + ": 'can.cannelloni_address' is '" + cfg.cannelloni.bind_address +
-                          "'; give a dotted IPv4 address (0.0.0.0: every interface)");
+    return c.error("cannelloni_address",
+                   "is '" + cfg.cannelloni.bind_address +
+                       "'; give a dotted IPv4 address (0.0.0.0: every interface)");
   }
   if (cannelloni_port < 0 || cannelloni_port > 65535)
-    return rt::make_error(file + ": 'can.cannelloni_port' must be in 0..65535");
+    return c.error("cannelloni_port", "must be in 0..65535");
   cfg.cannelloni.port = static_cast<std::uint16_t>(cannelloni_port);
   if (cfg.socketcan.interface.empty() || cfg.socketcan.interface.size() > 15) {
-    return rt::make_error(file + ": 'can.interface' must have 1..15 characters");
+    return c.error("interface", "must have 1..15 characters");
   }
   if (bitrate < 10'000 || bitrate > 1'000'000) {
-    return rt::make_error(file + ": 'can.bitrate_bps' must be in 10000..1000000 (classic CAN)");
+    return c.error("bitrate_bps", "must be in 10000..1000000 (classic CAN)");
   }
   cfg.gs_usb.bitrate_bps = static_cast<std::uint32_t>(bitrate);
-  if (channel < 0 || channel > 7)
-    return rt::make_error(file + ": 'can.gs_usb_channel' must be in 0..7");
+  if (channel < 0 || channel > 7) return c.error("gs_usb_channel", "must be in 0..7");
   cfg.gs_usb.channel = static_cast<std::uint8_t>(channel);
   if (cfg.signals.yaw_rate_sign != 1.0 && cfg.signals.yaw_rate_sign != -1.0) {
-    return rt::make_error(file + ": 'can.yaw_rate_sign' must be 1 or -1");
+    return c.error("yaw_rate_sign", "must be 1 or -1");
   }
-  if (!(stale_s > 0 && stale_s <= 10))
-    return rt::make_error(file + ": 'can.stale_timeout_s' must be in (0, 10]");
+  if (!(stale_s > 0 && stale_s <= 10)) return c.error("stale_timeout_s", "must be in (0, 10]");
   cfg.dead_reckoning.stale_timeout_ns = std::llround(stale_s * 1e9);
-  if (dbc.empty()) return rt::make_error(file + ": 'can.dbc' must name a DBC file");
+  if (dbc.empty()) return c.error("dbc", "must name a DBC file");
   cfg.dbc = c.path(dbc);
   return cfg;
 }

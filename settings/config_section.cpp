@@ -173,4 +173,19 @@ std::filesystem::path ConfigSection::path(const std::string& written) const {
   return p.is_absolute() ? p : std::filesystem::path(file_).parent_path() / p;
 }
 
+rt::Unexpected<rt::Error> ConfigSection::error(const char* key, const std::string& what) const {
+  const YAML::Node v = node_[key];
+  return rt::make_error(file_ + ": '" + name_ + "." + key + "' " + what +
+                        (v ? line_of(v) : std::string{}));
+}
+
+rt::Unexpected<rt::Error> ConfigSection::error_about(const std::string& message) const {
+  const std::size_t space = message.find(' ');
+  if (space != std::string::npos) {
+    const std::string key = message.substr(0, space);
+    if (node_[key]) return error(key.c_str(), message.substr(space + 1));
+  }
+  return rt::make_error(file_ + ": the '" + name_ + ":' section: " + message);
+}
+
 }  // namespace stac::settings

@@ -6,7 +6,8 @@
 //
 //   auto s = ConfigSection::open(file, "velodyne");     if (!s) return error;
 //   auto port = s->get<int>("port");                     if (!port) return port.error();
-//   if (*port > 65535) return s->error("port", "must be 1..65535");
+//   if (*port > 65535) return s->error("port", "must be 1..65535");   // FILE: 'velodyne.port'
+//                                                                    // must be 1..65535 (line 7)
 #pragma once
 
 #include <yaml-cpp/yaml.h>
@@ -64,10 +65,13 @@ class ConfigSection {
     out = *v;
     return {};
   }
-  // "FILE: 'section.key' WHAT", as an error value.
-  rt::Unexpected<rt::Error> error(const char* key, const std::string& what) const {
-    return rt::make_error(file_ + ": '" + name_ + "." + key + "' " + what);
-  }
+  // The one form of a configuration error: "FILE: 'section.key' WHAT (line N)", the line the
+  // key's value is on (none for a key the file leaves out). Every check of a value says it so.
+  rt::Unexpected<rt::Error> error(const char* key, const std::string& what) const;
+  // A check's message that starts with the key it is about ("cell_m must be in ..."; a library's
+  // own validation, e.g. segmentation::validate) as error() gives it; a message about no single
+  // key of the section names the section.
+  rt::Unexpected<rt::Error> error_about(const std::string& message) const;
   // A path written in the file, relative to the file's folder unless absolute.
   std::filesystem::path path(const std::string& written) const;
   const YAML::Node& node() const noexcept { return node_; }
@@ -81,13 +85,12 @@ class ConfigSection {
       // range check after this one (each comparison is false).
       if constexpr (std::is_floating_point_v<T>) {
         if (!std::isfinite(value)) {
-          return error(key, "must be a finite number, not '" + v.Scalar() + "' (line " +
-                                std::to_string(v.Mark().line + 1) + ")");
+          return error(key, "must be a finite number, not '" + v.Scalar() + "'");
         }
       }
       return value;
     } catch (const YAML::Exception&) {
-      return error(key, "has the wrong type (line " + std::to_string(v.Mark().line + 1) + ")");
+      return error(key, "has the wrong type");
     }
   }
   YAML::Node node_;

@@ -10,7 +10,6 @@ namespace stac::settings {
 
 rt::Result<segmentation::SegmenterConfig> load_segmentation_settings(
     const std::filesystem::path& config_file) {
-  const std::string file = config_file.string();
   auto section = ConfigSection::open(config_file, "segmentation");
   if (!section) return rt::Unexpected<rt::Error>{section.error()};
   const ConfigSection& s = *section;
@@ -21,8 +20,7 @@ rt::Result<segmentation::SegmenterConfig> load_segmentation_settings(
     std::int64_t v = 0;
     if (auto r = s.read(key, v); !r) return r;
     if (v < lowest || static_cast<std::uint64_t>(v) > limit) {
-      return rt::make_error(file + ": 'segmentation." + key + "' must be in " +
-                            std::to_string(lowest) + ".." + std::to_string(limit));
+      return s.error(key, "must be in " + std::to_string(lowest) + ".." + std::to_string(limit));
     }
     dst = static_cast<std::remove_reference_t<decltype(dst)>>(v);
     return {};
@@ -62,7 +60,7 @@ rt::Result<segmentation::SegmenterConfig> load_segmentation_settings(
     if (!r) return rt::Unexpected<rt::Error>{r.error()};
   }
   if (const char* why = segmentation::validate(c); *why != '\0') {
-    return rt::make_error(file + ": segmentation." + why);
+    return s.error_about(why);
   }
   return c;
 }

@@ -37,7 +37,6 @@ std::filesystem::path config_path(const std::string& option) {
 }
 
 rt::Result<VelodyneSettings> load_velodyne_settings(const std::filesystem::path& config_file) {
-  const std::string file = config_file.string();
   auto section = ConfigSection::open(config_file, "velodyne");
   if (!section) return rt::Unexpected<rt::Error>{section.error()};
   const ConfigSection& v = *section;
@@ -71,8 +70,8 @@ rt::Result<VelodyneSettings> load_velodyne_settings(const std::filesystem::path&
   const auto parsed = velodyne::parse_model(model);
   s.model_auto = model == "auto";
   if (!parsed && !s.model_auto) {
-    return rt::make_error(file + ": 'velodyne.model' is '" + model + "'; use " +
-                          std::string(velodyne::model_names()) + " or auto");
+    return v.error("model",
+                   "is '" + model + "'; use " + std::string(velodyne::model_names()) + " or auto");
   }
   a.decoder.model = parsed ? *parsed : velodyne::Model::kS2_1;
   if (const YAML::Node& m = v.node()["model_calibrations"]; m && !m.IsNull()) {
@@ -96,8 +95,8 @@ rt::Result<VelodyneSettings> load_velodyne_settings(const std::filesystem::path&
     s.calibration = v.path(calibration);
   } else if (!s.model_auto &&
              velodyne::traits(a.decoder.model).trailer != velodyne::TrailerKind::kGpsStatus) {
-    return rt::make_error(file + ": 'velodyne.calibration: stream' needs an S2.1 or S3; the " +
-                          model + " sends no calibration in its packets");
+    return v.error("calibration", "is 'stream', which needs an S2.1 or S3; the " + model +
+                                      " sends no calibration in its packets");
   }
   // Parsed as the UDP receiver parses them at start-up (io::parse_ipv4).
   if (std::uint32_t ip = 0; !io::parse_ipv4(s.bind_address.c_str(), ip)) {
@@ -111,28 +110,24 @@ rt::Result<VelodyneSettings> load_velodyne_settings(const std::filesystem::path&
                                          "'; give the sensor's dotted IPv4 address, or \"\" "
                                          "to accept any sender");
   }
-  if (port <= 0 || port > 65535) return rt::make_error(file + ": 'velodyne.port' must be 1..65535");
+  if (port <= 0 || port > 65535) return v.error("port", "must be 1..65535");
   s.port = static_cast<std::uint16_t>(port);
-  if (cut_deg < 0 || cut_deg >= 360)
-    return rt::make_error(file + ": 'velodyne.cut_angle_deg' must be in [0, 360)");
+  if (cut_deg < 0 || cut_deg >= 360) return v.error("cut_angle_deg", "must be in [0, 360)");
   a.cut_angle = static_cast<std::uint16_t>(std::lround(cut_deg * 100.0) % 36000);
-  if (a.min_rpm < 60 || a.min_rpm > 1200)
-    return rt::make_error(file + ": 'velodyne.min_rpm' must be in 60..1200");
+  if (a.min_rpm < 60 || a.min_rpm > 1200) return v.error("min_rpm", "must be in 60..1200");
   if (min_range < 0 || max_range <= min_range) {
-    return rt::make_error(file + ": need 0 <= 'velodyne.min_range_m' < 'velodyne.max_range_m'");
+    return v.error("min_range_m", "must be >= 0 and below 'velodyne.max_range_m'");
   }
   a.decoder.min_range_m = static_cast<float>(min_range);
   a.decoder.max_range_m = static_cast<float>(max_range);
   if (a.max_gap_s <= 0 || a.max_scan_duration_s <= 0) {
-    return rt::make_error(file +
-                          ": 'velodyne.max_gap_s' and 'velodyne.max_scan_duration_s' must be > 0");
+    return v.error("max_gap_s", "and 'velodyne.max_scan_duration_s' must be > 0");
   }
   if (!(a.min_completeness >= 0.0 && a.min_completeness <= 1.0))
-    return rt::make_error(file + ": 'velodyne.min_scan_completeness' must be in [0, 1]");
-  if (s.scan_slots < 2 || s.scan_slots > 64)
-    return rt::make_error(file + ": 'velodyne.scan_slots' must be in 2..64");
+    return v.error("min_scan_completeness", "must be in [0, 1]");
+  if (s.scan_slots < 2 || s.scan_slots > 64) return v.error("scan_slots", "must be in 2..64");
   if (s.receive_buffer_bytes < 65536) {
-    return rt::make_error(file + ": 'velodyne.receive_buffer_bytes' must be at least 65536");
+    return v.error("receive_buffer_bytes", "must be at least 65536");
   }
   return s;
 }

@@ -8,7 +8,6 @@
 namespace stac::settings {
 
 rt::Result<tracking::TrackerConfig> load_tracking_config(const std::filesystem::path& config_file) {
-  const std::string file = config_file.string();
   auto section = ConfigSection::open(config_file, "tracking");
   if (!section) return rt::Unexpected<rt::Error>{section.error()};
   const ConfigSection& t = *section;
@@ -65,7 +64,11 @@ rt::Result<tracking::TrackerConfig> load_tracking_config(const std::filesystem::
   try {
     const tracking::Tracker probe(c);  // the tracker's own validation, with its message
   } catch (const std::invalid_argument& e) {
-    return rt::make_error(file + ": " + e.what() + " (section 'tracking:')");
+    // "tracking config: KEY must ...": the key named as every other check names it.
+    std::string message = e.what();
+    const std::string prefix = "tracking config: ";
+    if (message.rfind(prefix, 0) == 0) message.erase(0, prefix.size());
+    return t.error_about(message);
   }
   return c;
 }

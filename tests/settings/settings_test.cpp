@@ -135,6 +135,50 @@ TEST(ConfigFile, AMisspelledKeyOrSectionIsAnErrorWithTheNearestKnownName) {
       << far.error().message;
 }
 
+// One form for every value a check refuses (issue 51): "FILE: 'section.key' WHAT (line N)", N the
+// line of the key in the file, whichever section and whoever checks it (the reader, or the
+// library's own validation: segmentation::validate, the tracker's).
+TEST(ConfigFile, EveryRefusedValueNamesTheFileTheKeyAndItsLine) {
+  std::ifstream in(kShipped);
+  std::vector<std::string> lines;
+  for (std::string l; std::getline(in, l);) lines.push_back(l);
+  const auto line_of = [&](const std::string& start) {
+    for (std::size_t i = 0; i < lines.size(); ++i)
+      if (lines[i].rfind(start, 0) == 0) return std::to_string(i + 1);
+    ADD_FAILURE() << "no line starts with " << start;
+    return std::string("?");
+  };
+  const auto expect = [](const std::string& message, const std::string& wanted) {
+    EXPECT_NE(message.find(wanted), std::string::npos) << message << "\nwanted: " << wanted;
+  };
+  const auto port = with_line("\n  port: 2368", "\n  port: 70000");
+  auto velodyne = load_velodyne_settings(port);
+  ASSERT_FALSE(velodyne);
+  expect(velodyne.error().message, port.string() + ": 'velodyne.port' must be 1..65535 (line " +
+                                       line_of("  port: 2368") + ")");
+  const auto bitrate = with_line("\n  bitrate_bps: ([0-9]+)", "\n  bitrate_bps: 5");
+  auto can = load_can_settings(bitrate);
+  ASSERT_FALSE(can);
+  expect(can.error().message, bitrate.string() +
+                                  ": 'can.bitrate_bps' must be in 10000..1000000 "
+                                  "(classic CAN) (line " +
+                                  line_of("  bitrate_bps:") + ")");
+  const auto cell = with_line("\n  cell_m: 0.15", "\n  cell_m: 0.0");
+  auto segmentation = load_segmentation_settings(cell);
+  ASSERT_FALSE(segmentation);
+  expect(segmentation.error().message, cell.string() +
+                                           ": 'segmentation.cell_m' must be in "
+                                           "[0.02, 5] m (line " +
+                                           line_of("  cell_m: 0.15") + ")");
+  const auto smoothing = with_line("\n  box_smoothing: ([0-9.]+)", "\n  box_smoothing: 2");
+  auto tracking = load_tracking_config(smoothing);
+  ASSERT_FALSE(tracking);
+  expect(tracking.error().message, smoothing.string() +
+                                       ": 'tracking.box_smoothing' must be in "
+                                       "(0, 1] (line " +
+                                       line_of("  box_smoothing:") + ")");
+}
+
 TEST(ConfigFile, AKeyWrittenTwiceIsAnError) {
   auto twice =
       load_tracking_config(with_line("  max_tracks: 512", "  max_tracks: 512\n  max_tracks: 0"));
