@@ -31,6 +31,16 @@ std::string id_text() {
   return buf;
 }
 
+// open()'s and check_present()'s error when no adapter could be opened.
+rt::Unexpected<rt::Error> no_adapter(const std::string& what) {
+  return rt::make_error(what +
+                        "no gs_usb/candleLight adapter found, or no permission to open it: "
+                        "check `lsusb -d " +
+                        id_text() +
+                        "` and a udev rule granting access "
+                        "(deploy/60-stac-gs-usb.rules, docs/can.md)");
+}
+
 template <class T>
 int control(libusb_device_handle* h, std::uint8_t type, gs_usb::Request request,
             std::uint16_t value, T& body) {
@@ -53,12 +63,7 @@ rt::Status GsUsbDevice::check_present() {
   if (handle != nullptr) libusb_close(handle);
   libusb_exit(context);
   if (handle == nullptr) {
-    return rt::make_error(what +
-                          "no gs_usb/candleLight adapter found, or no permission to open it: "
-                          "check `lsusb -d " +
-                          id_text() +
-                          "` and a udev rule granting access "
-                          "(deploy/60-stac-gs-usb.rules, docs/can.md)");
+    return no_adapter(what);
   }
   return {};
 }
@@ -74,12 +79,7 @@ rt::Result<GsUsbDevice> GsUsbDevice::open(const GsUsbConfig& config) {
   }
   d.handle_ = libusb_open_device_with_vid_pid(d.context_, gs_usb::kVendorId, gs_usb::kProductId);
   if (d.handle_ == nullptr) {
-    return rt::make_error(what +
-                          "no gs_usb/candleLight adapter found, or no permission to open it: "
-                          "check `lsusb -d " +
-                          id_text() +
-                          "` and a udev rule granting access "
-                          "(deploy/60-stac-gs-usb.rules, docs/can.md)");
+    return no_adapter(what);
   }
   libusb_set_auto_detach_kernel_driver(d.handle_, 1);  // unbind the kernel gs_usb driver if bound
   if (const int rc = libusb_claim_interface(d.handle_, kInterface); rc != 0) {
