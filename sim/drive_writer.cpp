@@ -381,6 +381,128 @@ io::Datagram data_datagram(const std::array<std::uint8_t, velodyne::kPacketSize>
   return d;
 }
 
+// Where a drive's packets and scans go besides the pcap: the truth file, the INS stream in the
+// pcap and the KITTI raw folder, with what was written.
+struct DriveRecorder {
+  DriveRecorder(const sim::RunConfig& rc_in, const sim::InsConfig& ic, std::ofstream& truth_in,
+                std::optional<formats::KittiRawWriter>& kitti_in,
+                std::optional<velodyne::ScanStream>& kitti_scans_in, sim::InsSim& ins_in)
+      : rc(rc_in),
+        origin_lat_lon_alt{ic.origin.lat_deg, ic.origin.lon_deg, ic.origin.alt_m},
+        truth(truth_in),
+        kitti(kitti_in),
+        kitti_scans(kitti_scans_in),
+        ins(ins_in) {}
+
+  // A truth scan closed: its line in the truth file (and its sweep for the tracklets).
+  void on_scan(const sim::TruthScan& s) {
+    truth << sim::to_json(s, origin_lat_lon_alt) << '\n';
+    if (kitti) {
+      SweepTruth& w = sweeps.emplace_back();
+      w.start_ns = s.start_ns, w.end_ns = s.end_ns;
+      for (const sim::TruthObject& obj : s.objects)
+        if (sim::is_foreground(obj.cls)) w.objects.emplace_back(obj.id, obj.cls);
+    }
+    ++scans;
+    points += s.points;
+  }
+  // The INS messages up to stamp_ns into the pcap.
+  rt::Status write_ins_until(std::int64_t stamp_ns) {
+    while (ins_out && ins.next_stamp_ns() <= stamp_ns) {
+      if (auto w = ins_out->write(ins.next()); !w) return w;
+      ++ins_messages;
+    }
+    return {};
+  }
+  // The complete scans the KITTI framing gave, each with the OXTS record of its mid-sweep time.
+  rt::Status write_kitti_scans() {
+    while (velodyne::Scan* scan = kitti_scans->take()) {
+      if (scan->header.complete()) {
+        const std::int64_t mid =
+            scan->header.stamp_ns + (scan->header.end_stamp_ns - scan->header.stamp_ns) / 2;
+        const applanix::Group1 g = ins.group1_at(static_cast<double>(mid - rc.start_ns) * 1e-9);
+        kitti_frames.push_back({scan->header.stamp_ns, mid, scan->header.end_stamp_ns});
+        if (auto a = kitti->add(*scan, mid, formats::oxts_record(ego::ins_fix(g, mid))); !a) {
+          kitti_scans->release();
+          return a;
+        }
+      }
+      kitti_scans->release();
+    }
+    return {};
+  }
+
+  const sim::RunConfig& rc;
+  const double origin_lat_lon_alt[3];
+  std::ofstream& truth;
+  std::optional<formats::KittiRawWriter>& kitti;
+  std::optional<velodyne::ScanStream>& kitti_scans;
+  sim::InsSim& ins;
+  std::optional<InsPcapStream> ins_out;
+  std::uint64_t scans = 0, points = 0, ins_messages = 0;
+  std::vector<SweepTruth> sweeps;        // --kitti-raw: for its tracklets
+  std::vector<KittiFrame> kitti_frames;  // the KITTI scans' sweeps and times
+};
+
+// Every data packet of the run (with the INS messages before it, its trailer, and an HDL-32E's
+// or VLP's position packets) into the pcap and the KITTI framing.
+rt::Status write_packets(sim::SimRun& run, std::int64_t span_ns, PacketTrailer& trailer,
+                         std::optional<io::PcapWriter>& pcap, DriveRecorder& rec,
+                         const DriveOutput& out) {
+  const bool factory = trailer.factory();
+  const std::uint32_t n = run.packet_count();
+  const auto on_scan = [&rec](const sim::TruthScan& s) { rec.on_scan(s); };
+  std::array<std::uint8_t, velodyne::kPositionPacketSize> position{};
+  std::array<std::uint8_t, velodyne::kPacketSize> bytes{};
+  for (std::uint32_t k = 0; k < n; ++k) {
+    std::int64_t first_ns = 0;
+    run.packet(k, bytes, first_ns, on_scan);
+    if (auto w = rec.write_ins_until(first_ns + span_ns); !w)
+      return rt::make_error(w.error().message);
+    trailer.write(bytes.data() + velodyne::kPacketSize - 6, first_ns);
+    // Received right after its last firing.
+    const io::Datagram d = data_datagram(bytes, first_ns + span_ns, factory);
+    if (pcap) {
+      if (auto w = pcap->write_udp(d); !w) return rt::make_error(w.error().message);
+    }
+    // An HDL-32E / VLP also sends a position packet (port 8308) for about every 14 data packets
+    // (VLP-16 manual).
+    if (pcap && factory && k % 14 == 13) {
+      if (auto w = write_position(*pcap, rec.ins, rec.rc.start_ns, d.stamp_ns, position); !w)
+        return rt::make_error(w.error().message);
+    }
+    if (rec.kitti_scans && rec.kitti_scans->add_packet(d.payload, d.stamp_ns)) {
+      if (auto w = rec.write_kitti_scans(); !w) return rt::make_error(w.error().message);
+    }
+    out.progress(k, n);
+  }
+  (void)run.finish(on_scan);
+  return {};
+}
+
+// The summary lines of a written drive (wall: seconds it took).
+void summarize(const DriveOptions& o, const sim::SimRun& run, const DriveRecorder& rec, bool pcap,
+               double wall, const DriveOutput& out) {
+  out.summary(formatted(
+      "stac sim: %s seed %llu, %.1f s: %u packets, %llu scans, %llu points -> %s, %s\n"
+      "  %zu objects in the world; simulated %.2fx real time (%.1f s)",
+      o.scenario.c_str(), static_cast<unsigned long long>(o.seed), o.duration_s, run.packet_count(),
+      static_cast<unsigned long long>(rec.scans), static_cast<unsigned long long>(rec.points),
+      o.out.empty() ? "(no pcap)" : o.out.c_str(), o.truth.c_str(), run.world().actors().size(),
+      o.duration_s / wall, wall));
+  if (pcap)
+    out.summary(
+        formatted("  INS: %llu Applanix messages (Group 1 at 200 Hz, Groups 2 and 3 at 1 Hz), GPS "
+                  "week %u, %s port %u",
+                  static_cast<unsigned long long>(rec.ins_messages), rec.ins.gps_week(),
+                  o.ins_udp ? "UDP" : "TCP", static_cast<unsigned>(InsPcapStream::kPort)));
+  if (rec.kitti)
+    out.summary(
+        formatted("  KITTI raw: %zu complete scans with their OXTS records in %s (velodyne_points, "
+                  "oxts, calib_imu_to_velo.txt, tracklet_labels.xml)",
+                  rec.kitti->scans(), o.kitti_raw.c_str()));
+}
+
 }  // namespace
 
 rt::Status write_drive(const DriveOptions& o, const DriveOutput& given) {
@@ -423,88 +545,25 @@ rt::Status write_drive(const DriveOptions& o, const DriveOutput& given) {
   if (!truth) return rt::make_error(o.truth + ": cannot create the truth file");
   auto trailer = PacketTrailer::create(o, *sensor, rc);
   if (!trailer) return rt::make_error(trailer.error().message);
-  const bool factory = trailer->factory();
 
   const velodyne::PacketDecoder timing(sensor->calibration,
                                        velodyne::DecoderConfig{.model = rc.lidar.model});
   const std::int64_t span_ns = timing.packet_span_ns(o.dual_return);
-  std::uint64_t scans = 0, points = 0;
-  const double origin_lat_lon_alt[3] = {ic.origin.lat_deg, ic.origin.lon_deg, ic.origin.alt_m};
-  std::vector<SweepTruth> sweeps;        // --kitti-raw: for its tracklets
-  std::vector<KittiFrame> kitti_frames;  // the KITTI scans' sweeps and times
-  auto on_scan = [&](const sim::TruthScan& s) {
-    truth << sim::to_json(s, origin_lat_lon_alt) << '\n';
-    if (kitti) {
-      SweepTruth& w = sweeps.emplace_back();
-      w.start_ns = s.start_ns, w.end_ns = s.end_ns;
-      for (const sim::TruthObject& obj : s.objects)
-        if (sim::is_foreground(obj.cls)) w.objects.emplace_back(obj.id, obj.cls);
-    }
-    ++scans;
-    points += s.points;
-  };
-  const std::uint32_t n = (*run)->packet_count();
   const auto wall0 = std::chrono::steady_clock::now();
   sim::InsSim ins(ic, [r = run->get()](double t) { return r->ego(t); });
-  std::optional<InsPcapStream> ins_out;
-  if (pcap) ins_out.emplace(*pcap, o.ins_udp);
-  std::uint64_t ins_messages = 0;
-  auto write_ins_until = [&](std::int64_t stamp_ns) -> rt::Status {
-    while (ins_out && ins.next_stamp_ns() <= stamp_ns) {
-      if (auto w = ins_out->write(ins.next()); !w) return w;
-      ++ins_messages;
-    }
-    return {};
-  };
-  auto write_kitti_scans = [&]() -> rt::Status {
-    while (velodyne::Scan* scan = kitti_scans->take()) {
-      if (scan->header.complete()) {
-        const std::int64_t mid =
-            scan->header.stamp_ns + (scan->header.end_stamp_ns - scan->header.stamp_ns) / 2;
-        const applanix::Group1 g = ins.group1_at(static_cast<double>(mid - rc.start_ns) * 1e-9);
-        kitti_frames.push_back({scan->header.stamp_ns, mid, scan->header.end_stamp_ns});
-        if (auto a = kitti->add(*scan, mid, formats::oxts_record(ego::ins_fix(g, mid))); !a) {
-          kitti_scans->release();
-          return a;
-        }
-      }
-      kitti_scans->release();
-    }
-    return {};
-  };
-  std::array<std::uint8_t, velodyne::kPositionPacketSize> position{};
-  std::array<std::uint8_t, velodyne::kPacketSize> bytes{};
-  for (std::uint32_t k = 0; k < n; ++k) {
-    std::int64_t first_ns = 0;
-    (*run)->packet(k, bytes, first_ns, on_scan);
-    if (auto w = write_ins_until(first_ns + span_ns); !w) return rt::make_error(w.error().message);
-    trailer->write(bytes.data() + velodyne::kPacketSize - 6, first_ns);
-    // Received right after its last firing.
-    const io::Datagram d = data_datagram(bytes, first_ns + span_ns, factory);
-    if (pcap) {
-      if (auto w = pcap->write_udp(d); !w) return rt::make_error(w.error().message);
-    }
-    // An HDL-32E / VLP also sends a position packet (port 8308) for about every 14 data packets
-    // (VLP-16 manual).
-    if (pcap && factory && k % 14 == 13) {
-      if (auto w = write_position(*pcap, ins, rc.start_ns, d.stamp_ns, position); !w)
-        return rt::make_error(w.error().message);
-    }
-    if (kitti_scans && kitti_scans->add_packet(d.payload, d.stamp_ns)) {
-      if (auto w = write_kitti_scans(); !w) return rt::make_error(w.error().message);
-    }
-    out.progress(k, n);
-  }
-  (void)(*run)->finish(on_scan);
+  DriveRecorder rec(rc, ic, truth, kitti, kitti_scans, ins);
+  if (pcap) rec.ins_out.emplace(*pcap, o.ins_udp);
+  if (auto w = write_packets(**run, span_ns, *trailer, pcap, rec, out); !w) return w;
   if (kitti) {
     if (auto f = kitti->finish(); !f) return rt::make_error(f.error().message);
-    const auto labels = sim_tracklets(**run, rc, sweeps, kitti_frames);
+    const auto labels = sim_tracklets(**run, rc, rec.sweeps, rec.kitti_frames);
     const std::filesystem::path xml = std::filesystem::path(o.kitti_raw) / "tracklet_labels.xml";
     std::ofstream(xml) << formats::format_kitti_tracklets(labels);
     if (!std::filesystem::exists(xml)) return rt::make_error(xml.string() + ": cannot write");
   }
-  if (auto w = write_ins_until(rc.start_ns + std::llround(rc.duration_s * 1e9)); !w)
+  if (auto w = rec.write_ins_until(rc.start_ns + std::llround(rc.duration_s * 1e9)); !w)
     return rt::make_error(w.error().message);
+  const std::uint32_t n = (*run)->packet_count();
   out.progress(n, n);
   if (pcap) {
     if (auto c = pcap->close(); !c) return rt::make_error(c.error().message);
@@ -513,24 +572,7 @@ rt::Status write_drive(const DriveOptions& o, const DriveOutput& given) {
   if (!truth) return rt::make_error(o.truth + ": write failed");
   const double wall =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
-  out.summary(
-      formatted("stac sim: %s seed %llu, %.1f s: %u packets, %llu scans, %llu points -> %s, %s\n"
-                "  %zu objects in the world; simulated %.2fx real time (%.1f s)",
-                o.scenario.c_str(), static_cast<unsigned long long>(o.seed), o.duration_s, n,
-                static_cast<unsigned long long>(scans), static_cast<unsigned long long>(points),
-                o.out.empty() ? "(no pcap)" : o.out.c_str(), o.truth.c_str(),
-                (*run)->world().actors().size(), o.duration_s / wall, wall));
-  if (pcap)
-    out.summary(
-        formatted("  INS: %llu Applanix messages (Group 1 at 200 Hz, Groups 2 and 3 at 1 Hz), GPS "
-                  "week %u, %s port %u",
-                  static_cast<unsigned long long>(ins_messages), ins.gps_week(),
-                  o.ins_udp ? "UDP" : "TCP", static_cast<unsigned>(InsPcapStream::kPort)));
-  if (kitti)
-    out.summary(
-        formatted("  KITTI raw: %zu complete scans with their OXTS records in %s (velodyne_points, "
-                  "oxts, calib_imu_to_velo.txt, tracklet_labels.xml)",
-                  kitti->scans(), o.kitti_raw.c_str()));
+  summarize(o, **run, rec, pcap.has_value(), wall, out);
   if (can_log) return write_can_log(*can_log, o.can, rc, out);
   return {};
 }
