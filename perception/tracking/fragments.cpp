@@ -14,13 +14,78 @@ namespace stac::tracking {
 
 using namespace shapes;  // NOLINT(google-build-using-namespace): the tracker's own box rules
 
+namespace {
+
+// Detection h grown into its union u (about h's centre, in `heading`) with fragment f.
+void join(Detection& h, const Detection& f, const Extent& u, float heading) noexcept {
+  const Eigen::Vector2f centre = h.position(true);
+  const float ch = std::cos(heading), sh = std::sin(heading);
+  h.yaw = heading;
+  const float uc = 0.5f * (u.u0 + u.u1), vc = 0.5f * (u.v0 + u.v1);
+  const float total = static_cast<float>(h.points + f.points);
+  h.centroid =
+      (h.centroid * static_cast<float>(h.points) + f.centroid * static_cast<float>(f.points)) /
+      total;
+  h.box_center = centre + Eigen::Vector2f(ch * uc - sh * vc, sh * uc + ch * vc);
+  h.length = u.u1 - u.u0;
+  h.width = u.v1 - u.v0;
+  if (h.width > h.length) {
+    std::swap(h.length, h.width);
+    h.yaw = static_cast<float>(wrap_pi(h.yaw + std::numbers::pi / 2));
+  }
+  h.height = std::max(h.height, f.height);
+  h.end_on = false;  // a union: its heading no longer points away from the sensor
+  h.points += f.points;
+}
+
+}  // namespace
+
+// The host a fragment joins (best == nd: none) and their union.
+struct Tracker::HostChoice {
+  std::size_t best = 0;
+  float gap = 0;
+  Extent union_box{};
+  float heading = 0, area = 0;
+  bool known = false;  // inside a host's known body
+};
+
 void Tracker::absorb_fragments(std::span<const Detection> detections) noexcept {
   const std::size_t nd = detections.size();
-  for (std::size_t di = 0; di < nd; ++di) {
+  start_merged(detections);
+  std::fill_n(merged_track_.begin(), live_.size(), std::uint8_t{0});
+  if (config_.fragments.gap_m <= 0) return;
+  const auto max_len =
+      static_cast<float>(longest_object(config_, config_.object.tall_height_m > 0));
+  const auto max_wid = static_cast<float>(config_.object.max_width_m);
+  const auto max_gap = static_cast<float>(config_.fragments.gap_m);
+  const float reach_sq = max_len * max_len + max_wid * max_wid;
+  for (std::size_t fi = 0; fi < nd; ++fi) {
+    const Detection& f = detections[fi];
+    if (det_match_[fi] == kAbsorbed || host_[fi] != 0 || !f.centroid.allFinite() ||
+        !f.position(true).allFinite()) {
+      continue;
+    }
+    const Slot* own =
+        det_match_[fi] >= 0 ? &slots_[live_[static_cast<std::size_t>(det_match_[fi])]] : nullptr;
+    const HostChoice c = find_host(fi, f, own, nd, max_gap, reach_sq);
+    if (c.best == nd) continue;
+    join(merged_[c.best], f, c.union_box, c.heading);
+    host_[c.best] = c.known || host_[c.best] == kBodyHost ? kBodyHost : kHost;
+    if (own != nullptr) {
+      merged_track_[static_cast<std::size_t>(det_match_[fi])] = 1;
+      ++counters_.deleted_merged;
+    }
+    det_match_[fi] = kAbsorbed;
+    ++counters_.absorbed_detections;
+  }
+}
+
+// Each detection as measured, no host yet. An end-on face matched to a track of known extent is
+// that body (its face kept) before any fragment joins it.
+void Tracker::start_merged(std::span<const Detection> detections) noexcept {
+  for (std::size_t di = 0; di < detections.size(); ++di) {
     merged_[di] = detections[di];
     host_[di] = 0;
-    // An end-on face matched to a track of known extent is that body (its face kept) before
-    // any fragment joins it.
     if (det_match_[di] >= 0) {
       const Slot& slot = slots_[live_[static_cast<std::size_t>(det_match_[di])]];
       Detection& m = merged_[di];
@@ -32,110 +97,73 @@ void Tracker::absorb_fragments(std::span<const Detection> detections) noexcept {
       }
     }
   }
-  std::fill_n(merged_track_.begin(), live_.size(), std::uint8_t{0});
-  if (config_.fragments.gap_m <= 0) return;
-  const auto max_len =
-      static_cast<float>(longest_object(config_, config_.object.tall_height_m > 0));
-  const auto max_wid = static_cast<float>(config_.object.max_width_m);
-  const auto max_gap = static_cast<float>(config_.fragments.gap_m);
-  const float reach_sq = max_len * max_len + max_wid * max_wid;
-  const auto person = [&](const Detection& d) {
-    return narrow_and_tall(config_, d.length, d.width, d.height);
-  };
-  for (std::size_t fi = 0; fi < nd; ++fi) {
-    const Detection& f = detections[fi];
-    // A person-like piece joins only the known body of a truck it lies in (inside_known_body).
-    const bool f_person = person(f);
-    if (det_match_[fi] == kAbsorbed || host_[fi] != 0 || !f.centroid.allFinite() ||
-        !f.position(true).allFinite()) {
-      continue;
-    }
-    const Slot* own =
-        det_match_[fi] >= 0 ? &slots_[live_[static_cast<std::size_t>(det_match_[fi])]] : nullptr;
-    // A fragment whose own track is established joins only a person (its own legs), never a car.
-    const bool established = own != nullptr && config_.fragments.established_hits > 0 &&
-                             own->track.hits >= config_.fragments.established_hits;
-    // The matched measurement nearest to the fragment (box gap) whose union with it still fits;
-    // a matched fragment only joins an older track moving with it.
-    std::size_t best = nd;
-    float best_gap = max_gap;
-    Extent best_union{};
-    float best_heading = 0, best_area = 0;
-    bool best_known = false;
-    const Eigen::Vector2f fc = f.position(true);
-    for (std::size_t hi = 0; hi < nd; ++hi) {
-      if (hi == fi || det_match_[hi] < 0) continue;
-      // A union that fits has a diagonal of at most reach: farther centres never fit (cheap test).
-      if ((merged_[hi].position(true) - fc).squaredNorm() > reach_sq) continue;
-      // A person or bicyclist takes only low pieces (legs, a wheel), whatever their tracks' ages,
-      // and stays narrow.
-      const bool narrow_host = person(merged_[hi]);
-      const Slot& host = slots_[live_[static_cast<std::size_t>(det_match_[hi])]];
-      const bool in_body = !narrow_host && inside_known_body(host, f);
-      if (f_person && !in_body) continue;
-      if (narrow_host && f.height >= config_.person.min_height_m) continue;
-      if (own != nullptr && !narrow_host) {
-        if (established || !older(host.track, own->track)) continue;
-        if (own->track.state != TrackState::kTentative &&
-            (host.kf.x.tail<2>() - own->kf.x.tail<2>()).norm() > config_.fragments.velocity_mps) {
-          continue;
-        }
+}
+
+// The matched measurement nearest to fragment fi (box gap) whose union with it still fits; a
+// matched fragment (own: its track) only joins an older track moving with it.
+Tracker::HostChoice Tracker::find_host(std::size_t fi, const Detection& f, const Slot* own,
+                                       std::size_t nd, float max_gap,
+                                       float reach_sq) const noexcept {
+  // A person-like piece joins only the known body of a truck it lies in (inside_known_body).
+  const bool f_person = narrow_and_tall(config_, f.length, f.width, f.height);
+  // A fragment whose own track is established joins only a person (its own legs), never a car.
+  const bool established = own != nullptr && config_.fragments.established_hits > 0 &&
+                           own->track.hits >= config_.fragments.established_hits;
+  HostChoice c;
+  c.best = nd;
+  c.gap = max_gap;
+  const Eigen::Vector2f fc = f.position(true);
+  for (std::size_t hi = 0; hi < nd; ++hi) {
+    if (hi == fi || det_match_[hi] < 0) continue;
+    // A union that fits has a diagonal of at most reach: farther centres never fit (cheap test).
+    if ((merged_[hi].position(true) - fc).squaredNorm() > reach_sq) continue;
+    // A person or bicyclist takes only low pieces (legs, a wheel), whatever their tracks' ages,
+    // and stays narrow.
+    const Detection& h = merged_[hi];
+    const bool narrow_host = narrow_and_tall(config_, h.length, h.width, h.height);
+    const Slot& host = slots_[live_[static_cast<std::size_t>(det_match_[hi])]];
+    const bool in_body = !narrow_host && inside_known_body(host, f);
+    if (f_person && !in_body) continue;
+    if (narrow_host && f.height >= config_.person.min_height_m) continue;
+    if (own != nullptr && !narrow_host) {
+      if (established || !older(host.track, own->track)) continue;
+      if (own->track.state != TrackState::kTentative &&
+          (host.kf.x.tail<2>() - own->kf.x.tail<2>()).norm() > config_.fragments.velocity_mps) {
+        continue;
       }
-      const Detection& h = merged_[hi];
+    }
+    // Inside the body of a host track of known extent: joined in the body's heading (its
+    // last whole view), the first such host taken.
+    if (in_body) {
       const Eigen::Vector2f centre = h.position(true);
-      // Inside the body of a host track of known extent: joined in the body's heading (its
-      // last whole view), the first such host taken.
-      if (in_body) {
-        const float heading = host.known_yaw;
-        best = hi, best_heading = heading, best_known = true;
-        best_union = hull(extent_in(h, centre, heading), extent_in(f, centre, heading));
-        break;
-      }
-      // The union in the host's heading or the fragment's, whichever fits tighter (a piece's
-      // principal axis may be diagonal to the car).
-      for (const float heading : {h.yaw, f.yaw}) {
-        const Extent a = extent_in(h, centre, heading), b = extent_in(f, centre, heading);
-        const float gu = std::max(0.0f, std::max(a.u0, b.u0) - std::min(a.u1, b.u1));
-        const float gv = std::max(0.0f, std::max(a.v0, b.v0) - std::min(a.v1, b.v1));
-        const float gap = std::hypot(gu, gv);
-        if (!(gap <= best_gap) || (narrow_host && gap > config_.person.gap_m)) continue;
-        const Extent u = hull(a, b);
-        const float lu = u.u1 - u.u0, lv = u.v1 - u.v0;
-        if (!fits_one_object(config_, lu, lv, tall(config_, h.height) && tall(config_, f.height)))
-          continue;
-        if (narrow_host && !narrow_and_tall(config_, lu, lv, merged_[hi].height)) continue;
-        if (best == hi && lu * lv >= best_area) continue;
-        best = hi, best_gap = gap, best_union = u, best_heading = heading, best_area = lu * lv;
-      }
+      c.best = hi, c.heading = host.known_yaw, c.known = true;
+      c.union_box = hull(extent_in(h, centre, c.heading), extent_in(f, centre, c.heading));
+      break;
     }
-    if (best == nd) continue;
-    Detection& h = merged_[best];
-    const Eigen::Vector2f centre = h.position(true);
-    const float ch = std::cos(best_heading), sh = std::sin(best_heading);
-    h.yaw = best_heading;
-    const float uc = 0.5f * (best_union.u0 + best_union.u1),
-                vc = 0.5f * (best_union.v0 + best_union.v1);
-    const float total = static_cast<float>(h.points + f.points);
-    h.centroid =
-        (h.centroid * static_cast<float>(h.points) + f.centroid * static_cast<float>(f.points)) /
-        total;
-    h.box_center = centre + Eigen::Vector2f(ch * uc - sh * vc, sh * uc + ch * vc);
-    h.length = best_union.u1 - best_union.u0;
-    h.width = best_union.v1 - best_union.v0;
-    if (h.width > h.length) {
-      std::swap(h.length, h.width);
-      h.yaw = static_cast<float>(wrap_pi(h.yaw + std::numbers::pi / 2));
-    }
-    h.height = std::max(h.height, f.height);
-    h.end_on = false;  // a union: its heading no longer points away from the sensor
-    h.points += f.points;
-    host_[best] = best_known || host_[best] == kBodyHost ? kBodyHost : kHost;
-    if (own != nullptr) {
-      merged_track_[static_cast<std::size_t>(det_match_[fi])] = 1;
-      ++counters_.deleted_merged;
-    }
-    det_match_[fi] = kAbsorbed;
-    ++counters_.absorbed_detections;
+    try_union(hi, f, narrow_host, c);
+  }
+  return c;
+}
+
+// The union of host hi with fragment f in the host's heading or the fragment's, whichever fits
+// tighter (a piece's principal axis may be diagonal to the car), taken into c when nearer.
+void Tracker::try_union(std::size_t hi, const Detection& f, bool narrow_host,
+                        HostChoice& c) const noexcept {
+  const Detection& h = merged_[hi];
+  const Eigen::Vector2f centre = h.position(true);
+  for (const float heading : {h.yaw, f.yaw}) {
+    const Extent a = extent_in(h, centre, heading), b = extent_in(f, centre, heading);
+    const float gu = std::max(0.0f, std::max(a.u0, b.u0) - std::min(a.u1, b.u1));
+    const float gv = std::max(0.0f, std::max(a.v0, b.v0) - std::min(a.v1, b.v1));
+    const float gap = std::hypot(gu, gv);
+    if (!(gap <= c.gap) || (narrow_host && gap > config_.person.gap_m)) continue;
+    const Extent u = hull(a, b);
+    const float lu = u.u1 - u.u0, lv = u.v1 - u.v0;
+    if (!fits_one_object(config_, lu, lv, tall(config_, h.height) && tall(config_, f.height)))
+      continue;
+    if (narrow_host && !narrow_and_tall(config_, lu, lv, h.height)) continue;
+    if (c.best == hi && lu * lv >= c.area) continue;
+    c.best = hi, c.gap = gap, c.union_box = u, c.heading = heading, c.area = lu * lv;
   }
 }
 

@@ -101,6 +101,13 @@ class Tracker {
                const Eigen::Matrix2d* spread = nullptr, bool single = false) noexcept;
   bool spawn(const Detection& d, std::int64_t stamp_ns) noexcept;  // false: not spawned (counted)
   void absorb_fragments(std::span<const Detection> detections) noexcept;
+  // The steps of absorb_fragments (fragments.cpp).
+  struct HostChoice;
+  void start_merged(std::span<const Detection> detections) noexcept;
+  HostChoice find_host(std::size_t fi, const Detection& f, const Slot* own, std::size_t nd,
+                       float max_gap, float reach_sq) const noexcept;
+  void try_union(std::size_t hi, const Detection& f, bool narrow_host,
+                 HostChoice& c) const noexcept;
   // Whether fragment f lies wholly inside the known body of track slot s
   // (fragments.known_margin_m).
   [[nodiscard]] bool inside_known_body(const Slot& s, const Detection& f) const noexcept;
