@@ -167,113 +167,30 @@ void Tracker::try_union(std::size_t hi, const Detection& f, bool narrow_host,
   }
 }
 
+// A's box grown for the pair tests of merge_overlapping, refreshed when a is corrected.
+struct Tracker::GrownBox {
+  bool narrow = false;  // a person-like track: takes only low tracks (legs) into its box
+  float grow = 0, reach = 0, ca = 1, sa = 0;
+  void refresh(const Track& t) noexcept {
+    reach = 0.5f * std::hypot(t.length + 2 * grow, t.width + 2 * grow);
+    ca = std::cos(t.yaw), sa = std::sin(t.yaw);
+  }
+};
+
 void Tracker::merge_overlapping(std::int64_t stamp_ns) noexcept {
   if (config_.fragments.overlap_margin_m < 0) return;
-  const auto margin = static_cast<float>(config_.fragments.overlap_margin_m);
-  const auto person = [&](const Track& t) {
-    return narrow_and_tall(config_, t.length, t.width, t.height);
-  };
-  const auto fits = [&](const Track& t) {
-    return fits_one_object(config_, t.length, t.width, tall(config_, t.height));
-  };
   const std::size_t n = live_.size();
   std::fill_n(merged_track_.begin(), n, std::uint8_t{0});
   // The tracks' x,y in one compact array for the pair loop (kept current when a is corrected).
   for (std::size_t i = 0; i < n; ++i) track_xy_[i] = slots_[live_[i]].kf.x.head<2>();
   // The tracks sorted by x: the pairs within a's reach lie in a window of that order (a track
   // corrected below is moved to its new place).
-  const auto before = [&](std::uint32_t p, std::uint32_t q) {
-    return track_xy_[p].x() < track_xy_[q].x() || (track_xy_[p].x() == track_xy_[q].x() && p < q);
-  };
   for (std::size_t i = 0; i < n; ++i) order_[i] = static_cast<std::uint32_t>(i);
-  std::sort(order_.begin(), order_.begin() + static_cast<std::ptrdiff_t>(n), before);
+  std::sort(order_.begin(), order_.begin() + static_cast<std::ptrdiff_t>(n),
+            [this](std::uint32_t p, std::uint32_t q) { return x_before(p, q); });
   for (std::size_t k = 0; k < n; ++k) rank_[order_[k]] = static_cast<std::uint32_t>(k);
-  const auto move_to_place = [&](std::uint32_t t) {
-    std::size_t k = rank_[t];
-    for (; k > 0 && before(t, order_[k - 1]); --k) {
-      order_[k] = order_[k - 1];
-      rank_[order_[k]] = static_cast<std::uint32_t>(k);
-    }
-    for (; k + 1 < n && before(order_[k + 1], t); ++k) {
-      order_[k] = order_[k + 1];
-      rank_[order_[k]] = static_cast<std::uint32_t>(k);
-    }
-    order_[k] = t;
-    rank_[t] = static_cast<std::uint32_t>(k);
-  };
   for (std::size_t i = 0; i < n; ++i) {
-    if (merged_track_[i] != 0) continue;
-    Slot& a = slots_[live_[i]];
-    const bool narrow = person(a.track);  // takes only low tracks (legs) into its box
-    // Both boxes must fit what one fragmented object's box may (a hedge, a wall or a canopy
-    // beside a parked car does not), and a's changes only when it merges: it never will.
-    if (!narrow && !fits(a.track)) continue;
-    const float grow = narrow ? static_cast<float>(config_.person.gap_m) : margin;
-    float reach = 0, ca = 1, sa = 0;  // of a's grown box; refreshed when a is corrected
-    const auto shape = [&] {
-      reach = 0.5f * std::hypot(a.track.length + 2 * grow, a.track.width + 2 * grow);
-      ca = std::cos(a.track.yaw), sa = std::sin(a.track.yaw);
-    };
-    shape();
-    // Tries the pair (a, track j); true when a was corrected (it moved).
-    const auto pair = [&](std::size_t j) {
-      if (j == i || merged_track_[j] != 0) return false;
-      const float dx = static_cast<float>(track_xy_[j].x() - track_xy_[i].x()),
-                  dy = static_cast<float>(track_xy_[j].y() - track_xy_[i].y());
-      if (dx * dx + dy * dy > reach * reach) return false;  // outside the grown box's circle
-      const Slot& b = slots_[live_[j]];
-      if (person(b.track) ||
-          (narrow ? b.track.height >= config_.person.min_height_m : !older(a.track, b.track))) {
-        return false;
-      }
-      if (std::abs(ca * dx + sa * dy) > 0.5f * a.track.length + grow ||
-          std::abs(-sa * dx + ca * dy) > 0.5f * a.track.width + grow) {
-        return false;
-      }
-      if (!narrow && (!fits(a.track) || !fits(b.track))) return false;
-      // b is the same object as the older a: a keeps its id (and its velocity); if only b was
-      // measured in this scan, b's measurement corrects a.
-      bool moved = false;
-      if (a.track.segment < 0 && b.measured >= 0) {
-        // Learns the extent from any measurement, a known body's union too (unlike step 4).
-        const auto bi = static_cast<std::size_t>(b.measured);
-        Eigen::Matrix2d spread;
-        float gap = 0;
-        Eigen::Vector2f centre = Eigen::Vector2f::Zero();
-        Detection m = merged_[bi];
-        const bool is_piece = piece(a, m, bi, spread, gap, centre);
-        if (is_piece) m.box_center = centre;
-        correct(a, m, stamp_ns, true, is_piece ? &spread : nullptr, host_[bi] == 0);
-        track_xy_[i] = a.kf.x.head<2>();
-        a.measured = b.measured;
-        shape();
-        moved = true;
-      }
-      merged_track_[j] = 1;
-      ++counters_.deleted_overlap;
-      return moved;
-    };
-    // The tracks from j = `from` on within reach along x (a margin above rounding: every pair
-    // outside fails the circle test above), tried in the order of j as a scan of all pairs
-    // would; when a moves, its remaining pairs are gathered again around its new place.
-    for (std::size_t from = 0;;) {
-      const double window = static_cast<double>(reach) * (1 + 1e-5), xi = track_xy_[i].x();
-      std::size_t candidates = 0;
-      for (std::size_t k = rank_[i]; k-- > 0 && xi - track_xy_[order_[k]].x() <= window;) {
-        if (order_[k] >= from) candidate_[candidates++] = order_[k];
-      }
-      for (std::size_t k = rank_[i] + 1; k < n && track_xy_[order_[k]].x() - xi <= window; ++k) {
-        if (order_[k] >= from) candidate_[candidates++] = order_[k];
-      }
-      std::sort(candidate_.begin(), candidate_.begin() + static_cast<std::ptrdiff_t>(candidates));
-      bool moved = false;
-      for (std::size_t c = 0; c < candidates && !moved; ++c) {
-        moved = pair(candidate_[c]);
-        from = candidate_[c] + 1;
-      }
-      if (!moved) break;
-      move_to_place(static_cast<std::uint32_t>(i));
-    }
+    if (merged_track_[i] == 0) merge_into(i, stamp_ns);
   }
   std::size_t kept = 0;
   for (std::size_t i = 0; i < n; ++i) {
@@ -284,6 +201,108 @@ void Tracker::merge_overlapping(std::int64_t stamp_ns) noexcept {
     }
   }
   (void)live_.resize(kept);
+}
+
+// The order of merge_overlapping's sweep: by x, then by index.
+bool Tracker::x_before(std::uint32_t p, std::uint32_t q) const noexcept {
+  return track_xy_[p].x() < track_xy_[q].x() || (track_xy_[p].x() == track_xy_[q].x() && p < q);
+}
+
+// Track t moved to its place in order_ after its x changed.
+void Tracker::move_to_place(std::uint32_t t) noexcept {
+  const std::size_t n = live_.size();
+  std::size_t k = rank_[t];
+  for (; k > 0 && x_before(t, order_[k - 1]); --k) {
+    order_[k] = order_[k - 1];
+    rank_[order_[k]] = static_cast<std::uint32_t>(k);
+  }
+  for (; k + 1 < n && x_before(order_[k + 1], t); ++k) {
+    order_[k] = order_[k + 1];
+    rank_[order_[k]] = static_cast<std::uint32_t>(k);
+  }
+  order_[k] = t;
+  rank_[t] = static_cast<std::uint32_t>(k);
+}
+
+// The tracks within live track i's box (grown) merged into it. Both boxes must fit what one
+// fragmented object's box may (a hedge, a wall or a canopy beside a parked car does not), and
+// a's changes only when it merges: one that does not fit never will.
+void Tracker::merge_into(std::size_t i, std::int64_t stamp_ns) noexcept {
+  const Slot& a = slots_[live_[i]];
+  GrownBox g;
+  g.narrow = narrow_and_tall(config_, a.track.length, a.track.width, a.track.height);
+  if (!g.narrow &&
+      !fits_one_object(config_, a.track.length, a.track.width, tall(config_, a.track.height))) {
+    return;
+  }
+  g.grow = g.narrow ? static_cast<float>(config_.person.gap_m)
+                    : static_cast<float>(config_.fragments.overlap_margin_m);
+  g.refresh(a.track);
+  // The tracks from j = `from` on within reach along x (a margin above rounding: every pair
+  // outside fails the circle test), tried in the order of j as a scan of all pairs would; when
+  // a moves, its remaining pairs are gathered again around its new place.
+  const std::size_t n = live_.size();
+  for (std::size_t from = 0;;) {
+    const double window = static_cast<double>(g.reach) * (1 + 1e-5), xi = track_xy_[i].x();
+    std::size_t candidates = 0;
+    for (std::size_t k = rank_[i]; k-- > 0 && xi - track_xy_[order_[k]].x() <= window;) {
+      if (order_[k] >= from) candidate_[candidates++] = order_[k];
+    }
+    for (std::size_t k = rank_[i] + 1; k < n && track_xy_[order_[k]].x() - xi <= window; ++k) {
+      if (order_[k] >= from) candidate_[candidates++] = order_[k];
+    }
+    std::sort(candidate_.begin(), candidate_.begin() + static_cast<std::ptrdiff_t>(candidates));
+    bool moved = false;
+    for (std::size_t c = 0; c < candidates && !moved; ++c) {
+      moved = try_merge(i, candidate_[c], g, stamp_ns);
+      from = candidate_[c] + 1;
+    }
+    if (!moved) break;
+    move_to_place(static_cast<std::uint32_t>(i));
+  }
+}
+
+// Tries the pair (live track i = a, live track j); true when a was corrected (it moved).
+bool Tracker::try_merge(std::size_t i, std::size_t j, GrownBox& g, std::int64_t stamp_ns) noexcept {
+  if (j == i || merged_track_[j] != 0) return false;
+  Slot& a = slots_[live_[i]];
+  const float dx = static_cast<float>(track_xy_[j].x() - track_xy_[i].x()),
+              dy = static_cast<float>(track_xy_[j].y() - track_xy_[i].y());
+  if (dx * dx + dy * dy > g.reach * g.reach) return false;  // outside the grown box's circle
+  const Slot& b = slots_[live_[j]];
+  if (narrow_and_tall(config_, b.track.length, b.track.width, b.track.height) ||
+      (g.narrow ? b.track.height >= config_.person.min_height_m : !older(a.track, b.track))) {
+    return false;
+  }
+  if (std::abs(g.ca * dx + g.sa * dy) > 0.5f * a.track.length + g.grow ||
+      std::abs(-g.sa * dx + g.ca * dy) > 0.5f * a.track.width + g.grow) {
+    return false;
+  }
+  const auto fits = [&](const Track& t) {
+    return fits_one_object(config_, t.length, t.width, tall(config_, t.height));
+  };
+  if (!g.narrow && (!fits(a.track) || !fits(b.track))) return false;
+  // b is the same object as the older a: a keeps its id (and its velocity); if only b was
+  // measured in this scan, b's measurement corrects a.
+  bool moved = false;
+  if (a.track.segment < 0 && b.measured >= 0) {
+    // Learns the extent from any measurement, a known body's union too (unlike step 4).
+    const auto bi = static_cast<std::size_t>(b.measured);
+    Eigen::Matrix2d spread;
+    float gap = 0;
+    Eigen::Vector2f centre = Eigen::Vector2f::Zero();
+    Detection m = merged_[bi];
+    const bool is_piece = piece(a, m, bi, spread, gap, centre);
+    if (is_piece) m.box_center = centre;
+    correct(a, m, stamp_ns, true, is_piece ? &spread : nullptr, host_[bi] == 0);
+    track_xy_[i] = a.kf.x.head<2>();
+    a.measured = b.measured;
+    g.refresh(a.track);
+    moved = true;
+  }
+  merged_track_[j] = 1;
+  ++counters_.deleted_overlap;
+  return moved;
 }
 
 }  // namespace stac::tracking

@@ -126,6 +126,12 @@ class Tracker {
   void prune() noexcept;
   void spawn_unmatched(std::int64_t stamp_ns, std::span<const Detection> detections) noexcept;
   void merge_overlapping(std::int64_t stamp_ns) noexcept;
+  // The steps of merge_overlapping (fragments.cpp).
+  struct GrownBox;
+  [[nodiscard]] bool x_before(std::uint32_t p, std::uint32_t q) const noexcept;
+  void move_to_place(std::uint32_t t) noexcept;
+  void merge_into(std::size_t i, std::int64_t stamp_ns) noexcept;
+  bool try_merge(std::size_t i, std::size_t j, GrownBox& g, std::int64_t stamp_ns) noexcept;
   void report(std::int64_t stamp_ns, TrackerOutput& out) noexcept;
   // Solves the assignment of the gated rows_ x cols_ (pair_cost_, nd detections per track) per
   // connected component of the allowed pairs into det_match_.
