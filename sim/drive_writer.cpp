@@ -206,14 +206,17 @@ std::vector<formats::Tracklet> sim_tracklets(const sim::SimRun& run, const sim::
   return out;
 }
 
-}  // namespace
+// The virtual sensor: an HDL-64E S2.1 (S3 in dual return) unless --model names another, with its
+// settings and the calibration it casts with.
+struct VirtualSensor {
+  VelodyneSettings settings;
+  velodyne::Model model;
+  velodyne::Calibration calibration;
+};
 
-rt::Status write_drive(const DriveOptions& o, const DriveOutput& given) {
-  const DriveOutput out{given.summary ? given.summary : [](const std::string&) {},
-                        given.progress ? given.progress : [](std::uint32_t, std::uint32_t) {}};
+rt::Result<VirtualSensor> virtual_sensor(const DriveOptions& o) {
   auto settings = load_velodyne_settings(config_path(o.config));
   if (!settings) return rt::make_error(settings.error().message);
-  // The virtual sensor: an HDL-64E S2.1 (S3 in dual return) unless --model names another.
   velodyne::Model model = o.dual_return ? velodyne::Model::kS3 : velodyne::Model::kS2_1;
   if (!o.model.empty()) {
     const auto m = velodyne::parse_model(o.model);
@@ -234,8 +237,11 @@ rt::Status write_drive(const DriveOptions& o, const DriveOutput& given) {
   if (!loaded) return rt::make_error(loaded.error().message);
   if (auto fits = velodyne::check_calibration_for(*loaded, model); !fits)
     return rt::make_error(fits.error().message);
-  auto calibration = rt::Result<velodyne::Calibration>(velodyne::lasers_of(*loaded, model));
+  return VirtualSensor{std::move(*settings), model, velodyne::lasers_of(*loaded, model)};
+}
 
+// The run's configuration from the options and the sensor.
+rt::Result<sim::RunConfig> run_config(const DriveOptions& o, const VirtualSensor& sensor) {
   sim::RunConfig rc;
   rc.scenario = o.scenario;
   for (const std::string& kind : o.without) {
@@ -249,10 +255,264 @@ rt::Status write_drive(const DriveOptions& o, const DriveOutput& given) {
   }
   rc.seed = o.seed;
   rc.duration_s = o.duration_s;
-  rc.cut_angle = settings->assembler.cut_angle;
+  rc.cut_angle = sensor.settings.assembler.cut_angle;
   rc.lidar.seed = o.seed;
   rc.lidar.dual_return = o.dual_return;
-  rc.lidar.model = model;
+  rc.lidar.model = sensor.model;
+  return rc;
+}
+
+// --kitti-raw: the packets decoded as a driver would, each complete scan written with the OXTS
+// record of its mid-sweep time (the sim's Group 1 there) and the sensor's mounting.
+rt::Status open_kitti_raw(const DriveOptions& o, const sim::RunConfig& rc,
+                          const VirtualSensor& sensor,
+                          std::optional<formats::KittiRawWriter>& kitti,
+                          std::optional<velodyne::ScanStream>& kitti_scans) {
+  Eigen::Isometry3d velo_T_imu = Eigen::Isometry3d::Identity();
+  velo_T_imu.translation() = Eigen::Vector3d(0, 0, -rc.lidar.mount_height_m);
+  auto w = formats::KittiRawWriter::create(o.kitti_raw, velo_T_imu);
+  if (!w) return rt::make_error(w.error().message);
+  kitti.emplace(std::move(*w));
+  // KITTI's sweeps start and end facing backward (timestamps_start/_end.txt), facing
+  // forward at the frame's time (timestamps.txt).
+  velodyne::ScanAssemblerConfig sweep_framing = sensor.settings.assembler;
+  sweep_framing.cut_angle = 18000;
+  kitti_scans.emplace(sensor.calibration, sweep_framing, 2);
+  return {};
+}
+
+// The last 6 bytes of each data packet. An S2.1/S3 sends GPS time past the hour and the status
+// cycle, with the calibration the sim casts with in its dump (so `--calib stream` decodes the
+// capture); an HDL-32E / VLP sends GPS time, its return mode and product id instead
+// (docs/velodyne.md).
+class PacketTrailer {
+ public:
+  static rt::Result<PacketTrailer> create(const DriveOptions& o, const VirtualSensor& sensor,
+                                          const sim::RunConfig& rc) {
+    PacketTrailer p;
+    p.model_ = sensor.model;
+    p.dual_return_ = o.dual_return;
+    p.factory_ = velodyne::traits(sensor.model).trailer == velodyne::TrailerKind::kFactory;
+    if (p.factory_) return p;
+    velodyne::SensorStatus status;
+    status.gps_raw = 'A';  // PPS and NMEA
+    status.temperature_c = 42;
+    status.firmware = 0x47;
+    velodyne::UnitParameters unit;
+    unit.upper_noise_threshold = unit.lower_noise_threshold = 24;
+    unit.calibration_date = velodyne::DateTime{2025, 6, 2, 10, 30, 0};
+    unit.humidity = 30;
+    unit.rpm = static_cast<std::uint16_t>(std::lround(rc.lidar.rpm));
+    unit.fov_end = 36000;
+    unit.run_hours = 1200;
+    unit.ip_source = {192, 168, 3, 43};
+    unit.ip_destination = {255, 255, 255, 255};
+    unit.return_mode =
+        o.dual_return ? velodyne::ReturnMode::kDual : velodyne::ReturnMode::kStrongest;
+    unit.power_level = 0xA8;
+    unit.warnings = 0x60;  // PPS and GPS time present
+    auto t = velodyne::StatusTrailerWriter::create(sensor.model, status, unit, sensor.calibration);
+    if (!t)
+      return rt::make_error("the calibration cannot be sent in the status cycle: " +
+                            t.error().message);
+    p.status_.emplace(std::move(*t));
+    return p;
+  }
+  // An HDL-32E / VLP (factory bytes), which also sends position packets.
+  [[nodiscard]] bool factory() const noexcept { return factory_; }
+  void write(std::uint8_t* t, std::int64_t utc_ns) {
+    if (!factory_) return status_->write(t, utc_ns);
+    velodyne::store_u32(t, velodyne::usec_past_hour(utc_ns));
+    t[4] = dual_return_ ? velodyne::kReturnDual : velodyne::kReturnStrongest;
+    t[5] = velodyne::traits(model_).product_id;
+  }
+
+ private:
+  velodyne::Model model_{};
+  bool dual_return_ = false;
+  bool factory_ = false;
+  std::optional<velodyne::StatusTrailerWriter> status_;
+};
+
+// An HDL-32E / VLP position packet (port 8308) at utc_ns: its GPS time and the receiver's
+// $GPRMC, here the INS's fix; `position` is the packet's buffer.
+rt::Status write_position(io::PcapWriter& pcap, const sim::InsSim& ins, std::int64_t start_ns,
+                          std::int64_t utc_ns,
+                          std::array<std::uint8_t, velodyne::kPositionPacketSize>& position) {
+  const applanix::Group1 g = ins.group1_at(static_cast<double>(utc_ns - start_ns) * 1e-9);
+  velodyne::NmeaFix fix;
+  fix.valid = true;
+  const std::int64_t day_ns = 86'400'000'000'000LL;
+  const std::int64_t days = utc_ns >= 0 ? utc_ns / day_ns : (utc_ns - day_ns + 1) / day_ns;
+  fix.time_of_day_ns = utc_ns - days * day_ns;
+  const std::chrono::year_month_day ymd{std::chrono::sys_days{std::chrono::days{days}}};
+  fix.date = velodyne::NmeaDate{static_cast<int>(ymd.year()),
+                                static_cast<int>(static_cast<unsigned>(ymd.month())),
+                                static_cast<int>(static_cast<unsigned>(ymd.day()))};
+  fix.latitude_deg = g.latitude_deg;
+  fix.longitude_deg = g.longitude_deg;
+  fix.speed_mps = std::max(0.0, static_cast<double>(g.speed_mps));
+  fix.course_deg = std::fmod(static_cast<double>(g.track_deg) + 360.0, 360.0);
+  if (auto w = velodyne::write_position_packet(velodyne::usec_past_hour(utc_ns),
+                                               velodyne::PpsStatus::kLocked, fix, position);
+      !w) {
+    return rt::make_error(std::string("position packet: ") + velodyne::to_string(w.error()));
+  }
+  io::Datagram p;
+  p.payload = position;
+  p.stamp_ns = utc_ns;
+  p.src_ip = 0xC0A801C9;  // 192.168.1.201, a VLP's factory address
+  p.dst_ip = 0xFFFFFFFF;
+  p.src_port = velodyne::kPortPosition;
+  p.dst_port = velodyne::kPortPosition;
+  return pcap.write_udp(p);
+}
+
+// Data packet `bytes` as the sensor sends it, received at stamp_ns.
+io::Datagram data_datagram(const std::array<std::uint8_t, velodyne::kPacketSize>& bytes,
+                           std::int64_t stamp_ns, bool factory) {
+  io::Datagram d;
+  d.payload = bytes;
+  d.stamp_ns = stamp_ns;
+  d.src_ip = factory ? 0xC0A801C9 : 0xC0A8032B;  // 192.168.1.201 (VLP) / 192.168.3.43 (64E)
+  d.dst_ip = 0xFFFFFFFF;
+  d.src_port = velodyne::kPortData;
+  d.dst_port = velodyne::kPortData;
+  return d;
+}
+
+// Where a drive's packets and scans go besides the pcap: the truth file, the INS stream in the
+// pcap and the KITTI raw folder, with what was written.
+struct DriveRecorder {
+  DriveRecorder(const sim::RunConfig& rc_in, const sim::InsConfig& ic, std::ofstream& truth_in,
+                std::optional<formats::KittiRawWriter>& kitti_in,
+                std::optional<velodyne::ScanStream>& kitti_scans_in, sim::InsSim& ins_in)
+      : rc(rc_in),
+        origin_lat_lon_alt{ic.origin.lat_deg, ic.origin.lon_deg, ic.origin.alt_m},
+        truth(truth_in),
+        kitti(kitti_in),
+        kitti_scans(kitti_scans_in),
+        ins(ins_in) {}
+
+  // A truth scan closed: its line in the truth file (and its sweep for the tracklets).
+  void on_scan(const sim::TruthScan& s) {
+    truth << sim::to_json(s, origin_lat_lon_alt) << '\n';
+    if (kitti) {
+      SweepTruth& w = sweeps.emplace_back();
+      w.start_ns = s.start_ns, w.end_ns = s.end_ns;
+      for (const sim::TruthObject& obj : s.objects)
+        if (sim::is_foreground(obj.cls)) w.objects.emplace_back(obj.id, obj.cls);
+    }
+    ++scans;
+    points += s.points;
+  }
+  // The INS messages up to stamp_ns into the pcap.
+  rt::Status write_ins_until(std::int64_t stamp_ns) {
+    while (ins_out && ins.next_stamp_ns() <= stamp_ns) {
+      if (auto w = ins_out->write(ins.next()); !w) return w;
+      ++ins_messages;
+    }
+    return {};
+  }
+  // The complete scans the KITTI framing gave, each with the OXTS record of its mid-sweep time.
+  rt::Status write_kitti_scans() {
+    while (velodyne::Scan* scan = kitti_scans->take()) {
+      if (scan->header.complete()) {
+        const std::int64_t mid =
+            scan->header.stamp_ns + (scan->header.end_stamp_ns - scan->header.stamp_ns) / 2;
+        const applanix::Group1 g = ins.group1_at(static_cast<double>(mid - rc.start_ns) * 1e-9);
+        kitti_frames.push_back({scan->header.stamp_ns, mid, scan->header.end_stamp_ns});
+        if (auto a = kitti->add(*scan, mid, formats::oxts_record(ego::ins_fix(g, mid))); !a) {
+          kitti_scans->release();
+          return a;
+        }
+      }
+      kitti_scans->release();
+    }
+    return {};
+  }
+
+  const sim::RunConfig& rc;
+  const double origin_lat_lon_alt[3];
+  std::ofstream& truth;
+  std::optional<formats::KittiRawWriter>& kitti;
+  std::optional<velodyne::ScanStream>& kitti_scans;
+  sim::InsSim& ins;
+  std::optional<InsPcapStream> ins_out;
+  std::uint64_t scans = 0, points = 0, ins_messages = 0;
+  std::vector<SweepTruth> sweeps;        // --kitti-raw: for its tracklets
+  std::vector<KittiFrame> kitti_frames;  // the KITTI scans' sweeps and times
+};
+
+// Every data packet of the run (with the INS messages before it, its trailer, and an HDL-32E's
+// or VLP's position packets) into the pcap and the KITTI framing.
+rt::Status write_packets(sim::SimRun& run, std::int64_t span_ns, PacketTrailer& trailer,
+                         std::optional<io::PcapWriter>& pcap, DriveRecorder& rec,
+                         const DriveOutput& out) {
+  const bool factory = trailer.factory();
+  const std::uint32_t n = run.packet_count();
+  const auto on_scan = [&rec](const sim::TruthScan& s) { rec.on_scan(s); };
+  std::array<std::uint8_t, velodyne::kPositionPacketSize> position{};
+  std::array<std::uint8_t, velodyne::kPacketSize> bytes{};
+  for (std::uint32_t k = 0; k < n; ++k) {
+    std::int64_t first_ns = 0;
+    run.packet(k, bytes, first_ns, on_scan);
+    if (auto w = rec.write_ins_until(first_ns + span_ns); !w)
+      return rt::make_error(w.error().message);
+    trailer.write(bytes.data() + velodyne::kPacketSize - 6, first_ns);
+    // Received right after its last firing.
+    const io::Datagram d = data_datagram(bytes, first_ns + span_ns, factory);
+    if (pcap) {
+      if (auto w = pcap->write_udp(d); !w) return rt::make_error(w.error().message);
+    }
+    // An HDL-32E / VLP also sends a position packet (port 8308) for about every 14 data packets
+    // (VLP-16 manual).
+    if (pcap && factory && k % 14 == 13) {
+      if (auto w = write_position(*pcap, rec.ins, rec.rc.start_ns, d.stamp_ns, position); !w)
+        return rt::make_error(w.error().message);
+    }
+    if (rec.kitti_scans && rec.kitti_scans->add_packet(d.payload, d.stamp_ns)) {
+      if (auto w = rec.write_kitti_scans(); !w) return rt::make_error(w.error().message);
+    }
+    out.progress(k, n);
+  }
+  (void)run.finish(on_scan);
+  return {};
+}
+
+// The summary lines of a written drive (wall: seconds it took).
+void summarize(const DriveOptions& o, const sim::SimRun& run, const DriveRecorder& rec, bool pcap,
+               double wall, const DriveOutput& out) {
+  out.summary(formatted(
+      "stac sim: %s seed %llu, %.1f s: %u packets, %llu scans, %llu points -> %s, %s\n"
+      "  %zu objects in the world; simulated %.2fx real time (%.1f s)",
+      o.scenario.c_str(), static_cast<unsigned long long>(o.seed), o.duration_s, run.packet_count(),
+      static_cast<unsigned long long>(rec.scans), static_cast<unsigned long long>(rec.points),
+      o.out.empty() ? "(no pcap)" : o.out.c_str(), o.truth.c_str(), run.world().actors().size(),
+      o.duration_s / wall, wall));
+  if (pcap)
+    out.summary(
+        formatted("  INS: %llu Applanix messages (Group 1 at 200 Hz, Groups 2 and 3 at 1 Hz), GPS "
+                  "week %u, %s port %u",
+                  static_cast<unsigned long long>(rec.ins_messages), rec.ins.gps_week(),
+                  o.ins_udp ? "UDP" : "TCP", static_cast<unsigned>(InsPcapStream::kPort)));
+  if (rec.kitti)
+    out.summary(
+        formatted("  KITTI raw: %zu complete scans with their OXTS records in %s (velodyne_points, "
+                  "oxts, calib_imu_to_velo.txt, tracklet_labels.xml)",
+                  rec.kitti->scans(), o.kitti_raw.c_str()));
+}
+
+}  // namespace
+
+rt::Status write_drive(const DriveOptions& o, const DriveOutput& given) {
+  const DriveOutput out{given.summary ? given.summary : [](const std::string&) {},
+                        given.progress ? given.progress : [](std::uint32_t, std::uint32_t) {}};
+  auto sensor = virtual_sensor(o);
+  if (!sensor) return rt::make_error(sensor.error().message);
+  auto run_cfg = run_config(o, *sensor);
+  if (!run_cfg) return rt::make_error(run_cfg.error().message);
+  const sim::RunConfig& rc = *run_cfg;
   sim::InsConfig ic;
   if (!o.origin.empty()) {
     auto origin = parse_origin(o.origin);
@@ -260,7 +520,7 @@ rt::Status write_drive(const DriveOptions& o, const DriveOutput& given) {
     ic.origin = *origin;
   }
   ic.start_ns = rc.start_ns;
-  auto run = sim::SimRun::create(*calibration, rc);
+  auto run = sim::SimRun::create(sensor->calibration, rc);
   if (!run) return rt::make_error(run.error().message);
   std::optional<CanLog> can_log;
   if (!o.can.empty()) {
@@ -276,173 +536,34 @@ rt::Status write_drive(const DriveOptions& o, const DriveOutput& given) {
     if (!p) return rt::make_error(p.error().message);
     pcap.emplace(std::move(*p));
   }
-  // --kitti-raw: the packets decoded as a driver would, each complete scan written with the OXTS
-  // record of its mid-sweep time (the sim's Group 1 there) and the sensor's mounting.
   std::optional<formats::KittiRawWriter> kitti;
   std::optional<velodyne::ScanStream> kitti_scans;
   if (!o.kitti_raw.empty()) {
-    Eigen::Isometry3d velo_T_imu = Eigen::Isometry3d::Identity();
-    velo_T_imu.translation() = Eigen::Vector3d(0, 0, -rc.lidar.mount_height_m);
-    auto w = formats::KittiRawWriter::create(o.kitti_raw, velo_T_imu);
-    if (!w) return rt::make_error(w.error().message);
-    kitti.emplace(std::move(*w));
-    // KITTI's sweeps start and end facing backward (timestamps_start/_end.txt), facing
-    // forward at the frame's time (timestamps.txt).
-    velodyne::ScanAssemblerConfig sweep_framing = settings->assembler;
-    sweep_framing.cut_angle = 18000;
-    kitti_scans.emplace(*calibration, sweep_framing, 2);
+    if (auto k = open_kitti_raw(o, rc, *sensor, kitti, kitti_scans); !k) return k;
   }
   std::ofstream truth(o.truth);
   if (!truth) return rt::make_error(o.truth + ": cannot create the truth file");
+  auto trailer = PacketTrailer::create(o, *sensor, rc);
+  if (!trailer) return rt::make_error(trailer.error().message);
 
-  // The trailer an S2.1/S3 sends: GPS time past the hour and the status cycle, with the
-  // calibration the sim casts with in its dump (so `--calib stream` decodes the capture).
-  velodyne::SensorStatus sensor;
-  sensor.gps_raw = 'A';  // PPS and NMEA
-  sensor.temperature_c = 42;
-  sensor.firmware = 0x47;
-  velodyne::UnitParameters unit;
-  unit.upper_noise_threshold = unit.lower_noise_threshold = 24;
-  unit.calibration_date = velodyne::DateTime{2025, 6, 2, 10, 30, 0};
-  unit.humidity = 30;
-  unit.rpm = static_cast<std::uint16_t>(std::lround(rc.lidar.rpm));
-  unit.fov_end = 36000;
-  unit.run_hours = 1200;
-  unit.ip_source = {192, 168, 3, 43};
-  unit.ip_destination = {255, 255, 255, 255};
-  unit.return_mode = o.dual_return ? velodyne::ReturnMode::kDual : velodyne::ReturnMode::kStrongest;
-  unit.power_level = 0xA8;
-  unit.warnings = 0x60;  // PPS and GPS time present
-  // An HDL-32E / VLP sends GPS time, its return mode and product id instead (docs/velodyne.md).
-  const bool factory = velodyne::traits(model).trailer == velodyne::TrailerKind::kFactory;
-  std::optional<velodyne::StatusTrailerWriter> trailer;
-  if (!factory) {
-    auto t = velodyne::StatusTrailerWriter::create(model, sensor, unit, *calibration);
-    if (!t)
-      return rt::make_error("the calibration cannot be sent in the status cycle: " +
-                            t.error().message);
-    trailer.emplace(std::move(*t));
-  }
-  auto write_trailer = [&](std::uint8_t* t, std::int64_t utc_ns) {
-    if (!factory) return trailer->write(t, utc_ns);
-    velodyne::store_u32(t, velodyne::usec_past_hour(utc_ns));
-    t[4] = o.dual_return ? velodyne::kReturnDual : velodyne::kReturnStrongest;
-    t[5] = velodyne::traits(model).product_id;
-  };
-
-  const velodyne::PacketDecoder timing(*calibration,
+  const velodyne::PacketDecoder timing(sensor->calibration,
                                        velodyne::DecoderConfig{.model = rc.lidar.model});
   const std::int64_t span_ns = timing.packet_span_ns(o.dual_return);
-  std::uint64_t scans = 0, points = 0;
-  const double origin_lat_lon_alt[3] = {ic.origin.lat_deg, ic.origin.lon_deg, ic.origin.alt_m};
-  std::vector<SweepTruth> sweeps;        // --kitti-raw: for its tracklets
-  std::vector<KittiFrame> kitti_frames;  // the KITTI scans' sweeps and times
-  auto on_scan = [&](const sim::TruthScan& s) {
-    truth << sim::to_json(s, origin_lat_lon_alt) << '\n';
-    if (kitti) {
-      SweepTruth& w = sweeps.emplace_back();
-      w.start_ns = s.start_ns, w.end_ns = s.end_ns;
-      for (const sim::TruthObject& obj : s.objects)
-        if (sim::is_foreground(obj.cls)) w.objects.emplace_back(obj.id, obj.cls);
-    }
-    ++scans;
-    points += s.points;
-  };
-  const std::uint32_t n = (*run)->packet_count();
   const auto wall0 = std::chrono::steady_clock::now();
   sim::InsSim ins(ic, [r = run->get()](double t) { return r->ego(t); });
-  std::optional<InsPcapStream> ins_out;
-  if (pcap) ins_out.emplace(*pcap, o.ins_udp);
-  std::uint64_t ins_messages = 0;
-  auto write_ins_until = [&](std::int64_t stamp_ns) -> rt::Status {
-    while (ins_out && ins.next_stamp_ns() <= stamp_ns) {
-      if (auto w = ins_out->write(ins.next()); !w) return w;
-      ++ins_messages;
-    }
-    return {};
-  };
-  auto write_kitti_scans = [&]() -> rt::Status {
-    while (velodyne::Scan* scan = kitti_scans->take()) {
-      if (scan->header.complete()) {
-        const std::int64_t mid =
-            scan->header.stamp_ns + (scan->header.end_stamp_ns - scan->header.stamp_ns) / 2;
-        const applanix::Group1 g = ins.group1_at(static_cast<double>(mid - rc.start_ns) * 1e-9);
-        kitti_frames.push_back({scan->header.stamp_ns, mid, scan->header.end_stamp_ns});
-        if (auto a = kitti->add(*scan, mid, formats::oxts_record(ego::ins_fix(g, mid))); !a) {
-          kitti_scans->release();
-          return a;
-        }
-      }
-      kitti_scans->release();
-    }
-    return {};
-  };
-  std::array<std::uint8_t, velodyne::kPositionPacketSize> position{};
-  auto write_position = [&](std::int64_t utc_ns) -> rt::Status {
-    const applanix::Group1 g = ins.group1_at(static_cast<double>(utc_ns - rc.start_ns) * 1e-9);
-    velodyne::NmeaFix fix;
-    fix.valid = true;
-    const std::int64_t day_ns = 86'400'000'000'000LL;
-    const std::int64_t days = utc_ns >= 0 ? utc_ns / day_ns : (utc_ns - day_ns + 1) / day_ns;
-    fix.time_of_day_ns = utc_ns - days * day_ns;
-    const std::chrono::year_month_day ymd{std::chrono::sys_days{std::chrono::days{days}}};
-    fix.date = velodyne::NmeaDate{static_cast<int>(ymd.year()),
-                                  static_cast<int>(static_cast<unsigned>(ymd.month())),
-                                  static_cast<int>(static_cast<unsigned>(ymd.day()))};
-    fix.latitude_deg = g.latitude_deg;
-    fix.longitude_deg = g.longitude_deg;
-    fix.speed_mps = std::max(0.0, static_cast<double>(g.speed_mps));
-    fix.course_deg = std::fmod(static_cast<double>(g.track_deg) + 360.0, 360.0);
-    if (auto w = velodyne::write_position_packet(velodyne::usec_past_hour(utc_ns),
-                                                 velodyne::PpsStatus::kLocked, fix, position);
-        !w) {
-      return rt::make_error(std::string("position packet: ") + velodyne::to_string(w.error()));
-    }
-    io::Datagram p;
-    p.payload = position;
-    p.stamp_ns = utc_ns;
-    p.src_ip = 0xC0A801C9;  // 192.168.1.201, a VLP's factory address
-    p.dst_ip = 0xFFFFFFFF;
-    p.src_port = velodyne::kPortPosition;
-    p.dst_port = velodyne::kPortPosition;
-    return pcap->write_udp(p);
-  };
-  std::array<std::uint8_t, velodyne::kPacketSize> bytes{};
-  for (std::uint32_t k = 0; k < n; ++k) {
-    std::int64_t first_ns = 0;
-    (*run)->packet(k, bytes, first_ns, on_scan);
-    if (auto w = write_ins_until(first_ns + span_ns); !w) return rt::make_error(w.error().message);
-    write_trailer(bytes.data() + velodyne::kPacketSize - 6, first_ns);
-    io::Datagram d;
-    d.payload = bytes;
-    d.stamp_ns = first_ns + span_ns;               // received right after its last firing
-    d.src_ip = factory ? 0xC0A801C9 : 0xC0A8032B;  // 192.168.1.201 (VLP) / 192.168.3.43 (64E)
-    d.dst_ip = 0xFFFFFFFF;
-    d.src_port = velodyne::kPortData;
-    d.dst_port = velodyne::kPortData;
-    if (pcap) {
-      if (auto w = pcap->write_udp(d); !w) return rt::make_error(w.error().message);
-    }
-    // An HDL-32E / VLP also sends a position packet (port 8308) for about every 14 data packets
-    // (VLP-16 manual): its GPS time and the receiver's $GPRMC, here the INS's fix.
-    if (pcap && factory && k % 14 == 13) {
-      if (auto w = write_position(d.stamp_ns); !w) return rt::make_error(w.error().message);
-    }
-    if (kitti_scans && kitti_scans->add_packet(d.payload, d.stamp_ns)) {
-      if (auto w = write_kitti_scans(); !w) return rt::make_error(w.error().message);
-    }
-    out.progress(k, n);
-  }
-  (void)(*run)->finish(on_scan);
+  DriveRecorder rec(rc, ic, truth, kitti, kitti_scans, ins);
+  if (pcap) rec.ins_out.emplace(*pcap, o.ins_udp);
+  if (auto w = write_packets(**run, span_ns, *trailer, pcap, rec, out); !w) return w;
   if (kitti) {
     if (auto f = kitti->finish(); !f) return rt::make_error(f.error().message);
-    const auto labels = sim_tracklets(**run, rc, sweeps, kitti_frames);
+    const auto labels = sim_tracklets(**run, rc, rec.sweeps, rec.kitti_frames);
     const std::filesystem::path xml = std::filesystem::path(o.kitti_raw) / "tracklet_labels.xml";
     std::ofstream(xml) << formats::format_kitti_tracklets(labels);
     if (!std::filesystem::exists(xml)) return rt::make_error(xml.string() + ": cannot write");
   }
-  if (auto w = write_ins_until(rc.start_ns + std::llround(rc.duration_s * 1e9)); !w)
+  if (auto w = rec.write_ins_until(rc.start_ns + std::llround(rc.duration_s * 1e9)); !w)
     return rt::make_error(w.error().message);
+  const std::uint32_t n = (*run)->packet_count();
   out.progress(n, n);
   if (pcap) {
     if (auto c = pcap->close(); !c) return rt::make_error(c.error().message);
@@ -451,24 +572,7 @@ rt::Status write_drive(const DriveOptions& o, const DriveOutput& given) {
   if (!truth) return rt::make_error(o.truth + ": write failed");
   const double wall =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
-  out.summary(
-      formatted("stac sim: %s seed %llu, %.1f s: %u packets, %llu scans, %llu points -> %s, %s\n"
-                "  %zu objects in the world; simulated %.2fx real time (%.1f s)",
-                o.scenario.c_str(), static_cast<unsigned long long>(o.seed), o.duration_s, n,
-                static_cast<unsigned long long>(scans), static_cast<unsigned long long>(points),
-                o.out.empty() ? "(no pcap)" : o.out.c_str(), o.truth.c_str(),
-                (*run)->world().actors().size(), o.duration_s / wall, wall));
-  if (pcap)
-    out.summary(
-        formatted("  INS: %llu Applanix messages (Group 1 at 200 Hz, Groups 2 and 3 at 1 Hz), GPS "
-                  "week %u, %s port %u",
-                  static_cast<unsigned long long>(ins_messages), ins.gps_week(),
-                  o.ins_udp ? "UDP" : "TCP", static_cast<unsigned>(InsPcapStream::kPort)));
-  if (kitti)
-    out.summary(
-        formatted("  KITTI raw: %zu complete scans with their OXTS records in %s (velodyne_points, "
-                  "oxts, calib_imu_to_velo.txt, tracklet_labels.xml)",
-                  kitti->scans(), o.kitti_raw.c_str()));
+  summarize(o, **run, rec, pcap.has_value(), wall, out);
   if (can_log) return write_can_log(*can_log, o.can, rc, out);
   return {};
 }

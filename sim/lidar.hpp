@@ -88,6 +88,18 @@ class LidarSim {
  private:
   void refresh_candidates(double t);
   bool hits_body(const velodyne::BeamLine& line) const;  // line in the sensor frame
+  // The steps of make_packet (lidar.cpp).
+  struct PacketContext;
+  struct Beam;
+  struct Echo;
+  void firing_rotations(const PacketContext& p, int firings,
+                        std::array<std::uint16_t, velodyne::kBlocksPerPacket>& rotation,
+                        std::array<int, velodyne::kBlocksPerPacket>& step) const noexcept;
+  void fire(const PacketContext& p, int firing, std::uint16_t block_rotation, int azimuth_step);
+  void cast(const PacketContext& p, const Beam& b, BeamRecord& rec);
+  void cast_second(const PacketContext& p, const Beam& b, const Echo& main, double raw,
+                   std::uint8_t intensity, BeamRecord& rec);
+  Echo trace(const Beam& b, int through, double yaw_offset);
 
   velodyne::Calibration calibration_;
   velodyne::BeamModel beams_;

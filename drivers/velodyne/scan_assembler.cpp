@@ -117,9 +117,26 @@ bool ScanAssembler::add_packet(std::span<const std::uint8_t> payload,
     ++counters_.wrong_size;
     return false;
   }
-  const ModelTraits& model = decoder_.model();
-  const bool banks = model.layout == Layout::kBankPairs;  // HDL-64E: upper and lower blocks
-  for (const RawBlock& b : packet->blocks) {
+  if (!accept(*packet, payload)) return false;
+  if (scan_ == nullptr) return false;     // begin() was never called: nothing to write into
+  if (target_ == &carry_) begin(*scan_);  // the caller did not take the closed scan: reuse it
+  const std::uint32_t device_usec = read_trailer(*packet);
+  const bool had_prev = have_prev_;
+  bool completed = close_stale(stamp_ns);
+  const bool restarted = !had_prev || completed;
+  const bool dual = decoder_.dual_return(*packet);
+  estimate_loss(packet->blocks[0].rotation);
+  if (write_firings(*packet, stamp_ns, device_usec, dual)) completed = true;
+  prev_stamp_ns_ = restarted ? stamp_ns : std::max(prev_stamp_ns_, stamp_ns);
+  return completed;
+}
+
+// Invalid blocks, rotations that jump, duplicates and (when so configured) other models' packets
+// are counted and refused.
+bool ScanAssembler::accept(const RawPacket& packet,
+                           std::span<const std::uint8_t> payload) noexcept {
+  const bool banks = decoder_.model().layout == Layout::kBankPairs;  // HDL-64E: upper and lower
+  for (const RawBlock& b : packet.blocks) {
     if ((b.bank != kUpperBank && (!banks || b.bank != kLowerBank)) ||
         b.rotation >= kRotationUnits) {
       ++counters_.invalid_block;
@@ -130,7 +147,7 @@ bool ScanAssembler::add_packet(std::span<const std::uint8_t> payload,
   // hundredths of a degree (equal within a firing). Rotations that jump (a corrupted packet whose
   // bank ids hold) would cross the cut angle and split a scan: the packet is dropped.
   for (int b = 1; b < kBlocksPerPacket; ++b) {
-    const int step = forward(packet->blocks[b - 1].rotation, packet->blocks[b].rotation);
+    const int step = forward(packet.blocks[b - 1].rotation, packet.blocks[b].rotation);
     if (step > kMaxBlockStep && step < kRotationUnits - kMaxBlockBack) {
       ++counters_.invalid_block;
       return false;
@@ -150,129 +167,151 @@ bool ScanAssembler::add_packet(std::span<const std::uint8_t> payload,
       return false;
     }
   }
-  if (scan_ == nullptr) return false;     // begin() was never called: nothing to write into
-  if (target_ == &carry_) begin(*scan_);  // the caller did not take the closed scan: reuse it
-  std::memcpy(last_trailer_.data(), packet->trailer, last_trailer_.size());
-  if (model.trailer == TrailerKind::kGpsStatus) status_.add(packet->trailer[4], packet->trailer[5]);
-  const std::uint32_t device_usec =
-      model.trailer == TrailerKind::kSpinCount ? 0 : load_u32(packet->trailer);
+  return true;
+}
 
-  bool completed = false;
-  bool restarted = !have_prev_;
-  // Silence, a clock jump or a scan that never ends closes the scan in progress.
-  if (have_prev_ && current_.open) {
-    const bool gap =
-        stamp_ns - prev_stamp_ns_ > max_gap_ns_ || prev_stamp_ns_ - stamp_ns > max_gap_ns_;
-    const bool timeout = stamp_ns - current_.header->stamp_ns > max_duration_ns_;
-    if (gap || timeout) {
-      ++(gap ? counters_.time_gaps : counters_.timeouts);
-      close(false);
-      completed = true;
-      have_prev_ = false;
-      restarted = true;
-      step_ema_ = 0.0;
-    }
-  }
-  const bool dual = decoder_.dual_return(*packet);
-  const int group = decoder_.blocks_per_firing(dual);
+// The trailer kept, its status byte pair decoded; returns the device's microseconds (0 for a
+// spin-count trailer).
+std::uint32_t ScanAssembler::read_trailer(const RawPacket& packet) noexcept {
+  const ModelTraits& model = decoder_.model();
+  std::memcpy(last_trailer_.data(), packet.trailer, last_trailer_.size());
+  if (model.trailer == TrailerKind::kGpsStatus) status_.add(packet.trailer[4], packet.trailer[5]);
+  return model.trailer == TrailerKind::kSpinCount ? 0 : load_u32(packet.trailer);
+}
 
-  // Loss estimate: an azimuth step between packets much larger than the usual one.
-  const std::uint16_t r0 = packet->blocks[0].rotation;
-  if (have_prev_) {
-    const int step = forward(prev_packet_rotation_, r0);
-    if (step > 0 && step < kHalfTurn) {
-      if (step_ema_ == 0.0) {
-        step_ema_ = step;
-      } else if (step > kGapFactor * step_ema_) {
-        const auto lost = static_cast<std::uint32_t>(std::lround(step / step_ema_) - 1);
-        counters_.packets_lost += lost;
-        target_->header->packets_lost += lost;
-        gap_ = {prev_packet_rotation_, r0, lost, target_, target_->epoch};
-      } else {
-        step_ema_ = 0.95 * step_ema_ + 0.05 * step;
-      }
-      prev_packet_rotation_ = r0;
-    } else if (step >= kHalfTurn && gap_.open > 0 && forward(gap_.from, r0) > 0 &&
-               forward(gap_.from, r0) < forward(gap_.from, gap_.to)) {
-      // A packet behind the newest one, inside the last gap: it was reordered, not lost. The
-      // scan that counted the gap is corrected while it is still open.
-      --gap_.open;
-      --counters_.packets_lost;
-      if (gap_.target == target_ && gap_.epoch == target_->epoch &&
-          target_->header->packets_lost > 0) {
-        --target_->header->packets_lost;
-      }
-    }
-  } else {
+// Silence, a clock jump or a scan that never ends closes the scan in progress: returns true
+// when it did.
+bool ScanAssembler::close_stale(std::int64_t stamp_ns) noexcept {
+  if (!(have_prev_ && current_.open)) return false;
+  const bool gap =
+      stamp_ns - prev_stamp_ns_ > max_gap_ns_ || prev_stamp_ns_ - stamp_ns > max_gap_ns_;
+  const bool timeout = stamp_ns - current_.header->stamp_ns > max_duration_ns_;
+  if (!(gap || timeout)) return false;
+  ++(gap ? counters_.time_gaps : counters_.timeouts);
+  close(false);
+  have_prev_ = false;
+  step_ema_ = 0.0;
+  return true;
+}
+
+// Loss estimate: an azimuth step between packets much larger than the usual one.
+void ScanAssembler::estimate_loss(std::uint16_t r0) noexcept {
+  if (!have_prev_) {
     prev_packet_rotation_ = r0;
+    return;
   }
+  const int step = forward(prev_packet_rotation_, r0);
+  if (step > 0 && step < kHalfTurn) {
+    if (step_ema_ == 0.0) {
+      step_ema_ = step;
+    } else if (step > kGapFactor * step_ema_) {
+      const auto lost = static_cast<std::uint32_t>(std::lround(step / step_ema_) - 1);
+      counters_.packets_lost += lost;
+      target_->header->packets_lost += lost;
+      gap_ = {prev_packet_rotation_, r0, lost, target_, target_->epoch};
+    } else {
+      step_ema_ = 0.95 * step_ema_ + 0.05 * step;
+    }
+    prev_packet_rotation_ = r0;
+  } else if (step >= kHalfTurn && gap_.open > 0 && forward(gap_.from, r0) > 0 &&
+             forward(gap_.from, r0) < forward(gap_.from, gap_.to)) {
+    // A packet behind the newest one, inside the last gap: it was reordered, not lost. The
+    // scan that counted the gap is corrected while it is still open.
+    --gap_.open;
+    --counters_.packets_lost;
+    if (gap_.target == target_ && gap_.epoch == target_->epoch &&
+        target_->header->packets_lost > 0) {
+      --target_->header->packets_lost;
+    }
+  }
+}
 
+// Every firing of the packet into the scan it belongs to; returns true when a scan was closed
+// at the cut angle.
+bool ScanAssembler::write_firings(const RawPacket& packet, std::int64_t stamp_ns,
+                                  std::uint32_t device_usec, bool dual) noexcept {
+  const int group = decoder_.blocks_per_firing(dual);
+  bool completed = false;
   bool wrote_current = false;
   bool wrote_carry = false;
   int azimuth_step = 0;  // to the next firing; the last firing of the packet keeps the one before
   for (int first = 0; first < kBlocksPerPacket; first += group) {
-    const std::uint16_t r = packet->blocks[first].rotation;
+    const std::uint16_t r = packet.blocks[first].rotation;
     if (first + group < kBlocksPerPacket) {
-      azimuth_step = forward(r, packet->blocks[first + group].rotation);
+      azimuth_step = forward(r, packet.blocks[first + group].rotation);
       if (azimuth_step > kHalfTurn) azimuth_step -= kRotationUnits;  // jitter backwards
     }
     const std::int32_t firing = decoder_.firing_offset_ns(first, 0, dual);
-    const std::int64_t t = stamp_ns + firing;
-    if (!have_prev_) {
-      have_prev_ = true;
-      prev_rotation_ = r;
-      if (!target_->open) open(*target_, t, r, false, device_usec, firing, dual);
-    } else {
-      const int d = forward(prev_rotation_, r);
-      if (d != 0 && d < kHalfTurn) {
-        const int to_cut = forward(prev_rotation_, config_.cut_angle);
-        if (to_cut > 0 && to_cut <= d) {
-          if (target_ == &current_ && current_.open) {
-            close(true);
-            completed = true;
-          }
-          open(*target_, t, r, true, device_usec, firing, dual);
-        }
-        prev_rotation_ = r;
-      } else if (d >= kHalfTurn) {
-        // Backwards: a reordered firing. If the cut lies between it and the newest firing,
-        // it belongs to a scan already closed.
-        if (forward(config_.cut_angle, prev_rotation_) < kRotationUnits - d) {
-          counters_.late_firings += 1;
-          target_->header->late_firings += 1;
-          continue;
-        }
-      }
-      if (!target_->open) open(*target_, t, r, false, device_usec, firing, dual);
-    }
-    ScanHeader& h = *target_->header;
-    rt::FixedVector<Point>& pts = *target_->points;
-    const std::int64_t offset = stamp_ns - h.stamp_ns;
-    for (int b = first; b < first + group; ++b) {
-      const std::size_t size = pts.size();
-      if (pts.capacity() - size < static_cast<std::size_t>(kLasersPerBlock)) {
-        Point spill[kLasersPerBlock];
-        const int n =
-            decoder_.decode_block(packet->blocks[b], b, dual, offset, spill, azimuth_step);
-        for (int i = 0; i < n; ++i) {
-          if (!pts.push_back(spill[i])) ++h.points_dropped;
-        }
-        continue;
-      }
-      const int n = decoder_.decode_block(packet->blocks[b], b, dual, offset, pts.data() + size,
-                                          azimuth_step);
-      (void)pts.resize(size + static_cast<std::size_t>(n));
-    }
-    h.end_stamp_ns = std::max(
-        h.end_stamp_ns,
-        stamp_ns + decoder_.firing_offset_ns(first + group - 1, kLasersPerBlock - 1, dual));
-    if (forward(h.first_azimuth, r) >= forward(h.first_azimuth, h.last_azimuth)) h.last_azimuth = r;
+    if (!frame_firing(stamp_ns + firing, r, device_usec, firing, dual, completed)) continue;
+    decode_firing(packet, first, group, stamp_ns, dual, azimuth_step);
     (target_ == &current_ ? wrote_current : wrote_carry) = true;
   }
   if (wrote_current) ++current_.header->packets;
   if (wrote_carry) ++carry_header_.packets;
-  prev_stamp_ns_ = restarted ? stamp_ns : std::max(prev_stamp_ns_, stamp_ns);
   return completed;
+}
+
+// Cut-angle framing of one firing at time t and rotation r: closes the scan when the firing
+// crosses the cut (completed set) and opens the target it goes to. False for a late firing
+// (reordered behind the cut, counted): it is dropped.
+bool ScanAssembler::frame_firing(std::int64_t t, std::uint16_t r, std::uint32_t device_usec,
+                                 std::int32_t firing, bool dual, bool& completed) noexcept {
+  if (!have_prev_) {
+    have_prev_ = true;
+    prev_rotation_ = r;
+    if (!target_->open) open(*target_, t, r, false, device_usec, firing, dual);
+    return true;
+  }
+  const int d = forward(prev_rotation_, r);
+  if (d != 0 && d < kHalfTurn) {
+    const int to_cut = forward(prev_rotation_, config_.cut_angle);
+    if (to_cut > 0 && to_cut <= d) {
+      if (target_ == &current_ && current_.open) {
+        close(true);
+        completed = true;
+      }
+      open(*target_, t, r, true, device_usec, firing, dual);
+    }
+    prev_rotation_ = r;
+  } else if (d >= kHalfTurn) {
+    // Backwards: a reordered firing. If the cut lies between it and the newest firing,
+    // it belongs to a scan already closed.
+    if (forward(config_.cut_angle, prev_rotation_) < kRotationUnits - d) {
+      counters_.late_firings += 1;
+      target_->header->late_firings += 1;
+      return false;
+    }
+  }
+  if (!target_->open) open(*target_, t, r, false, device_usec, firing, dual);
+  return true;
+}
+
+// The firing's blocks [first, first + group) decoded into the target's points (over its
+// capacity: counted as dropped), its end time and last azimuth.
+void ScanAssembler::decode_firing(const RawPacket& packet, int first, int group,
+                                  std::int64_t stamp_ns, bool dual, int azimuth_step) noexcept {
+  const std::uint16_t r = packet.blocks[first].rotation;
+  ScanHeader& h = *target_->header;
+  rt::FixedVector<Point>& pts = *target_->points;
+  const std::int64_t offset = stamp_ns - h.stamp_ns;
+  for (int b = first; b < first + group; ++b) {
+    const std::size_t size = pts.size();
+    if (pts.capacity() - size < static_cast<std::size_t>(kLasersPerBlock)) {
+      Point spill[kLasersPerBlock];
+      const int n = decoder_.decode_block(packet.blocks[b], b, dual, offset, spill, azimuth_step);
+      for (int i = 0; i < n; ++i) {
+        if (!pts.push_back(spill[i])) ++h.points_dropped;
+      }
+      continue;
+    }
+    const int n =
+        decoder_.decode_block(packet.blocks[b], b, dual, offset, pts.data() + size, azimuth_step);
+    (void)pts.resize(size + static_cast<std::size_t>(n));
+  }
+  h.end_stamp_ns =
+      std::max(h.end_stamp_ns,
+               stamp_ns + decoder_.firing_offset_ns(first + group - 1, kLasersPerBlock - 1, dual));
+  if (forward(h.first_azimuth, r) >= forward(h.first_azimuth, h.last_azimuth)) h.last_azimuth = r;
 }
 
 bool ScanAssembler::flush() noexcept {

@@ -98,6 +98,17 @@ class ScanAssembler {
             std::uint32_t device_usec, std::int32_t firing_in_packet_ns, bool dual) noexcept;
   void close(bool at_cut) noexcept;
   bool is_duplicate(std::span<const std::uint8_t> payload) noexcept;
+  // The steps of add_packet, in order.
+  bool accept(const RawPacket& packet, std::span<const std::uint8_t> payload) noexcept;
+  std::uint32_t read_trailer(const RawPacket& packet) noexcept;
+  bool close_stale(std::int64_t stamp_ns) noexcept;
+  void estimate_loss(std::uint16_t r0) noexcept;
+  bool write_firings(const RawPacket& packet, std::int64_t stamp_ns, std::uint32_t device_usec,
+                     bool dual) noexcept;
+  bool frame_firing(std::int64_t t, std::uint16_t r, std::uint32_t device_usec, std::int32_t firing,
+                    bool dual, bool& completed) noexcept;
+  void decode_firing(const RawPacket& packet, int first, int group, std::int64_t stamp_ns,
+                     bool dual, int azimuth_step) noexcept;
 
   ScanAssemblerConfig config_;
   PacketDecoder decoder_;

@@ -128,6 +128,17 @@ struct Rect {
   bool operator==(const Rect&) const = default;
 };
 
+// Where a view's HOG windows go and which regions of the view are worked on.
+struct ViewPlan {
+  int w = 0, h = 0;
+  float pad_w = 0.0f, pad_h = 0.0f;
+  int placed[2][4][2] = {};  // per array, per offset: top-left
+  Rect region[4] = {};       // the regions worked on
+  int regions = 0;
+  int region_of[4] = {};  // offset k's gradients are those of region region_of[k]
+  Rect raw_rect[4] = {};  // per region: where the unsmoothed view is read (grown by 2 px)
+};
+
 // Zero mean, unit mean square; an all-equal vector becomes all zeros.
 void whiten(float* v, std::size_t n) noexcept {
   double mean = 0.0;
@@ -222,6 +233,23 @@ struct DescriptorPipeline::State {
   HogWindow windows[3];                      // 15x30, 30x30, 15x15
   std::vector<float> projection[kViews][2];  // raw size x kHogProjectedDim (transposed)
   float raw[kMaxHogRaw]{};
+
+  // The canonical axis a (0: x, 1: y, 2: z).
+  [[nodiscard]] const float* axis(int a) const noexcept {
+    return a == 0 ? x.data() : (a == 1 ? y.data() : z.data());
+  }
+  // The steps of compute() after canonicalize(), in order.
+  // sp: spaces(), read once by compute().
+  using Spaces = std::array<Space, kSpaceCount>;
+  void box_size(const Spaces& sp, float (&lo)[3], float (&hi)[3], Descriptors& out) const noexcept;
+  void spin_images(const Spaces& sp, Descriptors& out) noexcept;
+  void view_and_hog(const Spaces& sp, int v, const float (&lo)[3], const float (&hi)[3],
+                    const DescriptorConfig& config, Descriptors& out) noexcept;
+  void place_windows(int v, ViewPlan& p) const noexcept;
+  Rect keep_pixels(const ViewPlan& p, Descriptors& out) noexcept;
+  void draw_view(int v, const ViewPlan& p, const Rect& occupied) noexcept;
+  void hog_windows(const Spaces& sp, int v, const ViewPlan& p, const Rect& nonzero,
+                   Descriptors& out) noexcept;
 };
 
 DescriptorPipeline::DescriptorPipeline(const DescriptorConfig& config) : config_(config) {
@@ -250,11 +278,12 @@ namespace {
 
 constexpr std::size_t kPrefetchAhead = 16;  // points
 
-// Stage 1: read, drop invalid points, centre, rotate into the canonical frame.
-void canonicalize(const SegmentView& segment, const DescriptorConfig& config, std::vector<float>& x,
-                  std::vector<float>& y, std::vector<float>& z, std::vector<float>& value,
-                  std::size_t& n, float& yaw, Descriptors& out) {
-  n = 0;
+// Reads the segment's valid points (at most x.size(), evenly spaced) into x, y, z and value
+// (intensity in [0.25, 1]); returns how many, with the sums of their x, y, z.
+std::size_t read_points(const SegmentView& segment, const DescriptorConfig& config,
+                        std::vector<float>& x, std::vector<float>& y, std::vector<float>& z,
+                        std::vector<float>& value, double (&sums)[3], Descriptors& out) {
+  std::size_t n = 0;
   const std::size_t total = segment.size();
   const double full = config.intensity_full_scale;
   // A segment of more than max_points is read at max_points evenly spaced positions.
@@ -286,11 +315,19 @@ void canonicalize(const SegmentView& segment, const DescriptorConfig& config, st
     mz += p[2];
     ++n;
   }
+  sums[0] = mx, sums[1] = my, sums[2] = mz;
+  return n;
+}
+
+// Stage 1: read, drop invalid points, centre, rotate into the canonical frame.
+void canonicalize(const SegmentView& segment, const DescriptorConfig& config, std::vector<float>& x,
+                  std::vector<float>& y, std::vector<float>& z, std::vector<float>& value,
+                  std::size_t& n, float& yaw, Descriptors& out) {
+  double sums[3];
+  n = read_points(segment, config, x, y, z, value, sums, out);
   if (n == 0) return;
   const double inv = 1.0 / static_cast<double>(n);
-  mx *= inv;
-  my *= inv;
-  mz *= inv;
+  const double mx = sums[0] * inv, my = sums[1] * inv, mz = sums[2] * inv;
   double sxx = 0, sxy = 0, syy = 0;
   for (std::size_t i = 0; i < n; ++i) {
     const double dx = x[i] - mx, dy = y[i] - my;
@@ -388,6 +425,68 @@ void mean_row(const float* __restrict sum, const float* __restrict count, int c0
   }
 }
 
+// A view's side from its extent (px): at least min_px (the points padded about the centre),
+// at most cap (cropped about the centre, pad negative).
+void fit_side(float extent, int min_px, int cap, int& size, float& pad) noexcept {
+  size = static_cast<int>(std::ceil(extent)) + 1;
+  pad = 0.0f;
+  if (size < min_px) {
+    pad = static_cast<float>(min_px - size) / 2.0f;
+    size = min_px;
+  } else if (size > cap) {
+    pad = -static_cast<float>(size - cap) / 2.0f;  // crop about the centre
+    size = cap;
+  }
+}
+
+// The regions worked on: the offsets' distinct boxes, or their bounding box when that is
+// no larger than they are together (small views, where the windows overlap).
+void plan_regions(const Rect (&look)[4], ViewPlan& p) noexcept {
+  Rect all{p.w, p.h, -1, -1};
+  long separate = 0;
+  p.regions = 0;
+  for (int k = 0; k < 4; ++k) {
+    int same = -1;
+    for (int e = 0; e < p.regions && same < 0; ++e) {
+      if (p.region[e] == look[k]) same = e;
+    }
+    if (same < 0) {
+      same = p.regions;
+      p.region[p.regions++] = look[k];
+      separate += look[k].area();
+    }
+    p.region_of[k] = same;
+    all = all.united(look[k]);
+  }
+  if (all.area() <= separate) {
+    p.regions = 1;
+    p.region[0] = all;
+    for (int& r : p.region_of) r = 0;
+  }
+  for (int j = 0; j < p.regions; ++j) p.raw_rect[j] = p.region[j].grown(2, p.w, p.h);
+}
+
+// Zeroes buffer (w pixels a row) within q (which may be empty).
+void zero_rect(std::vector<float>& buffer, const Rect& q, int w) noexcept {
+  for (int r = q.y0; r <= q.y1 && q.x0 <= q.x1; ++r) {
+    const std::ptrdiff_t a = static_cast<std::ptrdiff_t>(r) * w + q.x0;
+    std::fill(buffer.begin() + a, buffer.begin() + a + (q.x1 - q.x0 + 1), 0.0f);
+  }
+}
+
+// dst = M raw, each output summed over j in order (the same sums as row by row), the
+// 20 outputs side by side so the compiler vectorises across them; empty bins skipped.
+void project(const float* raw, std::size_t raw_n, const float* m, float* dst) noexcept {
+  float acc[kHogProjectedDim] = {};
+  for (std::size_t j = 0; j < raw_n; ++j) {
+    const float r = raw[j];
+    if (r == 0.0f) continue;
+    const float* col = m + j * kHogProjectedDim;
+    for (std::size_t k2 = 0; k2 < kHogProjectedDim; ++k2) acc[k2] += col[k2] * r;
+  }
+  std::copy(acc, acc + kHogProjectedDim, dst);
+}
+
 }  // namespace
 
 // NOLINTNEXTLINE(bugprone-exception-escape): the layout exists already (see spaces())
@@ -399,235 +498,198 @@ void DescriptorPipeline::compute(const SegmentView& segment, Descriptors& out) n
   st.yaw = 0.0f;
   for (int v = 0; v < kViews; ++v) st.width[v] = st.height[v] = 0;
   canonicalize(segment, config_, st.x, st.y, st.z, st.value, st.n, st.yaw, out);
-  const std::size_t n = st.n;
-  out.points_used = static_cast<std::uint32_t>(n);
-  if (n == 0) return;
+  out.points_used = static_cast<std::uint32_t>(st.n);
+  if (st.n == 0) return;
   out.status = Status::kOk;
-  const auto& sp = spaces();
-
-  // (a) Oriented bounding box size (m): extents along canonical x, y, z.
   float lo[3], hi[3];
-  const float* axis[3] = {st.x.data(), st.y.data(), st.z.data()};
+  const auto& sp = spaces();
+  st.box_size(sp, lo, hi, out);
+  st.spin_images(sp, out);
+  for (int v = 0; v < kViews; ++v) st.view_and_hog(sp, v, lo, hi, config_, out);
+}
+
+// (a) Oriented bounding box size (m): extents along canonical x, y, z.
+void DescriptorPipeline::State::box_size(const Spaces& sp, float (&lo)[3], float (&hi)[3],
+                                         Descriptors& out) const noexcept {
   for (int a = 0; a < 3; ++a) {
-    const auto [mn, mx] = std::minmax_element(axis[a], axis[a] + n);
+    const auto [mn, mx] = std::minmax_element(axis(a), axis(a) + n);
     lo[a] = *mn;
     hi[a] = *mx;
     out.values[sp[0].offset + static_cast<std::size_t>(a)] = hi[a] - lo[a];
   }
+}
 
-  // (b) Spin images about the vertical axis through the centroid: column = floor(r * ppm),
-  // row = floor((rows / (2 ppm) - z) * ppm) (row 0 on top); counts, then whitened.
-  // Counted as integers (exact, as the float counts were: n < 2^24) in four interleaved copies,
-  // so that successive points in the same bin do not wait for each other; each point's bin is
-  // found first, in a loop without branches.
-  float* const radius = st.radius.data();
-  for (std::size_t i = 0; i < n; ++i) radius[i] = std::sqrt(st.x[i] * st.x[i] + st.y[i] * st.y[i]);
+// (b) Spin images about the vertical axis through the centroid: column = floor(r * ppm),
+// row = floor((rows / (2 ppm) - z) * ppm) (row 0 on top); counts, then whitened.
+// Counted as integers (exact, as the float counts were: n < 2^24) in four interleaved copies,
+// so that successive points in the same bin do not wait for each other; each point's bin is
+// found first, in a loop without branches.
+void DescriptorPipeline::State::spin_images(const Spaces& sp, Descriptors& out) noexcept {
+  float* const r = radius.data();
+  for (std::size_t i = 0; i < n; ++i) r[i] = std::sqrt(x[i] * x[i] + y[i] * y[i]);
   for (std::size_t k = 0; k < 4; ++k) {
     const SpinShape& s = kSpins[k];
     float* img = out.values.data() + sp[1 + k].offset;
     const float half = static_cast<float>(s.rows) / (2.0f * s.px_per_m);
     const int cells = s.rows * s.cols;
-    std::int32_t* const bin = st.pixel.data();
-    spin_bins(radius, st.z.data(), n, s, half, bin);
-    std::uint32_t(&count)[4][kMaxSpinCells + 1] = st.spin_count;
-    for (auto& c : count) std::fill(c, c + cells + 1, 0u);
+    std::int32_t* const bin = pixel.data();
+    spin_bins(r, z.data(), n, s, half, bin);
+    std::uint32_t(&counts)[4][kMaxSpinCells + 1] = spin_count;
+    for (auto& c : counts) std::fill(c, c + cells + 1, 0u);
     std::size_t i = 0;
     for (; i + 4 <= n; i += 4) {
-      ++count[0][bin[i]];
-      ++count[1][bin[i + 1]];
-      ++count[2][bin[i + 2]];
-      ++count[3][bin[i + 3]];
+      ++counts[0][bin[i]];
+      ++counts[1][bin[i + 1]];
+      ++counts[2][bin[i + 2]];
+      ++counts[3][bin[i + 3]];
     }
-    for (; i < n; ++i) ++count[0][bin[i]];
+    for (; i < n; ++i) ++counts[0][bin[i]];
     for (int j = 0; j < cells; ++j) {
-      img[j] = static_cast<float>(count[0][j] + count[1][j] + count[2][j] + count[3][j]);
+      img[j] = static_cast<float>(counts[0][j] + counts[1][j] + counts[2][j] + counts[3][j]);
     }
     whiten(img, sp[1 + k].size);
   }
+}
 
-  // (c) Orthographic intensity images. View v drops canonical axis v; columns follow the first
-  // remaining axis, rows the second, top row = its maximum.
-  const float ppm = static_cast<float>(config_.image_px_per_m);
-  const int cap = static_cast<int>(config_.max_image_px);
-  const int min_px = static_cast<int>(config_.min_image_px);
+// (c) Orthographic intensity image v, then (d) its HOG windows. View v drops canonical axis v;
+// columns follow the first remaining axis, rows the second, top row = its maximum.
+void DescriptorPipeline::State::view_and_hog(const Spaces& sp, int v, const float (&lo)[3],
+                                             const float (&hi)[3], const DescriptorConfig& config,
+                                             Descriptors& out) noexcept {
+  const float ppm = static_cast<float>(config.image_px_per_m);
   constexpr int kAxes[kViews][2] = {{1, 2}, {0, 2}, {0, 1}};
-  std::size_t space = 5;
-  for (int v = 0; v < kViews; ++v) {
-    const float* us = axis[kAxes[v][0]];
-    const float* vs = axis[kAxes[v][1]];
-    const float min_u = lo[kAxes[v][0]] * ppm, max_u = hi[kAxes[v][0]] * ppm;
-    const float min_v = lo[kAxes[v][1]] * ppm, max_v = hi[kAxes[v][1]] * ppm;
-    auto fit = [&](float extent, int& size, float& pad) {
-      size = static_cast<int>(std::ceil(extent)) + 1;
-      pad = 0.0f;
-      if (size < min_px) {
-        pad = static_cast<float>(min_px - size) / 2.0f;
-        size = min_px;
-      } else if (size > cap) {
-        pad = -static_cast<float>(size - cap) / 2.0f;  // crop about the centre
-        size = cap;
-      }
-    };
-    int w, h;
-    float pad_w, pad_h;
-    fit(max_u - min_u, w, pad_w);
-    fit(max_v - min_v, h, pad_h);
-    st.width[v] = w;
-    st.height[v] = h;
+  const float min_u = lo[kAxes[v][0]] * ppm, max_u = hi[kAxes[v][0]] * ppm;
+  const float min_v = lo[kAxes[v][1]] * ppm, max_v = hi[kAxes[v][1]] * ppm;
+  ViewPlan p;
+  const int cap = static_cast<int>(config.max_image_px);
+  const int min_px = static_cast<int>(config.min_image_px);
+  fit_side(max_u - min_u, min_px, cap, p.w, p.pad_w);
+  fit_side(max_v - min_v, min_px, cap, p.h, p.pad_h);
+  width[v] = p.w;
+  height[v] = p.h;
+  place_windows(v, p);
+  // Each point's pixel (-1: cropped, or too far from every window to matter), and the
+  // rectangle the kept points cover: outside it (grown by the smoothing's and the gradient's
+  // 1 px each) everything is exactly zero, so only that part is worked on.
+  view_cells(axis(kAxes[v][0]), axis(kAxes[v][1]), n, ppm, min_u, p.pad_w, max_v, p.pad_h,
+             pixel.data(), row_index.data());
+  const Rect occupied = keep_pixels(p, out);
+  if (!occupied.empty()) draw_view(v, p, occupied);
+  // Where gradients may be non-zero (nowhere without a kept point).
+  const Rect nonzero = occupied.empty() ? occupied : occupied.grown(2, p.w, p.h);
+  hog_windows(sp, v, p, nonzero, out);
+}
 
-    // Where the HOG windows go: centre (int(u W), int(v H)), shifted into the image. Only
-    // there are gradients needed, so the view is made only within 2 px of them (the gradient's
-    // and the smoothing's pixel); a large view is mostly outside every window.
-    int placed[2][4][2];  // per array, per offset: top-left
-    Rect look[4];         // per offset: the bounding box of its two windows
-    for (int k = 0; k < 4; ++k) {
-      look[k] = Rect{w, h, -1, -1};
-      for (int a = 0; a < 2; ++a) {
-        const HogShape& shape = st.window(v, a).shape();
-        const auto& o = kOffsets[k];
-        const int x0 = std::clamp(static_cast<int>(o[0] * static_cast<float>(w)) - shape.width / 2,
-                                  0, w - shape.width);
-        const int y0 = std::clamp(static_cast<int>(o[1] * static_cast<float>(h)) - shape.height / 2,
-                                  0, h - shape.height);
-        placed[a][k][0] = x0;
-        placed[a][k][1] = y0;
-        look[k] = look[k].united(Rect{x0, y0, x0 + shape.width - 1, y0 + shape.height - 1});
-      }
+// Where the HOG windows go: centre (int(u W), int(v H)), shifted into the image. Only
+// there are gradients needed, so the view is made only within 2 px of them (the gradient's
+// and the smoothing's pixel); a large view is mostly outside every window.
+void DescriptorPipeline::State::place_windows(int v, ViewPlan& p) const noexcept {
+  const int w = p.w, h = p.h;
+  Rect look[4];  // per offset: the bounding box of its two windows
+  for (int k = 0; k < 4; ++k) {
+    look[k] = Rect{w, h, -1, -1};
+    for (int a = 0; a < 2; ++a) {
+      const HogShape& shape = window(v, a).shape();
+      const auto& o = kOffsets[k];
+      const int x0 = std::clamp(static_cast<int>(o[0] * static_cast<float>(w)) - shape.width / 2, 0,
+                                w - shape.width);
+      const int y0 = std::clamp(static_cast<int>(o[1] * static_cast<float>(h)) - shape.height / 2,
+                                0, h - shape.height);
+      p.placed[a][k][0] = x0;
+      p.placed[a][k][1] = y0;
+      look[k] = look[k].united(Rect{x0, y0, x0 + shape.width - 1, y0 + shape.height - 1});
     }
-    // The regions worked on: the offsets' distinct boxes, or their bounding box when that is
-    // no larger than they are together (small views, where the windows overlap).
-    Rect region[4];
-    int regions = 0;
-    int region_of[4];  // offset k's gradients are those of region region_of[k]
-    {
-      Rect all{w, h, -1, -1};
-      long separate = 0;
-      for (int k = 0; k < 4; ++k) {
-        int same = -1;
-        for (int e = 0; e < regions && same < 0; ++e) {
-          if (region[e] == look[k]) same = e;
-        }
-        if (same < 0) {
-          same = regions;
-          region[regions++] = look[k];
-          separate += look[k].area();
-        }
-        region_of[k] = same;
-        all = all.united(look[k]);
-      }
-      if (all.area() <= separate) {
-        regions = 1;
-        region[0] = all;
-        for (int& r : region_of) r = 0;
-      }
+  }
+  plan_regions(look, p);
+}
+
+// Each point's pixel index (r * w + c) where a region reads it, else -1 (cropped ones counted);
+// returns the rectangle the kept points cover.
+Rect DescriptorPipeline::State::keep_pixels(const ViewPlan& p, Descriptors& out) noexcept {
+  Rect occupied{p.w, p.h, -1, -1};
+  for (std::size_t i = 0; i < n; ++i) {
+    const int c = pixel[i], r = row_index[i];
+    if (!(c >= 0 && c < p.w && r >= 0 && r < p.h)) {
+      ++out.pixels_cropped;
+      pixel[i] = -1;
+      continue;
     }
-    // Each point's pixel (-1: cropped, or too far from every window to matter), and the
-    // rectangle the kept points cover: outside it (grown by the smoothing's and the gradient's
-    // 1 px each) everything is exactly zero, so only that part is worked on.
-    Rect occupied{w, h, -1, -1};
-    Rect raw_rect[4];  // per region: where the unsmoothed view is read (grown by 2 px)
-    for (int j = 0; j < regions; ++j) raw_rect[j] = region[j].grown(2, w, h);
-    view_cells(us, vs, n, ppm, min_u, pad_w, max_v, pad_h, st.pixel.data(), st.row_index.data());
-    for (std::size_t i = 0; i < n; ++i) {
-      const int c = st.pixel[i], r = st.row_index[i];
-      if (!(c >= 0 && c < w && r >= 0 && r < h)) {
-        ++out.pixels_cropped;
-        st.pixel[i] = -1;
+    bool needed = false;
+    for (int j = 0; j < p.regions && !needed; ++j) needed = p.raw_rect[j].contains(c, r);
+    if (!needed) {
+      pixel[i] = -1;
+      continue;
+    }
+    pixel[i] = r * p.w + c;
+    occupied = occupied.united(Rect{c, r, c, r});
+  }
+  return occupied;
+}
+
+// The view within each region: the mean intensity of each pixel's points (0 without points),
+// then a 3x3 Gaussian. Only near the points is anything non-zero: the means within the
+// occupied rectangle, the smoothed view within 1 px of it, the gradients within 2 px. Each
+// buffer is zeroed where it is read but not computed, and the Gaussian reads `raw_image`,
+// never written in place, so overlapping regions give the same values.
+void DescriptorPipeline::State::draw_view(int v, const ViewPlan& p, const Rect& occupied) noexcept {
+  const int w = p.w, h = p.h;
+  Rect mean_rect[4], smooth_rect[4];
+  for (int j = 0; j < p.regions; ++j) {
+    mean_rect[j] = p.raw_rect[j].intersected(occupied);
+    smooth_rect[j] = p.region[j].grown(1, w, h).intersected(occupied.grown(1, w, h));
+    zero_rect(sum, mean_rect[j], w);
+    zero_rect(count, mean_rect[j], w);
+    zero_rect(raw_image, p.raw_rect[j].intersected(occupied.grown(2, w, h)), w);
+    zero_rect(images[v], p.region[j].grown(1, w, h).intersected(occupied.grown(3, w, h)), w);
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    if (pixel[i] < 0) continue;
+    const auto px = static_cast<std::size_t>(pixel[i]);
+    sum[px] += value[i];
+    count[px] += 1.0f;
+  }
+  for (int j = 0; j < p.regions; ++j) {
+    const Rect& q = mean_rect[j];
+    for (int r = q.y0; r <= q.y1; ++r) {
+      const std::ptrdiff_t at = static_cast<std::ptrdiff_t>(r) * w;
+      mean_row(sum.data() + at, count.data() + at, q.x0, q.x1 + 1, raw_image.data() + at);
+    }
+  }
+  for (int j = 0; j < p.regions; ++j) {
+    if (!smooth_rect[j].empty()) {
+      smooth3(raw_image.data(), smooth_tmp.data(), images[v].data(), w, h, smooth_rect[j]);
+    }
+  }
+}
+
+// (d) HOG windows at the 4 offsets, each projected by its array's fixed random matrix.
+void DescriptorPipeline::State::hog_windows(const Spaces& sp, int v, const ViewPlan& p,
+                                            const Rect& nonzero, Descriptors& out) noexcept {
+  const std::size_t space = 5 + 8 * static_cast<std::size_t>(v);
+  int gradients_of = -1;  // the region whose gradients the cache holds
+  for (int k = 0; k < 4; ++k) {
+    for (int a = 0; a < 2; ++a) {
+      const HogWindow& win = window(v, a);
+      const int x0 = p.placed[a][k][0], y0 = p.placed[a][k][1];
+      const std::size_t slot = space + static_cast<std::size_t>(a * 4 + k);
+      float* dst = out.values.data() + sp[slot].offset;
+      int same = -1;  // an earlier offset of this array landed on the same window: reuse it
+      for (int e = 0; e < k && same < 0; ++e) {
+        if (p.placed[a][e][0] == x0 && p.placed[a][e][1] == y0) same = e;
+      }
+      if (same >= 0) {
+        const float* src = out.values.data() + sp[slot - static_cast<std::size_t>(k - same)].offset;
+        std::copy(src, src + kHogProjectedDim, dst);
         continue;
       }
-      bool needed = false;
-      for (int j = 0; j < regions && !needed; ++j) needed = raw_rect[j].contains(c, r);
-      if (!needed) {
-        st.pixel[i] = -1;
-        continue;
+      if (gradients_of != p.region_of[k]) {
+        gradients_of = p.region_of[k];
+        const Rect g = p.region[gradients_of].intersected(nonzero);
+        gradients.reset(images[v].data(), p.w, p.h, g.x0, g.y0, g.x1 + 1, g.y1 + 1);
       }
-      st.pixel[i] = r * w + c;
-      occupied = occupied.united(Rect{c, r, c, r});
+      win.compute(gradients, x0, y0, raw);
+      project(raw, win.shape().size(), projection[v][a].data(), dst);
     }
-    float* img = st.images[v].data();
-    // The view within each region: the mean intensity of each pixel's points (0 without points),
-    // then a 3x3 Gaussian. Only near the points is anything non-zero: the means within the
-    // occupied rectangle, the smoothed view within 1 px of it, the gradients within 2 px. Each
-    // buffer is zeroed where it is read but not computed, and the Gaussian reads `raw_image`,
-    // never written in place, so overlapping regions give the same values.
-    if (!occupied.empty()) {
-      auto zero = [w](std::vector<float>& buffer, const Rect& q) {  // q may be empty
-        for (int r = q.y0; r <= q.y1 && q.x0 <= q.x1; ++r) {
-          const std::ptrdiff_t a = static_cast<std::ptrdiff_t>(r) * w + q.x0;
-          std::fill(buffer.begin() + a, buffer.begin() + a + (q.x1 - q.x0 + 1), 0.0f);
-        }
-      };
-      Rect mean_rect[4], smooth_rect[4];
-      for (int j = 0; j < regions; ++j) {
-        mean_rect[j] = raw_rect[j].intersected(occupied);
-        smooth_rect[j] = region[j].grown(1, w, h).intersected(occupied.grown(1, w, h));
-        zero(st.sum, mean_rect[j]);
-        zero(st.count, mean_rect[j]);
-        zero(st.raw_image, raw_rect[j].intersected(occupied.grown(2, w, h)));
-        zero(st.images[v], region[j].grown(1, w, h).intersected(occupied.grown(3, w, h)));
-      }
-      for (std::size_t i = 0; i < n; ++i) {
-        if (st.pixel[i] < 0) continue;
-        const auto p = static_cast<std::size_t>(st.pixel[i]);
-        st.sum[p] += st.value[i];
-        st.count[p] += 1.0f;
-      }
-      for (int j = 0; j < regions; ++j) {
-        const Rect& q = mean_rect[j];
-        for (int r = q.y0; r <= q.y1; ++r) {
-          const std::ptrdiff_t at = static_cast<std::ptrdiff_t>(r) * w;
-          mean_row(st.sum.data() + at, st.count.data() + at, q.x0, q.x1 + 1,
-                   st.raw_image.data() + at);
-        }
-      }
-      for (int j = 0; j < regions; ++j) {
-        if (!smooth_rect[j].empty()) {
-          smooth3(st.raw_image.data(), st.smooth_tmp.data(), img, w, h, smooth_rect[j]);
-        }
-      }
-    }
-    // Where gradients may be non-zero (nowhere without a kept point).
-    const Rect nonzero = occupied.empty() ? occupied : occupied.grown(2, w, h);
-
-    // (d) HOG windows at the 4 offsets, each projected by its array's fixed random matrix.
-    int gradients_of = -1;  // the region whose gradients the cache holds
-    for (int k = 0; k < 4; ++k) {
-      for (int a = 0; a < 2; ++a) {
-        const HogWindow& win = st.window(v, a);
-        const std::size_t raw_n = win.shape().size();
-        const float* m = st.projection[v][a].data();
-        const int x0 = placed[a][k][0], y0 = placed[a][k][1];
-        const std::size_t slot = space + static_cast<std::size_t>(a * 4 + k);
-        float* dst = out.values.data() + sp[slot].offset;
-        int same = -1;  // an earlier offset of this array landed on the same window: reuse it
-        for (int e = 0; e < k && same < 0; ++e) {
-          if (placed[a][e][0] == x0 && placed[a][e][1] == y0) same = e;
-        }
-        if (same >= 0) {
-          const float* src =
-              out.values.data() + sp[slot - static_cast<std::size_t>(k - same)].offset;
-          std::copy(src, src + kHogProjectedDim, dst);
-          continue;
-        }
-        if (gradients_of != region_of[k]) {
-          gradients_of = region_of[k];
-          const Rect g = region[gradients_of].intersected(nonzero);
-          st.gradients.reset(img, w, h, g.x0, g.y0, g.x1 + 1, g.y1 + 1);
-        }
-        win.compute(st.gradients, x0, y0, st.raw);
-        // dst = M raw, each output summed over j in order (the same sums as row by row), the
-        // 20 outputs side by side so the compiler vectorises across them; empty bins skipped.
-        float acc[kHogProjectedDim] = {};
-        for (std::size_t j = 0; j < raw_n; ++j) {
-          const float r = st.raw[j];
-          if (r == 0.0f) continue;
-          const float* col = m + j * kHogProjectedDim;
-          for (std::size_t k2 = 0; k2 < kHogProjectedDim; ++k2) acc[k2] += col[k2] * r;
-        }
-        std::copy(acc, acc + kHogProjectedDim, dst);
-      }
-    }
-    space += 8;
   }
 }
 

@@ -101,6 +101,13 @@ class Tracker {
                const Eigen::Matrix2d* spread = nullptr, bool single = false) noexcept;
   bool spawn(const Detection& d, std::int64_t stamp_ns) noexcept;  // false: not spawned (counted)
   void absorb_fragments(std::span<const Detection> detections) noexcept;
+  // The steps of absorb_fragments (fragments.cpp).
+  struct HostChoice;
+  void start_merged(std::span<const Detection> detections) noexcept;
+  HostChoice find_host(std::size_t fi, const Detection& f, const Slot* own, std::size_t nd,
+                       float max_gap, float reach_sq) const noexcept;
+  void try_union(std::size_t hi, const Detection& f, bool narrow_host,
+                 HostChoice& c) const noexcept;
   // Whether fragment f lies wholly inside the known body of track slot s
   // (fragments.known_margin_m).
   [[nodiscard]] bool inside_known_body(const Slot& s, const Detection& f) const noexcept;
@@ -119,6 +126,12 @@ class Tracker {
   void prune() noexcept;
   void spawn_unmatched(std::int64_t stamp_ns, std::span<const Detection> detections) noexcept;
   void merge_overlapping(std::int64_t stamp_ns) noexcept;
+  // The steps of merge_overlapping (fragments.cpp).
+  struct GrownBox;
+  [[nodiscard]] bool x_before(std::uint32_t p, std::uint32_t q) const noexcept;
+  void move_to_place(std::uint32_t t) noexcept;
+  void merge_into(std::size_t i, std::int64_t stamp_ns) noexcept;
+  bool try_merge(std::size_t i, std::size_t j, GrownBox& g, std::int64_t stamp_ns) noexcept;
   void report(std::int64_t stamp_ns, TrackerOutput& out) noexcept;
   // Solves the assignment of the gated rows_ x cols_ (pair_cost_, nd detections per track) per
   // connected component of the allowed pairs into det_match_.
