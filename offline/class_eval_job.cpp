@@ -185,7 +185,7 @@ rt::Status run_class_eval_job(const ClassEvalJobOptions& o, const JobOutput& out
       scores[c].push_back({out[kAdbf][c], t.label == c});
     }
     output.advance("eval: classifying", static_cast<double>(++done),
-                static_cast<double>(data.tracks.size()));
+                   static_cast<double>(data.tracks.size()));
   }
 
   const std::uint64_t inconsistent = all_tracks.total() - tracks[kAdbf].total();
@@ -255,7 +255,7 @@ rt::Status run_class_eval_job(const ClassEvalJobOptions& o, const JobOutput& out
     if (auto r = pictures::save_chart(chart, dir / "pr.png"); !r)
       return rt::make_error(r.error().message);
     output.tell(rt::formatted("report: %s/metrics.json, tracks.csv, confusion.png, pr.png\n",
-                           o.report.c_str()));
+                              o.report.c_str()));
   }
   return {};
 }
