@@ -1,24 +1,12 @@
 #include "formats/recorded_drive.hpp"
 
-#include <time.h>
-
 #include <utility>
 
 #include "formats/capture_input.hpp"
 #include "formats/capture_sensor.hpp"
+#include "rt/clock.hpp"
 
 namespace stac::formats {
-namespace {
-
-// CPU time of this thread (ns): decoding's cost on one core, whatever else the machine does.
-std::int64_t cpu_ns() {
-  timespec t{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return static_cast<std::int64_t>(t.tv_sec) * 1'000'000'000 + t.tv_nsec;
-}
-
-}  // namespace
-
 rt::Result<RecordedDrive> RecordedDrive::open(const std::filesystem::path& in,
                                               settings::PipelineSettings& settings,
                                               const RecordedDriveOptions& options) {
@@ -76,13 +64,13 @@ rt::Status RecordedDrive::for_each_scan(
     velodyne::Scan scan(kitti_->max_points);  // the one scan, reused
     const auto n = static_cast<double>(kitti_->scans.size());
     for (std::size_t i = 0; i < kitti_->scans.size(); ++i) {
-      const std::int64_t c0 = cpu_ns();
+      const std::int64_t c0 = rt::thread_cpu_ns();
       auto c = load_kitti_drive_scan(*kitti_, i, scan);
       if (!c) return rt::Unexpected<rt::Error>{c.error()};
       kitti_points_.points += c->points;
       kitti_points_.refused += c->refused;
       ++scans_;
-      const bool more = on_scan(scan, cpu_ns() - c0);
+      const bool more = on_scan(scan, rt::thread_cpu_ns() - c0);
       report(static_cast<double>(i + 1), n);
       if (!more) return {};
     }
@@ -93,9 +81,9 @@ rt::Status RecordedDrive::for_each_scan(
   io::Datagram d;
   bool more = true;
   while (more && reader_->next(d)) {
-    const std::int64_t c0 = cpu_ns();
+    const std::int64_t c0 = rt::thread_cpu_ns();
     const bool closed = stream_->add_packet(d.payload, d.stamp_ns);
-    decode_ns += cpu_ns() - c0;
+    decode_ns += rt::thread_cpu_ns() - c0;
     if (closed) {
       while (velodyne::Scan* scan = stream_->take()) {
         if (more && scan->header.complete()) {

@@ -2,8 +2,6 @@
 // the pipeline and into the tracks file (and pictures, and DDS), the summary.
 #include "offline/process_job.hpp"
 
-#include <time.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -27,6 +25,7 @@
 #include "formats/recorded_drive.hpp"
 #include "pictures/birds_eye.hpp"
 #include "pipeline/scan_pipeline.hpp"
+#include "rt/clock.hpp"
 #include "rt/formatted.hpp"
 #include "settings/dds_settings.hpp"
 #include "settings/settings.hpp"
@@ -57,13 +56,6 @@ rt::Result<ProcessDds> open_dds(const dds::PublisherConfig& settings, const Proc
     dds_sleepfor(DDS_MSECS(10));
   }
   return out;
-}
-
-// CPU time of this thread (ns): a stage's cost on one core, whatever else the machine does.
-std::int64_t cpu_ns() {
-  timespec t{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return static_cast<std::int64_t>(t.tv_sec) * 1'000'000'000 + t.tv_nsec;
 }
 
 struct Stage {
@@ -229,9 +221,9 @@ rt::Status run_process_job(const ProcessJobOptions& o, const JobOutput& output) 
 
   auto handle = [&](velodyne::Scan& scan) {
     pipeline.process(scan, recorded->pose_history(), result);
-    const std::int64_t finish_start = cpu_ns();
+    const std::int64_t finish_start = rt::thread_cpu_ns();
     pipeline.finish_scan(scan);
-    const std::int64_t finish_ns = cpu_ns() - finish_start;
+    const std::int64_t finish_ns = rt::thread_cpu_ns() - finish_start;
     // Offline nothing waits: every track's class after both steps (the tentative ones too).
     if (pipeline.classifier() != nullptr)
       pipeline.classifier()->report(result.tracked, result.classes);
@@ -422,10 +414,7 @@ rt::Status run_process_job(const ProcessJobOptions& o, const JobOutput& output) 
                       static_cast<unsigned long long>(scans), o.pictures.c_str()));
   }
   if (!capture_error.empty()) return rt::make_error(capture_breaks_off(capture_error));
-  if (scans == 0 && reader) {
-    return rt::make_error(
-        nothing_decoded_reason(o.in, reader->counters(), stream->assembler().counters(), vs.port));
-  }
+  if (scans == 0 && reader) return rt::make_error(recorded->nothing_decoded());
   return {};
 }
 

@@ -2,8 +2,6 @@
 // segmented, and what was asked for written.
 #include "offline/segment_job.hpp"
 
-#include <time.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -19,6 +17,7 @@
 #include "formats/recorded_drive.hpp"
 #include "perception/segmentation/segmenter.hpp"
 #include "pictures/birds_eye.hpp"
+#include "rt/clock.hpp"
 #include "rt/formatted.hpp"
 #include "settings/settings.hpp"
 
@@ -27,12 +26,6 @@ namespace stac::offline {
 using namespace stac::settings;
 using namespace stac::formats;
 namespace {
-
-double thread_cpu_ms() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) * 1e3 + static_cast<double>(ts.tv_nsec) * 1e-6;
-}
 
 rt::Status write_csv(const std::string& path, const segmentation::Segments& out) {
   std::FILE* f = std::fopen(path.c_str(), "w");
@@ -58,9 +51,9 @@ rt::Status report(const SegmentJobOptions& o, const JobOutput& output,
   segmentation::Segments out = segmenter.make_segments();
   segmenter.segment(points, out);  // warm-up: first touch of the grids
   const auto t0 = std::chrono::steady_clock::now();
-  const double cpu0 = thread_cpu_ms();
+  const std::int64_t cpu0 = rt::thread_cpu_ns();
   segmenter.segment(points, out);
-  const double cpu = thread_cpu_ms() - cpu0;
+  const double cpu = static_cast<double>(rt::thread_cpu_ns() - cpu0) * 1e-6;
   const double ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 

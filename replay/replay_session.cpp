@@ -32,6 +32,17 @@ std::string rate_text(double rate) {
   return b;
 }
 
+// The schedule and pacing error of a stream's report, its last UNIT (packet, segment) named.
+std::string pacing_lines(const char* unit, std::int64_t scheduled_ns, double elapsed_s,
+                         std::int64_t median_ns, std::int64_t p99_ns, std::int64_t max_ns) {
+  return rt::formatted(
+      "  schedule   %.6f s scheduled for the last %s, %.6f s taken\n"
+      "  pacing error |sent - scheduled|: median %.1f us, p99 %.1f us, max %.1f us\n",
+      static_cast<double>(scheduled_ns) * 1e-9, unit, elapsed_s,
+      static_cast<double>(median_ns) * 1e-3, static_cast<double>(p99_ns) * 1e-3,
+      static_cast<double>(max_ns) * 1e-3);
+}
+
 // first_due_ns: when the first datagram was due on the shared clock; the schedule is printed
 // from there (as for a UDP replay alone).
 void print_report(const Say& say, const SessionOptions& o, const ReplayPlan& plan, ReplayReport r,
@@ -61,12 +72,8 @@ void print_report(const Say& say, const SessionOptions& o, const ReplayPlan& pla
   if (o.fast) {
     say("  pacing     none (--fast)\n");
   } else {
-    say(rt::formatted(
-        "  schedule   %.6f s scheduled for the last packet, %.6f s taken\n"
-        "  pacing error |sent - scheduled|: median %.1f us, p99 %.1f us, max %.1f us\n",
-        static_cast<double>(r.scheduled_ns) * 1e-9, elapsed_s,
-        static_cast<double>(r.error_median_ns) * 1e-3, static_cast<double>(r.error_p99_ns) * 1e-3,
-        static_cast<double>(r.error_max_ns) * 1e-3));
+    say(pacing_lines("packet", r.scheduled_ns, elapsed_s, r.error_median_ns, r.error_p99_ns,
+                     r.error_max_ns));
   }
   if (r.faults) say(rt::formatted("  %s\n", summary(*r.faults).c_str()));
   if (r.send_failures > 0) {
@@ -105,12 +112,8 @@ void print_tcp_report(const Say& say, const SessionOptions& o, const TcpReplay& 
   if (o.fast) {
     say("  pacing     none (--fast)\n");
   } else if (r.error_max_ns >= 0) {
-    say(rt::formatted(
-        "  schedule   %.6f s scheduled for the last segment, %.6f s taken\n"
-        "  pacing error |sent - scheduled|: median %.1f us, p99 %.1f us, max %.1f us\n",
-        static_cast<double>(r.scheduled_ns) * 1e-9, elapsed_s,
-        static_cast<double>(r.error_median_ns) * 1e-3, static_cast<double>(r.error_p99_ns) * 1e-3,
-        static_cast<double>(r.error_max_ns) * 1e-3));
+    say(pacing_lines("segment", r.scheduled_ns, elapsed_s, r.error_median_ns, r.error_p99_ns,
+                     r.error_max_ns));
   }
   if (r.faults) say(rt::formatted("  %s\n", summary(*r.faults).c_str()));
 }

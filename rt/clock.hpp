@@ -9,5 +9,8 @@ namespace stac::rt {
 std::int64_t monotonic_ns() noexcept;
 // CLOCK_REALTIME: nanoseconds since the Unix epoch, for stamps when the source gives none.
 std::int64_t realtime_ns() noexcept;
+// CLOCK_THREAD_CPUTIME_ID: the CPU time of the calling thread, for a stage's cost on one core
+// whatever else the machine does.
+std::int64_t thread_cpu_ns() noexcept;
 
 }  // namespace stac::rt

@@ -19,5 +19,8 @@ std::int64_t monotonic_ns() noexcept {
 std::int64_t realtime_ns() noexcept {
   return read(CLOCK_REALTIME);
 }
+std::int64_t thread_cpu_ns() noexcept {
+  return read(CLOCK_THREAD_CPUTIME_ID);
+}
 
 }  // namespace stac::rt
